@@ -1,0 +1,26 @@
+# Two commands on a fresh machine: `make demo` and `make test`. Both set up what they need first.
+SHELL := /bin/bash
+RUN := tools/with-env.sh
+
+.PHONY: setup test demo bench soak lint clean
+
+setup:
+	@bash tools/setup.sh
+
+test: setup
+	@bash tools/run-tests.sh $(ARGS)
+
+demo: setup
+	@$(RUN) python -m skin_driver.demo $(ARGS)
+
+bench: setup
+	@$(RUN) python -m skin_driver.bench $(ARGS)
+
+soak: setup
+	@$(RUN) python -m skin_driver.soak $(ARGS)
+
+lint: setup
+	@$(RUN) python -m pytest -q -m linter
+
+clean:
+	rm -rf build install log .venv .venv-setup.log build-colcon.log

@@ -1,0 +1,37 @@
+"""Install the skin_driver ROS 2 package (ament_python)."""
+
+from glob import glob
+
+from setuptools import find_packages, setup
+
+PACKAGE = 'skin_driver'
+
+setup(
+    name=PACKAGE,
+    version='0.1.0',
+    packages=find_packages(exclude=['test']),
+    package_data={PACKAGE: ['scenes/*.yaml']},
+    data_files=[
+        ('share/ament_index/resource_index/packages', ['resource/' + PACKAGE]),
+        ('share/' + PACKAGE, ['package.xml']),
+        ('share/' + PACKAGE + '/launch', glob('launch/*.launch.py')),
+        ('share/' + PACKAGE + '/config', glob('config/*.yaml') + glob('config/*.rviz')),
+    ],
+    install_requires=['setuptools'],
+    zip_safe=True,
+    maintainer='skin_driver maintainers',
+    maintainer_email='skin-driver@example.com',
+    description='ROS 2 driver for a two-layer tactile skin with pressure direction detection.',
+    license='Apache-2.0',
+    tests_require=['pytest'],
+    entry_points={
+        'console_scripts': [
+            'driver = skin_driver.driver_node:main',
+            'direction = skin_driver.direction_node:main',
+            'sim = skin_driver.sim:main',
+            'evaluate = skin_driver.evaluate:main',
+            'demo = skin_driver.demo:main',
+            'bench = skin_driver.bench:main',
+        ],
+    },
+)

@@ -1,0 +1,1 @@
+"""ROS 2 driver for a two-layer tactile skin: where a touch is, how hard and which way it pushes."""

@@ -1,0 +1,105 @@
+"""
+Conversions between the ROS-free core's values and ROS messages, kept in one place.
+
+No node lives here (as in sensor_msgs_py): everything takes and returns plain values and messages,
+so the nodes stay thin and the conversions can be tested without a running ROS graph.
+"""
+
+from array import array
+import math
+from typing import Iterable, Sequence, Tuple
+
+from builtin_interfaces.msg import Time
+from geometry_msgs.msg import Point, Vector3, Wrench, WrenchStamped
+import numpy as np
+from sensor_msgs.msg import Image
+from skin_msgs.msg import SkinFrame, TactileContact, TactileContactArray
+from std_msgs.msg import Header
+
+ADC_MAX = 4095
+
+
+def make_header(stamp: Time, frame_id: str) -> Header:
+    """Return a header for the skin frame at the given stamp."""
+    return Header(stamp=stamp, frame_id=frame_id)
+
+
+def skin_frame_to_msg(header: Header, sequence: int, device_time_us: int,
+                      pitch_m: float, top: np.ndarray, bottom: np.ndarray) -> SkinFrame:
+    """Pack one scan (two rows x cols count maps) into a SkinFrame message."""
+    if top.shape != bottom.shape or top.ndim != 2:
+        raise ValueError(
+            f'layers must be two maps of one shape, got {top.shape} and {bottom.shape}')
+    rows, cols = top.shape
+    msg = SkinFrame(header=header, sequence=sequence & 0xFFFFFFFF,
+                    device_time_us=int(device_time_us), rows=rows, cols=cols,
+                    pitch=float(pitch_m))
+    # An array('H') is stored as it is; a list would be range-checked element by element.
+    msg.top = array('H', np.ascontiguousarray(top, dtype=np.uint16).tobytes())
+    msg.bottom = array('H', np.ascontiguousarray(bottom, dtype=np.uint16).tobytes())
+    return msg
+
+
+def skin_frame_layers(msg: SkinFrame) -> Tuple[np.ndarray, np.ndarray]:
+    """Return the (top, bottom) count maps of a SkinFrame, checking that its sizes agree."""
+    n = int(msg.rows) * int(msg.cols)
+    if n == 0 or len(msg.top) != n or len(msg.bottom) != n:
+        raise ValueError(f'SkinFrame {msg.rows}x{msg.cols} carries {len(msg.top)} top and '
+                         f'{len(msg.bottom)} bottom counts; expected {n} each')
+    shape = (int(msg.rows), int(msg.cols))
+    return (np.asarray(msg.top, dtype=np.uint16).reshape(shape),
+            np.asarray(msg.bottom, dtype=np.uint16).reshape(shape))
+
+
+def counts_to_image(header: Header, counts: np.ndarray) -> Image:
+    """Return a mono16 image of one layer's raw counts (row 0 first, as the skin's y axis)."""
+    data = np.ascontiguousarray(counts, dtype='<u2')
+    rows, cols = data.shape
+    return Image(header=header, height=rows, width=cols, encoding='mono16', is_bigendian=0,
+                 step=cols * 2, data=data.tobytes())
+
+
+def rgb_to_image(header: Header, rgb: np.ndarray) -> Image:
+    """Return an rgb8 image from a rows x cols x 3 uint8 array."""
+    data = np.ascontiguousarray(rgb, dtype=np.uint8)
+    rows, cols, _ = data.shape
+    return Image(header=header, height=rows, width=cols, encoding='rgb8', is_bigendian=0,
+                 step=cols * 3, data=data.tobytes())
+
+
+def _finite(value: float, name: str) -> float:
+    value = float(value)
+    if not math.isfinite(value):
+        raise ValueError(f'{name} is {value}; a contact message never carries NaN or inf')
+    return value
+
+
+def contact_to_msg(header: Header, contact) -> TactileContact:
+    """Convert a core Contact (see skin_driver.core.estimator) into a TactileContact message."""
+    fx, fy, fz = (_finite(v, 'force') for v in contact.force_xyz_n)
+    sx, sy = (_finite(v, 'shift') for v in contact.shift_m)
+    direction_valid = bool(contact.direction_valid)
+    return TactileContact(
+        header=header,
+        location=Point(x=_finite(contact.x_m, 'x'), y=_finite(contact.y_m, 'y'), z=0.0),
+        magnitude=_finite(contact.force_n, 'magnitude'),
+        azimuth=_finite(contact.azimuth_rad, 'azimuth') if direction_valid else 0.0,
+        polar=_finite(contact.alpha_rad, 'polar') if direction_valid else 0.0,
+        shift=Vector3(x=sx, y=sy, z=0.0),
+        wrench=Wrench(force=Vector3(x=fx, y=fy, z=fz)),
+        area=_finite(contact.area_m2, 'area'),
+        confidence=min(1.0, max(0.0, _finite(contact.confidence, 'confidence'))),
+        direction_valid=direction_valid,
+    )
+
+
+def contacts_to_array(header: Header, contacts: Iterable) -> TactileContactArray:
+    """Convert core contacts (strongest first) into a TactileContactArray."""
+    return TactileContactArray(header=header,
+                               contacts=[contact_to_msg(header, c) for c in contacts])
+
+
+def wrench_stamped(header: Header, force_xyz_n: Sequence[float]) -> WrenchStamped:
+    """Return the force of a contact as a WrenchStamped in the skin frame (no torque)."""
+    fx, fy, fz = (_finite(v, 'force') for v in force_xyz_n)
+    return WrenchStamped(header=header, wrench=Wrench(force=Vector3(x=fx, y=fy, z=fz)))
