@@ -1,1 +1,1 @@
-"""ROS 2 driver for a two-layer tactile skin: where a touch is, how hard and which way it pushes."""
+"""ROS 2 driver for a two-layer tactile skin: where a touch is, how hard, which way it pushes."""

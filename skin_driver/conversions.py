@@ -14,7 +14,10 @@ from geometry_msgs.msg import Point, Vector3, Wrench, WrenchStamped
 import numpy as np
 from sensor_msgs.msg import Image
 from skin_msgs.msg import SkinFrame, TactileContact, TactileContactArray
-from std_msgs.msg import Header
+from std_msgs.msg import ColorRGBA, Header
+from visualization_msgs.msg import Marker, MarkerArray
+
+from skin_driver.core.heatmap import colour_map
 
 ADC_MAX = 4095
 
@@ -103,3 +106,43 @@ def wrench_stamped(header: Header, force_xyz_n: Sequence[float]) -> WrenchStampe
     """Return the force of a contact as a WrenchStamped in the skin frame (no torque)."""
     fx, fy, fz = (_finite(v, 'force') for v in force_xyz_n)
     return WrenchStamped(header=header, wrench=Wrench(force=Vector3(x=fx, y=fy, z=fz)))
+
+
+def heatmap_markers(header: Header, force_map: np.ndarray, pitch_m: float, contacts: Iterable,
+                    full_scale_n: float, arrow_m_per_n: float = 0.002) -> MarkerArray:
+    """
+    Return rviz markers in the skin frame: the taxel grid coloured by force, and the contacts.
+
+    Each contact gets an arrow along its force (ending at the contact, coming from where the
+    push comes from) and a label with magnitude and azimuth.
+    """
+    markers = [Marker(header=header, ns='skin', action=Marker.DELETEALL)]
+    rows, cols = force_map.shape
+    grid = Marker(header=header, ns='taxels', id=0, type=Marker.CUBE_LIST, action=Marker.ADD)
+    grid.pose.orientation.w = 1.0
+    grid.scale = Vector3(x=pitch_m * 0.9, y=pitch_m * 0.9, z=pitch_m * 0.1)
+    rgb = colour_map(force_map, full_scale_n).reshape(-1, 3) / 255.0
+    ys, xs = np.mgrid[0:rows, 0:cols]
+    grid.points = [Point(x=float(x) * pitch_m, y=float(y) * pitch_m, z=0.0)
+                   for x, y in zip(xs.ravel(), ys.ravel())]
+    grid.colors = [ColorRGBA(r=float(r), g=float(g), b=float(b), a=1.0) for r, g, b in rgb]
+    markers.append(grid)
+    for i, contact in enumerate(contacts):
+        tip = Point(x=float(contact.x_m), y=float(contact.y_m), z=0.0)
+        fx, fy, fz = (float(v) for v in contact.force_xyz_n)
+        tail = Point(x=tip.x - fx * arrow_m_per_n, y=tip.y - fy * arrow_m_per_n,
+                     z=-fz * arrow_m_per_n)
+        arrow = Marker(header=header, ns='force', id=i, type=Marker.ARROW, action=Marker.ADD,
+                       points=[tail, tip], color=ColorRGBA(r=0.1, g=0.8, b=1.0, a=1.0))
+        arrow.pose.orientation.w = 1.0
+        arrow.scale = Vector3(x=pitch_m * 0.3, y=pitch_m * 0.6, z=pitch_m * 0.8)
+        label = Marker(header=header, ns='label', id=i, type=Marker.TEXT_VIEW_FACING,
+                       action=Marker.ADD, color=ColorRGBA(r=1.0, g=1.0, b=1.0, a=1.0))
+        label.pose.position = Point(x=tail.x, y=tail.y, z=tail.z + pitch_m)
+        label.pose.orientation.w = 1.0
+        label.scale.z = pitch_m * 1.2
+        label.text = f'{contact.force_n:.1f} N'
+        if contact.direction_valid:
+            label.text += f' β {math.degrees(contact.azimuth_rad):.0f}°'
+        markers += [arrow, label]
+    return MarkerArray(markers=markers)

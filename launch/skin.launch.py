@@ -1,0 +1,55 @@
+"""
+Bring up the skin: serial driver and direction node, optionally the simulated skin and rviz2.
+
+    ros2 launch skin_driver skin.launch.py                      # a real skin on /tmp/skin0
+    ros2 launch skin_driver skin.launch.py port:=/dev/ttyACM0
+    ros2 launch skin_driver skin.launch.py sim:=true rviz:=true  # simulated skin + heatmap
+"""
+
+from launch import LaunchDescription
+from launch.actions import DeclareLaunchArgument
+from launch.conditions import IfCondition
+from launch.substitutions import LaunchConfiguration, PathJoinSubstitution
+from launch_ros.actions import LifecycleNode, Node
+from launch_ros.substitutions import FindPackageShare
+
+
+def generate_launch_description():
+    """Return the launch description of the whole skin pipeline."""
+    share = FindPackageShare('skin_driver')
+    port = LaunchConfiguration('port')
+    namespace = LaunchConfiguration('namespace')
+    params_file = LaunchConfiguration('params_file')
+    arguments = [
+        DeclareLaunchArgument('port', default_value='/tmp/skin0',
+                              description='Serial device or pyserial URL of the skin board.'),
+        DeclareLaunchArgument('params_file',
+                              default_value=PathJoinSubstitution([share, 'config', 'skin.yaml']),
+                              description='Parameter file for the driver and direction nodes.'),
+        DeclareLaunchArgument('namespace', default_value='skin',
+                              description='Namespace of the nodes and their topics.'),
+        DeclareLaunchArgument('sim', default_value='false',
+                              description='Start the simulated skin on a pty linked at port.'),
+        DeclareLaunchArgument('scene', default_value='seed',
+                              description='Scene the simulated skin plays (name or YAML path).'),
+        DeclareLaunchArgument('sim_rate', default_value='100.0',
+                              description='Scans per second of the simulated skin.'),
+        DeclareLaunchArgument('rviz', default_value='false',
+                              description='Start rviz2 with the heatmap configuration.'),
+    ]
+    simulator = Node(
+        package='skin_driver', executable='sim', name='skin_sim', namespace=namespace,
+        arguments=['--link', port, '--scene', LaunchConfiguration('scene'),
+                   '--rate', LaunchConfiguration('sim_rate'), '--loop'],
+        output='screen', condition=IfCondition(LaunchConfiguration('sim')))
+    driver = LifecycleNode(
+        package='skin_driver', executable='driver', name='skin_driver', namespace=namespace,
+        parameters=[params_file, {'port': port}], output='screen')
+    direction = Node(
+        package='skin_driver', executable='direction', name='skin_direction',
+        namespace=namespace, parameters=[params_file], output='screen')
+    rviz = Node(
+        package='rviz2', executable='rviz2', name='skin_rviz',
+        arguments=['-d', PathJoinSubstitution([share, 'config', 'skin.rviz'])],
+        output='screen', condition=IfCondition(LaunchConfiguration('rviz')))
+    return LaunchDescription(arguments + [simulator, driver, direction, rviz])

@@ -1,0 +1,173 @@
+"""
+Turn raw ADC counts of both layers into per-taxel force maps.
+
+Per taxel and layer: subtract the baseline (tare), zero what is below the noise threshold, convert
+the remaining counts to force through the FSR divider model (:class:`physics.FsrModel`), multiply
+by the optional per-taxel gain, and replace dead or stuck taxels by the mean of their live
+neighbours so that a dead taxel inside a contact does not fake a shift between the layers.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import cv2
+import numpy as np
+
+from .physics import FsrModel
+from .validate import check_map, check_number, check_pair, check_stack
+
+__all__ = ['ConditioningConfig', 'Conditioner']
+
+
+@dataclass(frozen=True)
+class ConditioningConfig:
+    """
+    Parameters of the counts-to-force conversion.
+
+    ``threshold_counts`` is the minimum reading above baseline that counts as touch;
+    after :meth:`Conditioner.tare` the per-taxel threshold is raised to ``noise_sigmas`` times
+    the measured noise when that is larger.
+    """
+
+    fsr: FsrModel = field(default_factory=FsrModel)
+    threshold_counts: float = 40.0
+    noise_sigmas: float = 5.0
+    fill_dead: bool = True
+
+    def __post_init__(self):
+        """Validate the thresholds."""
+        check_number(self.threshold_counts, 'threshold_counts', non_negative=True)
+        check_number(self.noise_sigmas, 'noise_sigmas', non_negative=True)
+
+
+class _Layer:
+    """Per-layer calibration state."""
+
+    def __init__(self, shape):
+        self.baseline = np.zeros(shape)
+        self.threshold = None
+        self.gain = None
+        self.dead = np.zeros(shape, dtype=bool)
+
+
+class Conditioner:
+    """Per-taxel baseline, gain, dead-taxel mask and counts-to-force for both layers."""
+
+    def __init__(self, config: ConditioningConfig = None, shape: tuple = None):
+        """Create a conditioner; ``shape`` fixes the map shape, else the first frame does."""
+        self.config = config or ConditioningConfig()
+        self._shape = None
+        self._layers = None
+        fsr = self.config.fsr
+        # A dense table makes the conversion one np.interp call per layer.
+        self._lut_counts = np.arange(fsr.full_scale + 1, dtype=np.float64)
+        self._lut_force = fsr.counts_to_force(self._lut_counts)
+        if shape is not None:
+            self._reset(tuple(int(s) for s in shape))
+
+    @property
+    def shape(self):
+        """Return the map shape this conditioner is set up for, or None."""
+        return self._shape
+
+    def _reset(self, shape):
+        if len(shape) != 2 or min(shape) < 1:
+            raise ValueError(f'map shape must be two positive integers, got {shape}')
+        self._shape = shape
+        self._layers = (_Layer(shape), _Layer(shape))
+        for layer in self._layers:
+            layer.threshold = np.full(shape, float(self.config.threshold_counts))
+
+    def _ensure(self, shape):
+        if self._shape is None:
+            self._reset(tuple(shape))
+        elif tuple(shape) != self._shape:
+            raise ValueError(f'maps have shape {tuple(shape)}, conditioner expects {self._shape}')
+
+    def tare(self, top_frames, bottom_frames) -> None:
+        """
+        Set baseline, noise threshold and dead/stuck masks from frames taken with no touch.
+
+        Both arguments are stacks N x rows x cols of raw counts (N >= 1). A taxel is dead when it
+        reads 0 in every frame while the layer's median baseline is above 0.5 counts, and stuck
+        when its reading never changes while the layer's median noise is above zero (needs N > 1).
+        """
+        stacks = (check_stack(top_frames, 'top_frames'),
+                  check_stack(bottom_frames, 'bottom_frames'))
+        if stacks[0].shape != stacks[1].shape:
+            raise ValueError(f'top_frames and bottom_frames shapes differ: '
+                             f'{stacks[0].shape} vs {stacks[1].shape}')
+        self._ensure(stacks[0].shape[1:])
+        for layer, frames in zip(self._layers, stacks):
+            frames = frames.astype(np.float64)
+            mean = frames.mean(axis=0)
+            std = frames.std(axis=0)
+            dead = (frames.max(axis=0) == 0) & (np.median(mean) > 0.5)
+            if frames.shape[0] > 1 and np.median(std) > 0:
+                dead |= std == 0
+            layer.baseline = np.where(dead, 0.0, mean)
+            layer.threshold = np.maximum(self.config.threshold_counts,
+                                         self.config.noise_sigmas * std)
+            layer.dead = dead
+
+    def set_baseline(self, top_baseline, bottom_baseline) -> None:
+        """Set the per-taxel baselines (counts) directly, e.g. from a calibration table."""
+        t, b = check_pair(top_baseline, bottom_baseline)
+        self._ensure(t.shape)
+        self._layers[0].baseline = t.astype(np.float64)
+        self._layers[1].baseline = b.astype(np.float64)
+
+    def set_gain(self, top_gain, bottom_gain) -> None:
+        """Set per-taxel multiplicative force gains (1 = nominal); None clears them."""
+        for layer, gain, name in zip(self._layers or (None, None), (top_gain, bottom_gain),
+                                     ('top_gain', 'bottom_gain')):
+            if gain is not None:
+                g = check_map(gain, name)
+                self._ensure(g.shape)
+        for i, gain in enumerate((top_gain, bottom_gain)):
+            self._layers[i].gain = None if gain is None else np.array(gain, dtype=np.float64)
+
+    def set_dead(self, top_dead, bottom_dead) -> None:
+        """Mark dead or stuck taxels (boolean maps, True = ignore and fill from neighbours)."""
+        for i, (mask, name) in enumerate(((top_dead, 'top_dead'), (bottom_dead, 'bottom_dead'))):
+            m = np.asarray(mask)
+            if m.dtype != bool or m.ndim != 2:
+                raise ValueError(f'{name} must be a 2-D boolean array, got {m.dtype} {m.shape}')
+            self._ensure(m.shape)
+            self._layers[i].dead = m.copy()
+
+    def dead_masks(self) -> tuple:
+        """Return copies of the (top, bottom) dead-taxel masks."""
+        if self._layers is None:
+            return None, None
+        return self._layers[0].dead.copy(), self._layers[1].dead.copy()
+
+    def _layer_force(self, counts: np.ndarray, layer: _Layer) -> np.ndarray:
+        c = counts - layer.baseline
+        c[c < layer.threshold] = 0.0
+        force = np.interp(c, self._lut_counts, self._lut_force)
+        if layer.gain is not None:
+            force *= layer.gain
+        if self.config.fill_dead and layer.dead.any():
+            live = (~layer.dead).astype(np.float64)
+            num = cv2.boxFilter(force * live, -1, (3, 3), normalize=False,
+                                borderType=cv2.BORDER_CONSTANT)
+            den = cv2.boxFilter(live, -1, (3, 3), normalize=False, borderType=cv2.BORDER_CONSTANT)
+            fill = np.divide(num, den, out=np.zeros_like(num), where=den > 0)
+            force = np.where(layer.dead, fill, force)
+        elif layer.dead.any():
+            force[layer.dead] = 0.0
+        return force
+
+    def condition(self, top_counts, bottom_counts) -> tuple:
+        """Return (top, bottom) per-taxel force maps in newtons (float64, new arrays)."""
+        t, b = check_pair(top_counts, bottom_counts)
+        return self.condition_checked(t, b)
+
+    def condition_checked(self, t: np.ndarray, b: np.ndarray) -> tuple:
+        """Do the work of :meth:`condition` on maps already checked by ``validate``."""
+        if self._shape != t.shape:
+            self._ensure(t.shape)
+        return (self._layer_force(t.astype(np.float64), self._layers[0]),
+                self._layer_force(b.astype(np.float64), self._layers[1]))

@@ -1,0 +1,224 @@
+"""
+Offline dataset format (.npz) of raw two-layer frames with ground truth, and generators.
+
+Format (version 1, documented in docs/dataset.md): ``top``, ``bottom`` (N x rows x cols uint16
+raw counts), ``pitch_m`` (scalar), ``azimuth_deg`` (N, NaN where undefined), ``alpha_deg`` (N,
+0 for normal presses); optional ``force_n``, ``x_m``, ``y_m`` (N each) and ``tare_top``,
+``tare_bottom`` (M x rows x cols no-touch frames); ``format_version`` = 1.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+import math
+import os
+
+import numpy as np
+
+from .atomic import write_atomically
+from .physics import Press, SkinModel, render
+from .validate import check_number, check_stack
+
+__all__ = ['Dataset', 'save_dataset', 'load_dataset', 'make_seed_experiment',
+           'make_random_experiment', 'FORMAT_VERSION']
+
+FORMAT_VERSION = 1
+_OPTIONAL = ('force_n', 'x_m', 'y_m')
+
+
+def _counts_stack(value, name: str) -> np.ndarray:
+    arr = check_stack(value, name)
+    if arr.dtype.kind == 'f':
+        if (arr != np.round(arr)).any():
+            raise ValueError(f'{name} must hold whole ADC counts')
+    if arr.size and arr.max() > 65535:
+        raise ValueError(f'{name} has counts above 65535')
+    return np.ascontiguousarray(arr, dtype=np.uint16)
+
+
+def _vector(value, name: str, n: int, allow_nan: bool = False) -> np.ndarray:
+    arr = np.asarray(value)
+    if arr.dtype.kind not in 'uif':
+        raise ValueError(f'{name} must be numeric, got dtype {arr.dtype}')
+    arr = arr.astype(np.float64)
+    if arr.shape != (n,):
+        raise ValueError(f'{name} must have shape ({n},), got {arr.shape}')
+    if np.isinf(arr).any() or (not allow_nan and np.isnan(arr).any()):
+        raise ValueError(f'{name} contains {"inf" if allow_nan else "NaN or inf"}')
+    return arr
+
+
+@dataclass(frozen=True, eq=False)
+class Dataset:
+    """Validated frames with ground truth; arrays are private copies."""
+
+    top: np.ndarray
+    bottom: np.ndarray
+    pitch_m: float
+    azimuth_deg: np.ndarray
+    alpha_deg: np.ndarray
+    force_n: np.ndarray = None
+    x_m: np.ndarray = None
+    y_m: np.ndarray = None
+    tare_top: np.ndarray = None
+    tare_bottom: np.ndarray = None
+
+    def __post_init__(self):
+        """Validate shapes, dtypes and values, and freeze copies of the arrays."""
+        top = _counts_stack(self.top, 'top')
+        bottom = _counts_stack(self.bottom, 'bottom')
+        if top.shape != bottom.shape:
+            raise ValueError(f'top and bottom shapes differ: {top.shape} vs {bottom.shape}')
+        n = top.shape[0]
+        set_ = object.__setattr__
+        set_(self, 'top', top.copy())
+        set_(self, 'bottom', bottom.copy())
+        set_(self, 'pitch_m', check_number(self.pitch_m, 'pitch_m', positive=True))
+        alpha = _vector(self.alpha_deg, 'alpha_deg', n)
+        if (alpha < 0).any() or (alpha >= 90).any():
+            raise ValueError('alpha_deg must be in [0, 90)')
+        azimuth = _vector(self.azimuth_deg, 'azimuth_deg', n, allow_nan=True)
+        if np.isnan(azimuth[alpha > 0]).any():
+            raise ValueError('azimuth_deg is NaN for a frame with alpha_deg > 0')
+        set_(self, 'alpha_deg', alpha)
+        set_(self, 'azimuth_deg', azimuth)
+        for name in _OPTIONAL:
+            if getattr(self, name) is not None:
+                set_(self, name, _vector(getattr(self, name), name, n))
+        if self.force_n is not None and (self.force_n < 0).any():
+            raise ValueError('force_n must be non-negative')
+        if (self.tare_top is None) != (self.tare_bottom is None):
+            raise ValueError('tare_top and tare_bottom must be given together')
+        if self.tare_top is not None:
+            tt = _counts_stack(self.tare_top, 'tare_top')
+            tb = _counts_stack(self.tare_bottom, 'tare_bottom')
+            if tt.shape != tb.shape or tt.shape[1:] != top.shape[1:]:
+                raise ValueError(f'tare frames must be M x {top.shape[1]} x {top.shape[2]} '
+                                 f'on both layers, got {tt.shape} and {tb.shape}')
+            set_(self, 'tare_top', tt.copy())
+            set_(self, 'tare_bottom', tb.copy())
+        for name in ('top', 'bottom', 'alpha_deg', 'azimuth_deg', 'tare_top', 'tare_bottom',
+                     *_OPTIONAL):
+            arr = getattr(self, name)
+            if arr is not None:
+                arr.flags.writeable = False
+
+    @property
+    def frames(self) -> int:
+        """Return the number of frames."""
+        return int(self.top.shape[0])
+
+    @property
+    def shape(self) -> tuple:
+        """Return (rows, cols) of one map."""
+        return tuple(self.top.shape[1:])
+
+
+def save_dataset(path, data: Dataset) -> None:
+    """Write ``data`` to ``path`` (.npz, compressed) atomically."""
+    path = os.fspath(path)
+    arrays = {'format_version': np.int64(FORMAT_VERSION), 'top': data.top,
+              'bottom': data.bottom, 'pitch_m': np.float64(data.pitch_m),
+              'azimuth_deg': data.azimuth_deg, 'alpha_deg': data.alpha_deg}
+    for name in (*_OPTIONAL, 'tare_top', 'tare_bottom'):
+        if getattr(data, name) is not None:
+            arrays[name] = getattr(data, name)
+    write_atomically(path, lambda f: np.savez_compressed(f, **arrays), binary=True)
+
+
+def load_dataset(path) -> Dataset:
+    """Read and validate a dataset written by :func:`save_dataset` (or by hand, same keys)."""
+    path = os.fspath(path)
+    try:
+        npz = np.load(path, allow_pickle=False)
+    except (OSError, ValueError) as exc:
+        raise ValueError(f'{path}: cannot read as .npz: {exc}') from None
+    with npz:
+        keys = set(npz.files)
+        missing = {'top', 'bottom', 'pitch_m', 'azimuth_deg', 'alpha_deg'} - keys
+        if missing:
+            raise ValueError(f'{path}: missing arrays: {", ".join(sorted(missing))}')
+        version = int(npz['format_version']) if 'format_version' in keys else FORMAT_VERSION
+        if version != FORMAT_VERSION:
+            raise ValueError(f'{path}: unsupported format_version {version}')
+        pitch = npz['pitch_m']
+        if pitch.size != 1:
+            raise ValueError(f'{path}: pitch_m must be a scalar')
+        fields = {k: npz[k] for k in ('top', 'bottom', 'azimuth_deg', 'alpha_deg', *_OPTIONAL,
+                                      'tare_top', 'tare_bottom') if k in keys}
+    return Dataset(pitch_m=float(pitch.reshape(())), **fields)
+
+
+def _tare(model: SkinModel, rng: np.random.Generator, frames: int = 20) -> tuple:
+    maps = [render(model, [], rng) for _ in range(frames)]
+    return np.stack([t for t, _ in maps]), np.stack([b for _, b in maps])
+
+
+def _build(model, presses, azimuths, rng) -> Dataset:
+    maps = [render(model, [p], rng) for p in presses]
+    tare_top, tare_bottom = _tare(model, rng)
+    return Dataset(top=np.stack([t for t, _ in maps]), bottom=np.stack([b for _, b in maps]),
+                   pitch_m=model.pitch_m, azimuth_deg=np.array(azimuths, dtype=np.float64),
+                   alpha_deg=np.array([math.degrees(p.alpha_rad) for p in presses]),
+                   force_n=np.array([p.force_n for p in presses]),
+                   x_m=np.array([p.x_m for p in presses]),
+                   y_m=np.array([p.y_m for p in presses]),
+                   tare_top=tare_top, tare_bottom=tare_bottom)
+
+
+def make_seed_experiment(model: SkinModel = None, repeats: int = 20,
+                         rng: np.random.Generator = None, force_n: float = 10.0,
+                         radius_m: float = 0.0025, location_m: tuple = None,
+                         jitter_m: float = 5e-5, alpha_deg: float = 45.0) -> Dataset:
+    """
+    Render the seed paper's experiment: normal presses and alpha tilts at eight azimuths.
+
+    Every repeat presses the same spot (robot-like, with ``jitter_m`` repeatability and +-5 %
+    force) once along the normal and once at each beta = 0, 45, ..., 315 degrees.
+    """
+    model = model or SkinModel(misalignment_m=(3e-4, -2e-4))
+    rng = rng if rng is not None else np.random.default_rng(0)
+    if location_m is None:
+        # Off the taxel centres on purpose: a realistic, unaligned placement.
+        location_m = ((model.cols - 1) * model.pitch_m * 0.49,
+                      (model.rows - 1) * model.pitch_m * 0.51)
+    presses, azimuths = [], []
+    for _ in range(int(repeats)):
+        for beta in [None] + list(range(0, 360, 45)):
+            x = location_m[0] + rng.normal(0.0, jitter_m)
+            y = location_m[1] + rng.normal(0.0, jitter_m)
+            f = force_n * rng.uniform(0.95, 1.05)
+            alpha = 0.0 if beta is None else math.radians(alpha_deg)
+            presses.append(Press(x, y, f, alpha, math.radians(beta or 0), radius_m))
+            azimuths.append(math.nan if beta is None else float(beta))
+    return _build(model, presses, azimuths, rng)
+
+
+def make_random_experiment(model: SkinModel = None, frames: int = 400,
+                           rng: np.random.Generator = None, normal_share: float = 0.2,
+                           force_range_n: tuple = (5.0, 15.0), alpha_range_deg=(15.0, 60.0),
+                           radius_range_m=(0.0015, 0.0035), border_m: float = 0.01) -> Dataset:
+    """
+    Render presses at random locations, azimuths, tilts and indenter radii.
+
+    A share ``normal_share`` of the frames are normal presses (alpha = 0) for calibration.
+    """
+    model = model or SkinModel(misalignment_m=(3e-4, -2e-4))
+    rng = rng if rng is not None else np.random.default_rng(0)
+    width = (model.cols - 1) * model.pitch_m
+    height = (model.rows - 1) * model.pitch_m
+    presses, azimuths = [], []
+    for i in range(int(frames)):
+        x = rng.uniform(border_m, max(width - border_m, border_m))
+        y = rng.uniform(border_m, max(height - border_m, border_m))
+        f = rng.uniform(*force_range_n)
+        r = rng.uniform(*radius_range_m)
+        if rng.random() < normal_share:
+            presses.append(Press(x, y, f, 0.0, 0.0, r))
+            azimuths.append(math.nan)
+        else:
+            beta = rng.uniform(0.0, 360.0)
+            alpha = math.radians(rng.uniform(*alpha_range_deg))
+            presses.append(Press(x, y, f, alpha, math.radians(beta), r))
+            azimuths.append(beta)
+    return _build(model, presses, azimuths, rng)

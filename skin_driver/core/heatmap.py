@@ -1,0 +1,29 @@
+"""Colour and character renderings of a pressure map, for rviz images and the terminal demo."""
+
+import cv2
+import numpy as np
+
+# From light to heavy, one character per level for the terminal heatmap.
+SHADES = ' .:-=+*#%@'
+
+
+def to_unit(values: np.ndarray, full_scale: float) -> np.ndarray:
+    """Scale values to [0, 1] with full_scale as 1; NaN and negatives become 0."""
+    if not full_scale > 0:
+        raise ValueError(f'full_scale must be > 0, got {full_scale}')
+    unit = np.nan_to_num(np.asarray(values, dtype=np.float64) / full_scale, nan=0.0,
+                         posinf=1.0, neginf=0.0)
+    return np.clip(unit, 0.0, 1.0)
+
+
+def colour_map(values: np.ndarray, full_scale: float) -> np.ndarray:
+    """Return a rows x cols x 3 uint8 RGB image of values (inferno: dark = none, yellow = full)."""
+    grey = np.round(to_unit(values, full_scale) * 255.0).astype(np.uint8)
+    bgr = cv2.applyColorMap(grey, cv2.COLORMAP_INFERNO)
+    return np.ascontiguousarray(bgr[..., ::-1])
+
+
+def text_map(values: np.ndarray, full_scale: float) -> list:
+    """Return one string per row, two characters per taxel, shading values for a terminal."""
+    levels = np.round(to_unit(values, full_scale) * (len(SHADES) - 1)).astype(int)
+    return [''.join(SHADES[v] * 2 for v in row) for row in levels]

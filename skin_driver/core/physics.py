@@ -1,0 +1,281 @@
+"""
+Simulation physics of the two-layer FSR skin: indenter pressure, layer shift, FSR and ADC.
+
+The model follows the seed paper's construction (two 16 x 16 FSR matrices, ~5 mm taxels, an elastic
+layer between them, a 12-bit ADC reading each FSR through a voltage divider):
+
+* An indenter of contact radius ``radius_m`` pressing with total force ``force_n`` tilted by
+  ``alpha`` from the skin normal loads the top layer with a Hertz pressure profile
+  ``p(r) = p0 * sqrt(1 - r**2 / a**2)`` whose integral is the normal part ``force_n * cos(alpha)``.
+* Each taxel integrates the pressure over its active square (``fill_factor * pitch`` wide), so a
+  contact that moves by a fraction of a taxel changes the map.
+* The bottom layer sees the same profile blurred by the elastic layer (Gaussian of ``spread_m``)
+  and displaced along the tangential force (the seed's convention):
+  ``shift = misalignment + compliance * force_n * sin(alpha) * (cos(beta), sin(beta))``.
+* Each taxel's force becomes ADC counts through :class:`FsrModel`; then come an amplifier offset,
+  row/column crosstalk of the passive matrix, Gaussian noise, dead taxels and 12-bit clipping.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+import math
+from typing import Sequence
+
+import cv2
+import numpy as np
+
+__all__ = ['FsrModel', 'SkinModel', 'Press', 'render', 'render_force', 'layer_shift_m']
+
+
+@dataclass(frozen=True)
+class FsrModel:
+    """
+    Force-sensitive resistor read through a voltage divider by an ADC.
+
+    The FSR resistance follows the usual power law ``R(F) = r_max * (F / force_at_r_max_n) ** -n``
+    (conductance grows as a power of force), with ``n`` chosen so that ``R = r_min`` at
+    ``force_at_r_min_n``; beyond that the resistance stays at ``r_min`` (the sensor saturates).
+    Below ``activation_n`` the FSR is open. The divider puts the FSR above ``r_series_ohm`` and the
+    ADC reads the voltage over the series resistor:
+    ``counts = full_scale * r_series / (r_series + R)``. Forces are per taxel, in newtons.
+    """
+
+    r_series_ohm: float = 1000.0
+    adc_bits: int = 12
+    r_min_ohm: float = 300.0
+    r_max_ohm: float = 3500.0
+    force_at_r_max_n: float = 0.2
+    force_at_r_min_n: float = 20.0
+    activation_n: float = 0.01
+
+    def __post_init__(self):
+        """Reject parameters that make the law undefined."""
+        values = (self.r_series_ohm, self.r_min_ohm, self.r_max_ohm, self.force_at_r_max_n,
+                  self.force_at_r_min_n)
+        if not all(math.isfinite(v) and v > 0 for v in values):
+            raise ValueError('FsrModel resistances and forces must be finite and positive')
+        if not self.r_min_ohm < self.r_max_ohm:
+            raise ValueError('FsrModel needs r_min_ohm < r_max_ohm')
+        if not self.force_at_r_max_n < self.force_at_r_min_n:
+            raise ValueError('FsrModel needs force_at_r_max_n < force_at_r_min_n')
+        if not (math.isfinite(self.activation_n)
+                and 0 <= self.activation_n < self.force_at_r_max_n):
+            raise ValueError('FsrModel activation_n must be in [0, force_at_r_max_n)')
+        if not 1 <= int(self.adc_bits) <= 16:
+            raise ValueError('FsrModel adc_bits must be between 1 and 16')
+
+    @property
+    def full_scale(self) -> int:
+        """Return the largest ADC code."""
+        return (1 << int(self.adc_bits)) - 1
+
+    @property
+    def exponent(self) -> float:
+        """Return the power-law exponent n of the conductance versus force."""
+        return (math.log(self.r_max_ohm / self.r_min_ohm)
+                / math.log(self.force_at_r_min_n / self.force_at_r_max_n))
+
+    @property
+    def saturation_counts(self) -> float:
+        """Return the counts reached when the FSR saturates at ``r_min_ohm``."""
+        return self.full_scale * self.r_series_ohm / (self.r_series_ohm + self.r_min_ohm)
+
+    def force_to_counts(self, force_n: np.ndarray) -> np.ndarray:
+        """Convert per-taxel force (N) to noise-free float counts (0..saturation_counts)."""
+        f = np.maximum(np.asarray(force_n, dtype=np.float64) - self.activation_n, 0.0)
+        conductance = (f / self.force_at_r_max_n) ** self.exponent / self.r_max_ohm
+        conductance = np.minimum(conductance, 1.0 / self.r_min_ohm)
+        gs = conductance * self.r_series_ohm
+        return self.full_scale * gs / (1.0 + gs)
+
+    def counts_to_force(self, counts: np.ndarray) -> np.ndarray:
+        """Invert :meth:`force_to_counts`; saturated counts give ``force_at_r_min_n``."""
+        c = np.clip(np.asarray(counts, dtype=np.float64), 0.0, self.saturation_counts)
+        with np.errstate(divide='ignore', invalid='ignore'):
+            gs = c / (self.full_scale - c)
+            f = self.force_at_r_max_n * (gs * self.r_max_ohm / self.r_series_ohm) ** (
+                1.0 / self.exponent)
+        f = np.where(c > 0, f + self.activation_n, 0.0)
+        return np.minimum(f, self.force_at_r_min_n + self.activation_n)
+
+
+@dataclass(frozen=True)
+class Press:
+    """One indenter acting on the skin; position in the skin frame, angles in radians."""
+
+    x_m: float
+    y_m: float
+    force_n: float
+    alpha_rad: float = 0.0
+    beta_rad: float = 0.0
+    radius_m: float = 0.0025
+
+    def __post_init__(self):
+        """Reject non-finite or out-of-range values."""
+        for name in ('x_m', 'y_m', 'force_n', 'alpha_rad', 'beta_rad', 'radius_m'):
+            if not math.isfinite(getattr(self, name)):
+                raise ValueError(f'Press.{name} must be finite')
+        if self.force_n < 0:
+            raise ValueError('Press.force_n must be non-negative')
+        if self.radius_m <= 0:
+            raise ValueError('Press.radius_m must be positive')
+        if not 0 <= self.alpha_rad < math.pi / 2:
+            raise ValueError('Press.alpha_rad must be in [0, pi/2)')
+
+    @property
+    def normal_force_n(self) -> float:
+        """Return the force component along the skin normal."""
+        return self.force_n * math.cos(self.alpha_rad)
+
+    @property
+    def tangential_force_n(self) -> float:
+        """Return the magnitude of the tangential force component."""
+        return self.force_n * math.sin(self.alpha_rad)
+
+
+@dataclass(frozen=True)
+class SkinModel:
+    """
+    Geometry, mechanics and electronics of a simulated two-layer skin.
+
+    Defaults match the seed's prototype: 16 x 16 taxels at 5 mm; a 10 N press tilted by 45 degrees
+    shifts the layers by about one taxel; a 10 N press reads well below saturation. The elastic
+    layer soft enough for that shift is a few millimetres thick, so it spreads the pressure by a
+    Gaussian of ``spread_m`` = 2 mm; the protective cover and FSR film spread the top layer's
+    pressure by ``cover_spread_m`` = 1 mm. ``fill_factor`` is the sensitive fraction of the pitch.
+    ``dead_taxels`` holds ``(row, col)`` (both layers) or ``(layer, row, col)`` with layer 0 = top,
+    1 = bottom; a dead taxel reads 0.
+    """
+
+    rows: int = 16
+    cols: int = 16
+    pitch_m: float = 0.005
+    compliance_m_per_n: float = 7.0e-4
+    spread_m: float = 0.002
+    noise_counts: float = 6.0
+    crosstalk: float = 0.0
+    dead_taxels: tuple = ()
+    misalignment_m: tuple = (0.0, 0.0)
+    fsr: FsrModel = field(default_factory=FsrModel)
+    fill_factor: float = 0.9
+    baseline_counts: float = 20.0
+    cover_spread_m: float = 0.001
+
+    def __post_init__(self):
+        """Reject inconsistent parameters."""
+        if int(self.rows) < 1 or int(self.cols) < 1:
+            raise ValueError('SkinModel rows and cols must be at least 1')
+        for name in ('pitch_m', 'compliance_m_per_n', 'spread_m', 'noise_counts', 'crosstalk',
+                     'fill_factor', 'baseline_counts', 'cover_spread_m'):
+            v = getattr(self, name)
+            if not (math.isfinite(v) and v >= 0):
+                raise ValueError(f'SkinModel.{name} must be finite and non-negative')
+        if self.pitch_m <= 0 or not 0 < self.fill_factor <= 1:
+            raise ValueError('SkinModel needs pitch_m > 0 and 0 < fill_factor <= 1')
+        if len(self.misalignment_m) != 2 or not all(math.isfinite(v) for v in self.misalignment_m):
+            raise ValueError('SkinModel.misalignment_m must be two finite numbers')
+        for t in self.dead_taxels:
+            if len(t) not in (2, 3):
+                raise ValueError('dead_taxels entries are (row, col) or (layer, row, col)')
+
+
+def layer_shift_m(model: SkinModel, press: Press) -> tuple:
+    """Return the (x, y) displacement of the bottom map relative to the top one, in metres."""
+    t = model.compliance_m_per_n * press.tangential_force_n
+    return (model.misalignment_m[0] + t * math.cos(press.beta_rad),
+            model.misalignment_m[1] + t * math.sin(press.beta_rad))
+
+
+def _hertz(x: np.ndarray, y: np.ndarray, cx: float, cy: float, radius: float) -> np.ndarray:
+    r2 = ((x - cx) ** 2)[None, :] + ((y - cy) ** 2)[:, None]
+    return np.sqrt(np.maximum(1.0 - r2 / (radius * radius), 0.0))
+
+
+def _cell_weights(sub: int, fill: float) -> np.ndarray:
+    # Overlap of each fine pixel with the centred active interval of one taxel cell.
+    edges = np.arange(sub + 1) / sub
+    lo, hi = 0.5 - fill / 2.0, 0.5 + fill / 2.0
+    return np.clip(np.minimum(edges[1:], hi) - np.maximum(edges[:-1], lo), 0.0, None) * sub
+
+
+def _press_maps(model: SkinModel, press: Press) -> tuple:
+    """Return per-taxel force maps (top, bottom) of one press, before the FSR."""
+    pitch = model.pitch_m
+    top = np.zeros((model.rows, model.cols))
+    bottom = np.zeros_like(top)
+    fz = press.normal_force_n
+    if fz <= 0:
+        return top, bottom
+    sx, sy = layer_shift_m(model, press)
+    a = press.radius_m
+    h = min(pitch / 24.0, a / 12.0)
+    sub = int(math.ceil(pitch / h))
+    h = pitch / sub
+    # The cover spreads the pressure on the top layer; the elastic layer adds its own spread.
+    cover = model.cover_spread_m
+    sigma = math.hypot(cover, model.spread_m)
+    weights = _cell_weights(sub, model.fill_factor)
+    for layer, (cx, cy), blur in ((top, (press.x_m, press.y_m), cover),
+                                  (bottom, (press.x_m + sx, press.y_m + sy), sigma)):
+        reach = a + 4.0 * blur + h
+        c0 = int(math.floor((cx - reach) / pitch + 0.5))
+        c1 = int(math.floor((cx + reach) / pitch + 0.5)) + 1
+        r0 = int(math.floor((cy - reach) / pitch + 0.5))
+        r1 = int(math.floor((cy + reach) / pitch + 0.5)) + 1
+        if c1 <= 0 or r1 <= 0 or c0 >= model.cols or r0 >= model.rows:
+            continue
+        xs = (c0 - 0.5) * pitch + (np.arange((c1 - c0) * sub) + 0.5) * h
+        ys = (r0 - 0.5) * pitch + (np.arange((r1 - r0) * sub) + 0.5) * h
+        fine = _hertz(xs, ys, cx, cy, a)
+        total = fine.sum()
+        if total <= 0:
+            # The disc fell between fine samples; put the whole force on the nearest sample.
+            fine[np.argmin(np.abs(ys - cy)), np.argmin(np.abs(xs - cx))] = 1.0
+            total = 1.0
+        fine *= fz / total
+        if blur > 0:
+            fine = cv2.GaussianBlur(fine, (0, 0), sigmaX=blur / h, sigmaY=blur / h,
+                                    borderType=cv2.BORDER_CONSTANT)
+        cells = np.einsum('aibj,i,j->ab',
+                          fine.reshape(r1 - r0, sub, c1 - c0, sub), weights, weights)
+        rr0, cc0 = max(r0, 0), max(c0, 0)
+        rr1, cc1 = min(r1, model.rows), min(c1, model.cols)
+        layer[rr0:rr1, cc0:cc1] += cells[rr0 - r0:rr1 - r0, cc0 - c0:cc1 - c0]
+    return top, bottom
+
+
+def render_force(model: SkinModel, presses: Sequence[Press]) -> tuple:
+    """Return noise-free per-taxel normal force maps (top, bottom) in newtons."""
+    top = np.zeros((model.rows, model.cols))
+    bottom = np.zeros_like(top)
+    for p in presses:
+        t, b = _press_maps(model, p)
+        top += t
+        bottom += b
+    return top, bottom
+
+
+def _electronics(model: SkinModel, force: np.ndarray, layer: int,
+                 rng: np.random.Generator) -> np.ndarray:
+    counts = model.fsr.force_to_counts(force) + model.baseline_counts
+    if model.crosstalk > 0:
+        # A passive matrix leaks a little of every taxel sharing the row or the column.
+        leak = counts.sum(axis=1, keepdims=True) + counts.sum(axis=0, keepdims=True) - 2 * counts
+        counts = counts + model.crosstalk * leak
+    if model.noise_counts > 0:
+        counts = counts + rng.normal(0.0, model.noise_counts, counts.shape)
+    for t in model.dead_taxels:
+        if len(t) == 3 and int(t[0]) != layer:
+            continue
+        r, c = int(t[-2]), int(t[-1])
+        if 0 <= r < model.rows and 0 <= c < model.cols:
+            counts[r, c] = 0.0
+    return np.clip(np.rint(counts), 0, model.fsr.full_scale).astype(np.uint16)
+
+
+def render(model: SkinModel, presses: Sequence[Press],
+           rng: np.random.Generator) -> tuple:
+    """Return (top, bottom) uint16 ADC count maps (rows x cols, 0..4095) of the presses."""
+    top_f, bottom_f = render_force(model, presses)
+    return _electronics(model, top_f, 0, rng), _electronics(model, bottom_f, 1, rng)

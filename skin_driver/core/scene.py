@@ -1,0 +1,321 @@
+"""
+Scenes: YAML scripts of presses that drive the simulated skin.
+
+A scene file is a mapping::
+
+    name: seed                 # optional, defaults to the file name
+    description: ...           # optional
+    model: {rows: 16, cols: 16, pitch_m: 0.005, noise_counts: 4.0, crosstalk: 0.0,
+            dead_taxels: [[3, 4]], misalignment_m: [0.0, 0.0], fsr: {r_series_ohm: 1000}}
+    repeat: 3                  # play the script this many times (default 1)
+    period_s: 20.0             # length of one repetition (default: end of the last press)
+    defaults: {x_m: 0.0375, y_m: 0.0375, radius_m: 0.004}   # merged into every press
+    presses:
+      - {time_s: 0.5, force_n: 10, alpha_deg: 45, beta_deg: 90, duration_s: 1.0, ramp_s: 0.2}
+    generator: {kind: random, seed: 1, count: 20, ...}     # optional, adds generated presses
+
+``model`` keys are the fields of :class:`skin_driver.core.physics.SkinModel`.  Angles are in
+degrees in the file only; everything a scene returns is SI with angles in radians.  A press's force
+ramps up linearly over ``ramp_s``, holds, and ramps down over the last ``ramp_s`` of its
+``duration_s``.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass
+import importlib.resources
+import math
+import os
+from pathlib import Path
+from typing import Any, Mapping
+
+import numpy as np
+import yaml
+
+from skin_driver.core.physics import FsrModel, Press, SkinModel
+
+PRESS_FIELDS = ('time_s', 'x_m', 'y_m', 'force_n', 'alpha_deg', 'beta_deg', 'radius_m',
+                'duration_s')
+DEFAULT_RAMP_S = 0.1
+_TOP_LEVEL = ('name', 'description', 'model', 'repeat', 'period_s', 'defaults', 'presses',
+              'generator')
+
+
+@dataclass(frozen=True)
+class ScenePress:
+    """One scripted press: where, how hard, which way, when and for how long."""
+
+    time_s: float
+    x_m: float
+    y_m: float
+    force_n: float
+    alpha_deg: float
+    beta_deg: float
+    radius_m: float
+    duration_s: float
+    ramp_s: float = DEFAULT_RAMP_S
+
+    @property
+    def end_s(self) -> float:
+        """Return the time at which the press has ended."""
+        return self.time_s + self.duration_s
+
+    def envelope(self, t: float) -> float:
+        """Return the fraction (0..1) of the full force acting at scene time t."""
+        if not self.time_s < t < self.end_s:
+            return 0.0
+        if self.ramp_s <= 0:
+            return 1.0
+        return min(1.0, (t - self.time_s) / self.ramp_s, (self.end_s - t) / self.ramp_s)
+
+    def press(self, fraction: float = 1.0) -> Press:
+        """Return the physics press at the given fraction of the full force."""
+        return Press(x_m=self.x_m, y_m=self.y_m, force_n=self.force_n * fraction,
+                     alpha_rad=math.radians(self.alpha_deg), beta_rad=math.radians(self.beta_deg),
+                     radius_m=self.radius_m)
+
+
+@dataclass(frozen=True)
+class Scene:
+    """A skin model and a script of presses, optionally repeated."""
+
+    name: str
+    model: SkinModel
+    presses: tuple
+    repeat: int = 1
+    period_s: float = 0.0
+    description: str = ''
+
+    @property
+    def duration_s(self) -> float:
+        """Return the length of the whole scene, all repetitions included."""
+        return self.period_s * self.repeat
+
+    def active_at(self, t: float) -> list:
+        """Return (press index, physics Press) for every press acting at scene time t."""
+        if not math.isfinite(t) or t < 0 or self.period_s <= 0:
+            return []
+        k = math.floor(t / self.period_s)
+        if k >= self.repeat:
+            return []
+        local = t - k * self.period_s
+        active = []
+        for i, p in enumerate(self.presses):
+            e = p.envelope(local)
+            if e > 0:
+                active.append((i, p.press(e)))
+        return active
+
+    def presses_at(self, t: float) -> list:
+        """Return the physics presses acting at scene time t."""
+        return [p for _, p in self.active_at(t)]
+
+    def hold_times(self) -> list:
+        """Return (scene time, press index) at the middle of every press, all repetitions."""
+        return [(k * self.period_s + p.time_s + p.duration_s / 2.0, i)
+                for k in range(self.repeat) for i, p in enumerate(self.presses)]
+
+
+def _number(where: str, field: str, value: Any) -> float:
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise ValueError(f'{where}: field {field!r} must be a number, got {value!r}')
+    value = float(value)
+    if not math.isfinite(value):
+        raise ValueError(f'{where}: field {field!r} must be finite, got {value}')
+    return value
+
+
+def _press(index: int, entry: Any, defaults: Mapping) -> ScenePress:
+    where = f'press {index}'
+    if not isinstance(entry, Mapping):
+        raise ValueError(f'{where}: must be a mapping of fields, got {entry!r}')
+    merged = {**defaults, **entry}
+    allowed = PRESS_FIELDS + ('ramp_s',)
+    for key in merged:
+        if key not in allowed:
+            raise ValueError(f'{where}: unknown field {key!r}; fields are {", ".join(allowed)}')
+    missing = [f for f in PRESS_FIELDS if f not in merged]
+    if missing:
+        raise ValueError(f'{where}: missing field {missing[0]!r}')
+    v = {k: _number(where, k, merged[k]) for k in merged}
+    v.setdefault('ramp_s', min(DEFAULT_RAMP_S, v['duration_s'] / 2.0))
+    checks = (
+        ('time_s', v['time_s'] >= 0, 'must be >= 0'),
+        ('force_n', v['force_n'] > 0, 'must be > 0'),
+        ('alpha_deg', 0 <= v['alpha_deg'] < 90, 'must be in [0, 90)'),
+        ('radius_m', v['radius_m'] > 0, 'must be > 0'),
+        ('duration_s', v['duration_s'] > 0, 'must be > 0'),
+        ('ramp_s', 0 <= 2 * v['ramp_s'] <= v['duration_s'], 'must be in [0, duration_s / 2]'),
+    )
+    for field, ok, rule in checks:
+        if not ok:
+            raise ValueError(f'{where}: field {field!r} {rule}, got {v[field]}')
+    return ScenePress(**v)
+
+
+def _model(data: Any) -> SkinModel:
+    if data is None:
+        return SkinModel()
+    if not isinstance(data, Mapping):
+        raise ValueError(f'model: must be a mapping of SkinModel fields, got {data!r}')
+    names = {f.name for f in dataclasses.fields(SkinModel)}
+    kwargs = {}
+    for key, value in data.items():
+        if key not in names:
+            raise ValueError(f'model: unknown field {key!r}; fields are '
+                             f'{", ".join(sorted(names))}')
+        if key == 'fsr':
+            fsr_names = {f.name for f in dataclasses.fields(FsrModel)}
+            if not isinstance(value, Mapping) or set(value) - fsr_names:
+                raise ValueError(f'model: field fsr must be a mapping of {sorted(fsr_names)}')
+            try:
+                value = FsrModel(**value)
+            except (TypeError, ValueError) as err:
+                raise ValueError(f'model: field fsr: {err}') from None
+        elif key == 'dead_taxels':
+            if not isinstance(value, (list, tuple)) or not all(
+                    isinstance(t, (list, tuple)) and all(isinstance(i, int) for i in t)
+                    for t in value):
+                raise ValueError(f'model: field dead_taxels must be a list of [row, col] or '
+                                 f'[layer, row, col] integer lists, got {value!r}')
+            value = tuple(tuple(t) for t in value)
+        elif key == 'misalignment_m':
+            if not isinstance(value, (list, tuple)) or len(value) != 2:
+                raise ValueError(f'model: field misalignment_m must be [x, y], got {value!r}')
+            value = tuple(_number('model', key, x) for x in value)
+        elif key in ('rows', 'cols'):
+            if isinstance(value, bool) or not isinstance(value, int) or not 1 <= value <= 128:
+                raise ValueError(f'model: field {key!r} must be an integer in 1..128, got '
+                                 f'{value!r}')
+        else:
+            value = _number('model', key, value)
+        kwargs[key] = value
+    try:
+        return SkinModel(**kwargs)
+    except (TypeError, ValueError) as err:
+        raise ValueError(f'model: {err}') from None
+
+
+def _range(spec: Mapping, key: str, default: tuple) -> tuple:
+    value = spec.get(key, default)
+    if isinstance(value, (int, float)) and not isinstance(value, bool):
+        value = (value, value)
+    if not isinstance(value, (list, tuple)) or len(value) != 2:
+        raise ValueError(f'generator: field {key!r} must be a number or [low, high], got '
+                         f'{value!r}')
+    low, high = (_number('generator', key, x) for x in value)
+    if low > high:
+        raise ValueError(f'generator: field {key!r} needs low <= high, got {value!r}')
+    return low, high
+
+
+def _generate(spec: Any, model: SkinModel, first_index: int) -> list:
+    """Return presses made by a generator entry (kind: random)."""
+    if not isinstance(spec, Mapping) or spec.get('kind') != 'random':
+        raise ValueError(f'generator: only {{kind: random, ...}} is known, got {spec!r}')
+    allowed = {'kind', 'seed', 'count', 'start_s', 'interval_s', 'duration_s', 'ramp_s',
+               'force_n', 'alpha_deg', 'beta_deg', 'radius_m', 'margin_m'}
+    unknown = set(spec) - allowed
+    if unknown:
+        raise ValueError(f'generator: unknown field {sorted(unknown)[0]!r}; fields are '
+                         f'{", ".join(sorted(allowed))}')
+    count = spec.get('count', 20)
+    seed = spec.get('seed', 0)
+    for key, value in (('count', count), ('seed', seed)):
+        if isinstance(value, bool) or not isinstance(value, int) or value < 0:
+            raise ValueError(f'generator: field {key!r} must be a non-negative integer, got '
+                             f'{value!r}')
+    start = _number('generator', 'start_s', spec.get('start_s', 0.5))
+    interval = _number('generator', 'interval_s', spec.get('interval_s', 1.0))
+    duration = _number('generator', 'duration_s', spec.get('duration_s', 0.6))
+    margin = _number('generator', 'margin_m', spec.get('margin_m', model.pitch_m))
+    default_ranges = (('force_n', (2.0, 15.0)), ('alpha_deg', (0.0, 60.0)),
+                      ('beta_deg', (0.0, 360.0)), ('radius_m', (0.002, 0.006)))
+    ranges = {k: _range(spec, k, d) for k, d in default_ranges}
+    rng = np.random.default_rng(seed)
+    x_hi = (model.cols - 1) * model.pitch_m
+    y_hi = (model.rows - 1) * model.pitch_m
+    entries = []
+    for _ in range(count):
+        entry = {k: float(rng.uniform(*r)) for k, r in ranges.items()}
+        entry['x_m'] = float(rng.uniform(min(margin, x_hi / 2), max(x_hi - margin, x_hi / 2)))
+        entry['y_m'] = float(rng.uniform(min(margin, y_hi / 2), max(y_hi - margin, y_hi / 2)))
+        entries.append(entry)
+    presses = []
+    for j, entry in enumerate(entries):
+        entry.update(time_s=start + j * interval, duration_s=duration)
+        if 'ramp_s' in spec:
+            entry['ramp_s'] = spec['ramp_s']
+        entry['alpha_deg'] = min(entry['alpha_deg'], 89.0)
+        presses.append(_press(first_index + j, entry, {}))
+    return presses
+
+
+def scene_from_dict(data: Any, name: str = 'scene') -> Scene:
+    """
+    Build and validate a scene from its parsed YAML mapping.
+
+    Raise ValueError naming the press index and field (or the top-level key) that is wrong.
+    """
+    if not isinstance(data, Mapping):
+        raise ValueError(f'scene {name!r}: must be a mapping, got {type(data).__name__}')
+    for key in data:
+        if key not in _TOP_LEVEL:
+            raise ValueError(f'scene {name!r}: unknown key {key!r}; keys are '
+                             f'{", ".join(_TOP_LEVEL)}')
+    model = _model(data.get('model'))
+    defaults = data.get('defaults') or {}
+    if not isinstance(defaults, Mapping):
+        raise ValueError(f'defaults: must be a mapping of press fields, got {defaults!r}')
+    entries = data.get('presses') or []
+    if not isinstance(entries, list):
+        raise ValueError(f'presses: must be a list, got {type(entries).__name__}')
+    presses = [_press(i, e, defaults) for i, e in enumerate(entries)]
+    if data.get('generator') is not None:
+        presses += _generate(data['generator'], model, len(presses))
+    if not presses:
+        raise ValueError(f'scene {name!r}: has no presses')
+    repeat = data.get('repeat', 1)
+    if isinstance(repeat, bool) or not isinstance(repeat, int) or repeat < 1:
+        raise ValueError(f'repeat: must be an integer >= 1, got {repeat!r}')
+    last_end = max(p.end_s for p in presses)
+    period = data.get('period_s')
+    period = last_end if period is None else _number('scene', 'period_s', period)
+    if period < last_end:
+        raise ValueError(f'period_s: must be at least the end of the last press ({last_end} s), '
+                         f'got {period}')
+    description = data.get('description', '')
+    return Scene(name=str(data.get('name', name)), model=model, presses=tuple(presses),
+                 repeat=repeat, period_s=period, description=str(description))
+
+
+def bundled_scene_names() -> list:
+    """Return the names of the scenes shipped with the package."""
+    folder = importlib.resources.files('skin_driver') / 'scenes'
+    return sorted(p.name[:-5] for p in folder.iterdir() if p.name.endswith('.yaml'))
+
+
+def find_scene(name_or_path: str | os.PathLike) -> Path:
+    """Return the file of a bundled scene name (with or without .yaml) or of an existing path."""
+    path = Path(name_or_path)
+    if path.is_file():
+        return path
+    stem = path.name[:-5] if path.name.endswith('.yaml') else path.name
+    if str(name_or_path) in (stem, stem + '.yaml'):
+        candidate = importlib.resources.files('skin_driver') / 'scenes' / (stem + '.yaml')
+        if candidate.is_file():
+            return Path(str(candidate))
+    raise ValueError(f'no scene file or bundled scene named {str(name_or_path)!r}; bundled '
+                     f'scenes are {", ".join(bundled_scene_names())}')
+
+
+def load_scene(name_or_path: str | os.PathLike) -> Scene:
+    """Load and validate a scene from a bundled name or a YAML file path."""
+    path = find_scene(name_or_path)
+    try:
+        data = yaml.safe_load(path.read_text())
+    except yaml.YAMLError as err:
+        raise ValueError(f'scene {str(path)!r} is not valid YAML: {err}') from None
+    name = path.name[:-5] if path.name.endswith('.yaml') else path.name
+    return scene_from_dict(data, name=name)

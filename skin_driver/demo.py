@@ -1,0 +1,289 @@
+"""
+`make demo`: the whole pipeline on the simulated skin, watched live in the terminal.
+
+Starts the direction node and the serial driver, then the simulated skin on a pseudo-terminal
+playing the seed paper's experiment (normal presses, then alpha = 45 deg at the eight azimuths).
+It tares and calibrates through the services, shows what the skin feels, and ends with Table 1
+of the paper next to the same table for this driver's estimator and the paper's method, measured
+on the same scans. Ctrl-C stops it; every process it started is stopped with it.
+"""
+
+import argparse
+import math
+import os
+import shutil
+import signal
+import subprocess
+import sys
+import tempfile
+import time
+
+import numpy as np
+import rclpy
+from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
+from rclpy.node import Node
+from rclpy.qos import qos_profile_sensor_data
+from skin_msgs.msg import SkinFrame, TactileContactArray
+from skin_msgs.srv import Calibrate
+from std_srvs.srv import Trigger
+import yaml
+
+from skin_driver import conversions
+from skin_driver.core.calibration import Calibration
+from skin_driver.core.direction import DEFAULT_METHOD
+from skin_driver.core.estimator import ContactEstimator, EstimatorConfig
+from skin_driver.core.heatmap import text_map
+from skin_driver.core.scene import scene_from_dict
+from skin_driver.evaluate import format_table, summarise
+
+LEAD_IN_S = 3.0
+CAL_PRESSES = 6
+CAL_PERIOD_S = 1.2
+DIR_PERIOD_S = 1.5
+
+
+def demo_scene(repeats: int) -> dict:
+    """Return the demo's scene: a quiet lead-in, normal presses, then the eight directions."""
+    presses = [{'time_s': LEAD_IN_S + i * CAL_PERIOD_S, 'alpha_deg': 0.0, 'beta_deg': 0.0,
+                'duration_s': 1.0} for i in range(CAL_PRESSES)]
+    start = LEAD_IN_S + CAL_PRESSES * CAL_PERIOD_S + 0.5
+    for k in range(repeats):
+        for j, beta in enumerate(range(0, 360, 45)):
+            presses.append({'time_s': start + (k * 8 + j) * DIR_PERIOD_S, 'alpha_deg': 45.0,
+                            'beta_deg': float(beta), 'duration_s': 1.2})
+    return {
+        'name': 'demo', 'description': 'seed experiment for make demo',
+        'model': {'rows': 16, 'cols': 16, 'pitch_m': 0.005},
+        'defaults': {'x_m': 0.0375, 'y_m': 0.0375, 'force_n': 10.0, 'radius_m': 0.004,
+                     'ramp_s': 0.3},
+        'presses': presses,
+    }
+
+
+class DemoMonitor(Node):
+    """Watch frames and contacts, drive the services and keep the ground-truth comparison."""
+
+    def __init__(self, scene, namespace: str, method: str, live: bool):
+        super().__init__('skin_demo', namespace=namespace)
+        self.scene = scene
+        self.live = live
+        self.method = method
+        self.device_time = {}
+        self.last_frame = None
+        self.last_contacts = []
+        self.frames = 0
+        self.calibration = Calibration()
+        self.calibrated = False
+        # The paper's method runs here on the very scans the node sees, for the side-by-side table.
+        self.seed = ContactEstimator(EstimatorConfig(method='seed'), self.calibration)
+        self.results = {method: [], 'seed': []}
+        self.status = 'waiting for the skin'
+        self.create_subscription(SkinFrame, 'frame', self._on_frame, qos_profile_sensor_data)
+        self.create_subscription(TactileContactArray, 'contacts', self._on_contacts,
+                                 qos_profile_sensor_data)
+        self.tare = self.create_client(Trigger, 'skin_direction/tare')
+        self.calibrate = self.create_client(Calibrate, 'skin_direction/calibrate')
+        self._last_draw = 0.0
+
+    def scene_time(self, stamp) -> float:
+        """Return the scene time of the scan with this header stamp, or NaN if unknown."""
+        us = self.device_time.get((stamp.sec, stamp.nanosec))
+        return math.nan if us is None else us * 1e-6
+
+    def truth(self, t: float):
+        """Return the press at full force at scene time t, or None."""
+        for index, press in self.scene.active_at(t):
+            spec = self.scene.presses[index]
+            if press.force_n >= spec.force_n * 0.999:
+                return spec
+        return None
+
+    def _on_frame(self, msg: SkinFrame) -> None:
+        self.frames += 1
+        key = (msg.header.stamp.sec, msg.header.stamp.nanosec)
+        self.device_time[key] = msg.device_time_us
+        if len(self.device_time) > 2000:
+            self.device_time.pop(next(iter(self.device_time)))
+        top, bottom = conversions.skin_frame_layers(msg)
+        self.last_frame = (top, bottom)
+        if self.calibrated:
+            spec = self.truth(msg.device_time_us * 1e-6)
+            if spec is not None and spec.alpha_deg > 0:
+                contacts = self.seed.process(top, bottom)
+                self._record('seed', spec, contacts[0] if contacts else None)
+
+    def _on_contacts(self, msg: TactileContactArray) -> None:
+        self.last_contacts = msg.contacts
+        if self.calibrated:
+            spec = self.truth(self.scene_time(msg.header.stamp))
+            if spec is not None and spec.alpha_deg > 0:
+                self._record(self.method, spec, msg.contacts[0] if msg.contacts else None)
+        self.draw()
+
+    def _record(self, method, spec, contact) -> None:
+        valid = contact is not None and contact.direction_valid
+        azimuth = math.degrees(contact.azimuth if hasattr(contact, 'azimuth')
+                               else contact.azimuth_rad) if valid else math.nan
+        self.results[method].append((spec.beta_deg, azimuth))
+
+    def set_calibration(self, response) -> None:
+        """Apply the calibration the service returned to the side-by-side seed estimator."""
+        self.calibration = Calibration(x_p_m=response.x_p, y_p_m=response.y_p,
+                                       std_x_m=response.std_x, std_y_m=response.std_y,
+                                       presses=response.presses_used)
+        self.seed.calibration = self.calibration
+        self.calibrated = True
+
+    def draw(self, force: bool = False) -> None:
+        """Redraw the live view at most ten times a second."""
+        now = time.monotonic()
+        if not force and now - self._last_draw < (0.1 if self.live else 2.0):
+            return
+        self._last_draw = now
+        lines = [f'skin_driver demo - {self.status}', '']
+        if self.last_frame is not None and self.live:
+            top, bottom = (layer.astype(np.float64) for layer in self.last_frame)
+            left, right = text_map(top, 3000.0), text_map(bottom, 3000.0)
+            lines.append(f'{"top layer":<34}bottom layer')
+            lines += [f'{a}  {b}' for a, b in zip(left, right)]
+            lines.append('')
+        if self.last_contacts:
+            for c in self.last_contacts[:3]:
+                beta = (f'{math.degrees(c.azimuth):7.1f} deg' if c.direction_valid
+                        else '      -    ')
+                alpha = f'{math.degrees(c.polar):5.1f} deg' if c.direction_valid else '    -    '
+                lines.append(f'contact at x {c.location.x * 1e3:5.1f} mm  '
+                             f'y {c.location.y * 1e3:5.1f} mm  |F| {c.magnitude:5.2f} N  '
+                             f'beta {beta}  alpha {alpha}'
+                             f'  confidence {c.confidence:.2f}')
+        else:
+            lines.append('no contact')
+        if self.live:
+            sys.stdout.write('\x1b[H\x1b[J' + '\n'.join(lines) + '\n')
+        else:
+            sys.stdout.write(lines[0] + ' | ' + lines[-1] + '\n')
+        sys.stdout.flush()
+
+
+def _spawn(argv, log):
+    return subprocess.Popen([sys.executable] + argv, stdout=log, stderr=subprocess.STDOUT,
+                            start_new_session=True)
+
+
+def _stop_all(procs) -> None:
+    for proc in procs:
+        if proc.poll() is None:
+            os.killpg(proc.pid, signal.SIGINT)
+    deadline = time.monotonic() + 5.0
+    for proc in procs:
+        try:
+            proc.wait(max(0.1, deadline - time.monotonic()))
+        except subprocess.TimeoutExpired:
+            os.killpg(proc.pid, signal.SIGKILL)
+            proc.wait()
+
+
+def _call(executor, client, request, timeout_s):
+    if not client.wait_for_service(timeout_sec=10.0):
+        raise RuntimeError(f'service {client.srv_name} did not come up')
+    future = client.call_async(request)
+    executor.spin_until_future_complete(future, timeout_sec=timeout_s)
+    if not future.done():
+        raise RuntimeError(f'service {client.srv_name} did not answer in {timeout_s:.0f} s')
+    return future.result()
+
+
+def _wait(executor, condition, timeout_s, what):
+    deadline = time.monotonic() + timeout_s
+    while not condition():
+        if time.monotonic() > deadline:
+            raise RuntimeError(f'gave up waiting for {what} after {timeout_s:.0f} s')
+        executor.spin_once(timeout_sec=0.05)
+
+
+def run(args, workdir: str) -> int:
+    """Run the demo in workdir; return the exit status."""
+    scene_dict = demo_scene(args.repeats)
+    scene = scene_from_dict(scene_dict, name='demo')
+    scene_path = os.path.join(workdir, 'demo.yaml')
+    with open(scene_path, 'w') as f:
+        yaml.safe_dump(scene_dict, f)
+    port = os.path.join(workdir, 'skin0')
+    ns = '/skin_demo'
+    log = open(os.path.join(workdir, 'nodes.log'), 'w')
+    ros = ['--ros-args', '-r', f'__ns:={ns}', '--log-level', 'warn']
+    procs = [
+        _spawn(['-m', 'skin_driver.direction_node'] + ros + [
+            '-p', f'method:={args.method}',
+            '-p', f'calibration_file:={os.path.join(workdir, "calibration.yaml")}'], log),
+        _spawn(['-m', 'skin_driver.driver_node'] + ros + [
+            '-p', f'port:={port}', '-p', 'reconnect_max:=0.2', '-p', 'publish_images:=false'],
+            log),
+    ]
+    rclpy.init()
+    executor = SingleThreadedExecutor()
+    monitor = DemoMonitor(scene, ns, args.method, live=args.live)
+    executor.add_node(monitor)
+    try:
+        _wait(executor, lambda: monitor.tare.service_is_ready(), 20.0, 'the direction node')
+        procs.append(_spawn(['-m', 'skin_driver.sim', '--scene', scene_path, '--link', port,
+                             '--rate', str(args.rate)], log))
+        _wait(executor, lambda: monitor.frames >= 30, 20.0, 'frames from the simulated skin')
+        monitor.status = 'taring the unloaded skin'
+        result = _call(executor, monitor.tare, Trigger.Request(), 10.0)
+        if not result.success:
+            raise RuntimeError(f'tare refused: {result.message}')
+        monitor.status = f'calibrating: the scene makes {CAL_PRESSES} normal presses'
+        response = _call(executor, monitor.calibrate,
+                         Calibrate.Request(presses=CAL_PRESSES - 1, timeout=20.0), 30.0)
+        if not response.success:
+            raise RuntimeError(f'calibration failed: {response.message}')
+        monitor.set_calibration(response)
+        monitor.status = (f'calibrated (x_p {response.x_p * 1e3:.2f} mm, y_p '
+                          f'{response.y_p * 1e3:.2f} mm); alpha = 45 deg presses at 8 azimuths')
+        _wait(executor, lambda: (monitor.device_time and max(monitor.device_time.values()) * 1e-6
+                                 > scene.duration_s + 0.3), scene.duration_s + 30.0, 'the scene')
+        monitor.draw(force=True)
+    finally:
+        executor.shutdown()
+        monitor.destroy_node()
+        rclpy.try_shutdown()
+        _stop_all(procs)
+        log.close()
+    report = {'methods': {name: summarise([r[0] for r in rows], [r[1] for r in rows])
+                          for name, rows in monitor.results.items()}}
+    print(f'\nTable 1: azimuth error at alpha = 45 deg, every scan at full force, '
+          f'{args.repeats} rounds at {args.rate:g} Hz; {args.method} ran in the direction node, '
+          'seed (the paper\'s plain phase correlation) on the same scans\n')
+    print(format_table(report))
+    return 0
+
+
+def main(argv=None) -> int:
+    """Run the demo from the command line."""
+    parser = argparse.ArgumentParser(prog='demo', description=__doc__.split('\n\n')[0])
+    parser.add_argument('--method', default=DEFAULT_METHOD, help='estimator of the direction node')
+    parser.add_argument('--repeats', type=int, default=3, help='rounds of the eight directions')
+    parser.add_argument('--rate', type=float, default=100.0, help='scans per second of the skin')
+    parser.add_argument('--plain', dest='live', action='store_false',
+                        help='print status lines instead of redrawing the terminal')
+    parser.set_defaults(live=sys.stdout.isatty())
+    args = parser.parse_args(argv)
+    workdir = tempfile.mkdtemp(prefix='skin_demo_')
+    keep = False
+    try:
+        return run(args, workdir)
+    except (KeyboardInterrupt, ExternalShutdownException):
+        print('\ndemo stopped')
+        return 130
+    except RuntimeError as err:
+        keep = True
+        print(f'\ndemo: {err} (node output kept in {workdir}/nodes.log)', file=sys.stderr)
+        return 1
+    finally:
+        if not keep:
+            shutil.rmtree(workdir, ignore_errors=True)
+
+
+if __name__ == '__main__':
+    sys.exit(main())

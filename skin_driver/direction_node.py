@@ -1,0 +1,365 @@
+"""
+Direction node: turns SkinFrame scans into contacts with location, force and direction.
+
+Subscribes to frame (skin_msgs/SkinFrame). Publishes contacts (TactileContactArray, every scan,
+empty when nothing touches), contact (the strongest TactileContact, when there is one) and wrench
+(its force as geometry_msgs/WrenchStamped; zero when nothing touches, so a controller sees the
+release). For rviz, at most viz_rate times a second: top/heatmap and bottom/heatmap (rgb8) and
+markers (visualization_msgs/MarkerArray). Services: ~/calibrate (skin_msgs/srv/Calibrate) and
+~/tare (std_srvs/srv/Trigger). Diagnostics on /diagnostics.
+"""
+
+import collections
+import dataclasses
+import math
+import os
+import time
+
+from geometry_msgs.msg import WrenchStamped
+import numpy as np
+import rclpy
+from rclpy.callback_groups import MutuallyExclusiveCallbackGroup
+from rclpy.executors import ExternalShutdownException
+from rclpy.node import Node
+from rclpy.qos import qos_profile_sensor_data
+from rclpy.task import Future
+from sensor_msgs.msg import Image
+from skin_msgs.msg import SkinFrame, TactileContact, TactileContactArray
+from skin_msgs.srv import Calibrate
+from std_srvs.srv import Trigger
+from visualization_msgs.msg import MarkerArray
+
+from skin_driver import conversions, diagnostics
+from skin_driver.core import calibration as calib
+from skin_driver.core.direction import DEFAULT_METHOD, method_names
+from skin_driver.core.estimator import ContactEstimator, EstimatorConfig
+from skin_driver.core.heatmap import colour_map
+from skin_driver.core.presses import PressSegmenter
+from skin_driver.params import declare, ParameterError
+
+DEFAULT_CALIBRATION_FILE = os.path.join(
+    os.environ.get('ROS_HOME', os.path.join(os.path.expanduser('~'), '.ros')),
+    'skin_driver', 'calibration.yaml')
+
+
+class _Session:
+    """One calibration call in progress."""
+
+    def __init__(self, wanted: int, segmenter: PressSegmenter, future: Future):
+        self.wanted = wanted
+        self.segmenter = segmenter
+        self.future = future
+        self.accepted = []
+        self.rejected = 0
+
+
+class DirectionNode(Node):
+    """Estimate contacts from raw scans; calibrate and tare on request."""
+
+    def __init__(self, **kwargs):
+        super().__init__('skin_direction', **kwargs)
+        self._declare_parameters()
+        self._calibration, self._calibration_note = self._load_calibration()
+        self._estimator = ContactEstimator(self._estimator_config(), self._calibration)
+        self._recent = collections.deque(maxlen=self._p('tare.frames'))
+        self._session = None
+        self._stats = collections.Counter()
+        self._cost = []
+        self._last_viz = 0.0
+        self._rate = diagnostics.RateMeter(time.monotonic())
+
+        self._pub_contacts = self.create_publisher(TactileContactArray, 'contacts',
+                                                   qos_profile_sensor_data)
+        self._pub_contact = self.create_publisher(TactileContact, 'contact',
+                                                  qos_profile_sensor_data)
+        self._pub_wrench = self.create_publisher(WrenchStamped, 'wrench', qos_profile_sensor_data)
+        self._pub_heat = {layer: self.create_publisher(Image, f'{layer}/heatmap', 5)
+                          for layer in ('top', 'bottom')}
+        self._pub_markers = self.create_publisher(MarkerArray, 'markers', 5)
+        self.create_subscription(SkinFrame, 'frame', self._on_frame, qos_profile_sensor_data)
+        # The calibration call waits for presses: in a group of its own it cannot hold up the
+        # frames it waits for, which run in the node's default group.
+        self.create_service(Calibrate, '~/calibrate', self._on_calibrate,
+                            callback_group=MutuallyExclusiveCallbackGroup())
+        self.create_service(Trigger, '~/tare', self._on_tare)
+        self._diag = diagnostics.DiagnosticPublisher(self)
+        self.create_timer(self._p('diagnostics_period'), self._report)
+        self.get_logger().info(
+            f"estimating with '{self._p('method')}'; {self._calibration_note}")
+
+    # ---- parameters -------------------------------------------------------------------------
+    def _declare_parameters(self) -> None:
+        declare(self, 'method', DEFAULT_METHOD,
+                'Shift estimator between the layers; seed is the paper\'s phase correlation.',
+                choices=method_names())
+        declare(self, 'threshold', 40.0,
+                'ADC counts above the baseline below which a taxel counts as untouched.',
+                low=0.0, high=4095.0)
+        declare(self, 'min_force', 0.2, 'Contacts weaker than this (newtons) are ignored.',
+                low=0.0, high=1000.0)
+        declare(self, 'min_confidence', 0.3,
+                'Directions less trusted than this are reported with direction_valid false.',
+                low=0.0, high=1.0)
+        declare(self, 'min_shift', 0.0005,
+                'Layer shift (metres, after calibration) below which no direction is reported.',
+                low=0.0, high=0.1)
+        declare(self, 'compliance', 7.0e-4,
+                'Layer shift per newton of tangential force (m/N); gives the polar angle alpha.',
+                low=1.0e-7, high=1.0)
+        declare(self, 'calibration_file', DEFAULT_CALIBRATION_FILE,
+                'YAML file holding (x_p, y_p); loaded at start-up, written by ~/calibrate.',
+                non_empty=True)
+        declare(self, 'calibration.presses', 8,
+                'Normal presses ~/calibrate records when the request asks for 0.',
+                low=1, high=1000)
+        declare(self, 'calibration.timeout', 60.0,
+                'Seconds ~/calibrate waits when the request asks for 0.', low=0.1, high=3600.0)
+        declare(self, 'calibration.max_std', 0.0005,
+                'Largest spread (metres, standard deviation) of the presses\' shifts accepted.',
+                low=1.0e-6, high=0.1)
+        declare(self, 'calibration.normal_tolerance', 0.0005,
+                'How far a press\'s shift may grow with its force (metres) and look normal.',
+                low=1.0e-6, high=0.1)
+        declare(self, 'tare.frames', 20, 'Scans averaged into the unloaded baseline by ~/tare.',
+                low=1, high=10000)
+        declare(self, 'viz_rate', 15.0,
+                'Heatmap images and markers per second (0 turns them off).', low=0.0, high=1000.0)
+        declare(self, 'viz_full_scale', 10.0,
+                'Force per taxel (newtons) drawn at the top of the colour scale.',
+                low=0.001, high=1000.0)
+        declare(self, 'diagnostics_period', 1.0, 'Seconds between two /diagnostics reports.',
+                low=0.1, high=60.0)
+
+    def _p(self, name):
+        return self.get_parameter(name).value
+
+    def _estimator_config(self, pitch_m: float = 0.005) -> EstimatorConfig:
+        return EstimatorConfig(
+            method=self._p('method'), pitch_m=pitch_m, threshold_counts=self._p('threshold'),
+            min_contact_force_n=self._p('min_force'), min_confidence=self._p('min_confidence'),
+            min_shift_m=self._p('min_shift'), compliance_m_per_n=self._p('compliance'))
+
+    def _follow_pitch(self, pitch_m: float) -> None:
+        """Take the taxel pitch from the frames, keeping the tare and the calibration."""
+        if pitch_m != self._estimator.config.pitch_m:
+            self._estimator = ContactEstimator(
+                dataclasses.replace(self._estimator.config, pitch_m=pitch_m),
+                self._calibration, conditioner=self._estimator.conditioner)
+
+    def _calibration_path(self) -> str:
+        return os.path.expanduser(self._p('calibration_file'))
+
+    def _load_calibration(self):
+        path = self._calibration_path()
+        if not os.path.exists(path):
+            return calib.Calibration(), f'no calibration file at {path} yet: (x_p, y_p) = (0, 0)'
+        try:
+            cal = calib.Calibration.load_yaml(path)
+        except (OSError, ValueError) as err:
+            self.get_logger().error(f'ignoring calibration file {path}: {err}')
+            return calib.Calibration(), f'calibration file {path} unreadable: (x_p, y_p) = (0, 0)'
+        return cal, (f'calibration from {path}: x_p = {cal.x_p_m * 1e3:.3f} mm, '
+                     f'y_p = {cal.y_p_m * 1e3:.3f} mm')
+
+    # ---- data path --------------------------------------------------------------------------
+    def _on_frame(self, msg: SkinFrame) -> None:
+        try:
+            top, bottom = conversions.skin_frame_layers(msg)
+            if not (math.isfinite(msg.pitch) and msg.pitch > 0):
+                raise ValueError(f'pitch {msg.pitch} is not a positive length')
+            self._follow_pitch(float(msg.pitch))
+            start = time.perf_counter()
+            contacts = self._estimator.process(top, bottom)
+            self._cost.append(time.perf_counter() - start)
+        except ValueError as err:
+            self._stats['bad frames'] += 1
+            self.get_logger().warning(f'dropping frame {msg.sequence}: {err}',
+                                      throttle_duration_sec=5.0)
+            return
+        self._stats['frames'] += 1
+        self._rate.add()
+        self._recent.append((top, bottom, len(contacts)))
+        header = msg.header
+        self._pub_contacts.publish(conversions.contacts_to_array(header, contacts))
+        if contacts:
+            strongest = contacts[0]
+            self._stats['contacts'] += len(contacts)
+            self._pub_contact.publish(conversions.contact_to_msg(header, strongest))
+            self._pub_wrench.publish(conversions.wrench_stamped(header, strongest.force_xyz_n))
+        else:
+            self._pub_wrench.publish(conversions.wrench_stamped(header, (0.0, 0.0, 0.0)))
+        if self._session is not None:
+            self._feed_session(contacts)
+        self._visualise(header, msg.pitch, top, bottom, contacts)
+
+    def _visualise(self, header, pitch, top, bottom, contacts) -> None:
+        rate = self._p('viz_rate')
+        now = time.monotonic()
+        if rate <= 0 or now - self._last_viz < 1.0 / rate:
+            return
+        self._last_viz = now
+        full = self._p('viz_full_scale')
+        top_force, bottom_force = self._estimator.conditioner.condition(top, bottom)
+        self._pub_heat['top'].publish(
+            conversions.rgb_to_image(header, colour_map(top_force, full)))
+        self._pub_heat['bottom'].publish(
+            conversions.rgb_to_image(header, colour_map(bottom_force, full)))
+        self._pub_markers.publish(conversions.heatmap_markers(
+            header, top_force, float(pitch), contacts, full))
+
+    # ---- calibration --------------------------------------------------------------------------
+    def _raw_shift(self, contact):
+        """Return the contact's shift before the current calibration was subtracted."""
+        return (contact.shift_m[0] + self._calibration.x_p_m,
+                contact.shift_m[1] + self._calibration.y_p_m)
+
+    def _feed_session(self, contacts) -> None:
+        session = self._session
+        if contacts:
+            press = session.segmenter.add(contacts[0].force_n, self._raw_shift(contacts[0]))
+        else:
+            press = session.segmenter.add(0.0, None)
+        if press is None:
+            return
+        if press.looks_normal:
+            session.accepted.append(press)
+            self.get_logger().info(f'calibration: press {len(session.accepted)}/{session.wanted} '
+                                   f'recorded ({press.peak_force_n:.1f} N)')
+        else:
+            session.rejected += 1
+            self.get_logger().warning(
+                'calibration: press ignored, it does not look normal (its shift grew by '
+                f'{press.shift_growth_m * 1e3:.2f} mm with force); press straight down')
+        if len(session.accepted) >= session.wanted and not session.future.done():
+            session.future.set_result('done')
+
+    async def _on_calibrate(self, request, response):
+        if self._session is not None:
+            response.success = False
+            response.message = 'a calibration is already running; wait for it to finish'
+            return response
+        wanted = request.presses or self._p('calibration.presses')
+        timeout = request.timeout if request.timeout > 0 else self._p('calibration.timeout')
+        if not math.isfinite(timeout) or timeout > 3600.0:
+            response.success = False
+            response.message = f'timeout {request.timeout} s is not in (0, 3600]'
+            return response
+        future = Future()
+        self._session = _Session(wanted, PressSegmenter(
+            normal_tolerance_m=self._p('calibration.normal_tolerance')), future)
+        timer = self.create_timer(timeout, lambda: future.done() or future.set_result('timeout'))
+        self.get_logger().info(f'calibration: press the skin straight down {wanted} times '
+                               f'(within {timeout:.0f} s)')
+        try:
+            outcome = await future
+        finally:
+            self.destroy_timer(timer)
+            session, self._session = self._session, None
+        return self._finish_calibration(session, outcome, timeout, response)
+
+    def _finish_calibration(self, session, outcome, timeout, response):
+        response.presses_used = len(session.accepted)
+        old = self._calibration
+        response.x_p, response.y_p = old.x_p_m, old.y_p_m
+        response.std_x, response.std_y = old.std_x_m, old.std_y_m
+        if outcome == 'timeout':
+            response.success = False
+            response.message = (
+                f'timed out after {timeout:.0f} s with {len(session.accepted)} of '
+                f'{session.wanted} normal presses ({session.rejected} presses did not look '
+                'normal); the previous calibration stays in force')
+            return response
+        try:
+            new = calib.calibrate_from_shifts(
+                [p.shift_m for p in session.accepted], max_std_m=self._p('calibration.max_std'),
+                compliance_m_per_n=old.compliance_m_per_n)
+            new.save_yaml(self._calibration_path())
+        except (ValueError, OSError) as err:
+            response.success = False
+            response.message = f'{err}; the previous calibration stays in force'
+            return response
+        self._calibration = new
+        self._estimator.calibration = new
+        response.success = True
+        response.x_p, response.y_p = new.x_p_m, new.y_p_m
+        response.std_x, response.std_y = new.std_x_m, new.std_y_m
+        response.message = (f'calibrated from {len(session.accepted)} presses: x_p = '
+                            f'{new.x_p_m * 1e3:.3f} mm, y_p = {new.y_p_m * 1e3:.3f} mm; '
+                            'written to '
+                            f'{self._calibration_path()}')
+        self._calibration_note = response.message
+        self.get_logger().info(response.message)
+        return response
+
+    # ---- tare -------------------------------------------------------------------------------
+    def _on_tare(self, request, response):
+        wanted = self._p('tare.frames')
+        frames = list(self._recent)
+        if len(frames) < wanted:
+            response.success = False
+            response.message = (f'only {len(frames)} of {wanted} scans received so far; '
+                                'is the driver running?')
+            return response
+        loaded = sum(1 for _, _, n in frames if n)
+        if loaded:
+            response.success = False
+            response.message = (f'the skin is loaded ({loaded} of the last {wanted} scans have a '
+                                'contact); lift everything off it and call again')
+            return response
+        tops = np.stack([f[0] for f in frames])
+        bottoms = np.stack([f[1] for f in frames])
+        try:
+            self._estimator.tare(tops, bottoms)
+        except ValueError as err:
+            response.success = False
+            response.message = f'tare failed: {err}'
+            return response
+        response.success = True
+        response.message = f'baseline recorded from {wanted} unloaded scans'
+        self.get_logger().info(response.message)
+        return response
+
+    # ---- diagnostics --------------------------------------------------------------------------
+    def _report(self) -> None:
+        rate, _ = self._rate.take(time.monotonic())
+        cost, self._cost = self._cost, []
+        cal = self._calibration
+        values = {
+            'method': self._p('method'), 'frame rate [Hz]': rate,
+            'frames': self._stats['frames'], 'bad frames': self._stats['bad frames'],
+            'contacts': self._stats['contacts'],
+            'mean cost [us]': 1e6 * sum(cost) / len(cost) if cost else 0.0,
+            'max cost [us]': 1e6 * max(cost) if cost else 0.0,
+            'x_p [m]': cal.x_p_m, 'y_p [m]': cal.y_p_m,
+            'calibrating': self._session is not None,
+        }
+        level, message = diagnostics.OK, self._calibration_note
+        if self._stats['frames'] == 0:
+            level, message = diagnostics.WARN, 'no frame received yet'
+        elif rate == 0.0:
+            level, message = diagnostics.WARN, 'no frame in the last period'
+        self._diag.publish([diagnostics.make_status(
+            f'{self.get_fully_qualified_name()}: contact estimation', 'skin', level, message,
+            values)])
+
+
+def main(args=None):
+    """Run the direction node until shut down."""
+    rclpy.init(args=args)
+    try:
+        node = DirectionNode()
+    except ParameterError as err:
+        rclpy.logging.get_logger('skin_direction').fatal(str(err))
+        rclpy.try_shutdown()
+        raise SystemExit(1)
+    try:
+        rclpy.spin(node)
+    except (KeyboardInterrupt, ExternalShutdownException):
+        pass
+    finally:
+        node.destroy_node()
+        rclpy.try_shutdown()
+
+
+if __name__ == '__main__':
+    main()

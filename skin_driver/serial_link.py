@@ -1,0 +1,156 @@
+"""
+Read skin frames from a serial port (or any pyserial URL) in a background thread.
+
+One decoder, many transports: a device path such as /dev/ttyACM0 or a pseudo-terminal, or a
+pyserial URL such as socket://host:port or loop://. The link reconnects with exponential back-off
+when the device goes away and reports every change of state; it never raises into its caller.
+It is ROS-free, so the driver node only wires it to topics and diagnostics.
+"""
+
+from dataclasses import dataclass
+import threading
+import time
+from typing import Callable, List, Optional
+
+import serial
+
+from skin_driver.core.protocol import Frame, FrameDecoder
+
+CONNECTING = 'connecting'
+CONNECTED = 'connected'
+STALLED = 'stalled'
+DISCONNECTED = 'disconnected'
+STOPPED = 'stopped'
+
+
+@dataclass
+class LinkStats:
+    """What the link has seen since it was created."""
+
+    connects: int = 0
+    disconnects: int = 0
+    open_failures: int = 0
+    bytes_read: int = 0
+    callback_errors: int = 0
+    frames: int = 0
+    last_error: str = ''
+
+
+class SerialLink:
+    """
+    Own the serial port, feed its bytes to a FrameDecoder and hand complete frames over.
+
+    on_frames(frames, monotonic_receive_time) is called from the link's thread for every read
+    that completed at least one frame; on_state(state, detail) whenever the link changes state.
+    """
+
+    def __init__(self, port: str, baud: int, decoder: FrameDecoder,
+                 on_frames: Callable[[List[Frame], float], None],
+                 on_state: Callable[[str, str], None] = lambda state, detail: None,
+                 read_timeout_s: float = 0.05, stall_timeout_s: float = 1.0,
+                 backoff_min_s: float = 0.1, backoff_max_s: float = 2.0,
+                 open_port: Optional[Callable[..., serial.SerialBase]] = None):
+        self.port = port
+        self.baud = baud
+        self.decoder = decoder
+        self.stats = LinkStats()
+        self.state = STOPPED
+        self._on_frames = on_frames
+        self._on_state = on_state
+        self._read_timeout = read_timeout_s
+        self._stall_timeout = stall_timeout_s
+        self._backoff = (backoff_min_s, backoff_max_s)
+        self._open_port = open_port or self._default_open
+        self._stop = threading.Event()
+        self._thread: Optional[threading.Thread] = None
+        self._serial: Optional[serial.SerialBase] = None
+
+    def _default_open(self) -> serial.SerialBase:
+        return serial.serial_for_url(self.port, baudrate=self.baud, timeout=self._read_timeout)
+
+    def start(self) -> None:
+        """Start reading in a daemon thread (idempotent)."""
+        if self._thread is not None and self._thread.is_alive():
+            return
+        self._stop.clear()
+        self._thread = threading.Thread(target=self._run, name=f'skin-link {self.port}',
+                                        daemon=True)
+        self._thread.start()
+
+    def stop(self, timeout_s: float = 2.0) -> None:
+        """Stop the thread and close the port."""
+        self._stop.set()
+        if self._thread is not None:
+            self._thread.join(timeout_s)
+            self._thread = None
+        self._close()
+        self._set_state(STOPPED, '')
+
+    def _set_state(self, state: str, detail: str) -> None:
+        if state != self.state:
+            self.state = state
+            self._notify(self._on_state, state, detail)
+
+    def _notify(self, callback, *args) -> None:
+        # A failing consumer must not kill the reader: the link would die silently.
+        try:
+            callback(*args)
+        except Exception as err:  # noqa: B902 - any consumer error, reported and survived
+            self.stats.callback_errors += 1
+            self.stats.last_error = f'{type(err).__name__} in {callback.__name__}: {err}'
+
+    def _close(self) -> None:
+        ser, self._serial = self._serial, None
+        if ser is not None:
+            try:
+                ser.close()
+            except (OSError, serial.SerialException):
+                pass
+
+    def _connect(self) -> bool:
+        try:
+            self._serial = self._open_port()
+        except (OSError, serial.SerialException, ValueError) as err:
+            self.stats.open_failures += 1
+            self.stats.last_error = str(err)
+            self._set_state(DISCONNECTED if self.stats.connects else CONNECTING,
+                            f'cannot open {self.port}: {err}')
+            return False
+        self.stats.connects += 1
+        # Bytes buffered from the previous connection belong to a frame that will never finish.
+        self.decoder.reset()
+        self._set_state(CONNECTED, f'reading {self.port}')
+        return True
+
+    def _run(self) -> None:
+        backoff = self._backoff[0]
+        last_frame = time.monotonic()
+        while not self._stop.is_set():
+            if self._serial is None:
+                if not self._connect():
+                    self._stop.wait(backoff)
+                    backoff = min(backoff * 2.0, self._backoff[1])
+                    continue
+                backoff = self._backoff[0]
+                last_frame = time.monotonic()
+            try:
+                data = self._serial.read(max(1, self._serial.in_waiting))
+            except (OSError, serial.SerialException, TypeError, AttributeError) as err:
+                # pyserial raises TypeError/AttributeError when the fd vanishes under a read.
+                self.stats.disconnects += 1
+                self.stats.last_error = str(err) or type(err).__name__
+                self._close()
+                self._set_state(DISCONNECTED, f'lost {self.port}: {self.stats.last_error}')
+                continue
+            now = time.monotonic()
+            if data:
+                self.stats.bytes_read += len(data)
+                frames = self.decoder.feed(data)
+                if frames:
+                    self.stats.frames += len(frames)
+                    last_frame = now
+                    self._set_state(CONNECTED, f'reading {self.port}')
+                    self._notify(self._on_frames, frames, now)
+            if now - last_frame > self._stall_timeout:
+                self._set_state(STALLED, f'no frame from {self.port} for '
+                                f'{now - last_frame:.1f} s')

@@ -1,0 +1,93 @@
+"""Tests of counts-to-force conditioning: tare, threshold, gain, dead taxels."""
+
+import numpy as np
+import pytest
+
+from skin_driver.core.conditioning import ConditioningConfig, Conditioner
+from skin_driver.core.physics import FsrModel, Press, render, SkinModel
+
+
+def _tared(model=None, rng=None):
+    model = model or SkinModel()
+    rng = rng or np.random.default_rng(0)
+    frames = [render(model, [], rng) for _ in range(20)]
+    cond = Conditioner()
+    cond.tare(np.stack([t for t, _ in frames]), np.stack([b for _, b in frames]))
+    return cond, model, rng
+
+
+def test_no_touch_gives_zero_force():
+    cond, model, rng = _tared()
+    top, bottom = render(model, [], rng)
+    tf, bf = cond.condition(top, bottom)
+    assert not tf.any() and not bf.any()
+
+
+def test_force_recovered_through_the_fsr_model():
+    fsr = FsrModel()
+    force = np.zeros((4, 4))
+    force[1, 2] = 3.0
+    counts = np.rint(fsr.force_to_counts(force)).astype(np.uint16)
+    tf, _ = Conditioner().condition(counts, counts)
+    assert tf[1, 2] == pytest.approx(3.0, rel=0.01)
+    assert tf.sum() == pytest.approx(3.0, rel=0.01)
+
+
+def test_press_total_force_close_to_rendered():
+    cond, model, rng = _tared()
+    top, bottom = render(model, [Press(0.0375, 0.0375, 10.0)], rng)
+    tf, _ = cond.condition(top, bottom)
+    # The taxels cover fill_factor**2 of the area, so part of the force falls into the gaps.
+    assert 0.6 * 10.0 < tf.sum() < 1.02 * 10.0
+
+
+def test_gain_multiplies_force():
+    counts = np.full((3, 3), 1000, dtype=np.uint16)
+    cond = Conditioner()
+    plain, _ = cond.condition(counts, counts)
+    cond.set_gain(np.full((3, 3), 2.0), None)
+    doubled, same = cond.condition(counts, counts)
+    np.testing.assert_allclose(doubled, 2 * plain)
+    np.testing.assert_allclose(same, plain)
+
+
+def test_dead_taxel_found_by_tare_and_filled_from_neighbours():
+    model = SkinModel(dead_taxels=((5, 5),))
+    cond, model, rng = _tared(model)
+    dead_top, dead_bottom = cond.dead_masks()
+    assert dead_top[5, 5] and dead_bottom[5, 5] and dead_top.sum() == 1
+    top, bottom = render(model, [Press(0.025, 0.025, 10.0, radius_m=0.004)], rng)
+    tf, _ = cond.condition(top, bottom)
+    assert tf[5, 5] > 0
+
+
+def test_stuck_taxel_is_masked():
+    rng = np.random.default_rng(2)
+    frames = rng.normal(50, 5, (10, 6, 6)).clip(0).astype(np.uint16)
+    frames[:, 2, 3] = 700
+    cond = Conditioner()
+    cond.tare(frames, frames)
+    assert cond.dead_masks()[0][2, 3]
+
+
+def test_threshold_zeroes_small_readings():
+    cond = Conditioner(ConditioningConfig(threshold_counts=100.0))
+    counts = np.array([[99, 101]], dtype=np.uint16)
+    tf, _ = cond.condition(counts, counts)
+    assert tf[0, 0] == 0 and tf[0, 1] > 0
+
+
+def test_inputs_are_not_modified_and_errors_are_clear():
+    cond = Conditioner()
+    top = np.full((4, 4), 500.0)
+    keep = top.copy()
+    cond.condition(top, top)
+    np.testing.assert_array_equal(top, keep)
+    with pytest.raises(ValueError, match='NaN'):
+        cond.condition(np.full((4, 4), np.nan), top)
+    with pytest.raises(ValueError, match='shape'):
+        cond.condition(np.zeros((5, 4)), np.zeros((5, 4)))
+    with pytest.raises(ValueError, match='negative'):
+        Conditioner().condition(-top, top)
+    with pytest.raises(ValueError, match='boolean'):
+        cond.set_dead(np.zeros((4, 4)), np.zeros((4, 4)))

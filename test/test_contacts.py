@@ -1,0 +1,59 @@
+"""Tests of segmentation into contacts."""
+
+import numpy as np
+import pytest
+
+from skin_driver.core.contacts import contact_windows, find_contacts
+
+
+def _blob(shape, r, c, value=1.0):
+    m = np.zeros(shape)
+    m[r - 1:r + 2, c - 1:c + 2] = value * 0.25
+    m[r, c] = value
+    return m
+
+
+def test_single_contact_location_force_area():
+    top = _blob((16, 16), 6, 9)
+    segs, labels = find_contacts(top, top, 0.005)
+    assert len(segs) == 1
+    s = segs[0]
+    assert (s.row, s.col) == pytest.approx((6.0, 9.0))
+    assert (s.x_m, s.y_m) == pytest.approx((0.045, 0.030))
+    assert s.force_n == pytest.approx(3.0)
+    assert s.area_m2 == pytest.approx(9 * 0.005 ** 2)
+    assert s.window == (4, 9, 7, 12)
+
+
+def test_sub_taxel_centroid():
+    top = np.zeros((8, 8))
+    top[3, 3], top[3, 4] = 3.0, 1.0
+    s = find_contacts(top, top, 0.01)[0][0]
+    assert s.col == pytest.approx(3.25)
+    assert s.x_m == pytest.approx(0.0325)
+
+
+def test_two_contacts_sorted_and_isolated():
+    top = _blob((16, 16), 3, 3, 1.0) + _blob((16, 16), 11, 12, 2.0)
+    segs, labels = find_contacts(top, top, 0.005)
+    assert [round(s.force_n, 6) for s in segs] == [6.0, 3.0]
+    tw, bw = contact_windows(top, top, labels, segs[0])
+    assert tw.sum() == pytest.approx(6.0)
+
+
+def test_bottom_imprint_joins_its_contact_and_weak_noise_is_dropped():
+    top = _blob((16, 16), 8, 8)
+    bottom = _blob((16, 16), 8, 9)
+    top[0, 15] = 0.01
+    segs, _ = find_contacts(top, bottom, 0.005, min_force_n=0.05)
+    assert len(segs) == 1
+    assert segs[0].window[2] <= 6 and segs[0].window[3] >= 11
+
+
+def test_bad_input():
+    with pytest.raises(ValueError, match='pitch_m must be positive'):
+        find_contacts(np.zeros((4, 4)), np.zeros((4, 4)), 0.0)
+    with pytest.raises(ValueError, match='inf'):
+        find_contacts(np.full((4, 4), np.inf), np.zeros((4, 4)), 0.005)
+    with pytest.raises(ValueError, match='connectivity'):
+        find_contacts(np.zeros((4, 4)), np.zeros((4, 4)), 0.005, connectivity=6)

@@ -1,0 +1,89 @@
+"""Tests of the offline dataset format and generators."""
+
+import math
+
+import numpy as np
+import pytest
+
+from skin_driver.core.dataset import Dataset, load_dataset, make_random_experiment, \
+    make_seed_experiment, save_dataset
+from skin_driver.core.physics import SkinModel
+
+
+def small(n=3):
+    return dict(top=np.zeros((n, 4, 5), np.uint16), bottom=np.ones((n, 4, 5), np.uint16),
+                pitch_m=0.005, azimuth_deg=np.array([math.nan, 45.0, 90.0][:n]),
+                alpha_deg=np.array([0.0, 45.0, 45.0][:n]))
+
+
+def test_seed_experiment_layout():
+    data = make_seed_experiment(SkinModel(), repeats=2, rng=np.random.default_rng(0))
+    assert data.frames == 18 and data.shape == (16, 16)
+    assert data.top.dtype == np.uint16
+    assert np.isnan(data.azimuth_deg[data.alpha_deg == 0]).all()
+    assert sorted(set(data.azimuth_deg[data.alpha_deg > 0])) == list(range(0, 360, 45))
+    assert set(data.alpha_deg) == {0.0, 45.0}
+    assert data.tare_top.shape[1:] == (16, 16)
+
+
+def test_random_experiment_ranges():
+    data = make_random_experiment(frames=40, rng=np.random.default_rng(1))
+    tilted = data.alpha_deg > 0
+    assert tilted.any() and (~tilted).any()
+    assert (data.alpha_deg[tilted] >= 15).all() and (data.alpha_deg[tilted] <= 60).all()
+    assert np.isfinite(data.azimuth_deg[tilted]).all()
+
+
+def test_round_trip(tmp_path):
+    data = make_seed_experiment(repeats=1, rng=np.random.default_rng(2))
+    path = tmp_path / 'd.npz'
+    save_dataset(path, data)
+    back = load_dataset(path)
+    assert np.array_equal(back.top, data.top) and np.array_equal(back.bottom, data.bottom)
+    np.testing.assert_array_equal(back.azimuth_deg, data.azimuth_deg)
+    np.testing.assert_array_equal(back.force_n, data.force_n)
+    assert back.pitch_m == data.pitch_m
+
+
+def test_minimal_file_without_optional_arrays(tmp_path):
+    path = tmp_path / 'm.npz'
+    np.savez(path, **small())
+    data = load_dataset(path)
+    assert data.force_n is None and data.tare_top is None
+
+
+@pytest.mark.parametrize('change, message', [
+    ({'top': np.zeros((3, 4, 4), np.uint16)}, 'shapes differ'),
+    ({'top': np.full((3, 4, 5), -1.0)}, 'negative'),
+    ({'top': np.full((3, 4, 5), 0.5)}, 'whole ADC counts'),
+    ({'pitch_m': 0.0}, 'pitch_m must be positive'),
+    ({'alpha_deg': np.array([0.0, 45.0])}, 'shape'),
+    ({'alpha_deg': np.array([0.0, 95.0, 45.0])}, 'alpha_deg'),
+    ({'azimuth_deg': np.array([math.nan, math.nan, 90.0])}, 'azimuth_deg is NaN'),
+    ({'force_n': np.array([1.0, -1.0, 1.0])}, 'force_n must be non-negative'),
+])
+def test_validation(change, message):
+    with pytest.raises(ValueError, match=message):
+        Dataset(**{**small(), **change})
+
+
+def test_missing_arrays_and_garbage(tmp_path):
+    path = tmp_path / 'bad.npz'
+    fields = small()
+    del fields['alpha_deg']
+    np.savez(path, **fields)
+    with pytest.raises(ValueError, match='missing arrays: alpha_deg'):
+        load_dataset(path)
+    junk = tmp_path / 'junk.npz'
+    junk.write_bytes(b'not a zip')
+    with pytest.raises(ValueError, match='cannot read'):
+        load_dataset(junk)
+
+
+def test_arrays_are_read_only_copies():
+    fields = small()
+    data = Dataset(**fields)
+    fields['top'][0, 0, 0] = 7
+    assert data.top[0, 0, 0] == 0
+    with pytest.raises(ValueError):
+        data.top[0, 0, 0] = 1

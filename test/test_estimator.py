@@ -1,0 +1,80 @@
+"""Tests of the contact estimation pipeline."""
+
+import math
+
+import numpy as np
+import pytest
+
+from skin_driver.core.calibration import calibrate_from_shifts, Calibration
+from skin_driver.core.estimator import Contact, ContactEstimator, EstimatorConfig
+from skin_driver.core.physics import Press, render, SkinModel
+
+
+SPOT = (0.037, 0.038)
+
+
+def make(model=None, method='poc', calibration=None, seed=0, calibrate=True):
+    """Return a tared estimator calibrated with normal presses at SPOT, as the seed does."""
+    model = model or SkinModel()
+    rng = np.random.default_rng(seed)
+    config = EstimatorConfig(method=method, pitch_m=model.pitch_m)
+    est = ContactEstimator(config, calibration)
+    frames = [render(model, [], rng) for _ in range(10)]
+    est.tare(np.stack([t for t, _ in frames]), np.stack([b for _, b in frames]))
+    if calibrate and calibration is None:
+        shifts = [est.measure_shifts(*render(model, [Press(*SPOT, 10.0)], rng))[0]
+                  for _ in range(5)]
+        est = ContactEstimator(config, calibrate_from_shifts(shifts), est.conditioner)
+    return est, model, rng
+
+
+def test_tilted_press_gives_location_direction_alpha_and_force_vector():
+    est, model, rng = make()
+    press = Press(0.037, 0.038, 10.0, math.radians(45), math.radians(60), 0.0025)
+    contacts = est.process(*render(model, [press], rng))
+    assert len(contacts) == 1
+    c = contacts[0]
+    assert isinstance(c, Contact) and c.direction_valid
+    assert (c.x_m, c.y_m) == pytest.approx((0.037, 0.038), abs=0.001)
+    assert math.degrees(c.azimuth_rad) == pytest.approx(60.0, abs=2.0)
+    assert math.degrees(c.alpha_rad) == pytest.approx(45.0, abs=12.0)
+    fx, fy, fz = c.force_xyz_n
+    assert fz == -c.force_n < 0
+    assert math.atan2(fy, fx) == pytest.approx(c.azimuth_rad)
+
+
+def test_normal_press_has_no_direction():
+    est, model, rng = make()
+    c = est.process(*render(model, [Press(0.037, 0.038, 10.0)], rng))[0]
+    assert not c.direction_valid
+    assert c.alpha_rad == 0.0 and c.azimuth_rad == 0.0
+    assert c.force_xyz_n[:2] == (0.0, 0.0)
+
+
+def test_calibration_offset_is_removed():
+    model = SkinModel(misalignment_m=(0.002, 0.0))
+    raw, model, rng = make(model, calibrate=False)
+    shift = raw.measure_shifts(*render(model, [Press(*SPOT, 10.0)], rng))[0]
+    assert shift[0] == pytest.approx(0.002, abs=5e-4)
+    assert raw.process(*render(model, [Press(*SPOT, 10.0)], rng))[0].direction_valid
+    est, _, _ = make(model, calibration=Calibration(shift[0], shift[1], 0, 0, 1))
+    c = est.process(*render(model, [Press(*SPOT, 10.0)], rng))[0]
+    assert not c.direction_valid
+
+
+@pytest.mark.parametrize('method', ['seed', 'hann', 'upsampled', 'centroid', 'poc'])
+def test_every_method_runs_through_the_pipeline(method):
+    est, model, rng = make(method=method)
+    press = Press(0.037, 0.038, 10.0, math.radians(45), math.radians(180), 0.0025)
+    c = est.process(*render(model, [press], rng))[0]
+    assert c.direction_valid
+    assert abs((math.degrees(c.azimuth_rad) - 180 + 180) % 360 - 180) < 20
+
+
+def test_config_validation():
+    with pytest.raises(ValueError, match='unknown direction method'):
+        EstimatorConfig(method='magic')
+    with pytest.raises(ValueError, match='pitch_m must be positive'):
+        EstimatorConfig(pitch_m=0.0)
+    with pytest.raises(ValueError, match='min_confidence'):
+        EstimatorConfig(min_confidence=2.0)

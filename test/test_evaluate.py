@@ -1,0 +1,37 @@
+"""Tests of the offline evaluator (Table 1 and JSON)."""
+
+import json
+
+import numpy as np
+
+from skin_driver import evaluate
+from skin_driver.core.dataset import make_seed_experiment, save_dataset
+
+
+def test_table_and_json(tmp_path, capsys):
+    path = tmp_path / 'seed.npz'
+    save_dataset(path, make_seed_experiment(repeats=3, rng=np.random.default_rng(0)))
+    assert evaluate.main([str(path), '--json']) == 0
+    report = json.loads(capsys.readouterr().out)
+    assert set(report['methods']) == {'poc', 'seed'}
+    poc = report['methods']['poc']
+    assert [r['beta_deg'] for r in poc['per_beta']] == [float(b) for b in range(0, 360, 45)]
+    assert all(r['frames'] == 3 for r in poc['per_beta'])
+    summary = poc['summary']
+    assert summary['valid_share'] == 1.0
+    assert summary['mean_error_deg'] < report['methods']['seed']['summary']['mean_error_deg']
+    assert summary['us_per_frame'] > 0
+    assert poc['calibration']['presses'] == 3
+    assert evaluate.main([str(path), '--method', 'centroid']) == 0
+    text = capsys.readouterr().out
+    assert 'summary' in text and 'centroid mean' in text and 'seed mean' in text
+
+
+def test_generate_and_errors(tmp_path, capsys):
+    out = tmp_path / 'r.npz'
+    assert evaluate.main(['--generate', 'random', str(out)]) == 0
+    assert out.exists()
+    bad = tmp_path / 'bad.npz'
+    bad.write_bytes(b'x')
+    assert evaluate.main([str(bad)]) == 2
+    assert 'error' in capsys.readouterr().err

@@ -1,0 +1,187 @@
+"""End to end: simulated skin on a pty -> driver -> direction node -> subscriber."""
+
+import math
+import os
+
+from diagnostic_msgs.msg import DiagnosticStatus
+import numpy as np
+import pytest
+from pipeline import call, overrides, pipeline, scene
+from rclpy.lifecycle import TransitionCallbackReturn
+from rosutil import ros_context, spin_until
+from skin_driver.core import calibration as calib
+from skin_driver.direction_node import DirectionNode
+from skin_driver.driver_node import SkinDriverNode
+from skin_driver.params import ParameterError
+from skin_msgs.srv import Calibrate
+from std_srvs.srv import Trigger
+
+pytestmark = pytest.mark.ros
+
+OK, ERROR = DiagnosticStatus.OK, DiagnosticStatus.ERROR
+NORMAL_PRESSES = [{'time_s': 0.3 + 1.2 * i} for i in range(5)]
+
+
+def test_every_published_frame_equals_the_simulators_ground_truth(tmp_path):
+    with pipeline(tmp_path, scene([{'time_s': 0.1, 'alpha_deg': 45.0, 'beta_deg': 30.0}]),
+                  rate_hz=250.0) as (sim, driver, _, probe, executor):
+        assert spin_until(executor, lambda: len(probe.frames) >= 150)
+        checked = 0
+        for msg in probe.frames:
+            truth = sim.truth(msg.sequence)
+            assert truth is not None
+            assert msg.device_time_us == truth.device_time_us
+            assert msg.header.frame_id == 'skin_link'
+            assert np.array_equal(np.asarray(msg.top).reshape(16, 16), truth.top)
+            assert np.array_equal(np.asarray(msg.bottom).reshape(16, 16), truth.bottom)
+            checked += 1
+        assert checked >= 150
+        # Some frames carry the press: the comparison is not only of empty maps.
+        assert any(max(msg.top) > 1000 for msg in probe.frames)
+
+
+def test_garbage_between_frames_costs_at_most_the_damaged_frame(tmp_path):
+    junk = [b'\x00' * 7, b'\xa5\x5a\x01', b'\xa5' * 40, bytes(range(256)), b'\x5a\xa5\x5a']
+    with pipeline(tmp_path, scene([]), rate_hz=250.0) as (sim, driver, _, probe, executor):
+        assert spin_until(executor, lambda: len(probe.frames) >= 20)
+        for data in junk:
+            sim.inject_garbage(data)
+            start = len(probe.frames)
+            assert spin_until(executor, lambda: len(probe.frames) >= start + 10)
+        seqs = [msg.sequence for msg in probe.frames]
+        lost = sum(b - a - 1 for a, b in zip(seqs, seqs[1:]))
+        assert lost <= len(junk)
+        assert driver._link.decoder.stats.bytes_discarded > 0
+
+
+def test_unplug_and_replug_is_survived_and_reported(tmp_path):
+    with pipeline(tmp_path, scene([]), rate_hz=200.0) as (sim, driver, _, probe, executor):
+        assert spin_until(executor, lambda: len(probe.frames) >= 20)
+        sim.unplug()
+        assert spin_until(executor, lambda: (probe.link_status() is not None
+                                             and probe.link_status().level == ERROR))
+        lost = probe.link_status()
+        assert 'disconnected' in lost.message or 'lost' in lost.message
+        before = len(probe.frames)
+        sim.replug()
+        assert spin_until(executor, lambda: len(probe.frames) >= before + 20)
+        assert spin_until(executor, lambda: probe.link_status().level == OK)
+        values = {kv.key: kv.value for kv in probe.link_status().values}
+        assert int(values['disconnects']) >= 1 and int(values['connects']) >= 2
+
+
+def test_contacts_match_the_simulated_presses(tmp_path):
+    presses = [{'time_s': 0.1, 'alpha_deg': 45.0, 'beta_deg': 90.0, 'duration_s': 1.5,
+                'x_m': 0.03, 'y_m': 0.045}]
+    with pipeline(tmp_path, scene(presses)) as (sim, _, __, probe, executor):
+        def held():
+            return sum(1 for m in probe.contacts if m.contacts
+                       and m.contacts[0].magnitude > 4.0) >= 40
+        assert spin_until(executor, held)
+    strong = [m.contacts[0] for m in probe.contacts
+              if m.contacts and m.contacts[0].magnitude > 4.0]
+    assert all(m.header.frame_id == 'skin_link' for m in probe.contacts)
+    xs = np.array([c.location.x for c in strong])
+    ys = np.array([c.location.y for c in strong])
+    assert abs(np.median(xs) - 0.03) < 0.0025 and abs(np.median(ys) - 0.045) < 0.0025
+    valid = [c for c in strong if c.direction_valid]
+    assert len(valid) >= 0.9 * len(strong)
+    errors = [abs(math.remainder(c.azimuth - math.pi / 2, 2 * math.pi)) for c in valid]
+    assert np.degrees(np.mean(errors)) < 5.0
+    for c in strong:
+        assert c.wrench.force.z < 0 and all(math.isfinite(v) for v in (c.azimuth, c.polar))
+
+
+def test_calibrate_records_normal_presses_and_the_file_is_loaded_at_start_up(tmp_path):
+    offset = (0.001, -0.0005)
+    the_scene = scene(NORMAL_PRESSES, misalignment_m=list(offset))
+    with pipeline(tmp_path, the_scene) as (sim, _, direction, probe, executor):
+        result = call(executor, direction, Calibrate, '/skin_direction/calibrate',
+                      Calibrate.Request(presses=3, timeout=8.0))
+        assert result.success, result.message
+        assert result.presses_used == 3
+        assert result.x_p == pytest.approx(offset[0], abs=0.0004)
+        assert result.y_p == pytest.approx(offset[1], abs=0.0004)
+    path = tmp_path / 'calibration.yaml'
+    assert path.exists()
+    saved = calib.Calibration.load_yaml(str(path))
+    assert (saved.x_p_m, saved.y_p_m) == (result.x_p, result.y_p)
+    with ros_context() as (context, _):
+        node = DirectionNode(context=context, parameter_overrides=overrides(
+            {'calibration_file': str(path)}))
+        assert node._calibration.x_p_m == result.x_p
+        node.destroy_node()
+
+
+def test_calibrate_times_out_without_presses_and_keeps_the_previous_calibration(tmp_path):
+    previous = calib.Calibration(x_p_m=0.0002, y_p_m=0.0001, std_x_m=1e-5, std_y_m=1e-5,
+                                 presses=4)
+    previous.save_yaml(str(tmp_path / 'calibration.yaml'))
+    with pipeline(tmp_path, scene([])) as (sim, _, direction, probe, executor):
+        result = call(executor, direction, Calibrate, '/skin_direction/calibrate',
+                      Calibrate.Request(presses=2, timeout=0.5))
+        assert not result.success
+        assert 'timed out' in result.message and 'previous calibration' in result.message
+        assert (result.x_p, result.y_p) == (0.0002, 0.0001)
+        assert direction._calibration == previous
+    assert calib.Calibration.load_yaml(str(tmp_path / 'calibration.yaml')) == previous
+
+
+def test_calibrate_ignores_tilted_presses(tmp_path):
+    tilted = [{'time_s': 0.2 + 1.2 * i, 'alpha_deg': 45.0, 'beta_deg': 0.0} for i in range(3)]
+    with pipeline(tmp_path, scene(tilted)) as (sim, _, direction, probe, executor):
+        result = call(executor, direction, Calibrate, '/skin_direction/calibrate',
+                      Calibrate.Request(presses=2, timeout=3.5))
+    assert not result.success
+    assert 'did not look normal' in result.message
+    assert not (tmp_path / 'calibration.yaml').exists()
+
+
+def test_calibrate_refuses_too_much_spread(tmp_path):
+    with pipeline(tmp_path, scene(NORMAL_PRESSES),
+                  direction={'calibration.max_std': 1e-6}) as (sim, _, direction, __, executor):
+        result = call(executor, direction, Calibrate, '/skin_direction/calibrate',
+                      Calibrate.Request(presses=3, timeout=8.0))
+    assert not result.success
+    assert 'spread' in result.message and 'previous calibration' in result.message
+    assert not (tmp_path / 'calibration.yaml').exists()
+
+
+def test_tare_refuses_while_loaded_and_records_an_unloaded_baseline(tmp_path):
+    presses = [{'time_s': 0.0, 'duration_s': 1.2, 'ramp_s': 0.05}]
+    with pipeline(tmp_path, scene(presses)) as (sim, _, direction, probe, executor):
+        assert spin_until(executor, lambda: sum(1 for m in probe.contacts if m.contacts) >= 25)
+        loaded = call(executor, direction, Trigger, '/skin_direction/tare', Trigger.Request())
+        assert not loaded.success and 'loaded' in loaded.message
+        assert spin_until(executor, lambda: len(probe.contacts) > 30 and not any(
+            m.contacts for m in probe.contacts[-25:]), 5.0)
+        unloaded = call(executor, direction, Trigger, '/skin_direction/tare', Trigger.Request())
+        assert unloaded.success, unloaded.message
+
+
+def test_bad_parameters_stop_start_up_with_a_clear_message():
+    with ros_context() as (context, _):
+        with pytest.raises(ParameterError, match="'rows' = 300 is out of range"):
+            SkinDriverNode(context=context, parameter_overrides=overrides({'rows': 300}))
+        with pytest.raises(ParameterError, match="'method' is 'bogus'"):
+            DirectionNode(context=context, parameter_overrides=overrides({'method': 'bogus'}))
+        with pytest.raises(ParameterError, match="'port' is empty"):
+            SkinDriverNode(context=context, parameter_overrides=overrides({'port': ' '}))
+        node = SkinDriverNode(context=context, parameter_overrides=overrides(
+            {'reconnect_min': 5.0, 'reconnect_max': 1.0}))
+        assert node.trigger_configure() == TransitionCallbackReturn.FAILURE
+        node.destroy_node()
+
+
+def test_driver_waits_for_a_missing_device_without_crashing(tmp_path):
+    with ros_context() as (context, executor):
+        node = SkinDriverNode(context=context, parameter_overrides=overrides(
+            {'port': str(tmp_path / 'nothing'), 'reconnect_min': 0.05, 'reconnect_max': 0.1}))
+        executor.add_node(node)
+        node.trigger_configure()
+        node.trigger_activate()
+        assert spin_until(executor, lambda: node._link.stats.open_failures >= 3)
+        assert node._link.state == 'connecting'
+        node.close()
+        node.destroy_node()
+    assert not os.path.exists(tmp_path / 'nothing')

@@ -1,0 +1,243 @@
+"""Tests of the simulated skin on a real pseudo-terminal, read with pyserial and the decoder."""
+
+import os
+import signal
+import struct
+import subprocess
+import sys
+import time
+
+import numpy as np
+import pytest
+import serial
+
+from skin_driver.core.dataset import load_dataset
+from skin_driver.core.protocol import encode_frame, FrameDecoder, header_crc, SYNC
+from skin_driver.core.scene import scene_from_dict
+from skin_driver.sim import main, render_dataset, SimulatedSkin
+
+RATE_HZ = 200.0
+# Generous deadlines only bound a hung test; no assertion depends on how fast anything runs.
+DEADLINE_S = 10.0
+
+
+def held_press_scene():
+    """Return a scene with one tilted press held at the centre for the whole test."""
+    return scene_from_dict({'presses': [{
+        'time_s': 0.0, 'x_m': 0.0375, 'y_m': 0.0375, 'force_n': 10.0, 'alpha_deg': 45.0,
+        'beta_deg': 135.0, 'radius_m': 0.004, 'duration_s': 1000.0, 'ramp_s': 0.0}]})
+
+
+class Reader:
+    """Read a port with pyserial, decode frames and reopen the port after it disappears."""
+
+    def __init__(self, port):
+        self.port = port
+        self.decoder = FrameDecoder(expected_shape=(16, 16))
+        self.frames = []
+        self.disconnects = 0
+        self.serial = serial.Serial(port, timeout=0.02)
+
+    def read_until(self, done):
+        end = time.monotonic() + DEADLINE_S
+        while not done():
+            assert time.monotonic() < end, 'timed out waiting for frames'
+            if self.serial is None:
+                self._reopen()
+                continue
+            try:
+                data = self.serial.read(4096)
+            except serial.SerialException:
+                self.serial.close()
+                self.serial = None
+                self.disconnects += 1
+                self.decoder.reset()
+                continue
+            self.frames += self.decoder.feed(data)
+
+    def read_frames(self, count):
+        target = len(self.frames) + count
+        self.read_until(lambda: len(self.frames) >= target)
+
+    def _reopen(self):
+        try:
+            self.serial = serial.Serial(self.port, timeout=0.02)
+        except (serial.SerialException, OSError):
+            time.sleep(0.01)
+
+    def close(self):
+        if self.serial is not None:
+            self.serial.close()
+
+
+@pytest.fixture
+def skin():
+    sim = SimulatedSkin(held_press_scene(), rate_hz=RATE_HZ, seed=3)
+    yield sim
+    sim.stop()
+
+
+def assert_equal_to_truth(sim, frames):
+    truth = sim.ground_truth
+    for f in frames:
+        t = truth[f.seq]
+        assert f.device_time_us == t.device_time_us
+        np.testing.assert_array_equal(f.top, t.top)
+        np.testing.assert_array_equal(f.bottom, t.bottom)
+
+
+def assert_no_frame_lost(sim, frames):
+    """Every frame the simulator queued between the first and last decoded one was decoded."""
+    seqs = [f.seq for f in frames]
+    queued = [s for s in sim.ground_truth if seqs[0] <= s <= seqs[-1]]
+    assert seqs == sorted(queued)
+
+
+def test_every_frame_equals_the_ground_truth(skin):
+    reader = Reader(skin.start())
+    try:
+        reader.read_frames(60)
+    finally:
+        reader.close()
+    frames = reader.frames
+    assert_equal_to_truth(skin, frames)
+    assert_no_frame_lost(skin, frames)
+    # The press is really in the frames: a 10 N press lifts the centre well above the baseline.
+    assert int(frames[-1].top.max()) > 1000 and int(frames[-1].bottom.max()) > 500
+    truth = skin.truth(frames[-1].seq)
+    assert len(truth.presses) == 1 and truth.press_indices == (0,)
+    # Device time follows the frame index at the configured rate.
+    f0, f1 = frames[0], frames[-1]
+    assert f1.device_time_us - f0.device_time_us == round((f1.seq - f0.seq) * 1e6 / RATE_HZ)
+    assert reader.decoder.stats.crc_errors == 0 and reader.decoder.stats.bytes_discarded == 0
+
+
+def test_garbage_between_frames_costs_no_frame(skin):
+    reader = Reader(skin.start())
+    head = SYNC + bytes([1, 0]) + bytes(12) + bytes([16, 16])
+    fake_header = head + struct.pack('<H', header_crc(head)) + b'\x33' * 40
+    damaged = bytearray(encode_frame(999_999, 0, np.ones((16, 16), np.uint16),
+                                     np.ones((16, 16), np.uint16)))
+    damaged[100] ^= 0xFF
+    garbage = [b'\x00\xff' * 50, SYNC * 3, fake_header, bytes(damaged), b'\xa5']
+    try:
+        reader.read_frames(5)
+        for junk in garbage:
+            skin.inject_garbage(junk)
+            reader.read_frames(5)
+        reader.read_frames(5)
+    finally:
+        reader.close()
+    frames = reader.frames
+    assert_equal_to_truth(skin, frames)
+    assert_no_frame_lost(skin, frames)
+    stats = reader.decoder.stats
+    assert stats.bytes_discarded == sum(len(g) for g in garbage)
+    # The fake header and the damaged frame fail their CRC; each of the three repeated markers
+    # is followed by 0xA5 where the version byte would be.
+    assert (stats.crc_errors, stats.size_errors, stats.version_errors) == (2, 0, 3)
+    assert 999_999 not in [f.seq for f in frames]
+
+
+def test_unplug_and_replug_on_the_link_is_survived(tmp_path):
+    link = str(tmp_path / 'skin')
+    sim = SimulatedSkin(held_press_scene(), rate_hz=RATE_HZ, link_path=link)
+    try:
+        assert sim.start() == link
+        assert os.path.realpath(link) == sim.port
+        reader = Reader(link)
+        reader.read_frames(10)
+        before = reader.frames[-1].seq
+        sim.unplug()
+        assert not os.path.lexists(link)  # like udev removing the by-id link
+        reader.read_until(lambda: reader.disconnects == 1)
+        time.sleep(0.1)  # the device clock runs on while unplugged
+        assert sim.replug() == link
+        assert os.path.realpath(link) == sim.port
+        reader.read_frames(10)
+        reader.close()
+    finally:
+        sim.stop()
+    after = [f for f in reader.frames if f.seq > before]
+    assert len(after) >= 10
+    assert after[0].seq - before >= 0.1 * RATE_HZ
+    assert_equal_to_truth(sim, reader.frames)
+    assert_no_frame_lost(sim, after)
+    assert reader.decoder.stats.seq_gaps == 0  # reset() after the reconnect forgot the old seq
+    assert not os.path.lexists(link)
+
+
+def test_ground_truth_is_bounded_and_stop_is_idempotent():
+    sim = SimulatedSkin('two_finger', rate_hz=RATE_HZ, truth_capacity=7)
+    reader = Reader(sim.start())
+    try:
+        reader.read_frames(20)
+    finally:
+        reader.close()
+        sim.stop()
+        sim.stop()
+    truth = sim.ground_truth
+    assert len(truth) == 7
+    assert max(truth) >= 19 and sim.frames_sent >= 20
+    assert sim.port is None
+
+
+def test_bad_arguments_are_rejected(tmp_path):
+    with pytest.raises(ValueError, match='rate_hz'):
+        SimulatedSkin('seed', rate_hz=0)
+    with pytest.raises(ValueError, match='truth_capacity'):
+        SimulatedSkin('seed', truth_capacity=0)
+    with pytest.raises(ValueError, match='bundled scenes'):
+        SimulatedSkin('no_such_scene')
+    occupied = tmp_path / 'file'
+    occupied.write_text('keep me')
+    sim = SimulatedSkin('seed', link_path=str(occupied))
+    with pytest.raises(ValueError, match='not a symlink'):
+        sim.start()
+    assert occupied.read_text() == 'keep me'
+
+
+def test_render_dataset_of_the_seed_scene():
+    data = render_dataset('seed', seed=1, tare_frames=4)
+    n = 9 * 5
+    assert data.top.shape == data.bottom.shape == (n, 16, 16)
+    assert data.top.dtype == np.uint16 and data.pitch_m == 0.005
+    normal = data.alpha_deg == 0
+    assert normal.sum() == 5 and np.isnan(data.azimuth_deg[normal]).all()
+    assert sorted(set(data.azimuth_deg[~normal])) == list(range(0, 360, 45))
+    assert (data.force_n == 10.0).all() and (data.x_m == 0.0375).all()
+    assert data.tare_top.shape == (4, 16, 16)
+    # Every sample is taken at full force: the press is plainly visible on the top layer.
+    assert (data.top.reshape(n, -1).max(axis=1) > 1000).all()
+    assert data.tare_top.max() < 200
+
+
+def test_cli_export_writes_a_dataset_the_evaluator_loads(tmp_path, capsys):
+    out = tmp_path / 'border.npz'
+    assert main(['--scene', 'border', '--export', str(out), '--samples-per-press', '2']) == 0
+    data = load_dataset(out)
+    assert data.frames == 16 and data.shape == (16, 16)
+    assert data.alpha_deg[0] == 0 and np.isnan(data.azimuth_deg[0])
+    assert main(['--scene', 'nope']) == 2
+    assert 'no scene file' in capsys.readouterr().err
+
+
+def test_cli_streams_on_a_pty_and_stops_cleanly_on_sigterm(tmp_path):
+    link = str(tmp_path / 'skin')
+    proc = subprocess.Popen([sys.executable, '-m', 'skin_driver.sim', '--rate', '200',
+                             '--link', link, '--scene', 'seed', '--loop'],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        first = proc.stdout.readline().split()
+        assert first == ['SKIN_PORT', link]
+        reader = Reader(link)
+        reader.read_frames(5)
+        reader.close()
+        proc.send_signal(signal.SIGTERM)
+        assert proc.wait(timeout=DEADLINE_S) == 0
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.wait()
+    assert 'stopped after' in proc.stderr.read()
+    assert not os.path.lexists(link)
