@@ -7,11 +7,11 @@ Bring up the skin: serial driver and direction node, optionally the simulated sk
 """
 
 from launch import LaunchDescription
-from launch.actions import DeclareLaunchArgument
+from launch.actions import DeclareLaunchArgument, ExecuteProcess
 from launch.conditions import IfCondition
 from launch.substitutions import LaunchConfiguration, PathJoinSubstitution
 from launch_ros.actions import LifecycleNode, Node
-from launch_ros.substitutions import FindPackageShare
+from launch_ros.substitutions import FindPackagePrefix, FindPackageShare
 
 
 def generate_launch_description():
@@ -37,11 +37,12 @@ def generate_launch_description():
         DeclareLaunchArgument('rviz', default_value='false',
                               description='Start rviz2 with the heatmap configuration.'),
     ]
-    simulator = Node(
-        package='skin_driver', executable='sim', name='skin_sim', namespace=namespace,
-        arguments=['--link', port, '--scene', LaunchConfiguration('scene'),
-                   '--rate', LaunchConfiguration('sim_rate'), '--loop'],
-        output='screen', condition=IfCondition(LaunchConfiguration('sim')))
+    # The simulator is a device, not a ROS node: it takes no --ros-args.
+    simulator = ExecuteProcess(
+        cmd=[PathJoinSubstitution([FindPackagePrefix('skin_driver'), 'lib', 'skin_driver', 'sim']),
+             '--link', port, '--scene', LaunchConfiguration('scene'),
+             '--rate', LaunchConfiguration('sim_rate'), '--loop'],
+        name='skin_sim', output='screen', condition=IfCondition(LaunchConfiguration('sim')))
     driver = LifecycleNode(
         package='skin_driver', executable='driver', name='skin_driver', namespace=namespace,
         parameters=[params_file, {'port': port}], output='screen')

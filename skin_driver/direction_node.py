@@ -283,7 +283,8 @@ class DirectionNode(Node):
         response.success = True
         response.x_p, response.y_p = new.x_p_m, new.y_p_m
         response.std_x, response.std_y = new.std_x_m, new.std_y_m
-        response.message = (f'calibrated from {len(session.accepted)} presses: x_p = '
+        used = len(session.accepted)
+        response.message = (f'calibrated from {used} press{"es" if used != 1 else ""}: x_p = '
                             f'{new.x_p_m * 1e3:.3f} mm, y_p = {new.y_p_m * 1e3:.3f} mm; '
                             'written to '
                             f'{self._calibration_path()}')

@@ -63,7 +63,7 @@ def test_rviz_config_shows_the_heatmaps_markers_and_wrench():
                            'ROS 2 Jazzy run this test')
 def test_launch_file_declares_its_arguments_and_nodes():
     from launch import LaunchDescription
-    from launch.actions import DeclareLaunchArgument
+    from launch.actions import DeclareLaunchArgument, ExecuteProcess
     spec = importlib.util.spec_from_file_location('skin_launch',
                                                   ROOT / 'launch' / 'skin.launch.py')
     module = importlib.util.module_from_spec(spec)
@@ -73,4 +73,7 @@ def test_launch_file_declares_its_arguments_and_nodes():
     names = {a.name for a in description.entities if isinstance(a, DeclareLaunchArgument)}
     assert names == {'port', 'params_file', 'namespace', 'sim', 'scene', 'sim_rate', 'rviz'}
     executables = [getattr(a, 'node_executable', None) for a in description.entities]
-    assert {'sim', 'driver', 'direction', 'rviz2'} <= set(executables)
+    assert {'driver', 'direction', 'rviz2'} <= set(executables)
+    processes = [a for a in description.entities if isinstance(a, ExecuteProcess)
+                 and a.name == 'skin_sim']
+    assert len(processes) == 1
