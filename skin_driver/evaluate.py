@@ -94,6 +94,26 @@ def summarise(truth_deg, estimate_deg) -> dict:
     }
 
 
+def _force_errors(data: Dataset, frames: np.ndarray, results: list) -> dict:
+    """Return alpha and force-magnitude error statistics over the frames with a direction."""
+    alpha_err, force_err = [], []
+    for i, contacts in zip(frames, results):
+        if not (contacts and contacts[0].direction_valid):
+            continue
+        c = contacts[0]
+        alpha_err.append(math.degrees(c.alpha_rad) - float(data.alpha_deg[i]))
+        if data.force_n is not None and data.force_n[i] > 0:
+            magnitude = math.sqrt(sum(v * v for v in c.force_xyz_n))
+            force_err.append(100.0 * (magnitude / float(data.force_n[i]) - 1.0))
+    out = {}
+    for key, unit, errors in (('alpha', 'deg', alpha_err), ('force', 'pct', force_err)):
+        e = np.asarray(errors)
+        out[f'{key}_mean_error_{unit}'] = float(np.abs(e).mean()) if e.size else None
+        out[f'{key}_std_error_{unit}'] = float(np.abs(e).std()) if e.size else None
+        out[f'{key}_bias_{unit}'] = float(e.mean()) if e.size else None
+    return out
+
+
 def evaluate_method(data: Dataset, method: str, config: EstimatorConfig = None) -> dict:
     """Return the Table 1 figures of one estimator on ``data`` (see docs/dataset.md)."""
     base = config or EstimatorConfig(pitch_m=data.pitch_m)
@@ -119,6 +139,7 @@ def evaluate_method(data: Dataset, method: str, config: EstimatorConfig = None) 
                  for c in results]
     report = summarise(data.azimuth_deg[tilted], estimates)
     report['summary']['us_per_frame'] = elapsed / tilted.size * 1e6 if tilted.size else None
+    report['summary'].update(_force_errors(data, tilted, results))
     return {'method': method, 'calibration': calibration.to_dict(), **report}
 
 
@@ -181,6 +202,15 @@ def format_table(report: dict) -> str:
         cost = (f', {_fmt(s["us_per_frame"], ".1f")} us per frame (contacts included)'
                 if s.get('us_per_frame') is not None else '')
         lines.append(f'{n}: max error {_fmt(s["max_error_deg"])} deg{cost}')
+        if s.get('alpha_mean_error_deg') is not None:
+            force = ''
+            if s.get('force_mean_error_pct') is not None:
+                force = (f'; |force| error {_fmt(s["force_mean_error_pct"])} % '
+                         f'(std {_fmt(s["force_std_error_pct"])}, '
+                         f'bias {_fmt(s["force_bias_pct"], "+.2f")})')
+            lines.append(f'{" " * len(n)}  alpha error {_fmt(s["alpha_mean_error_deg"])} deg '
+                         f'(std {_fmt(s["alpha_std_error_deg"])}, '
+                         f'bias {_fmt(s["alpha_bias_deg"], "+.2f")}){force}')
     if paper:
         lines.append('paper: Klimaszewski et al., Sensors 2019, 19, 4697, Table 1 '
                      '(real skin, Fanuc robot, alpha = 45 deg)')

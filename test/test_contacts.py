@@ -57,3 +57,29 @@ def test_bad_input():
         find_contacts(np.full((4, 4), np.inf), np.zeros((4, 4)), 0.005)
     with pytest.raises(ValueError, match='connectivity'):
         find_contacts(np.zeros((4, 4)), np.zeros((4, 4)), 0.005, connectivity=6)
+
+
+def test_bottom_layer_moments_and_border_flag():
+    top = _blob((16, 16), 6, 9)
+    bottom = np.zeros((16, 16))
+    bottom[6, 10], bottom[6, 11] = 1.0, 1.0
+    s = find_contacts(top, bottom, 0.005)[0][0]
+    assert s.bottom_force_n == pytest.approx(2.0)
+    assert (s.bottom_row, s.bottom_col) == pytest.approx((6.0, 10.5))
+    assert s.bottom_spread == pytest.approx(0.25)
+    assert not s.at_border
+    edge = np.zeros((16, 16))
+    edge[0, 3] = 1.0
+    assert find_contacts(edge, edge, 0.005)[0][0].at_border
+
+
+def test_many_contacts_use_the_same_moments():
+    # More labels than the one-hot path handles: the bincount path must give the same figures.
+    top = np.zeros((40, 40))
+    top[::3, ::3] = np.arange(1, 197).reshape(14, 14)
+    segs, _ = find_contacts(top, top * 0.5, 0.005, min_force_n=0.0)
+    assert len(segs) == 196
+    s = segs[0]
+    assert s.force_n == pytest.approx(196.0) and s.bottom_force_n == pytest.approx(98.0)
+    assert (s.row, s.col, s.bottom_row, s.bottom_col) == pytest.approx((39, 39, 39, 39))
+    assert s.taxels == 1 and s.bottom_spread == pytest.approx(0.0, abs=1e-6)

@@ -22,9 +22,15 @@ def test_table_and_json(tmp_path, capsys):
     assert summary['mean_error_deg'] < report['methods']['seed']['summary']['mean_error_deg']
     assert summary['us_per_frame'] > 0
     assert poc['calibration']['presses'] == 3
+    # 10 N at alpha 45 deg: the polar angle within a degree and |force| within 5 %.
+    assert summary['alpha_mean_error_deg'] < 1.0 and summary['force_mean_error_pct'] < 5.0
+    for key in ('alpha_std_error_deg', 'alpha_bias_deg', 'force_std_error_pct',
+                'force_bias_pct'):
+        assert isinstance(summary[key], float)
     assert evaluate.main([str(path), '--method', 'centroid']) == 0
     text = capsys.readouterr().out
     assert 'summary' in text and 'centroid mean' in text and 'seed mean' in text
+    assert 'alpha error' in text and '|force| error' in text
 
 
 def test_generate_and_errors(tmp_path, capsys):

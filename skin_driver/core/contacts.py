@@ -20,7 +20,11 @@ class Segment:
 
     ``row``/``col`` are the force-weighted centroid on the top layer in (fractional) taxels;
     ``window`` is ``(r0, r1, c0, c1)``, half-open, covering the contact on both layers plus a
-    margin, where the shift between the layers is measured.
+    margin, where the shift between the layers is measured. ``bottom_force_n``,
+    ``bottom_row``/``bottom_col`` and ``bottom_spread`` (variance along rows plus along columns,
+    taxels squared) describe the contact on the bottom layer (the top centroid and 0 when the
+    bottom layer carries nothing). ``at_border`` is True when the contact's taxels reach the
+    map edge.
     """
 
     label: int
@@ -32,6 +36,11 @@ class Segment:
     area_m2: float
     taxels: int
     window: tuple
+    bottom_force_n: float = 0.0
+    bottom_row: float = 0.0
+    bottom_col: float = 0.0
+    bottom_spread: float = 0.0
+    at_border: bool = False
 
 
 def find_contacts(top_force, bottom_force, pitch_m: float, min_force_n: float = 0.05,
@@ -56,7 +65,32 @@ def find_contacts(top_force, bottom_force, pitch_m: float, min_force_n: float = 
 @lru_cache(maxsize=16)
 def _grids(shape: tuple) -> tuple:
     rr, cc = np.indices(shape)
-    return rr.ravel().astype(np.float64), cc.ravel().astype(np.float64)
+    rr = rr.ravel().astype(np.float64)
+    cc = cc.ravel().astype(np.float64)
+    return np.stack((np.ones_like(rr), rr, cc, rr * rr + cc * cc)), np.arange(64)[:, None]
+
+
+# Few labels: one matrix product with the one-hot label matrix beats eight bincounts.
+_ONE_HOT_LABELS = 16
+
+
+def _moments(top: np.ndarray, bottom: np.ndarray, labels: np.ndarray, n: int) -> np.ndarray:
+    """
+    Return per-label sums (8 x n) over the taxels of each label.
+
+    Rows: top force, top force * row, top force * col, bottom force, bottom force * row,
+    bottom force * col, bottom force * (row**2 + col**2), loaded top taxels.
+    """
+    basis, label_ids = _grids(top.shape)
+    w = top.ravel()
+    weights = np.empty((8, w.size))
+    np.multiply(w, basis[:3], out=weights[:3])
+    np.multiply(bottom.ravel(), basis, out=weights[3:7])
+    np.greater(w, 0, out=weights[7])
+    flat = labels.ravel()
+    if n <= _ONE_HOT_LABELS:
+        return weights @ (flat == label_ids[:n]).T.astype(np.float64)
+    return np.stack([np.bincount(flat, weights=row, minlength=n) for row in weights])
 
 
 def segment(top: np.ndarray, bottom: np.ndarray, pitch: float, min_force_n: float,
@@ -68,13 +102,7 @@ def segment(top: np.ndarray, bottom: np.ndarray, pitch: float, min_force_n: floa
     if n <= 1:
         return [], labels
     rows, cols = top.shape
-    flat = labels.ravel()
-    w = top.ravel()
-    rr, cc = _grids(top.shape)
-    mass = np.bincount(flat, weights=w, minlength=n)
-    sum_r = np.bincount(flat, weights=w * rr, minlength=n)
-    sum_c = np.bincount(flat, weights=w * cc, minlength=n)
-    count = np.bincount(flat[w > 0], minlength=n)
+    mass, sum_r, sum_c, mass_b, sum_rb, sum_cb, sum_sq_b, count = _moments(top, bottom, labels, n)
     threshold = max(float(min_force_n), 1e-12)
     mass[0] = 0.0
     segments = []
@@ -85,9 +113,17 @@ def segment(top: np.ndarray, bottom: np.ndarray, pitch: float, min_force_n: floa
         m = float(mass[k])
         r = float(sum_r[k]) / m
         c = float(sum_c[k]) / m
-        n_taxels = int(count[k])
+        n_taxels = int(round(count[k]))
+        mb = float(mass_b[k])
+        if mb > 0:
+            rb = float(sum_rb[k]) / mb
+            cb = float(sum_cb[k]) / mb
+            spread = max(float(sum_sq_b[k]) / mb - rb * rb - cb * cb, 0.0)
+        else:
+            rb, cb, spread = r, c, 0.0
+        border = x0 == 0 or y0 == 0 or x0 + ww == cols or y0 + hh == rows
         segments.append(Segment(k, r, c, c * pitch, r * pitch, m, n_taxels * pitch * pitch,
-                                n_taxels, window))
+                                n_taxels, window, mb, rb, cb, spread, border))
     segments.sort(key=lambda s: -s.force_n)
     return segments, labels
 

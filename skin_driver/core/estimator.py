@@ -4,8 +4,16 @@ The contact estimation pipeline used by the ROS nodes, the evaluator and the ben
 raw counts (top, bottom) -> conditioning (tare, threshold, FSR model -> force per taxel)
 -> contacts (segmentation, sub-taxel centroid, force, area, window)
 -> shift between the layers in each window (named estimator from :mod:`direction`)
+-> taxel-sampling bias removed (:mod:`sampling`, all methods but the paper's ``seed``)
 -> calibrated shift ``s = raw - (x_p, y_p)`` -> azimuth ``atan2(s_y, s_x)``
 -> tangential force ``|s| / compliance`` -> polar angle and 3-D force.
+
+Normal force: the taxels sense only ``fill_factor**2`` of the skin area, so the summed taxel
+forces of a contact are divided by it. The bottom layer's sum is used because the elastic layer
+spreads the pressure over several taxels, which makes the sensed share independent of where the
+contact sits (within 1 % in simulation); the top layer's share varies by +-5 % with the sub-taxel
+position of a small indenter. At the map edge, where the wider bottom imprint is cut first, the
+larger of the two sums is used.
 
 Skin frame: x along columns, y along rows, z out of the skin. Pressing into the skin is a force
 along -z, so ``force_xyz_n[2] = -force_n`` (``force_n`` is the normal magnitude, >= 0). The
@@ -24,6 +32,7 @@ from .conditioning import ConditioningConfig, Conditioner
 from .contacts import contact_windows, segment
 from .direction import DEFAULT_METHOD, NO_SHIFT, get_method
 from .physics import FsrModel
+from .sampling import sampling_correction
 from .validate import check_number, check_pair
 
 __all__ = ['EstimatorConfig', 'Contact', 'ContactEstimator']
@@ -38,7 +47,13 @@ class EstimatorConfig:
     ``min_shift_m``: a calibrated shift shorter than this is no shear (alpha = 0, no direction).
     ``max_shift_m``: a shift longer than this is not physical for the skin; no direction.
     ``compliance_m_per_n``: layer shift per tangential newton, used when the calibration has none.
-    ``force_scale``: multiplies the summed taxel forces, e.g. to account for insensitive gaps.
+    ``force_scale``: extra factor on the normal force (a user's force calibration; 1 = none).
+    ``fill_factor``: sensitive fraction of the pitch on each axis; normal force = summed taxel
+    forces / fill_factor**2.
+    ``sampling_correction``: remove the taxel-sampling bias of the shift (:mod:`sampling`) with a
+    table built from ``pitch_m``, ``fill_factor``, ``cover_spread_m`` (spread of the pressure by
+    the cover, on the top layer) and ``layer_spread_m`` (extra spread by the elastic layer, on
+    the bottom layer), the FSR model and the threshold. Never applied to ``seed``.
     """
 
     method: str = DEFAULT_METHOD
@@ -54,6 +69,10 @@ class EstimatorConfig:
     max_contacts: int = 32
     force_scale: float = 1.0
     fsr: FsrModel = field(default_factory=FsrModel)
+    fill_factor: float = 0.9
+    sampling_correction: bool = True
+    cover_spread_m: float = 0.001
+    layer_spread_m: float = 0.002
 
     def __post_init__(self):
         """Validate every field and the method name."""
@@ -67,6 +86,12 @@ class EstimatorConfig:
         check_number(self.min_shift_m, 'min_shift_m', non_negative=True)
         check_number(self.max_shift_m, 'max_shift_m', positive=True)
         check_number(self.force_scale, 'force_scale', positive=True)
+        check_number(self.fill_factor, 'fill_factor', low=0.05, high=1.0)
+        check_number(self.cover_spread_m, 'cover_spread_m', non_negative=True)
+        check_number(self.layer_spread_m, 'layer_spread_m', non_negative=True)
+        if not isinstance(self.sampling_correction, bool):
+            raise ValueError(f'sampling_correction must be True or False, '
+                             f'got {self.sampling_correction!r}')
         for name in ('window_margin', 'max_contacts'):
             v = getattr(self, name)
             if isinstance(v, bool) or int(v) != v or v < 0:
@@ -111,6 +136,13 @@ class ContactEstimator:
             fsr=self.config.fsr, threshold_counts=self.config.threshold_counts,
             noise_sigmas=self.config.noise_sigmas))
         self._method = get_method(self.config.method)
+        cfg = self.config
+        self._correction = None
+        if cfg.sampling_correction and not self._method.whole_map:
+            self._correction = sampling_correction(
+                self._method.function, float(cfg.pitch_m), float(cfg.fill_factor),
+                float(cfg.cover_spread_m), float(cfg.layer_spread_m),
+                float(cfg.threshold_counts), cfg.fsr)
 
     @property
     def compliance_m_per_n(self) -> float:
@@ -141,8 +173,28 @@ class ContactEstimator:
                 est = self._method.function(tw, bw)
             if not (math.isfinite(est.dx) and math.isfinite(est.dy)):
                 est = NO_SHIFT
+            elif self._correction is not None and est.confidence > 0:
+                est = self._unbias(seg, est)
             out.append((seg, est))
         return out
+
+    def _unbias(self, seg, est):
+        """Remove the taxel-sampling bias from a window estimate (see :mod:`sampling`)."""
+        if seg.at_border or seg.bottom_force_n <= 0:
+            # The bottom imprint is cut by the edge: its centroid and spread would mislead.
+            return est
+        a1, a2 = self._correction.amplitudes(seg.bottom_spread, self._normal_force(seg))
+        solve = self._correction.solve
+        return est._replace(dx=solve(est.dx, seg.bottom_col, a1, a2),
+                            dy=solve(est.dy, seg.bottom_row, a1, a2))
+
+    def _normal_force(self, seg) -> float:
+        """Return the contact's normal force: sensed sum / fill_factor**2 (module docstring)."""
+        cfg = self.config
+        sensed = max(seg.force_n, seg.bottom_force_n) if seg.at_border else seg.bottom_force_n
+        if sensed <= 0:
+            sensed = seg.force_n
+        return sensed * cfg.force_scale / (cfg.fill_factor * cfg.fill_factor)
 
     def measure_shifts(self, top_counts, bottom_counts) -> list:
         """
@@ -164,7 +216,7 @@ class ContactEstimator:
             raw_x, raw_y = est.dx * pitch, est.dy * pitch
             sx, sy = raw_x - cal.x_p_m, raw_y - cal.y_p_m
             magnitude = math.hypot(sx, sy)
-            normal = seg.force_n * cfg.force_scale
+            normal = self._normal_force(seg)
             conf = min(max(_finite(est.confidence), 0.0), 1.0)
             valid = (conf >= cfg.min_confidence and cfg.min_shift_m <= magnitude
                      and math.hypot(raw_x, raw_y) <= cfg.max_shift_m)
