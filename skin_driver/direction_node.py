@@ -16,6 +16,7 @@ import os
 import time
 
 from geometry_msgs.msg import WrenchStamped
+from rcl_interfaces.msg import SetParametersResult
 import numpy as np
 import rclpy
 from rclpy.callback_groups import MutuallyExclusiveCallbackGroup
@@ -35,8 +36,14 @@ from skin_driver.core.direction import DEFAULT_METHOD, method_names
 from skin_driver.core.estimator import ContactEstimator, EstimatorConfig
 from skin_driver.core.heatmap import colour_map
 from skin_driver.core.presses import PressSegmenter
-from skin_driver.params import declare, ParameterError
+from skin_driver.params import check, declare, ParameterError
 
+MAX_CALIBRATION_PRESSES = 1000
+MAX_CALIBRATION_S = 3600.0
+# Parameters that shape the estimator: changing one at run time rebuilds it.
+ESTIMATOR_PARAMETERS = ('method', 'threshold', 'min_force', 'min_confidence', 'min_shift',
+                        'compliance', 'force_scale', 'sampling_correction', 'skin.fill_factor',
+                        'skin.cover_spread', 'skin.layer_spread')
 DEFAULT_CALIBRATION_FILE = os.path.join(
     os.environ.get('ROS_HOME', os.path.join(os.path.expanduser('~'), '.ros')),
     'skin_driver', 'calibration.yaml')
@@ -84,6 +91,8 @@ class DirectionNode(Node):
         self.create_service(Trigger, '~/tare', self._on_tare)
         self._diag = diagnostics.DiagnosticPublisher(self)
         self.create_timer(self._p('diagnostics_period'), self._report)
+        self.add_on_set_parameters_callback(self._check_new_parameters)
+        self.add_post_set_parameters_callback(self._apply_new_parameters)
         self.get_logger().info(
             f"estimating with '{self._p('method')}'; {self._calibration_note}")
 
@@ -92,28 +101,45 @@ class DirectionNode(Node):
         declare(self, 'method', DEFAULT_METHOD,
                 'Shift estimator between the layers; seed is the paper\'s phase correlation.',
                 choices=method_names())
-        declare(self, 'threshold', 40.0,
+        # The core's defaults are the node's: the evaluator and the node measure the same thing.
+        core = EstimatorConfig()
+        declare(self, 'threshold', core.threshold_counts,
                 'ADC counts above the baseline below which a taxel counts as untouched.',
                 low=0.0, high=4095.0)
         declare(self, 'min_force', 0.2, 'Contacts weaker than this (newtons) are ignored.',
                 low=0.0, high=1000.0)
-        declare(self, 'min_confidence', 0.3,
+        declare(self, 'min_confidence', core.min_confidence,
                 'Directions less trusted than this are reported with direction_valid false.',
                 low=0.0, high=1.0)
-        declare(self, 'min_shift', 0.0005,
+        declare(self, 'min_shift', core.min_shift_m,
                 'Layer shift (metres, after calibration) below which no direction is reported.',
                 low=0.0, high=0.1)
-        declare(self, 'compliance', 7.0e-4,
+        declare(self, 'compliance', core.compliance_m_per_n,
                 'Layer shift per newton of tangential force (m/N); gives the polar angle alpha.',
                 low=1.0e-7, high=1.0)
+        declare(self, 'force_scale', core.force_scale,
+                'Factor on the normal force: a force calibration against a reference sensor.',
+                low=0.01, high=100.0)
+        declare(self, 'sampling_correction', core.sampling_correction,
+                'Remove the bias of the layer shift that comes from sampling the top layer on '
+                'taxels (needs the skin.* parameters to describe the skin).')
+        declare(self, 'skin.fill_factor', core.fill_factor,
+                'Sensitive fraction of the pitch along each axis of a taxel.', low=0.1, high=1.0)
+        declare(self, 'skin.cover_spread', core.cover_spread_m,
+                'Spread (metres, standard deviation) of pressure through the top cover.',
+                low=0.0, high=0.02)
+        declare(self, 'skin.layer_spread', core.layer_spread_m,
+                'Extra spread (metres) of pressure through the elastic layer, seen by the bottom.',
+                low=0.0, high=0.05)
         declare(self, 'calibration_file', DEFAULT_CALIBRATION_FILE,
                 'YAML file holding (x_p, y_p); loaded at start-up, written by ~/calibrate.',
                 non_empty=True)
         declare(self, 'calibration.presses', 8,
                 'Normal presses ~/calibrate records when the request asks for 0.',
-                low=1, high=1000)
+                low=1, high=MAX_CALIBRATION_PRESSES)
         declare(self, 'calibration.timeout', 60.0,
-                'Seconds ~/calibrate waits when the request asks for 0.', low=0.1, high=3600.0)
+                'Seconds ~/calibrate waits when the request asks for 0.',
+                low=0.1, high=MAX_CALIBRATION_S)
         declare(self, 'calibration.max_std', 0.0005,
                 'Largest spread (metres, standard deviation) of the presses\' shifts accepted.',
                 low=1.0e-6, high=0.1)
@@ -133,11 +159,39 @@ class DirectionNode(Node):
     def _p(self, name):
         return self.get_parameter(name).value
 
+    def _check_new_parameters(self, params) -> SetParametersResult:
+        """Refuse at run time what start-up would refuse (rclpy checks the ranges)."""
+        for param in params:
+            try:
+                if param.name == 'method':
+                    check('method', param.value, 'a shift estimator', choices=method_names())
+                elif param.name == 'calibration_file':
+                    check('calibration_file', param.value, 'a YAML file path', non_empty=True)
+            except ParameterError as err:
+                return SetParametersResult(successful=False, reason=str(err))
+        return SetParametersResult(successful=True)
+
+    def _apply_new_parameters(self, params) -> None:
+        names = {param.name for param in params}
+        if names & set(ESTIMATOR_PARAMETERS):
+            self._estimator = ContactEstimator(
+                self._estimator_config(self._estimator.config.pitch_m), self._calibration,
+                conditioner=self._estimator.conditioner)
+            self.get_logger().info(f"estimator rebuilt for {', '.join(sorted(names))}")
+        if 'calibration_file' in names:
+            self._calibration, self._calibration_note = self._load_calibration()
+            self._estimator.calibration = self._calibration
+        if 'tare.frames' in names:
+            self._recent = collections.deque(self._recent, maxlen=self._p('tare.frames'))
+
     def _estimator_config(self, pitch_m: float = 0.005) -> EstimatorConfig:
         return EstimatorConfig(
             method=self._p('method'), pitch_m=pitch_m, threshold_counts=self._p('threshold'),
             min_contact_force_n=self._p('min_force'), min_confidence=self._p('min_confidence'),
-            min_shift_m=self._p('min_shift'), compliance_m_per_n=self._p('compliance'))
+            min_shift_m=self._p('min_shift'), compliance_m_per_n=self._p('compliance'),
+            force_scale=self._p('force_scale'), sampling_correction=self._p('sampling_correction'),
+            fill_factor=self._p('skin.fill_factor'), cover_spread_m=self._p('skin.cover_spread'),
+            layer_spread_m=self._p('skin.layer_spread'))
 
     def _follow_pitch(self, pitch_m: float) -> None:
         """Take the taxel pitch from the frames, keeping the tare and the calibration."""
@@ -171,6 +225,8 @@ class DirectionNode(Node):
             start = time.perf_counter()
             contacts = self._estimator.process(top, bottom)
             self._cost.append(time.perf_counter() - start)
+            # Converting here means a non-finite value never reaches a publisher.
+            array = conversions.contacts_to_array(msg.header, contacts)
         except ValueError as err:
             self._stats['bad frames'] += 1
             self.get_logger().warning(f'dropping frame {msg.sequence}: {err}',
@@ -180,11 +236,12 @@ class DirectionNode(Node):
         self._rate.add()
         self._recent.append((top, bottom, len(contacts)))
         header = msg.header
-        self._pub_contacts.publish(conversions.contacts_to_array(header, contacts))
+        self._pub_contacts.publish(array)
         if contacts:
             strongest = contacts[0]
             self._stats['contacts'] += len(contacts)
-            self._pub_contact.publish(conversions.contact_to_msg(header, strongest))
+            # The array already holds the strongest contact's message: no second conversion.
+            self._pub_contact.publish(array.contacts[0])
             self._pub_wrench.publish(conversions.wrench_stamped(header, strongest.force_xyz_n))
         else:
             self._pub_wrench.publish(conversions.wrench_stamped(header, (0.0, 0.0, 0.0)))
@@ -238,12 +295,13 @@ class DirectionNode(Node):
             response.success = False
             response.message = 'a calibration is already running; wait for it to finish'
             return response
-        wanted = request.presses or self._p('calibration.presses')
-        timeout = request.timeout if request.timeout > 0 else self._p('calibration.timeout')
-        if not math.isfinite(timeout) or timeout > 3600.0:
+        refusal = _calibrate_request_problem(request)
+        if refusal:
             response.success = False
-            response.message = f'timeout {request.timeout} s is not in (0, 3600]'
+            response.message = refusal + '; the previous calibration stays in force'
             return response
+        wanted = request.presses or self._p('calibration.presses')
+        timeout = request.timeout or self._p('calibration.timeout')
         future = Future()
         self._session = _Session(wanted, PressSegmenter(
             normal_tolerance_m=self._p('calibration.normal_tolerance')), future)
@@ -342,6 +400,17 @@ class DirectionNode(Node):
         self._diag.publish([diagnostics.make_status(
             f'{self.get_fully_qualified_name()}: contact estimation', 'skin', level, message,
             values)])
+
+
+def _calibrate_request_problem(request) -> str:
+    """Return why a Calibrate request cannot be served, or '' if it can."""
+    if request.presses > MAX_CALIBRATION_PRESSES:
+        return (f'presses {request.presses} is more than {MAX_CALIBRATION_PRESSES}; ask for '
+                '0 (the default) or a number up to that')
+    if not (math.isfinite(request.timeout) and 0.0 <= request.timeout <= MAX_CALIBRATION_S):
+        return (f'timeout {request.timeout} s is not in (0, {MAX_CALIBRATION_S:.0f}]; ask for '
+                '0 (the default) or a number of seconds in that range')
+    return ''
 
 
 def main(args=None):

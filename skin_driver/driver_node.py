@@ -8,6 +8,12 @@ walks to active on its own, as a plain node would.
 Publishes (sensor-data QoS): frame (skin_msgs/SkinFrame), top/image_raw and bottom/image_raw
 (sensor_msgs/Image, mono16, raw counts). Diagnostics on /diagnostics once a second.
 
+Diagnostics: OK while frames arrive; WARN when the link is stalled or, within the last period,
+frames were dropped (sequence gaps, frames lost while the device was away) or corrupt frames
+were rejected (line noise); ERROR while the device is missing or when it only sends frames of
+another grid size (the received shape is in the message). Parameters set at run time are checked
+as at start-up and take effect at the next configure.
+
 Each message is stamped with the host time at which its last byte was read. The board's own clock
 travels in SkinFrame.device_time_us: it is not synchronised with the host, but its differences are
 exact, so consumers use it for the interval between scans and for latency measurements.
@@ -15,6 +21,7 @@ exact, so consumers use it for the interval between scans and for latency measur
 
 import time
 
+from rcl_interfaces.msg import SetParametersResult
 import rclpy
 from rclpy.executors import ExternalShutdownException
 from rclpy.lifecycle import Node, State, TransitionCallbackReturn
@@ -40,6 +47,9 @@ class SkinDriverNode(Node):
         self._diag_timer = None
         self._rate = None
         self._state_detail = 'not configured'
+        self._burst = 0
+        self._reported = {}
+        self.add_on_set_parameters_callback(self._check_new_parameters)
 
     def _declare_parameters(self) -> None:
         self.autostart = declare(
@@ -66,13 +76,29 @@ class SkinDriverNode(Node):
                 low=0.05, high=60.0)
         declare(self, 'reconnect_min', 0.1, 'First delay before reopening a lost port, seconds.',
                 low=0.01, high=10.0)
-        declare(self, 'reconnect_max', 2.0, 'Longest delay between reopening attempts, seconds.',
-                low=0.01, high=60.0)
+        declare(self, 'reconnect_max', 0.5,
+                'Longest delay between reopening attempts, seconds (a device path that '
+                'reappears is reopened at once).', low=0.01, high=60.0)
         declare(self, 'diagnostics_period', 1.0, 'Seconds between two /diagnostics reports.',
                 low=0.1, high=60.0)
 
     def _p(self, name):
         return self.get_parameter(name).value
+
+    def _check_new_parameters(self, params) -> SetParametersResult:
+        """Refuse at run time what start-up refuses; rclpy itself checks the ranges."""
+        new = {p.name: p.value for p in params}
+        for name in ('port', 'frame_id'):
+            if name in new and not str(new[name]).strip():
+                return SetParametersResult(successful=False,
+                                           reason=f'parameter {name!r} must not be empty')
+        low = new.get('reconnect_min', self._p('reconnect_min'))
+        high = new.get('reconnect_max', self._p('reconnect_max'))
+        if isinstance(low, (int, float)) and isinstance(high, (int, float)) and low > high:
+            return SetParametersResult(
+                successful=False,
+                reason=f"'reconnect_min' ({low}) must not exceed 'reconnect_max' ({high})")
+        return SetParametersResult(successful=True)
 
     # ---- lifecycle --------------------------------------------------------------------------
     def on_configure(self, state: State) -> TransitionCallbackReturn:
@@ -97,6 +123,7 @@ class SkinDriverNode(Node):
             backoff_min_s=self._p('reconnect_min'), backoff_max_s=self._p('reconnect_max'))
         self._diag = diagnostics.DiagnosticPublisher(self)
         self._rate = diagnostics.RateMeter(time.monotonic())
+        self._reported = {}
         self._diag_timer = self.create_timer(self._p('diagnostics_period'), self._report)
         self._state_detail = 'configured'
         self.get_logger().info(f"configured for {self._p('port')} "
@@ -153,6 +180,7 @@ class SkinDriverNode(Node):
                 self._pubs['top'].publish(conversions.counts_to_image(header, frame.top))
                 self._pubs['bottom'].publish(conversions.counts_to_image(header, frame.bottom))
         self._rate.add(len(frames))
+        self._burst = max(self._burst, len(frames))
 
     def _on_link_state(self, state: str, detail: str) -> None:
         self._state_detail = detail
@@ -169,23 +197,39 @@ class SkinDriverNode(Node):
         if self._link is None:
             return
         rate, _ = self._rate.take(time.monotonic())
+        burst, self._burst = self._burst, 0
         link, dec = self._link.stats, self._link.decoder.stats
         state = self._link.state
-        if state == CONNECTED:
-            level = diagnostics.OK if not dec.size_errors else diagnostics.WARN
-        elif state == STALLED:
-            level = diagnostics.WARN
-        else:
-            level = diagnostics.ERROR
-        message = f'{state}: {self._state_detail}'
-        if dec.size_errors and state == CONNECTED:
-            message += (f"; {dec.size_errors} frames of the wrong grid size rejected "
-                        f"(expected {self._p('rows')}x{self._p('cols')})")
+        dropped = dec.frames_missed + link.frames_lost_reconnecting
+        totals = {'frames': dec.frames, 'dropped': dropped, 'size': dec.size_errors,
+                  'corrupt': dec.crc_errors + dec.version_errors}
+        new = {k: v - self._reported.get(k, 0) for k, v in totals.items()}
+        self._reported = totals
+        level = {CONNECTED: diagnostics.OK,
+                 STALLED: diagnostics.WARN}.get(state, diagnostics.ERROR)
+        problems = []
+        rejected = self._link.decoder.last_rejected_shape
+        shape = f'{rejected[0]}x{rejected[1]}' if rejected else ''
+        if new['size']:
+            # A board that sends nothing but another grid is misconfigured, not noisy.
+            level = max(level, diagnostics.WARN if new['frames'] else diagnostics.ERROR)
+            problems.append(f"{new['size']} frames of the wrong grid size {shape} rejected "
+                            f"(expected {self._p('rows')}x{self._p('cols')})")
+        if new['corrupt']:
+            level = max(level, diagnostics.WARN)
+            problems.append(f"{new['corrupt']} corrupt frames rejected (line noise?)")
+        if new['dropped']:
+            level = max(level, diagnostics.WARN)
+            problems.append(f"{new['dropped']} frames dropped (sequence gaps)")
+        message = '; '.join([f'{state}: {self._state_detail}'] + problems)
         values = {
             'port': self._p('port'), 'link state': state, 'frame rate [Hz]': rate,
             'frames': dec.frames, 'crc errors': dec.crc_errors, 'size errors': dec.size_errors,
-            'version errors': dec.version_errors, 'bytes discarded': dec.bytes_discarded,
-            'sequence gaps': dec.seq_gaps, 'frames dropped': dec.frames_missed,
+            'last rejected shape': shape, 'version errors': dec.version_errors,
+            'bytes discarded': dec.bytes_discarded, 'sequence gaps': dec.seq_gaps,
+            'frames dropped': dropped,
+            'frames lost while disconnected': link.frames_lost_reconnecting,
+            'largest burst [frames]': burst,
             'connects': link.connects, 'disconnects': link.disconnects,
             'open failures': link.open_failures, 'publish errors': link.callback_errors,
             'last error': link.last_error,

@@ -4,23 +4,37 @@ Read skin frames from a serial port (or any pyserial URL) in a background thread
 One decoder, many transports: a device path such as /dev/ttyACM0 or a pseudo-terminal, or a
 pyserial URL such as socket://host:port or loop://. The link reconnects with exponential back-off
 when the device goes away and reports every change of state; it never raises into its caller.
+A device path that was missing is watched while the link waits, so a replugged board is opened
+as soon as its path reappears rather than when the back-off ends.
 It is ROS-free, so the driver node only wires it to topics and diagnostics.
+
+Frames lost while the device was away are counted when the board comes back with its sequence
+moved on (frames_lost_reconnecting): the same board's clock has advanced about as much as the
+host's since the last frame, whereas a board that restarted counts its clock from zero again, so
+a jump is only counted when the device clock advanced by at least the host's time less
+SAME_BOARD_TOLERANCE_S.
 """
 
 from dataclasses import dataclass
+import os
 import threading
 import time
 from typing import Callable, List, Optional
 
 import serial
 
-from skin_driver.core.protocol import Frame, FrameDecoder
+from skin_driver.core.protocol import Frame, FrameDecoder, MAX_SEQ
 
 CONNECTING = 'connecting'
 CONNECTED = 'connected'
 STALLED = 'stalled'
 DISCONNECTED = 'disconnected'
 STOPPED = 'stopped'
+
+# How often a missing device path is looked for while the link waits to reopen it.
+PATH_POLL_S = 0.05
+# Slack between the device clock and the host clock across a reconnect (latency, backlog).
+SAME_BOARD_TOLERANCE_S = 1.0
 
 
 @dataclass
@@ -33,6 +47,8 @@ class LinkStats:
     bytes_read: int = 0
     callback_errors: int = 0
     frames: int = 0
+    frames_lost_reconnecting: int = 0
+    last_connect_s: float = 0.0   # time.monotonic() of the latest successful open
     last_error: str = ''
 
 
@@ -64,6 +80,8 @@ class SerialLink:
         self._stop = threading.Event()
         self._thread: Optional[threading.Thread] = None
         self._serial: Optional[serial.SerialBase] = None
+        self._last_frame: Optional[tuple] = None  # (seq, device time in us, host time in s)
+        self._resumed = False
 
     def _default_open(self) -> serial.SerialBase:
         return serial.serial_for_url(self.port, baudrate=self.baud, timeout=self._read_timeout)
@@ -117,8 +135,10 @@ class SerialLink:
                             f'cannot open {self.port}: {err}')
             return False
         self.stats.connects += 1
+        self.stats.last_connect_s = time.monotonic()
         # Bytes buffered from the previous connection belong to a frame that will never finish.
         self.decoder.reset()
+        self._resumed = self._last_frame is not None
         self._set_state(CONNECTED, f'reading {self.port}')
         return True
 
@@ -128,7 +148,7 @@ class SerialLink:
         while not self._stop.is_set():
             if self._serial is None:
                 if not self._connect():
-                    self._stop.wait(backoff)
+                    self._wait_to_retry(backoff)
                     backoff = min(backoff * 2.0, self._backoff[1])
                     continue
                 backoff = self._backoff[0]
@@ -147,6 +167,7 @@ class SerialLink:
                 self.stats.bytes_read += len(data)
                 frames = self.decoder.feed(data)
                 if frames:
+                    self._follow_sequence(frames, now)
                     self.stats.frames += len(frames)
                     last_frame = now
                     self._set_state(CONNECTED, f'reading {self.port}')
@@ -154,3 +175,27 @@ class SerialLink:
             if now - last_frame > self._stall_timeout:
                 self._set_state(STALLED, f'no frame from {self.port} for '
                                 f'{now - last_frame:.1f} s')
+
+    def _wait_to_retry(self, backoff_s: float) -> None:
+        """Wait backoff_s, or less if the device path was missing and has just appeared."""
+        deadline = time.monotonic() + backoff_s
+        watch = self.port.startswith('/') and not os.path.exists(self.port)
+        while not self._stop.is_set():
+            left = deadline - time.monotonic()
+            if left <= 0:
+                return
+            self._stop.wait(min(left, PATH_POLL_S) if watch else left)
+            if watch and os.path.exists(self.port):
+                return
+
+    def _follow_sequence(self, frames: List[Frame], now: float) -> None:
+        if self._resumed:
+            self._resumed = False
+            seq, device_us, host_s = self._last_frame
+            first = frames[0]
+            step = (first.seq - seq) & MAX_SEQ
+            device_s = (first.device_time_us - device_us) * 1e-6
+            if 1 < step <= MAX_SEQ // 2 and device_s >= now - host_s - SAME_BOARD_TOLERANCE_S:
+                self.stats.frames_lost_reconnecting += step - 1
+        last = frames[-1]
+        self._last_frame = (last.seq, last.device_time_us, now)

@@ -8,6 +8,12 @@ messages go to stderr.  ``--export OUT.npz`` renders the scene offline into an e
 Like a USB CDC board whose host stops reading, the simulator never blocks: frames that do not fit
 into the pty and a small output queue are dropped whole, so the clock and the sequence numbers run
 on and the reader sees a sequence gap.
+
+Faults for reliability tests: unplug/replug, stall (the board stops for a while), burst (frames
+held back and sent in one clump), line noise (damaged frames and junk between frames), sequence
+gaps and frames of another grid size.  Every frame that leaves the board has exactly one fate the
+board can name: intact, damaged by the line, of the wrong size, or still unread in the pty when
+the cable was pulled (see the frames_* counters).
 """
 
 from __future__ import annotations
@@ -20,7 +26,9 @@ import fcntl
 import math
 import os
 import signal
+import struct
 import sys
+import termios
 import threading
 import time
 import tty
@@ -36,6 +44,10 @@ from skin_driver.core.scene import load_scene, Scene
 BATCH_S = 0.002
 # Further behind than this (a stalled process) the clock skips frames instead of bursting them.
 MAX_LAG_S = 0.5
+# Sent frames remembered to tell, at an unplug, which of them the reader had not read yet.
+SENT_HISTORY = 8192
+UNPLUG_SETTLE_S = 0.01
+DAMAGE_KINDS = ('bit flip', 'dropped byte', 'duplicated byte', 'inserted bytes', 'truncated')
 
 
 @dataclass(frozen=True)
@@ -96,8 +108,20 @@ class SimulatedSkin:
         self._written_bytes = 0
         self._next_index = 0
         self._t0 = 0.0
-        self.frames_sent = 0
-        self.frames_dropped = 0
+        self._seq_offset = 0
+        self._time_offset_us = 0
+        self._hold_until = 0.0
+        self._noise = 0.0
+        self._noise_rng = np.random.default_rng(seed + 1)
+        self._wire_shape: tuple | None = None
+        self._sent_ends: deque = deque(maxlen=SENT_HISTORY)  # (end offset, intact) of sent frames
+        self.frames_sent = 0          # frames whose last byte went into the pty
+        self.frames_dropped = 0       # frames scanned but never sent (unplugged, queue full, lag)
+        self.frames_damaged = 0       # sent frames whose bytes the line noise changed
+        self.frames_wrong_shape = 0   # sent frames of a grid other than the scene's
+        self.frames_unread = 0        # sent intact frames the reader had not read at an unplug
+        self.seq_skipped = 0          # sequence numbers skipped by skip_sequence()
+        self.first_seq_since_plug = None  # seq of the first frame queued on the current pty
 
     # ---- public control -------------------------------------------------------------------
 
@@ -105,6 +129,11 @@ class SimulatedSkin:
     def port(self) -> str | None:
         """Return the pty slave path while plugged in, else None."""
         return self._port
+
+    @property
+    def next_seq(self) -> int:
+        """Return the sequence number the next scanned frame will carry."""
+        return (self._next_index + self._seq_offset) & MAX_SEQ
 
     @property
     def ground_truth(self) -> dict:
@@ -154,6 +183,50 @@ class SimulatedSkin:
         with self._lock:
             self._garbage.append(bytes(data))
 
+    def stall(self, seconds: float) -> None:
+        """Stop scanning and sending for seconds, as a hung firmware would, then carry on."""
+        _check_duration(seconds)
+        # Moving the start of the clock leaves no frame due until the stall is over; the
+        # sequence and the device time carry on where they stopped.
+        self._t0 += seconds
+        # The board's hardware clock runs on while its firmware hangs.
+        self._time_offset_us += int(round(seconds * 1e6))
+
+    def burst(self, seconds: float) -> None:
+        """Hold the frames back for seconds, then send them all in one clump."""
+        _check_duration(seconds)
+        with self._lock:
+            self._hold_until = time.monotonic() + seconds
+
+    def set_line_noise(self, probability: float) -> None:
+        """
+        Damage each frame on the line with this probability (0 turns the noise off).
+
+        A damaged frame has a bit flipped, a byte dropped or duplicated, bytes inserted or its
+        tail cut off; as often again, random bytes fall between two frames.
+        """
+        if isinstance(probability, bool) or not isinstance(probability, (int, float)) or not (
+                0.0 <= probability <= 1.0):
+            raise ValueError(f'probability must be in [0, 1], got {probability!r}')
+        self._noise = float(probability)
+
+    def skip_sequence(self, count: int) -> None:
+        """Make the next sequence number jump forward by count, as a firmware losing scans."""
+        if isinstance(count, bool) or not isinstance(count, int) or not 1 <= count <= 1_000_000:
+            raise ValueError(f'count must be an integer in 1..1000000, got {count!r}')
+        with self._lock:
+            self._seq_offset += count
+            self.seq_skipped += count
+
+    def set_wire_shape(self, shape) -> None:
+        """Send frames of another grid (rows, cols), cropped or zero-padded; None restores."""
+        if shape is not None:
+            rows, cols = shape
+            if not all(isinstance(v, int) and 1 <= v <= 255 for v in (rows, cols)):
+                raise ValueError(f'shape must be (rows, cols) within 1..255, got {shape!r}')
+            shape = (rows, cols)
+        self._wire_shape = shape
+
     def __enter__(self) -> SimulatedSkin:
         """Start the board."""
         self.start()
@@ -182,13 +255,18 @@ class SimulatedSkin:
         with self._lock:
             self._pending.clear()
             self._frame_ends.clear()
+            self._sent_ends.clear()
             self._queued_bytes = self._written_bytes = 0
             # The slave stays open here so that a reader may close and reopen the port.
             self._master, self._slave, self._port = master, slave, port
+            self.first_seq_since_plug = None
 
     def _unplug_locked(self) -> None:
         if self._master is None:
             return
+        self.frames_unread += self._count_unread_locked()
+        # Frames still queued here never leave the board.
+        self.frames_dropped += len(self._frame_ends)
         for fd in (self._master, self._slave):
             try:
                 os.close(fd)
@@ -200,6 +278,18 @@ class SimulatedSkin:
         self._pending.clear()
         self._frame_ends.clear()
         self._garbage.clear()
+
+    def _count_unread_locked(self) -> int:
+        """Return how many sent intact frames have bytes the reader has not read yet."""
+        # Written bytes reach the slave's read queue (what FIONREAD counts) a moment later.
+        time.sleep(UNPLUG_SETTLE_S)
+        try:
+            raw = fcntl.ioctl(self._slave, termios.FIONREAD, b'\0\0\0\0')
+            unread = struct.unpack('i', raw)[0]
+        except OSError:
+            return 0
+        read_up_to = self._written_bytes - unread
+        return sum(1 for end, intact in self._sent_ends if intact and end > read_up_to)
 
     # ---- streaming ------------------------------------------------------------------------
 
@@ -219,7 +309,11 @@ class SimulatedSkin:
             wake = self._t0 + self._next_index * period
             if period < BATCH_S:
                 wake += BATCH_S - period
-            self._stop.wait(max(0.0, wake - time.monotonic()))
+            delay = max(0.0, wake - time.monotonic())
+            if self._pending:
+                # Bytes the pty could not take yet (or held for a burst) go out meanwhile.
+                delay = min(delay, BATCH_S)
+            self._stop.wait(delay)
 
     def _scene_time(self, seconds: float) -> float:
         duration = self.scene.duration_s
@@ -228,8 +322,9 @@ class SimulatedSkin:
         return seconds
 
     def _emit(self, index: int) -> None:
-        seq = index & MAX_SEQ
+        seq = (index + self._seq_offset) & MAX_SEQ
         device_time_us, seconds = _frame_times(index, self.rate_hz)
+        device_time_us += self._time_offset_us
         with self._lock:
             plugged = self._master is not None
             room = len(self._pending) < self._max_pending
@@ -240,23 +335,38 @@ class SimulatedSkin:
         active = self.scene.active_at(t)
         presses = tuple(p for _, p in active)
         top, bottom = physics.render(self.scene.model, presses, self._rng)
+        wire_shape = self._wire_shape
+        wrong_shape = wire_shape is not None and wire_shape != top.shape
+        if wrong_shape:
+            top, bottom = _reshape(top, wire_shape), _reshape(bottom, wire_shape)
         top.flags.writeable = False
         bottom.flags.writeable = False
         raw = encode_frame(seq, device_time_us, top, bottom)
         truth = FrameTruth(seq, device_time_us, top, bottom, presses, t,
                            tuple(i for i, _ in active))
+        junk, wire, damaged = b'', raw, False
+        if self._noise and self._noise_rng.random() < self._noise:
+            wire = _damage(raw, self._noise_rng)
+            # Damage at the very end may leave the frame intact with junk behind it.
+            damaged = wire[:len(raw)] != raw
+        if self._noise and self._noise_rng.random() < self._noise:
+            junk = self._noise_rng.integers(0, 256, int(self._noise_rng.integers(1, 64)),
+                                            dtype=np.uint8).tobytes()
         with self._lock:
             self._remember(truth)
             if self._master is None:
                 self.frames_dropped += 1
                 return
-            for junk in self._garbage:
-                self._pending += junk
-                self._queued_bytes += len(junk)
+            self._garbage.append(junk)
+            for extra in self._garbage:
+                self._pending += extra
+                self._queued_bytes += len(extra)
             self._garbage.clear()
-            self._pending += raw
-            self._queued_bytes += len(raw)
-            self._frame_ends.append(self._queued_bytes)
+            self._pending += wire
+            self._queued_bytes += len(wire)
+            if self.first_seq_since_plug is None:
+                self.first_seq_since_plug = seq
+            self._frame_ends.append((self._queued_bytes, damaged, wrong_shape))
 
     def _remember(self, truth: FrameTruth) -> None:
         if truth.seq in self._truth:
@@ -270,6 +380,8 @@ class SimulatedSkin:
         with self._lock:
             if self._master is None or not self._pending:
                 return
+            if time.monotonic() < self._hold_until:
+                return
             try:
                 n = os.write(self._master, self._pending)
             except BlockingIOError:
@@ -280,9 +392,44 @@ class SimulatedSkin:
                 raise
             del self._pending[:n]
             self._written_bytes += n
-            while self._frame_ends and self._frame_ends[0] <= self._written_bytes:
-                self._frame_ends.popleft()
+            while self._frame_ends and self._frame_ends[0][0] <= self._written_bytes:
+                end, damaged, wrong_shape = self._frame_ends.popleft()
                 self.frames_sent += 1
+                self.frames_damaged += damaged
+                self.frames_wrong_shape += wrong_shape
+                self._sent_ends.append((end, not (damaged or wrong_shape)))
+
+
+def _check_duration(seconds: float) -> None:
+    if isinstance(seconds, bool) or not isinstance(seconds, (int, float)) or not (
+            0.0 <= seconds <= 3600.0):
+        raise ValueError(f'seconds must be in [0, 3600], got {seconds!r}')
+
+
+def _reshape(layer: np.ndarray, shape: tuple) -> np.ndarray:
+    """Return layer cropped or zero-padded to shape."""
+    out = np.zeros(shape, dtype=layer.dtype)
+    rows, cols = min(shape[0], layer.shape[0]), min(shape[1], layer.shape[1])
+    out[:rows, :cols] = layer[:rows, :cols]
+    return out
+
+
+def _damage(raw: bytes, rng: np.random.Generator) -> bytes:
+    """Return raw with one kind of line damage applied at a random place."""
+    kind = DAMAGE_KINDS[int(rng.integers(len(DAMAGE_KINDS)))]
+    data = bytearray(raw)
+    at = int(rng.integers(len(data)))
+    if kind == 'bit flip':
+        data[at] ^= 1 << int(rng.integers(8))
+    elif kind == 'dropped byte':
+        del data[at]
+    elif kind == 'duplicated byte':
+        data.insert(at, data[at])
+    elif kind == 'inserted bytes':
+        data[at:at] = rng.integers(0, 256, int(rng.integers(1, 9)), dtype=np.uint8).tobytes()
+    else:
+        del data[max(at, 1):]
+    return bytes(data)
 
 
 def _point_link(link: str, target: str) -> None:
@@ -376,6 +523,10 @@ def _parser() -> argparse.ArgumentParser:
 
 def main(argv=None) -> int:
     """Run the simulator from the command line; return the process exit status."""
+    argv = sys.argv[1:] if argv is None else list(argv)
+    # `ros2 run` and launch may append ROS arguments; the simulated device has no use for them.
+    if '--ros-args' in argv:
+        argv = argv[:argv.index('--ros-args')]
     args = _parser().parse_args(argv)
     try:
         scene = load_scene(args.scene)
@@ -402,6 +553,9 @@ def main(argv=None) -> int:
     for sig in (signal.SIGINT, signal.SIGTERM):
         signal.signal(sig, _on_signal)
     print(f'SKIN_PORT {port}', flush=True)
+    # Wall-clock instant of device time 0, so that a host can turn device stamps into latency.
+    print(f'SKIN_EPOCH {time.time() - (time.monotonic() - skin._t0):.6f}', file=sys.stderr,
+          flush=True)
     model = scene.model
     print(f'sim: scene {scene.name!r} ({scene.duration_s:.1f} s{", looped" if args.loop else ""}'
           f'), {model.rows}x{model.cols} taxels at {args.rate:g} Hz on {skin.port}'

@@ -52,6 +52,16 @@ class Probe:
                     return status
         return None
 
+    def link_statuses(self):
+        """Return every skin-link DiagnosticStatus still kept, oldest first."""
+        return [status for msg in self.diagnostics for status in msg.status
+                if status.name.endswith('skin link')]
+
+    def saw_link_status(self, predicate):
+        """Return whether a kept skin-link status satisfies predicate(status, values)."""
+        return any(predicate(status, {kv.key: kv.value for kv in status.values})
+                   for status in self.link_statuses())
+
 
 @contextlib.contextmanager
 def pipeline(tmp_path, the_scene, rate_hz=200.0, driver=None, direction=None, loop=False):

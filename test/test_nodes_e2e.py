@@ -48,10 +48,10 @@ def test_garbage_between_frames_costs_at_most_the_damaged_frame(tmp_path):
             sim.inject_garbage(data)
             start = len(probe.frames)
             assert spin_until(executor, lambda: len(probe.frames) >= start + 10)
-        seqs = [msg.sequence for msg in probe.frames]
-        lost = sum(b - a - 1 for a, b in zip(seqs, seqs[1:]))
-        assert lost <= len(junk)
-        assert driver._link.decoder.stats.bytes_discarded > 0
+        stats = driver._link.decoder.stats
+        # Frames the simulator itself dropped (a loaded machine) are not the garbage's doing.
+        assert stats.frames_missed - sim.frames_dropped <= len(junk)
+        assert stats.bytes_discarded > 0
 
 
 def test_unplug_and_replug_is_survived_and_reported(tmp_path):

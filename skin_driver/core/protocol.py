@@ -168,6 +168,8 @@ class FrameDecoder:
         self._buf = bytearray()
         self._last_seq: int | None = None
         self.stats = DecoderStats()
+        # (rows, cols) of the newest frame refused for its size, for diagnostics.
+        self.last_rejected_shape: tuple[int, int] | None = None
 
     @property
     def max_buffer_bytes(self) -> int:
@@ -238,6 +240,7 @@ class FrameDecoder:
                 continue
             if not self._shape_ok(rows, cols):
                 stats.size_errors += 1
+                self.last_rejected_shape = (rows, cols)
                 stats.bytes_discarded += len(SYNC)
                 pos += len(SYNC)
                 continue

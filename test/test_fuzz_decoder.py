@@ -1,0 +1,285 @@
+"""
+Fuzzing of the frame decoder: mutated valid streams, random bytes and a regression corpus.
+
+Whatever arrives, the decoder must not raise, must accept only frames that were encoded, must
+find every frame that the damage did not touch (resync within the next intact frame) and must
+keep its buffer within max_buffer_bytes.  The corpus in test/corpus/ holds small streams, each
+named for what it exercises, with the expected outcome in test/corpus/expected.yaml; rebuild it
+with ``python test/test_fuzz_decoder.py`` after a deliberate protocol change.
+"""
+
+import binascii
+import pathlib
+import struct
+import sys
+import zlib
+
+from hypothesis import given, settings, strategies as st
+import numpy as np
+import pytest
+import yaml
+
+from skin_driver.core.protocol import encode_frame, frame_size, FrameDecoder, SYNC
+
+CORPUS = pathlib.Path(__file__).resolve().parent / 'corpus'
+MAX_SHAPE = 16
+# Bytes that settle a candidate still waiting for its payload at the end of a stream.
+SETTLE = b'\x00' * frame_size(MAX_SHAPE, MAX_SHAPE)
+MUTATIONS = ('bit flip', 'drop', 'duplicate', 'insert', 'truncate', 'absurd size',
+             'wrong version', 'junk between')
+
+
+def reference_frame(seq, shape=(2, 3)):
+    """Return the encoded frame with this seq: its counts are a function of seq alone."""
+    rng = np.random.default_rng(seq)
+    top = rng.integers(0, 4096, shape, dtype=np.uint16)
+    bottom = rng.integers(0, 4096, shape, dtype=np.uint16)
+    return encode_frame(seq, seq * 1000 + 7, top, bottom)
+
+
+def reseal_header(raw):
+    """Recompute the header check of an edited header so that only the edit is wrong."""
+    raw = bytearray(raw)
+    raw[18:20] = struct.pack('<H', binascii.crc_hqx(bytes(raw[:18]), 0xFFFF))
+    return bytes(raw)
+
+
+def reseal(raw):
+    """Recompute both checks of an edited frame."""
+    raw = bytearray(reseal_header(raw))
+    raw[-4:] = struct.pack('<I', zlib.crc32(bytes(raw[:-4])))
+    return bytes(raw)
+
+
+def mutate(raw, kind, rng):
+    """Return raw with one mutation of the given kind at a place drawn from rng."""
+    data = bytearray(raw)
+    at = int(rng.integers(len(data)))
+    if kind == 'bit flip':
+        data[at] ^= 1 << int(rng.integers(8))
+    elif kind == 'drop':
+        del data[at]
+    elif kind == 'duplicate':
+        data.insert(at, data[at])
+    elif kind == 'insert':
+        data[at:at] = rng.integers(0, 256, int(rng.integers(1, 40)), dtype=np.uint8).tobytes()
+    elif kind == 'truncate':
+        del data[max(at, 1):]
+    elif kind == 'absurd size':
+        data[16], data[17] = int(rng.integers(0, 256)), int(rng.integers(0, 256))
+        data = bytearray(reseal_header(data)) if rng.random() < 0.7 else data
+    elif kind == 'wrong version':
+        data[2 + int(rng.integers(2))] = int(rng.integers(2, 256))
+        data = bytearray(reseal(data)) if rng.random() < 0.7 else data
+    return bytes(data)
+
+
+class Fuzzer:
+    """Build a stream of frames, damage some, feed it in chunks and check the decoder."""
+
+    def __init__(self, rng, frames=12, expected_shape=None):
+        self.rng = rng
+        shapes = [expected_shape] if expected_shape else [(1, 1), (2, 3), (4, 4), (16, 16)]
+        self.originals = {}
+        self.untouched = set()
+        parts = []
+        for seq in range(frames):
+            shape = shapes[int(rng.integers(len(shapes)))]
+            raw = reference_frame(seq, shape)
+            self.originals[seq] = FrameDecoder().feed(raw)[0]
+            wire = raw
+            if rng.random() < 0.5:
+                kind = MUTATIONS[int(rng.integers(len(MUTATIONS)))]
+                if kind == 'junk between':
+                    junk = rng.integers(0, 256, int(rng.integers(1, 80)), dtype=np.uint8)
+                    parts.append(junk.tobytes() + SYNC * int(rng.integers(0, 3)))
+                else:
+                    wire = mutate(raw, kind, rng)
+            # Damage at the very end can leave the frame whole, followed by junk.
+            if wire[:len(raw)] == raw:
+                self.untouched.add(seq)
+            parts.append(wire)
+        self.stream = b''.join(parts)
+        self.decoder = FrameDecoder(max_rows=MAX_SHAPE, max_cols=MAX_SHAPE,
+                                    expected_shape=expected_shape)
+
+    def run(self):
+        """Feed the stream in random chunks and check every promise; return the frames."""
+        decoded = []
+        pos = 0
+        while pos < len(self.stream):
+            step = int(self.rng.integers(1, 600))
+            decoded += self.decoder.feed(self.stream[pos:pos + step])
+            pos += step
+            assert self.decoder.buffered_bytes <= self.decoder.max_buffer_bytes
+        decoded += self.decoder.feed(SETTLE)
+        assert self.decoder.buffered_bytes <= self.decoder.max_buffer_bytes
+        for frame in decoded:
+            assert frame == self.originals[frame.seq], f'accepted a corrupt frame {frame.seq}'
+        seqs = [f.seq for f in decoded]
+        assert len(seqs) == len(set(seqs)), 'a frame was accepted twice'
+        assert self.untouched <= set(seqs), 'an intact frame was lost'
+        assert self.decoder.stats.frames == len(decoded)
+        return decoded
+
+
+def test_ten_thousand_mutated_streams():
+    rng = np.random.default_rng(2024)
+    accepted = 0
+    for _ in range(10_000):
+        accepted += len(Fuzzer(rng, frames=int(rng.integers(1, 8))).run())
+    assert accepted > 10_000  # most frames survive: the test is not vacuous
+
+
+def test_mutated_streams_with_an_expected_shape():
+    rng = np.random.default_rng(7)
+    for _ in range(2_000):
+        Fuzzer(rng, frames=6, expected_shape=(4, 4)).run()
+
+
+@settings(max_examples=400, deadline=None)
+@given(st.integers(0, 2 ** 32 - 1), st.integers(1, 20))
+def test_hypothesis_mutated_streams(seed, frames):
+    Fuzzer(np.random.default_rng(seed), frames=frames).run()
+
+
+FAKE_HEADER_255 = reseal_header(SYNC + bytes([1, 0]) + bytes(12) + bytes([255, 255, 0, 0]))
+PIECES = st.one_of(st.binary(max_size=200),
+                   st.integers(0, 50).map(lambda s: reference_frame(s, (2, 2))),
+                   st.sampled_from([SYNC, SYNC[:1], SYNC * 8, FAKE_HEADER_255]))
+
+
+@settings(max_examples=300, deadline=None)
+@given(st.lists(PIECES, max_size=30), st.integers(1, 300))
+def test_hypothesis_arbitrary_pieces_never_yield_a_foreign_frame(pieces, chunk):
+    originals = {s: FrameDecoder().feed(reference_frame(s, (2, 2)))[0] for s in range(51)}
+    stream = b''.join(pieces)
+    decoder = FrameDecoder(max_rows=MAX_SHAPE, max_cols=MAX_SHAPE)
+    for i in range(0, len(stream), chunk):
+        for frame in decoder.feed(stream[i:i + chunk]):
+            assert frame == originals[frame.seq]
+        assert decoder.buffered_bytes <= decoder.max_buffer_bytes
+
+
+def test_absurd_declared_sizes_never_hold_the_buffer():
+    # Every rows/cols pair with a valid header check, followed by a real frame.
+    decoder = FrameDecoder(max_rows=MAX_SHAPE, max_cols=MAX_SHAPE)
+    head = SYNC + bytes([1, 0]) + bytes(12)
+    found = 0
+    for rows in range(256):
+        for cols in range(0, 256, 15):
+            fake = reseal_header(head + bytes([rows, cols, 0, 0]))
+            frames = decoder.feed(fake + reference_frame(rows, (2, 2)) + SETTLE)
+            assert decoder.buffered_bytes <= decoder.max_buffer_bytes
+            found += sum(f.seq == rows for f in frames)
+    assert found == 256 * 18
+
+
+# ---- regression corpus ------------------------------------------------------------------------
+
+def _corpus_cases():
+    """Return {name: (stream, expected)}: the corpus as this protocol version writes it."""
+    f = [reference_frame(s) for s in range(4)]
+
+    def edit(raw, at, value):
+        data = bytearray(raw)
+        data[at] = value
+        return bytes(data)
+
+    head = SYNC + bytes([1, 0]) + bytes(12)
+    cases = {
+        'intact_three_frames': (f[0] + f[1] + f[2], [0, 1, 2], {}),
+        'bit_flip_in_payload': (f[0] + edit(f[1], 25, f[1][25] ^ 4) + f[2], [0, 2],
+                                {'crc_errors': 1}),
+        'bit_flip_in_header_seq': (f[0] + edit(f[1], 4, f[1][4] ^ 1) + f[2], [0, 2],
+                                   {'crc_errors': 1}),
+        'bit_flip_in_frame_crc': (f[0] + edit(f[1], len(f[1]) - 1, f[1][-1] ^ 128) + f[2],
+                                  [0, 2], {'crc_errors': 1}),
+        'dropped_byte_mid_frame': (f[0] + f[1][:30] + f[1][31:] + f[2], [0, 2],
+                                   {'crc_errors': 1}),
+        'duplicated_byte_mid_frame': (f[0] + f[1][:30] + f[1][29:] + f[2], [0, 2],
+                                      {'crc_errors': 1}),
+        'inserted_bytes_mid_frame': (f[0] + f[1][:22] + b'\xa5\x5a\x01' + f[1][22:] + f[2],
+                                     [0, 2], {'crc_errors': 1, 'version_errors': 1}),
+        'truncated_frame': (f[0] + f[1][:-9] + f[2], [0, 2], {'crc_errors': 1}),
+        'truncated_header': (f[0] + f[1][:11] + f[2], [0, 2], {'crc_errors': 1}),
+        'absurd_size_255x255_valid_header_check': (
+            f[0] + reseal_header(edit(edit(f[1], 16, 255), 17, 255)) + f[2], [0, 2],
+            {'size_errors': 1}),
+        'zero_rows_valid_header_check': (f[0] + reseal_header(edit(f[1], 16, 0)) + f[2],
+                                         [0, 2], {'size_errors': 1}),
+        'claims_16x16_swallows_next_frames': (
+            f[0] + reseal_header(head + bytes([16, 16, 0, 0])) + f[1] + f[2] + SETTLE,
+            [0, 1, 2], {'crc_errors': 1}),
+        'wrong_version_2_valid_checks': (f[0] + reseal(edit(f[1], 2, 2)) + f[2], [0, 2],
+                                         {'version_errors': 1}),
+        'nonzero_flags_valid_checks': (f[0] + reseal(edit(f[1], 3, 0x80)) + f[2], [0, 2],
+                                       {'version_errors': 1}),
+        'count_above_4095_valid_checks': (f[0] + reseal(edit(f[1], 21, 0x10)) + f[2], [0, 2],
+                                          {'crc_errors': 1}),
+        # Each marker is followed by 0xA5 where the version belongs.
+        'sync_marker_flood': (SYNC * 300 + f[3], [3], {'version_errors': 300}),
+        'half_marker_flood': (b'\xa5' * 500 + f[3], [3], {}),
+        'random_junk_between_frames': (
+            f[0] + np.random.default_rng(3).integers(0, 256, 300, dtype=np.uint8).tobytes()
+            + f[1], [0, 1], None),
+        'sequence_gap_and_restart': (reference_frame(0) + reference_frame(5)
+                                     + reference_frame(2), [0, 5, 2],
+                                     {'seq_gaps': 1, 'frames_missed': 4}),
+        'trailing_first_sync_byte': (f[0] + SYNC[:1], [0], {}),
+    }
+    for name, (stream, seqs, counters) in cases.items():
+        if seqs == [0, 2]:
+            # The damaged frame 1 shows as a sequence gap.
+            counters.update(seq_gaps=1, frames_missed=1)
+    return {name: (stream, {'frames': seqs, 'counters': counters})
+            for name, (stream, seqs, counters) in cases.items()}
+
+
+def write_corpus():
+    """(Re)write test/corpus/ from _corpus_cases()."""
+    CORPUS.mkdir(exist_ok=True)
+    expected = {}
+    for name, (stream, outcome) in sorted(_corpus_cases().items()):
+        (CORPUS / f'{name}.bin').write_bytes(stream)
+        expected[name] = outcome
+    header = ('# Expected outcome of replaying each <name>.bin through FrameDecoder(max_rows=16,\n'
+              '# max_cols=16): the accepted sequence numbers in order, and the decoder counters\n'
+              '# that must hold exactly (null: not checked). Written by test_fuzz_decoder.py.\n')
+    (CORPUS / 'expected.yaml').write_text(header + yaml.safe_dump(expected, sort_keys=True))
+
+
+def _corpus():
+    path = CORPUS / 'expected.yaml'
+    # A missing corpus leaves nothing to replay; the next test fails on it.
+    return sorted(yaml.safe_load(path.read_text()).items()) if path.exists() else []
+
+
+def test_corpus_files_and_expectations_match():
+    names = {p.stem for p in CORPUS.glob('*.bin')}
+    assert names == {name for name, _ in _corpus()}
+    assert len(names) >= 15
+
+
+@pytest.mark.parametrize('name, expected', _corpus(), ids=[n for n, _ in _corpus()])
+@pytest.mark.parametrize('chunk', [1, 7, 10_000])
+def test_corpus_replays_to_its_expected_outcome(name, expected, chunk):
+    stream = (CORPUS / f'{name}.bin').read_bytes()
+    decoder = FrameDecoder(max_rows=MAX_SHAPE, max_cols=MAX_SHAPE)
+    frames = []
+    for i in range(0, len(stream), chunk):
+        frames += decoder.feed(stream[i:i + chunk])
+        assert decoder.buffered_bytes <= decoder.max_buffer_bytes
+    assert [f.seq for f in frames] == expected['frames']
+    for frame in frames:
+        assert frame == FrameDecoder().feed(reference_frame(frame.seq))[0]
+    stats = decoder.stats
+    counters = expected['counters']
+    if counters is not None:
+        for key in ('crc_errors', 'size_errors', 'version_errors', 'seq_gaps', 'frames_missed'):
+            assert getattr(stats, key) == counters.get(key, 0), key
+
+
+if __name__ == '__main__':
+    write_corpus()
+    sys.exit(0)
