@@ -9,6 +9,7 @@ on the same scans. Ctrl-C stops it; every process it started is stopped with it.
 """
 
 import argparse
+import ctypes
 import math
 import os
 import shutil
@@ -40,6 +41,7 @@ LEAD_IN_S = 3.0
 CAL_PRESSES = 6
 CAL_PERIOD_S = 1.2
 DIR_PERIOD_S = 1.5
+PR_SET_PDEATHSIG = 1
 
 
 def demo_scene(repeats: int) -> dict:
@@ -72,6 +74,7 @@ class DemoMonitor(Node):
         self.last_frame = None
         self.last_contacts = []
         self.frames = 0
+        self.estimates = 0
         self.calibration = Calibration()
         self.calibrated = False
         # The paper's method runs here on the very scans the node sees, for the side-by-side table.
@@ -113,6 +116,7 @@ class DemoMonitor(Node):
                 self._record('seed', spec, contacts[0] if contacts else None)
 
     def _on_contacts(self, msg: TactileContactArray) -> None:
+        self.estimates += 1
         self.last_contacts = msg.contacts
         if self.calibrated:
             spec = self.truth(self.scene_time(msg.header.stamp))
@@ -165,9 +169,15 @@ class DemoMonitor(Node):
         sys.stdout.flush()
 
 
+def _die_with_parent() -> None:
+    # If the demo itself is killed (SIGKILL, closed terminal), its children must not linger.
+    if sys.platform.startswith('linux'):
+        ctypes.CDLL(None, use_errno=True).prctl(PR_SET_PDEATHSIG, signal.SIGTERM)
+
+
 def _spawn(argv, log):
     return subprocess.Popen([sys.executable] + argv, stdout=log, stderr=subprocess.STDOUT,
-                            start_new_session=True)
+                            start_new_session=True, preexec_fn=_die_with_parent)
 
 
 def _stop_all(procs) -> None:
@@ -228,7 +238,8 @@ def run(args, workdir: str) -> int:
         _wait(executor, lambda: monitor.tare.service_is_ready(), 20.0, 'the direction node')
         procs.append(_spawn(['-m', 'skin_driver.sim', '--scene', scene_path, '--link', port,
                              '--rate', str(args.rate)], log))
-        _wait(executor, lambda: monitor.frames >= 30, 20.0, 'frames from the simulated skin')
+        # Tare needs its scans in the direction node, which sees them after the driver does.
+        _wait(executor, lambda: monitor.estimates >= 30, 20.0, 'contacts from the direction node')
         monitor.status = 'taring the unloaded skin'
         result = _call(executor, monitor.tare, Trigger.Request(), 10.0)
         if not result.success:

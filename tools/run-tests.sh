@@ -2,11 +2,12 @@
 # Run the whole test suite inside the workspace environment; extra arguments go to pytest.
 set -euo pipefail
 cd "$(dirname "${BASH_SOURCE[0]}")/.."
-# A domain of its own keeps this run's nodes apart from anything else on the machine.
-export ROS_DOMAIN_ID="${ROS_DOMAIN_ID:-$(( (RANDOM % 90) + 10 ))}"
+# A domain of its own keeps this run's nodes apart from anything else on the machine; each
+# pytest-xdist worker takes the next one (test/conftest.py).
+export ROS_DOMAIN_ID="${ROS_DOMAIN_ID:-$(( (RANDOM % 80) + 10 ))}"
 export PYTHONDONTWRITEBYTECODE=1
 set +e
-tools/with-env.sh python -m pytest "$@"
+tools/with-env.sh python -m pytest -n "${SKIN_TEST_WORKERS:-2}" "$@"
 rc=$?
 set -e
 if [ "$rc" -eq 5 ]; then

@@ -1,0 +1,73 @@
+"""Message conversions: faithful, and never a NaN or inf in a message."""
+
+import math
+
+import numpy as np
+import pytest
+from skin_driver import conversions
+from skin_driver.core.estimator import Contact
+from std_msgs.msg import Header
+from visualization_msgs.msg import Marker
+
+HEADER = Header(frame_id='skin_link')
+
+
+def _contact(**changes):
+    values = dict(x_m=0.03, y_m=0.04, force_n=7.0, area_m2=5e-5, shift_m=(0.0, 0.002),
+                  azimuth_rad=math.pi / 2, alpha_rad=math.pi / 4,
+                  force_xyz_n=(0.0, 7.0, -7.0), confidence=0.9, direction_valid=True)
+    values.update(changes)
+    return Contact(**values)
+
+
+def test_contact_message_carries_every_field():
+    msg = conversions.contact_to_msg(HEADER, _contact())
+    assert (msg.location.x, msg.location.y, msg.location.z) == (0.03, 0.04, 0.0)
+    assert msg.magnitude == 7.0 and msg.azimuth == pytest.approx(math.pi / 2)
+    assert msg.polar == pytest.approx(math.pi / 4) and msg.direction_valid
+    assert (msg.wrench.force.y, msg.wrench.force.z) == (7.0, -7.0)
+    assert msg.shift.y == 0.002 and msg.header.frame_id == 'skin_link'
+
+
+def test_invalid_direction_zeroes_azimuth_and_polar():
+    msg = conversions.contact_to_msg(HEADER, _contact(direction_valid=False, azimuth_rad=1.0))
+    assert (msg.azimuth, msg.polar, msg.direction_valid) == (0.0, 0.0, False)
+
+
+@pytest.mark.parametrize('field,value', [('force_n', math.nan), ('x_m', math.inf),
+                                         ('force_xyz_n', (0.0, math.nan, -1.0)),
+                                         ('shift_m', (math.inf, 0.0))])
+def test_a_non_finite_value_is_refused_not_published(field, value):
+    with pytest.raises(ValueError, match='never carries NaN or inf'):
+        conversions.contact_to_msg(HEADER, _contact(**{field: value}))
+
+
+def test_layer_images_are_mono16_little_endian_rows_first():
+    counts = np.arange(6, dtype=np.uint16).reshape(2, 3) * 1000
+    image = conversions.counts_to_image(HEADER, counts)
+    assert (image.height, image.width, image.step, image.encoding) == (2, 3, 6, 'mono16')
+    assert np.array_equal(np.frombuffer(bytes(image.data), '<u2').reshape(2, 3), counts)
+
+
+def test_skin_frame_with_wrong_sizes_is_refused():
+    msg = conversions.skin_frame_to_msg(HEADER, 1, 2, 0.005, np.zeros((4, 4), np.uint16),
+                                        np.zeros((4, 4), np.uint16))
+    msg.rows = 5
+    with pytest.raises(ValueError, match='expected 20 each'):
+        conversions.skin_frame_layers(msg)
+
+
+def test_markers_draw_grid_arrow_and_label_per_contact():
+    force = np.zeros((16, 16))
+    force[8, 6] = 5.0
+    markers = conversions.heatmap_markers(HEADER, force, 0.005, [_contact()], 10.0).markers
+    assert markers[0].action == Marker.DELETEALL
+    grid = markers[1]
+    assert grid.type == Marker.CUBE_LIST and len(grid.points) == 256 == len(grid.colors)
+    hot = grid.colors[8 * 16 + 6]
+    assert hot.r > grid.colors[0].r
+    arrow, label = markers[2], markers[3]
+    assert arrow.type == Marker.ARROW and (arrow.points[1].x, arrow.points[1].y) == (0.03, 0.04)
+    # The arrow comes from where the push comes from: against +y, above the skin.
+    assert arrow.points[0].y < 0.04 and arrow.points[0].z > 0
+    assert label.text == '7.0 N β 90°'
