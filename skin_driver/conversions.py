@@ -13,11 +13,10 @@ from builtin_interfaces.msg import Time
 from geometry_msgs.msg import Point, Vector3, Wrench, WrenchStamped
 import numpy as np
 from sensor_msgs.msg import Image
+from skin_driver.core.heatmap import colour_map
 from skin_msgs.msg import SkinFrame, TactileContact, TactileContactArray
 from std_msgs.msg import ColorRGBA, Header
 from visualization_msgs.msg import Marker, MarkerArray
-
-from skin_driver.core.heatmap import colour_map
 
 ADC_MAX = 4095
 

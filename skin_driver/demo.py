@@ -24,11 +24,6 @@ import rclpy
 from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.qos import qos_profile_sensor_data
-from skin_msgs.msg import SkinFrame, TactileContactArray
-from skin_msgs.srv import Calibrate
-from std_srvs.srv import Trigger
-import yaml
-
 from skin_driver import conversions
 from skin_driver.core.calibration import Calibration
 from skin_driver.core.direction import DEFAULT_METHOD
@@ -36,6 +31,10 @@ from skin_driver.core.estimator import ContactEstimator, EstimatorConfig
 from skin_driver.core.heatmap import text_map
 from skin_driver.core.scene import scene_from_dict
 from skin_driver.evaluate import format_table, summarise
+from skin_msgs.msg import SkinFrame, TactileContactArray
+from skin_msgs.srv import Calibrate
+from std_srvs.srv import Trigger
+import yaml
 
 LEAD_IN_S = 3.0
 CAL_PRESSES = 6
@@ -265,7 +264,7 @@ def run(args, workdir: str) -> int:
                           for name, rows in monitor.results.items()}}
     print(f'\nTable 1: azimuth error at alpha = 45 deg, every scan at full force, '
           f'{args.repeats} rounds at {args.rate:g} Hz; {args.method} ran in the direction node, '
-          'seed (the paper\'s plain phase correlation) on the same scans\n')
+          "seed (the paper's plain phase correlation) on the same scans\n")
     print(format_table(report))
     return 0
 

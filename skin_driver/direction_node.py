@@ -16,8 +16,8 @@ import os
 import time
 
 from geometry_msgs.msg import WrenchStamped
-from rcl_interfaces.msg import SetParametersResult
 import numpy as np
+from rcl_interfaces.msg import SetParametersResult
 import rclpy
 from rclpy.callback_groups import MutuallyExclusiveCallbackGroup
 from rclpy.executors import ExternalShutdownException
@@ -25,11 +25,6 @@ from rclpy.node import Node
 from rclpy.qos import qos_profile_sensor_data
 from rclpy.task import Future
 from sensor_msgs.msg import Image
-from skin_msgs.msg import SkinFrame, TactileContact, TactileContactArray
-from skin_msgs.srv import Calibrate
-from std_srvs.srv import Trigger
-from visualization_msgs.msg import MarkerArray
-
 from skin_driver import conversions, diagnostics
 from skin_driver.core import calibration as calib
 from skin_driver.core.direction import DEFAULT_METHOD, method_names
@@ -37,6 +32,10 @@ from skin_driver.core.estimator import ContactEstimator, EstimatorConfig
 from skin_driver.core.heatmap import colour_map
 from skin_driver.core.presses import PressSegmenter
 from skin_driver.params import check, declare, ParameterError
+from skin_msgs.msg import SkinFrame, TactileContact, TactileContactArray
+from skin_msgs.srv import Calibrate
+from std_srvs.srv import Trigger
+from visualization_msgs.msg import MarkerArray
 
 MAX_CALIBRATION_PRESSES = 1000
 MAX_CALIBRATION_S = 3600.0
@@ -99,7 +98,7 @@ class DirectionNode(Node):
     # ---- parameters -------------------------------------------------------------------------
     def _declare_parameters(self) -> None:
         declare(self, 'method', DEFAULT_METHOD,
-                'Shift estimator between the layers; seed is the paper\'s phase correlation.',
+                "Shift estimator between the layers; seed is the paper's phase correlation.",
                 choices=method_names())
         # The core's defaults are the node's: the evaluator and the node measure the same thing.
         core = EstimatorConfig()
@@ -141,10 +140,10 @@ class DirectionNode(Node):
                 'Seconds ~/calibrate waits when the request asks for 0.',
                 low=0.1, high=MAX_CALIBRATION_S)
         declare(self, 'calibration.max_std', 0.0005,
-                'Largest spread (metres, standard deviation) of the presses\' shifts accepted.',
+                "Largest spread (metres, standard deviation) of the presses' shifts accepted.",
                 low=1.0e-6, high=0.1)
         declare(self, 'calibration.normal_tolerance', 0.0005,
-                'How far a press\'s shift may grow with its force (metres) and look normal.',
+                "How far a press's shift may grow with its force (metres) and look normal.",
                 low=1.0e-6, high=0.1)
         declare(self, 'tare.frames', 20, 'Scans averaged into the unloaded baseline by ~/tare.',
                 low=1, high=10000)
@@ -195,7 +194,9 @@ class DirectionNode(Node):
 
     def _follow_pitch(self, pitch_m: float) -> None:
         """Take the taxel pitch from the frames, keeping the tare and the calibration."""
-        if pitch_m != self._estimator.config.pitch_m:
+        # SkinFrame carries the pitch as float32: 0.005 arrives as 0.004999999888. A rebuild
+        # recomputes the sampling-correction table (~0.5 s), so only a real change counts.
+        if not math.isclose(pitch_m, self._estimator.config.pitch_m, rel_tol=1e-5):
             self._estimator = ContactEstimator(
                 dataclasses.replace(self._estimator.config, pitch_m=pitch_m),
                 self._calibration, conditioner=self._estimator.conditioner)

@@ -27,12 +27,11 @@ from rclpy.executors import ExternalShutdownException
 from rclpy.lifecycle import Node, State, TransitionCallbackReturn
 from rclpy.qos import qos_profile_sensor_data
 from sensor_msgs.msg import Image
-from skin_msgs.msg import SkinFrame
-
 from skin_driver import conversions, diagnostics
 from skin_driver.core.protocol import FrameDecoder
 from skin_driver.params import declare, ParameterError
 from skin_driver.serial_link import CONNECTED, SerialLink, STALLED, STOPPED
+from skin_msgs.msg import SkinFrame
 
 
 class SkinDriverNode(Node):

@@ -41,9 +41,8 @@ import rclpy
 from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.qos import HistoryPolicy, QoSProfile, ReliabilityPolicy
-from skin_msgs.msg import SkinFrame, TactileContactArray
-
 from skin_driver.sim import SimulatedSkin
+from skin_msgs.msg import SkinFrame, TactileContactArray
 
 FAULT_PERIOD_S = 4.0      # one fault starts every this many seconds
 MEMORY_PERIOD_S = 2.0     # resident memory sampled this often

@@ -4,7 +4,13 @@ import os
 import pathlib
 import sys
 
+from hypothesis import settings
+
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
+
+# The same examples on every run and machine: a red CI run can be reproduced, never a fluke.
+settings.register_profile('skin', derandomize=True, database=None, deadline=None)
+settings.load_profile('skin')
 
 # Under pytest-xdist every worker runs its own ROS graph: a DDS domain of its own keeps one
 # worker's nodes from receiving another's frames. rclpy reads the variable at init, later.

@@ -200,7 +200,7 @@ def test_failed_write_of_a_new_calibration_keeps_the_previous_one(tmp_path):
         assert (result.x_p, result.y_p) == (before.x_p_m, before.y_p_m)
 
 
-WRITER = textwrap.dedent('''
+WRITER = textwrap.dedent("""
     import sys
     from skin_driver.core.calibration import Calibration
     path = sys.argv[1]
@@ -211,7 +211,7 @@ WRITER = textwrap.dedent('''
                     presses=i).save_yaml(path)
         if i == 1:
             print('ready', flush=True)
-''')
+""")
 
 
 def test_calibration_file_survives_sigkill_at_random_moments(tmp_path):

@@ -2,8 +2,7 @@
 
 import numpy as np
 import pytest
-
-from skin_driver.core.conditioning import ConditioningConfig, Conditioner
+from skin_driver.core.conditioning import Conditioner, ConditioningConfig
 from skin_driver.core.physics import FsrModel, Press, render, SkinModel
 
 

@@ -13,9 +13,9 @@ HEADER = Header(frame_id='skin_link')
 
 
 def _contact(**changes):
-    values = dict(x_m=0.03, y_m=0.04, force_n=7.0, area_m2=5e-5, shift_m=(0.0, 0.002),
-                  azimuth_rad=math.pi / 2, alpha_rad=math.pi / 4,
-                  force_xyz_n=(0.0, 7.0, -7.0), confidence=0.9, direction_valid=True)
+    values = {'x_m': 0.03, 'y_m': 0.04, 'force_n': 7.0, 'area_m2': 5e-5, 'shift_m': (0.0, 0.002),
+              'azimuth_rad': math.pi / 2, 'alpha_rad': math.pi / 4,
+              'force_xyz_n': (0.0, 7.0, -7.0), 'confidence': 0.9, 'direction_valid': True}
     values.update(changes)
     return Contact(**values)
 

@@ -11,9 +11,9 @@ from skin_driver.core.physics import SkinModel
 
 
 def small(n=3):
-    return dict(top=np.zeros((n, 4, 5), np.uint16), bottom=np.ones((n, 4, 5), np.uint16),
-                pitch_m=0.005, azimuth_deg=np.array([math.nan, 45.0, 90.0][:n]),
-                alpha_deg=np.array([0.0, 45.0, 45.0][:n]))
+    return {'top': np.zeros((n, 4, 5), np.uint16), 'bottom': np.ones((n, 4, 5), np.uint16),
+            'pitch_m': 0.005, 'azimuth_deg': np.array([math.nan, 45.0, 90.0][:n]),
+            'alpha_deg': np.array([0.0, 45.0, 45.0][:n])}
 
 
 def test_seed_experiment_layout():

@@ -17,9 +17,8 @@ import zlib
 from hypothesis import given, settings, strategies as st
 import numpy as np
 import pytest
-import yaml
-
 from skin_driver.core.protocol import encode_frame, frame_size, FrameDecoder, SYNC
+import yaml
 
 CORPUS = pathlib.Path(__file__).resolve().parent / 'corpus'
 MAX_SHAPE = 16

@@ -5,8 +5,8 @@ import os
 
 from diagnostic_msgs.msg import DiagnosticStatus
 import numpy as np
-import pytest
 from pipeline import call, overrides, pipeline, scene
+import pytest
 from rclpy.lifecycle import TransitionCallbackReturn
 from rosutil import ros_context, spin_until
 from skin_driver.core import calibration as calib

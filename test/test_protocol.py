@@ -105,22 +105,22 @@ def test_encoder_does_not_modify_inputs_and_accepts_other_integer_dtypes():
 
 
 @pytest.mark.parametrize('kwargs, message', [
-    (dict(seq=-1), 'seq'),
-    (dict(seq=2 ** 32), 'seq'),
-    (dict(seq=1.0), 'seq'),
-    (dict(device_time_us=-5), 'device_time_us'),
-    (dict(device_time_us=2 ** 64), 'device_time_us'),
-    (dict(top=np.full((4, 4), 4096)), 'top counts'),
-    (dict(bottom=np.full((4, 4), -1)), 'bottom counts'),
-    (dict(top=np.zeros((4, 4), dtype=float)), 'integer dtype'),
-    (dict(top=np.zeros(16, dtype=np.uint16)), '2-D'),
-    (dict(top=np.zeros((4, 5), dtype=np.uint16)), 'same shape'),
-    (dict(top=np.zeros((256, 1), np.uint16), bottom=np.zeros((256, 1), np.uint16)), '255'),
-    (dict(top=np.zeros((0, 4), np.uint16), bottom=np.zeros((0, 4), np.uint16)), '1..255'),
+    ({'seq': -1}, 'seq'),
+    ({'seq': 2 ** 32}, 'seq'),
+    ({'seq': 1.0}, 'seq'),
+    ({'device_time_us': -5}, 'device_time_us'),
+    ({'device_time_us': 2 ** 64}, 'device_time_us'),
+    ({'top': np.full((4, 4), 4096)}, 'top counts'),
+    ({'bottom': np.full((4, 4), -1)}, 'bottom counts'),
+    ({'top': np.zeros((4, 4), dtype=float)}, 'integer dtype'),
+    ({'top': np.zeros(16, dtype=np.uint16)}, '2-D'),
+    ({'top': np.zeros((4, 5), dtype=np.uint16)}, 'same shape'),
+    ({'top': np.zeros((256, 1), np.uint16), 'bottom': np.zeros((256, 1), np.uint16)}, '255'),
+    ({'top': np.zeros((0, 4), np.uint16), 'bottom': np.zeros((0, 4), np.uint16)}, '1..255'),
 ])
 def test_encoder_rejects_bad_input(kwargs, message):
-    args = dict(seq=0, device_time_us=0, top=np.zeros((4, 4), np.uint16),
-                bottom=np.zeros((4, 4), np.uint16))
+    args = {'seq': 0, 'device_time_us': 0, 'top': np.zeros((4, 4), np.uint16),
+            'bottom': np.zeros((4, 4), np.uint16)}
     args.update(kwargs)
     with pytest.raises(ValueError, match=message):
         encode_frame(**args)

@@ -3,16 +3,15 @@
 import math
 
 import pytest
-import yaml
-
 from skin_driver.core.physics import Press, SkinModel
-from skin_driver.core.scene import (
-    bundled_scene_names, find_scene, load_scene, scene_from_dict, ScenePress)
+from skin_driver.core.scene import bundled_scene_names, find_scene, load_scene
+from skin_driver.core.scene import scene_from_dict, ScenePress
+import yaml
 
 
 def press(**over):
-    base = dict(time_s=1.0, x_m=0.02, y_m=0.03, force_n=10.0, alpha_deg=45.0, beta_deg=90.0,
-                radius_m=0.004, duration_s=1.0, ramp_s=0.25)
+    base = {'time_s': 1.0, 'x_m': 0.02, 'y_m': 0.03, 'force_n': 10.0, 'alpha_deg': 45.0,
+            'beta_deg': 90.0, 'radius_m': 0.004, 'duration_s': 1.0, 'ramp_s': 0.25}
     base.update(over)
     return base
 

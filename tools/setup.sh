@@ -42,14 +42,22 @@ hash_of() { cat "$@" | sha1sum | cut -c1-40; }
 # --- the virtual environment ------------------------------------------------------------------
 reqs=(tools/requirements.txt)
 [ -n "$system_ros" ] || reqs+=(tools/requirements-ros.txt)
-want="$("$py" -V 2>&1) ${system_ros:+system-ros} $(hash_of "${reqs[@]}" tools/setup.sh)"
-if [ "$(cat "$venv/.setup-stamp" 2>/dev/null)" != "$want" ]; then
-  say "creating $venv with $("$py" -V 2>&1)${system_ros:+ on the sourced ROS 2 $ROS_DISTRO} (first run: about a minute)"
-  rm -rf "$venv"
-  if [ -n "$system_ros" ]; then
-    "$py" -m venv --system-site-packages "$venv" >"$log" 2>&1 || die "could not create $venv (see $log)"
+kind="$("$py" -V 2>&1) ${system_ros:+system-ros}"
+want="$kind $(hash_of "${reqs[@]}" tools/setup.sh)"
+have=$(cat "$venv/.setup-stamp" 2>/dev/null || true)
+if [ "$have" != "$want" ]; then
+  if [ "${have% *}" != "$kind" ] || [ ! -x "$venv/bin/python" ]; then
+    # Another interpreter (or none yet): start from an empty environment.
+    say "creating $venv with $("$py" -V 2>&1)${system_ros:+ on the sourced ROS 2 $ROS_DISTRO} (first run: about a minute)"
+    rm -rf "$venv"
+    if [ -n "$system_ros" ]; then
+      "$py" -m venv --system-site-packages "$venv" >"$log" 2>&1 || die "could not create $venv (see $log)"
+    else
+      "$py" -m venv "$venv" >"$log" 2>&1 || die "could not create $venv (see $log)"
+    fi
   else
-    "$py" -m venv "$venv" >"$log" 2>&1 || die "could not create $venv (see $log)"
+    say "updating $venv to the pinned requirements"
+    : >"$log"
   fi
   pipargs=()
   for r in "${reqs[@]}"; do pipargs+=(-r "$r"); done
@@ -62,7 +70,8 @@ if [ "$(cat "$venv/.setup-stamp" 2>/dev/null)" != "$want" ]; then
   if [ -z "$system_ros" ]; then
     # The wheels' CMake exports name the include dirs of the machine that built them; point them here.
     npinc=$("$venv/bin/python" -c 'import numpy; print(numpy.get_include())')
-    grep -rlE '/opt/python/cp[0-9]+-cp[0-9]+' "$venv/share" --include='*.cmake' 2>/dev/null | while read -r f; do
+    { grep -rlE '/opt/python/cp[0-9]+-cp[0-9]+' "$venv/share" --include='*.cmake' 2>/dev/null || true; } |
+    while read -r f; do
       sed -i -E \
         -e "s#/opt/python/cp[0-9]+-cp[0-9]+/lib/python3\.[0-9]+/site-packages/numpy/_core/include#$npinc#g" \
         -e "s#/opt/python/cp[0-9]+-cp[0-9]+/include/python3\.[0-9]+#$pyinc#g" "$f"

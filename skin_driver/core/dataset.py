@@ -16,7 +16,7 @@ import os
 import numpy as np
 
 from .atomic import write_atomically
-from .physics import Press, SkinModel, render
+from .physics import Press, render, SkinModel
 from .validate import check_number, check_stack
 
 __all__ = ['Dataset', 'save_dataset', 'load_dataset', 'make_seed_experiment',

@@ -28,9 +28,9 @@ import math
 import numpy as np
 
 from .calibration import Calibration
-from .conditioning import ConditioningConfig, Conditioner
+from .conditioning import Conditioner, ConditioningConfig
 from .contacts import contact_windows, segment
-from .direction import DEFAULT_METHOD, NO_SHIFT, get_method
+from .direction import DEFAULT_METHOD, get_method, NO_SHIFT
 from .physics import FsrModel
 from .sampling import sampling_correction
 from .validate import check_number, check_pair

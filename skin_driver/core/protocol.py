@@ -25,9 +25,9 @@ announces, so it resynchronises within the next intact frame.
 from __future__ import annotations
 
 import binascii
+from dataclasses import dataclass
 import struct
 import zlib
-from dataclasses import dataclass
 
 import numpy as np
 

@@ -26,7 +26,7 @@ import math
 
 import numpy as np
 
-from .conditioning import ConditioningConfig, Conditioner
+from .conditioning import Conditioner, ConditioningConfig
 from .contacts import contact_windows, segment
 from .physics import FsrModel, Press, render, SkinModel
 

@@ -31,9 +31,8 @@ from pathlib import Path
 from typing import Any, Mapping
 
 import numpy as np
-import yaml
-
 from skin_driver.core.physics import FsrModel, Press, SkinModel
+import yaml
 
 PRESS_FIELDS = ('time_s', 'x_m', 'y_m', 'force_n', 'alpha_deg', 'beta_deg', 'radius_m',
                 'duration_s')

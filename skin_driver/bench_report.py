@@ -1,0 +1,277 @@
+"""Plots and the Markdown report of the benchmark, from the results dictionary alone."""
+
+from __future__ import annotations
+
+import os
+import warnings
+
+import numpy as np
+
+from .evaluate import PAPER_TABLE
+
+with warnings.catch_warnings():
+    # matplotlib's parsers call pyparsing APIs it deprecates; nothing this project can fix.
+    warnings.simplefilter('ignore', DeprecationWarning)
+    import matplotlib
+    matplotlib.use('Agg')
+    import matplotlib.pyplot as plt
+
+
+def _save(fig, out_dir, name) -> str:
+    os.makedirs(os.path.join(out_dir, 'img'), exist_ok=True)
+    path = os.path.join('img', name)
+    fig.savefig(os.path.join(out_dir, path), dpi=110, bbox_inches='tight')
+    plt.close(fig)
+    return path
+
+
+def _pareto_front(points) -> set:
+    """Return the indices of points not beaten on both cost and error by another point."""
+    front = set()
+    for i, (c, e) in enumerate(points):
+        if not any((c2 <= c and e2 <= e) and (c2 < c or e2 < e)
+                   for j, (c2, e2) in enumerate(points) if j != i):
+            front.add(i)
+    return front
+
+
+def plot_pareto(summary, out_dir) -> str:
+    """Plot mean azimuth error against us per frame, one panel per grid size."""
+    grids = sorted({r['grid'] for r in summary})
+    fig, axes = plt.subplots(1, len(grids), figsize=(4.2 * len(grids), 4), squeeze=False,
+                             constrained_layout=True)
+    methods = list(dict.fromkeys(r['method'] for r in summary))
+    colours = {m: plt.cm.tab10(i % 10) for i, m in enumerate(methods)}
+    for ax, n in zip(axes[0], grids):
+        rows = [r for r in summary if r['grid'] == n and r['mean_error_deg'] is not None]
+        front = _pareto_front([(r['median_us'], r['mean_error_deg']) for r in rows])
+        for i, r in enumerate(rows):
+            ax.scatter(r['median_us'], r['mean_error_deg'], color=colours[r['method']],
+                       s=60 if i in front else 25, edgecolors='k' if i in front else 'none',
+                       label=r['method'])
+            ax.annotate(r['method'], (r['median_us'], r['mean_error_deg']), fontsize=7,
+                        xytext=(3, 3), textcoords='offset points')
+        pts = sorted((rows[i]['median_us'], rows[i]['mean_error_deg']) for i in front)
+        if pts:
+            ax.plot(*zip(*pts), 'k--', lw=0.8)
+        ax.set_xscale('log')
+        ax.set_yscale('log')
+        ax.set_title(f'{n} x {n} taxels')
+        ax.set_xlabel('us per frame (pipeline, median)')
+        ax.grid(True, which='both', alpha=0.3)
+    axes[0][0].set_ylabel('mean azimuth error [deg]')
+    fig.suptitle('Accuracy against speed (all shifts and noise levels; dashed: Pareto front)')
+    return _save(fig, out_dir, 'pareto.png')
+
+
+def plot_seed_shifts(shifts, out_dir) -> str:
+    """Scatter the measured raw shifts coloured by true azimuth (the seed's Figure 10)."""
+    fig, axes = plt.subplots(1, len(shifts), figsize=(4.8 * len(shifts), 4.3), squeeze=False,
+                             constrained_layout=True)
+    for ax, (name, pts) in zip(axes[0], shifts.items()):
+        if pts:
+            arr = np.array(pts)
+            sc = ax.scatter(arr[:, 0], arr[:, 1], c=arr[:, 2], cmap='hsv', vmin=0, vmax=360,
+                            s=14)
+            fig.colorbar(sc, ax=ax, label='true beta [deg]')
+        ax.set_title(f'{name}: raw layer shift')
+        ax.set_xlabel('dx [taxels]')
+        ax.set_ylabel('dy [taxels]')
+        ax.set_aspect('equal', adjustable='datalim')
+        ax.grid(True, alpha=0.3)
+    return _save(fig, out_dir, 'seed_shifts.png')
+
+
+def plot_scaling(scale, out_dir) -> str:
+    """Plot pipeline cost against taxel count and against the number of contacts."""
+    fig, (a, b) = plt.subplots(1, 2, figsize=(10, 4), constrained_layout=True)
+    for m in dict.fromkeys(r['method'] for r in scale['by_grid']):
+        rows = [r for r in scale['by_grid'] if r['method'] == m]
+        a.plot([r['taxels'] for r in rows], [r['median_us'] for r in rows], 'o-', label=m)
+    a.axhline(100, color='g', ls=':', label='target 16x16 (100 us)')
+    a.axhline(1000, color='r', ls=':', label='target 128x128 (1 ms)')
+    a.set_xscale('log')
+    a.set_yscale('log')
+    a.set_xlabel('taxels per layer')
+    a.set_ylabel('us per frame, 1 contact (median)')
+    a.legend(fontsize=8)
+    a.grid(True, which='both', alpha=0.3)
+    for (m, n) in dict.fromkeys((r['method'], r['grid']) for r in scale['by_contacts']):
+        rows = [r for r in scale['by_contacts'] if r['method'] == m and r['grid'] == n]
+        b.plot([r['contacts'] for r in rows], [r['median_us'] for r in rows], 'o-',
+               label=f'{m} {n}x{n}')
+    b.set_yscale('log')
+    b.set_xlabel('simultaneous presses')
+    b.set_ylabel('us per frame (median)')
+    b.legend(fontsize=8)
+    b.grid(True, which='both', alpha=0.3)
+    return _save(fig, out_dir, 'scaling.png')
+
+
+def plot_e2e(e2e, out_dir) -> str:
+    """Plot the end-to-end latency percentiles per rate."""
+    fig, ax = plt.subplots(figsize=(6, 4))
+    rates = [r['rate_hz'] for r in e2e]
+    x = np.arange(len(rates))
+    for k, (key, label) in enumerate((('latency_p50_ms', 'p50'), ('latency_p99_ms', 'p99'))):
+        ax.bar(x + 0.35 * k, [r[key] or 0 for r in e2e], 0.35, label=label)
+    ax.axhline(2.0, color='r', ls=':', label='target p99 at 2 kHz')
+    ax.set_xticks(x + 0.17, [f'{r:g} Hz' for r in rates])
+    ax.set_yscale('log')
+    ax.set_ylabel('device timestamp -> contact message [ms]')
+    ax.legend()
+    return _save(fig, out_dir, 'e2e_latency.png')
+
+
+def _f(v, spec='.1f') -> str:
+    return '-' if v is None else format(v, spec)
+
+
+def _table(head, rows) -> list:
+    lines = ['| ' + ' | '.join(head) + ' |', '|' + '---|' * len(head)]
+    return lines + ['| ' + ' | '.join(str(c) for c in r) + ' |' for r in rows]
+
+
+def markdown(res, images) -> str:
+    """Return the Markdown report of a results dictionary."""
+    m, how = res['machine'], res['how']
+    out = ['# Benchmarks', '',
+           f'Generated by `{how["command"]}` on {res["generated_utc"]} (UTC) in '
+           f'{res["elapsed_s"]:.0f} s; every figure below was measured in that run. '
+           'Raw numbers: [benchmarks.json](benchmarks.json).', '',
+           '## Machine and method', '',
+           f'- CPU: {m["cpu_model"]}, {m["cores"]} cores ({m["cores_usable"]} usable); load '
+           f'average {m["load_before"]} before, {m["load_after"]} after (other jobs share this '
+           'machine: costs are compared side by side, not across runs).',
+           f'- Python {m["python"]}, numpy {m["numpy"]}, OpenCV {m["opencv"]}, rclpy '
+           f'{m["rclpy"]}, scikit-image {m["skimage"]}, RMW {m["rmw"]}.',
+           f'- In-process timings: pinned to CPU {how["pinned_cpu"]} with '
+           '`os.sched_setaffinity`; `time.perf_counter` around `ContactEstimator.process` '
+           '(conditioning, segmentation, shift estimation: contacts included); the methods are '
+           'interleaved in a fresh random order on every frame. Repetitions: '
+           f'{how["repetitions"]}.',
+           '- Simulated skin: `skin_driver.core.physics` (default model). Bigger grids cover '
+           "the same 80 mm patch as the seed's 16 x 16 at 5 mm, with a smaller pitch (the "
+           "seed's future work: higher resolution); FSR force ranges scale with the taxel area "
+           '(same material, same pressure -> same counts).', '']
+    out += ['## Targets', '']
+    out += _table(['target', 'measured', 'limit', 'met', 'note'],
+                  [(t['name'], t['measured'], t['limit'], 'yes' if t['met'] else '**no**',
+                    t['note']) for t in res['targets']])
+    out += ['']
+    if 'accuracy' in res:
+        acc = res['accuracy']
+        out += ['## 1. Accuracy against speed', '',
+                f'Grids {acc["grids"]}, shifts {acc["shifts_taxels"]} taxels, noise '
+                f'{acc["noise_counts"]} counts (sigma), {acc["frames"]} random presses per '
+                'cell (random place, azimuth, indenter radius 1.5-3.5 mm, normal force 5-15 N, '
+                'tilt set by the wanted shift). Error: mean |azimuth error| of the valid '
+                'strongest contact, averaged over shifts and noises. `skimage_pcc` is '
+                f'`skimage.registration.phase_cross_correlation(upsample_factor='
+                f'{acc["skimage_upsample"]})`, an external reference run on the same contact '
+                'windows (bench only).', '', f'![Pareto]({images["pareto"]})', '']
+        out += _table(['grid', 'method', 'mean error [deg]', 'valid', 'us/frame (median)',
+                       'us/frame (mean)'],
+                      [(r['grid'], r['method'], _f(r['mean_error_deg'], '.2f'),
+                        _f(r['valid_share'] and 100 * r['valid_share']) + ' %',
+                        _f(r['median_us']), _f(r['mean_us'])) for r in acc['summary']])
+        out += ['']
+    if 'seed' in res:
+        s = res['seed']
+        out += ["## 2. The seed's experiment", '',
+                'Seed-like frames (16 x 16, 5 mm, alpha = 45 deg at the eight beta, normal '
+                'presses for calibration), `seed` and the default on the same frames; the '
+                "paper's Table 1 (real skin) in the last columns:", '', '```',
+                s['seed_like_text'], '```', '',
+                'Random presses (any beta, alpha 15-60 deg, indenters 3-7 mm):', '', '```',
+                s['random_text'], '```', '', f'![raw shifts]({images["seed_shifts"]})', '',
+                'Measured raw shifts (before calibration) of the tilted presses, coloured by '
+                "the true azimuth, as in the seed's Figure 10.", '']
+    if 'scaling' in res:
+        sc = res['scaling']
+        out += ['## 4. Scale', '', f'![scaling]({images["scaling"]})', '']
+        out += _table(['grid', 'method', 'median us', 'mean us', 'p90 us'],
+                      [(r['grid'], r['method'], _f(r['median_us']), _f(r['mean_us']),
+                        _f(r['p90_us'])) for r in sc['by_grid']])
+        out += ['']
+        out += ['Presses on a 3 x 3 lattice 24 mm apart (3 mm indenters, 5-15 N, alpha 40 '
+                'deg); neighbours whose pressure spreads into each other are segmented as one '
+                'contact, hence "contacts found" (mean per frame) below the presses.', '']
+        out += _table(['grid', 'presses', 'contacts found', 'method', 'median us'],
+                      [(r['grid'], r['contacts'], _f(r['contacts_found']), r['method'],
+                        _f(r['median_us'])) for r in sc['by_contacts']])
+        out += ['']
+    if 'e2e' in res:
+        out += _e2e_section(res, images)
+    return '\n'.join(out) + '\n'
+
+
+def _e2e_section(res, images) -> list:
+    e = res['e2e']
+    out = ['## 3. End to end through ROS', '',
+           'Separate processes: `python -m skin_driver.sim --link ... --rate R --scene '
+           'bench.yaml --loop` -> `python -m skin_driver.driver_node --ros-args -p '
+           'publish_images:=false` -> `python -m skin_driver.direction_node --ros-args -p '
+           'viz_rate:=0.0` (default estimator) -> a subscriber in the bench process (sensor-data '
+           'QoS). The scene keeps a tilted 10 N press on the skin ~90 % of the time. Latency: '
+           "arrival of the contacts message minus the wall-clock instant of the scan's device "
+           'timestamp (`SKIN_EPOCH` printed by the simulator + device_time_us); split at the '
+           "driver's header stamp (host time when it read the scan). Dropped: scans of the "
+           'window without a contacts message at the subscriber; of these, scans the subscriber '
+           'never saw on `frame` (sequence gaps: lost in the simulator, the driver or the '
+           'subscriber\'s own queue) and scans it saw whose contacts never arrived; "sim" is '
+           'what the simulator counted as dropped over the whole run, '
+           f'warm-up included. {e["seconds"]} s measured per rate after {e["warmup_s"]} s '
+           'of warm-up. CPU: % of one core from /proc/<pid>/stat over the measured window. '
+           'Nodes are not pinned (they must share the 2 cores).', '',
+           f'![latency]({images["e2e"]})', '']
+    rows = []
+    for r in e['runs']:
+        cpu = r['cpu_percent']
+        rows.append((f'{r["rate_hz"]:g}', _f(r['received_rate_hz']),
+                     f'{r["dropped_scans"]} ({r["frame_sequence_gaps"]} / '
+                     f'{r["lost_after_driver"]}; sim {r["sim_frames_dropped"]})',
+                     f'{_f(r["latency_p50_ms"], ".2f")} / {_f(r["latency_p99_ms"], ".2f")}',
+                     f'{_f(r["device_to_driver_p50_ms"], ".2f")} / '
+                     f'{_f(r["device_to_driver_p99_ms"], ".2f")}',
+                     f'{_f(r["driver_to_contact_p50_ms"], ".2f")} / '
+                     f'{_f(r["driver_to_contact_p99_ms"], ".2f")}',
+                     ' / '.join(_f(cpu[k], '.0f')
+                                for k in ('sim', 'driver', 'direction', 'probe'))))
+    out += _table(['rate [Hz]', 'received [Hz]', 'dropped (seq gaps / lost after driver; sim)',
+                   'latency p50 / p99 [ms]', 'device -> driver p50 / p99',
+                   'driver -> contacts p50 / p99', 'CPU % sim / driver / direction / probe'],
+                  rows)
+    out += ['', "Where the scans went, from the nodes' own counters on /diagnostics over the "
+            'same window (driver: frames decoded and sequence gaps it saw, i.e. frames the '
+            'simulator dropped; direction node: scans processed and its mean estimator cost in '
+            'the last second, as loaded):', '']
+    rows = []
+    for r in e['runs']:
+        d = r.get('node_counters', {}).get('driver', {})
+        n = r.get('node_counters', {}).get('direction', {})
+        rows.append((f'{r["rate_hz"]:g}', _f(d.get('rate_hz')), _f(d.get('sequence gaps'), '.0f'),
+                     _f(n.get('rate_hz')), _f(n.get('mean_cost_us_last_period')),
+                     _f(n.get('max_cost_us_last_period')), _f(r['received_rate_hz'])))
+    out += _table(['rate [Hz]', 'driver decoded [Hz]', 'driver seq gaps',
+                   'direction processed [Hz]', 'direction mean cost [us]',
+                   'direction max cost [us]', 'contacts at subscriber [Hz]'], rows)
+    out += ['', 'Per-scan cost of each stage at 16 x 16, measured in the bench process '
+            '(one core, no contention from the chain):', '']
+    out += _table(['stage', 'us per scan'], [(k, _f(v)) for k, v in e['stage_costs_us'].items()])
+    out += ['']
+    if e.get('why'):
+        out += ['### Why the 2 kHz target is missed', ''] + [f'- {w}' for w in e['why']] + ['']
+    for name, rows in e.get('profiles', {}).items():
+        out += [f'cProfile of the {name} node (separate profiled run at 2 kHz, whole process '
+                'including start-up; own time; cProfile slows it, so compare shares only):', '']
+        out += _table(['function', 'calls', 'own s', 'share'],
+                      [(r['function'], r['calls'], _f(r['own_s'], '.2f'),
+                        _f(100 * r['own_share']) + ' %') for r in rows])
+        out += ['']
+    return out
+
+
+def paper_summary() -> str:
+    """Return the paper's Table 1 summary as text."""
+    return f'{PAPER_TABLE["summary"][0]:.2f} +- {PAPER_TABLE["summary"][1]:.2f} deg'
