@@ -43,20 +43,25 @@ DIR_PERIOD_S = 1.5
 PR_SET_PDEATHSIG = 1
 
 
-def demo_scene(repeats: int) -> dict:
-    """Return the demo's scene: a quiet lead-in, normal presses, then the eight directions."""
-    presses = [{'time_s': LEAD_IN_S + i * CAL_PERIOD_S, 'alpha_deg': 0.0, 'beta_deg': 0.0,
-                'duration_s': 1.0} for i in range(CAL_PRESSES)]
-    start = LEAD_IN_S + CAL_PRESSES * CAL_PERIOD_S + 0.5
+def demo_scene(repeats: int, pace: float = 1.0) -> dict:
+    """
+    Return the demo's scene: a quiet lead-in, normal presses, then the eight directions.
+
+    pace < 1 plays the presses faster (the lead-in, which start-up needs, stays as it is).
+    """
+    presses = [{'time_s': LEAD_IN_S + i * CAL_PERIOD_S * pace, 'alpha_deg': 0.0,
+                'beta_deg': 0.0, 'duration_s': 1.0 * pace} for i in range(CAL_PRESSES)]
+    start = LEAD_IN_S + (CAL_PRESSES * CAL_PERIOD_S + 0.5) * pace
     for k in range(repeats):
         for j, beta in enumerate(range(0, 360, 45)):
-            presses.append({'time_s': start + (k * 8 + j) * DIR_PERIOD_S, 'alpha_deg': 45.0,
-                            'beta_deg': float(beta), 'duration_s': 1.2})
+            presses.append({'time_s': start + (k * 8 + j) * DIR_PERIOD_S * pace,
+                            'alpha_deg': 45.0, 'beta_deg': float(beta),
+                            'duration_s': 1.2 * pace})
     return {
         'name': 'demo', 'description': 'seed experiment for make demo',
         'model': {'rows': 16, 'cols': 16, 'pitch_m': 0.005},
         'defaults': {'x_m': 0.0375, 'y_m': 0.0375, 'force_n': 10.0, 'radius_m': 0.004,
-                     'ramp_s': 0.3},
+                     'ramp_s': 0.3 * pace},
         'presses': presses,
     }
 
@@ -212,7 +217,7 @@ def _wait(executor, condition, timeout_s, what):
 
 def run(args, workdir: str) -> int:
     """Run the demo in workdir; return the exit status."""
-    scene_dict = demo_scene(args.repeats)
+    scene_dict = demo_scene(args.repeats, args.pace)
     scene = scene_from_dict(scene_dict, name='demo')
     scene_path = os.path.join(workdir, 'demo.yaml')
     with open(scene_path, 'w') as f:
@@ -275,10 +280,14 @@ def main(argv=None) -> int:
     parser.add_argument('--method', default=DEFAULT_METHOD, help='estimator of the direction node')
     parser.add_argument('--repeats', type=int, default=3, help='rounds of the eight directions')
     parser.add_argument('--rate', type=float, default=100.0, help='scans per second of the skin')
+    parser.add_argument('--pace', type=float, default=1.0,
+                        help='time scale of the presses (0.5: twice as fast), 0.3 to 3')
     parser.add_argument('--plain', dest='live', action='store_false',
                         help='print status lines instead of redrawing the terminal')
     parser.set_defaults(live=sys.stdout.isatty())
     args = parser.parse_args(argv)
+    if not 0.3 <= args.pace <= 3.0 or args.repeats < 1 or not 10.0 <= args.rate <= 2000.0:
+        parser.error('--pace takes 0.3 to 3, --repeats 1 or more, --rate 10 to 2000')
     workdir = tempfile.mkdtemp(prefix='skin_demo_')
     keep = False
     try:

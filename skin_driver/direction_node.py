@@ -20,6 +20,7 @@ import numpy as np
 from rcl_interfaces.msg import SetParametersResult
 import rclpy
 from rclpy.callback_groups import MutuallyExclusiveCallbackGroup
+from rclpy.event_handler import PublisherEventCallbacks
 from rclpy.executors import ExternalShutdownException
 from rclpy.node import Node
 from rclpy.qos import qos_profile_sensor_data
@@ -74,14 +75,17 @@ class DirectionNode(Node):
         self._last_viz = 0.0
         self._rate = diagnostics.RateMeter(time.monotonic())
 
-        self._pub_contacts = self.create_publisher(TactileContactArray, 'contacts',
-                                                   qos_profile_sensor_data)
-        self._pub_contact = self.create_publisher(TactileContact, 'contact',
-                                                  qos_profile_sensor_data)
-        self._pub_wrench = self.create_publisher(WrenchStamped, 'wrench', qos_profile_sensor_data)
-        self._pub_heat = {layer: self.create_publisher(Image, f'{layer}/heatmap', 5)
+        # Every QoS event handler is one more entity the Python executor walks on each wake,
+        # at up to 2 kHz; readers of these topics still get rclpy's incompatible-QoS warnings.
+        quiet = {'event_callbacks': PublisherEventCallbacks(use_default_callbacks=False)}
+        stream = qos_profile_sensor_data
+        self._pub_contacts = self.create_publisher(TactileContactArray, 'contacts', stream,
+                                                   **quiet)
+        self._pub_contact = self.create_publisher(TactileContact, 'contact', stream, **quiet)
+        self._pub_wrench = self.create_publisher(WrenchStamped, 'wrench', stream, **quiet)
+        self._pub_heat = {layer: self.create_publisher(Image, f'{layer}/heatmap', 5, **quiet)
                           for layer in ('top', 'bottom')}
-        self._pub_markers = self.create_publisher(MarkerArray, 'markers', 5)
+        self._pub_markers = self.create_publisher(MarkerArray, 'markers', 5, **quiet)
         self.create_subscription(SkinFrame, 'frame', self._on_frame, qos_profile_sensor_data)
         # The calibration call waits for presses: in a group of its own it cannot hold up the
         # frames it waits for, which run in the node's default group.
