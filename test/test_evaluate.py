@@ -5,7 +5,7 @@ import json
 import numpy as np
 
 from skin_driver import evaluate
-from skin_driver.core.dataset import make_seed_experiment, save_dataset
+from skin_driver.core.dataset import make_random_experiment, make_seed_experiment, save_dataset
 
 
 def test_table_and_json(tmp_path, capsys):
@@ -41,3 +41,12 @@ def test_generate_and_errors(tmp_path, capsys):
     bad.write_bytes(b'x')
     assert evaluate.main([str(bad)]) == 2
     assert 'error' in capsys.readouterr().err
+
+
+def test_the_papers_table_stands_beside_the_seed_experiment_only():
+    rng = np.random.default_rng(4)
+    seed_like = evaluate.evaluate(make_seed_experiment(repeats=1, rng=rng), 'centroid')
+    random = evaluate.evaluate(make_random_experiment(frames=30, rng=rng), 'centroid')
+    assert seed_like['seed_experiment'] and not random['seed_experiment']
+    assert 'paper mean' in evaluate.format_table(seed_like)
+    assert 'paper mean' not in evaluate.format_table(random)
