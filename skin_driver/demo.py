@@ -77,6 +77,7 @@ class DemoMonitor(Node):
         self.device_time = {}
         self.last_frame = None
         self.last_contacts = []
+        self.last_truth = []
         self.frames = 0
         self.estimates = 0
         self.calibration = Calibration()
@@ -113,6 +114,7 @@ class DemoMonitor(Node):
             self.device_time.pop(next(iter(self.device_time)))
         top, bottom = conversions.skin_frame_layers(msg)
         self.last_frame = (top, bottom)
+        self.last_truth = self.scene.active_at(msg.device_time_us * 1e-6)
         if self.calibrated:
             spec = self.truth(msg.device_time_us * 1e-6)
             if spec is not None and spec.alpha_deg > 0:
@@ -142,6 +144,24 @@ class DemoMonitor(Node):
         self.seed.calibration = self.calibration
         self.calibrated = True
 
+    @staticmethod
+    def _contact_line(c) -> str:
+        if c.direction_valid:
+            beta = f'{math.degrees(c.azimuth) % 360.0:5.1f} deg'
+            alpha = f'{math.degrees(c.polar):4.1f} deg'
+        else:
+            beta, alpha = '    -    ', '   -    '
+        return (f'x {c.location.x * 1e3:5.1f} mm  y {c.location.y * 1e3:5.1f} mm  '
+                f'|F| {c.magnitude:5.2f} N  beta {beta}  alpha {alpha}  '
+                f'confidence {c.confidence:.2f}')
+
+    @staticmethod
+    def _press_line(press) -> str:
+        return (f'x {press.x_m * 1e3:5.1f} mm  y {press.y_m * 1e3:5.1f} mm  '
+                f'|F| {press.normal_force_n:5.2f} N  '
+                f'beta {math.degrees(press.beta_rad) % 360.0:5.1f} deg  '
+                f'alpha {math.degrees(press.alpha_rad):4.1f} deg')
+
     def draw(self, force: bool = False) -> None:
         """Redraw the live view at most ten times a second."""
         now = time.monotonic()
@@ -155,21 +175,14 @@ class DemoMonitor(Node):
             lines.append(f'{"top layer":<34}bottom layer')
             lines += [f'{a}  {b}' for a, b in zip(left, right)]
             lines.append('')
-        if self.last_contacts:
-            for c in self.last_contacts[:3]:
-                beta = (f'{math.degrees(c.azimuth):7.1f} deg' if c.direction_valid
-                        else '      -    ')
-                alpha = f'{math.degrees(c.polar):5.1f} deg' if c.direction_valid else '    -    '
-                lines.append(f'contact at x {c.location.x * 1e3:5.1f} mm  '
-                             f'y {c.location.y * 1e3:5.1f} mm  |F| {c.magnitude:5.2f} N  '
-                             f'beta {beta}  alpha {alpha}'
-                             f'  confidence {c.confidence:.2f}')
-        else:
-            lines.append('no contact')
+        felt = [self._contact_line(c) for c in self.last_contacts[:3]] or ['no contact']
+        truth = [self._press_line(p) for _, p in self.last_truth[:1]]
         if self.live:
+            lines += ['skin feels: ' + line for line in felt]
+            lines += ['simulated:  ' + line for line in truth]
             sys.stdout.write('\x1b[H\x1b[J' + '\n'.join(lines) + '\n')
         else:
-            sys.stdout.write(lines[0] + ' | ' + lines[-1] + '\n')
+            sys.stdout.write(f'{lines[0]} | {felt[0]}\n')
         sys.stdout.flush()
 
 
