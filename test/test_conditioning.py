@@ -90,3 +90,33 @@ def test_inputs_are_not_modified_and_errors_are_clear():
         Conditioner().condition(-top, top)
     with pytest.raises(ValueError, match='boolean'):
         cond.set_dead(np.zeros((4, 4)), np.zeros((4, 4)))
+
+
+def test_force_lookup_equals_interpolation_of_the_table_bit_for_bit():
+    cond = Conditioner()
+    table = cond._table
+    counts = np.concatenate([[0.0, 0.25, 1.0, 1.5, 39.99, 40.0, 4094.0, 4094.5, 4095.0, 5000.0],
+                             np.random.default_rng(3).uniform(0.0, 4095.0, 500)])
+    np.testing.assert_array_equal(table(counts), np.interp(counts, table.counts, table.force))
+    assert table.force[0] == 0.0  # untouched taxels are left at 0 N
+
+
+def test_stacked_maps_match_the_pair_with_gain_and_dead_taxels():
+    cond, model, rng = _tared()
+    cond.set_gain(np.full((16, 16), 1.5), None)
+    dead = np.zeros((16, 16), dtype=bool)
+    dead[7, 8] = True
+    cond.set_dead(dead, np.zeros((16, 16), dtype=bool))
+    top, bottom = render(model, [Press(0.04, 0.04, 10.0)], rng)
+    stacked = cond.condition_stacked(top, bottom)
+    tf, bf = cond.condition(top, bottom)
+    assert stacked.shape == (2, 16, 16)
+    np.testing.assert_array_equal(stacked[0], tf)
+    np.testing.assert_array_equal(stacked[1], bf)
+    assert tf[7, 8] > 0  # the dead taxel is filled from its neighbours
+    plain, _, _ = _tared()  # the same tare, no gain and no dead taxel
+    raw_top = plain.condition(top, bottom)[0]
+    loaded = raw_top > 0
+    loaded[6:9, 7:10] = False
+    assert loaded.any()
+    np.testing.assert_array_equal(tf[loaded], 1.5 * raw_top[loaded])

@@ -3,7 +3,8 @@
 import numpy as np
 import pytest
 
-from skin_driver.core.contacts import contact_windows, find_contacts
+from skin_driver.core.contacts import (contact_windows, find_contacts, segment_stacked,
+                                       window_stack)
 
 
 def _blob(shape, r, c, value=1.0):
@@ -83,3 +84,44 @@ def test_many_contacts_use_the_same_moments():
     assert s.force_n == pytest.approx(196.0) and s.bottom_force_n == pytest.approx(98.0)
     assert (s.row, s.col, s.bottom_row, s.bottom_col) == pytest.approx((39, 39, 39, 39))
     assert s.taxels == 1 and s.bottom_spread == pytest.approx(0.0, abs=1e-6)
+
+
+def _fields(seg):
+    return (seg.row, seg.col, seg.force_n, seg.taxels, seg.bottom_force_n, seg.bottom_row,
+            seg.bottom_col, seg.bottom_spread)
+
+
+def test_a_lone_contact_gives_the_same_figures_as_one_among_others():
+    # A lone contact takes the whole-map shortcut; with a second contact the per-label sums run.
+    rng = np.random.default_rng(4)
+    top = _blob((16, 16), 6, 9) * rng.uniform(0.5, 1.5, (16, 16))
+    bottom = np.roll(top, 1, axis=1) * 0.7
+    alone, _ = find_contacts(top, bottom, 0.005)
+    other = _blob((16, 16), 13, 2, 0.5)
+    together, _ = find_contacts(top + other, bottom + other, 0.005)
+    assert len(alone) == 1 and len(together) == 2
+    assert _fields(alone[0]) == pytest.approx(_fields(together[0]), rel=1e-12, abs=1e-12)
+    assert alone[0].window == together[0].window
+
+
+def test_window_stack_equals_contact_windows():
+    top = _blob((16, 16), 3, 3, 1.0) + _blob((16, 16), 5, 6, 2.0)
+    top[4, 4] = 0.0  # two contacts whose windows overlap
+    top[4, 5] = 0.0
+    top[5, 4] = 0.0
+    bottom = top * 0.5
+    maps = np.stack((top, bottom))
+    segs, labels, components = segment_stacked(maps, 0.005, 0.05, 1)
+    assert components == 3 and len(segs) == 2
+    for seg in segs:
+        expected = contact_windows(top, bottom, labels, seg)
+        window = window_stack(maps, labels, seg)
+        np.testing.assert_array_equal(window[0], expected[0])
+        np.testing.assert_array_equal(window[1], expected[1])
+    lone = np.stack((_blob((16, 16), 8, 8), _blob((16, 16), 8, 9)))
+    segs, labels, components = segment_stacked(lone, 0.005, 0.05, 1)
+    assert components == 2
+    copied = window_stack(lone, labels, segs[0], alone=True)
+    np.testing.assert_array_equal(copied, np.stack(contact_windows(*lone, labels, segs[0])))
+    copied[:] = 0.0
+    assert lone.any()  # the window is a copy

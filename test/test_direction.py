@@ -80,3 +80,29 @@ def test_estimate_shift_validates():
         direction.estimate_shift(np.zeros((4, 4)), np.zeros((4, 5)))
     with pytest.raises(ValueError, match='NaN'):
         direction.estimate_shift(np.full((4, 4), np.nan), np.zeros((4, 4)))
+
+
+@pytest.mark.parametrize('shape', [(5, 6), (9, 9), (20, 24)])
+def test_dense_and_separable_band_spectra_agree(shape):
+    # Small windows use one dense DFT matrix, large ones the separable products: same numbers.
+    rng = np.random.default_rng(5)
+    maps = rng.uniform(0.0, 1.0, (2,) + shape)
+    plan = direction._plan(shape)
+    dense = dict(plan)
+    separable = dict(plan, dense=None)
+    if dense['dense'] is None:
+        ey, ex = plan['ey'], plan['ex']
+        full = np.einsum('iy,xj->ijyx', ey, ex).reshape(-1, shape[0] * shape[1])
+        dense['dense'] = np.ascontiguousarray(full[plan['keep']].T).view(np.float64)
+    np.testing.assert_allclose(direction._band_cross(maps, dense),
+                               direction._band_cross(maps, separable), rtol=1e-12, atol=1e-12)
+
+
+def test_stacked_poc_equals_poc_and_rejects_an_empty_layer():
+    top, bottom = _pair(0.0015, -0.001)
+    maps = np.stack((top, bottom))
+    assert direction.poc_stacked(maps) == direction.poc(top, bottom)
+    assert direction.get_method('poc').stacked is direction.poc_stacked
+    empty = np.stack((top, np.zeros_like(top)))
+    assert direction.poc_stacked(empty) == direction.NO_SHIFT
+    assert direction.poc(np.zeros_like(top), bottom) == direction.NO_SHIFT

@@ -1,5 +1,6 @@
 """Tests of the contact estimation pipeline."""
 
+import dataclasses
 import math
 
 import numpy as np
@@ -127,3 +128,16 @@ def test_new_config_fields_are_validated():
         EstimatorConfig(sampling_correction='yes')
     with pytest.raises(ValueError, match='layer_spread_m'):
         EstimatorConfig(layer_spread_m=-1.0)
+
+
+def test_method_without_stacked_entry_gives_the_same_contacts():
+    # Methods registered with only a (top, bottom) function go through the generic path.
+    est, model, rng = make()
+    generic = ContactEstimator(est.config, est.calibration, est.conditioner)
+    generic._method = dataclasses.replace(est._method, stacked=None)
+    presses = [Press(0.02, 0.025, 8.0, math.radians(40), 1.0, 0.003),
+               Press(0.055, 0.05, 12.0, math.radians(30), -2.0, 0.0025)]
+    top, bottom = render(model, presses, rng)
+    fast, slow = est.process(top, bottom), generic.process(top, bottom)
+    assert len(fast) == 2 and all(c.direction_valid for c in fast)
+    assert fast == slow

@@ -10,7 +10,8 @@ import numpy as np
 
 from .validate import check_number, check_pair
 
-__all__ = ['Segment', 'find_contacts', 'segment', 'contact_windows']
+__all__ = ['Segment', 'find_contacts', 'segment', 'segment_stacked', 'contact_windows',
+           'window_stack']
 
 
 @dataclass(frozen=True)
@@ -93,39 +94,73 @@ def _moments(top: np.ndarray, bottom: np.ndarray, labels: np.ndarray, n: int) ->
     return np.stack([np.bincount(flat, weights=row, minlength=n) for row in weights])
 
 
+def _single_moments(maps: np.ndarray) -> list:
+    """
+    Return the sums of :func:`_moments` for a map pair holding one contact, as [background, it].
+
+    With a single component every loaded taxel belongs to it and, the maps being non-negative
+    (checked), every other taxel is 0 on both layers, so the sums over the whole maps are its
+    sums: one matrix product, no label test.
+    """
+    basis, _ = _grids(maps.shape[1:])
+    (mass, mass_b), (sum_r, sum_rb), (sum_c, sum_cb), (_, sum_sq_b) = (
+        basis @ maps.reshape(2, -1).T).tolist()
+    count = int(np.count_nonzero(maps[0] > 0))
+    return [None, [mass, sum_r, sum_c, mass_b, sum_rb, sum_cb, sum_sq_b, count]]
+
+
 def segment(top: np.ndarray, bottom: np.ndarray, pitch: float, min_force_n: float,
             margin: int, connectivity: int = 8) -> tuple:
     """Do the work of :func:`find_contacts` on maps already checked (no validation)."""
+    maps = np.empty((2,) + top.shape)
+    maps[0], maps[1] = top, bottom
+    segments, labels, _ = segment_stacked(maps, pitch, min_force_n, margin, connectivity)
+    return segments, labels
+
+
+def segment_stacked(maps: np.ndarray, pitch: float, min_force_n: float, margin: int,
+                    connectivity: int = 8) -> tuple:
+    """
+    Do the work of :func:`segment` on the (2, rows, cols) float64 stack of top and bottom.
+
+    Returns (segments, label map, number of components including the background); with two
+    components the maps hold a single contact, which :func:`window_stack` can use.
+    """
+    top, bottom = maps
     mask = np.logical_or(top > 0, bottom > 0).view(np.uint8)
     n, labels, stats, _ = cv2.connectedComponentsWithStats(mask, connectivity=connectivity,
                                                            ltype=cv2.CV_32S)
     if n <= 1:
-        return [], labels
+        return [], labels, n
+    if n == 2:
+        moments = _single_moments(maps)
+    else:
+        moments = _moments(top, bottom, labels, n).T.tolist()
     rows, cols = top.shape
-    mass, sum_r, sum_c, mass_b, sum_rb, sum_cb, sum_sq_b, count = _moments(top, bottom, labels, n)
     threshold = max(float(min_force_n), 1e-12)
-    mass[0] = 0.0
+    boxes = stats[:, :4].tolist()
     segments = []
-    for k in np.flatnonzero(mass >= threshold).tolist():
-        x0, y0, ww, hh = stats[k, :4].tolist()
+    for k in range(1, n):
+        m, sum_r, sum_c, mb, sum_rb, sum_cb, sum_sq_b, count = moments[k]
+        if not m >= threshold:
+            continue
+        x0, y0, ww, hh = boxes[k]
         window = (max(y0 - margin, 0), min(y0 + hh + margin, rows),
                   max(x0 - margin, 0), min(x0 + ww + margin, cols))
-        m = float(mass[k])
-        r = float(sum_r[k]) / m
-        c = float(sum_c[k]) / m
-        n_taxels = int(round(count[k]))
-        mb = float(mass_b[k])
+        r = sum_r / m
+        c = sum_c / m
+        n_taxels = int(round(count))
         if mb > 0:
-            rb = float(sum_rb[k]) / mb
-            cb = float(sum_cb[k]) / mb
-            spread = max(float(sum_sq_b[k]) / mb - rb * rb - cb * cb, 0.0)
+            rb = sum_rb / mb
+            cb = sum_cb / mb
+            spread = max(sum_sq_b / mb - rb * rb - cb * cb, 0.0)
         else:
             rb, cb, spread = r, c, 0.0
         border = x0 == 0 or y0 == 0 or x0 + ww == cols or y0 + hh == rows
         segments.append(Segment(k, r, c, c * pitch, r * pitch, m, n_taxels * pitch * pitch,
                                 n_taxels, window, mb, rb, cb, spread, border))
     segments.sort(key=lambda s: -s.force_n)
-    return segments, labels
+    return segments, labels, n
 
 
 def contact_windows(top_force: np.ndarray, bottom_force: np.ndarray, labels: np.ndarray,
@@ -135,3 +170,18 @@ def contact_windows(top_force: np.ndarray, bottom_force: np.ndarray, labels: np.
     own = labels[r0:r1, c0:c1] == segment.label
     return (np.where(own, top_force[r0:r1, c0:c1], 0.0),
             np.where(own, bottom_force[r0:r1, c0:c1], 0.0))
+
+
+def window_stack(maps: np.ndarray, labels: np.ndarray, segment: Segment,
+                 alone: bool = False) -> np.ndarray:
+    """
+    Return a (2, h, w) copy of :func:`contact_windows` from the stacked maps.
+
+    ``alone`` says the maps hold no other component (see :func:`segment_stacked`): the window
+    then has nothing to zero and is copied as it is.
+    """
+    r0, r1, c0, c1 = segment.window
+    window = maps[:, r0:r1, c0:c1]
+    if alone:
+        return window.copy()
+    return np.where(labels[r0:r1, c0:c1] == segment.label, window, 0.0)

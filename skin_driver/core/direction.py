@@ -39,6 +39,9 @@ __all__ = ['ShiftEstimate', 'Method', 'METHODS', 'DEFAULT_METHOD', 'get_method',
            'method_names', 'estimate_shift']
 
 _EPS = 1e-12
+# Largest band DFT (taxels x bins) done as one dense product; beyond it the separable row and
+# column products are cheaper (and the cached matrix would grow past 400 kB).
+_DENSE_DFT_ENTRIES = 24576
 # Cycles per taxel kept by the phase-plane fit: above it aliasing of the sharp top map dominates.
 _BAND = 0.2
 
@@ -56,12 +59,19 @@ NO_SHIFT = ShiftEstimate(0.0, 0.0, 0.0)
 
 @dataclass(frozen=True)
 class Method:
-    """A registered estimator; ``whole_map`` methods get the full raw count maps."""
+    """
+    A registered estimator; ``whole_map`` methods get the full raw count maps.
+
+    ``stacked``, when set, does the work of ``function`` on both maps stacked in one
+    (2, rows, cols) float64 array, which the pipeline already holds; it saves a copy and lets
+    both layers go through each numpy call together.
+    """
 
     name: str
     function: Callable
     whole_map: bool = False
     description: str = ''
+    stacked: Callable = None
 
 
 def _pad_size(n: int) -> int:
@@ -91,13 +101,23 @@ def _plan(shape: tuple) -> dict:
     bv = np.broadcast_to(vb[:, None], (vb.size, ub.size))
     keep = ~((bu == 0) & (bv == 0))
     bmult = np.where(bu > 0, 2.0, 1.0)
-    return {'ph': ph, 'pw': pw, 'u': u, 'v': v, 'mult': mult, 'band': band,
-            'oy': (ph - h) // 2, 'ox': (pw - w) // 2,
+    bu, bv = bu[keep], bv[keep]
+    fu, fv = np.broadcast_arrays(u, v)
+    dense = None
+    if h * w * bu.size <= _DENSE_DFT_ENTRIES:
+        # One matrix from the window's taxels to the band bins, real and imaginary parts
+        # interleaved so that a real product viewed as complex gives the spectra in one call.
+        full = np.einsum('iy,xj->ijyx', ey, ex).reshape(-1, h * w)[keep.ravel()]
+        dense = np.ascontiguousarray(full.T).view(np.float64)
+    return {'ph': ph, 'pw': pw, 'fft_mult': np.broadcast_to(mult, band.shape)[band],
+            'band': band, 'oy': (ph - h) // 2, 'ox': (pw - w) // 2,
             'hann': cv2.createHanningWindow((pw, ph), cv2.CV_64F),
-            'ey': ey, 'ex': ex, 'keep': keep, 'bu': bu[keep], 'bv': bv[keep],
+            'ey': ey, 'ex': ex, 'keep': np.flatnonzero(keep.ravel()), 'dense': dense,
             'bmult': bmult[keep],
-            'iu1': int(np.flatnonzero((bu[keep] == 1.0 / pw) & (bv[keep] == 0))[0]),
-            'iv1': int(np.flatnonzero((bu[keep] == 0) & (bv[keep] == 1.0 / ph))[0]),
+            'band_fit': _PlaneBasis(bu, bv), 'fft_fit': _PlaneBasis(fu[band], fv[band]),
+            # Bins of the lowest non-zero frequency along x and along y: the start of the fit.
+            'start': [int(np.flatnonzero((bu == 1.0 / pw) & (bv == 0))[0]),
+                      int(np.flatnonzero((bu == 0) & (bv == 1.0 / ph))[0])],
             'rows': np.arange(h, dtype=np.float64),
             'cols': np.arange(w, dtype=np.float64)}
 
@@ -128,47 +148,62 @@ def _poc_peak_integer(cross: np.ndarray, plan: dict) -> tuple:
     return float(_signed(ix, plan['pw'])), float(_signed(iy, plan['ph']))
 
 
-def _fit_plane(cross: np.ndarray, weight: np.ndarray, u: np.ndarray, v: np.ndarray,
-               sx: float, sy: float, iterations: int = 2) -> ShiftEstimate:
+class _PlaneBasis:
+    """Frequencies of the bins a phase plane is fitted to, arranged for few numpy calls."""
+
+    def __init__(self, u: np.ndarray, v: np.ndarray):
+        # Rows 1, u, v: one product with the weighted copy gives the weight sum and the 2 x 2
+        # normal matrix together.
+        self.a = np.stack((np.ones_like(u), u, v))
+        self.two_pi_uv = 2.0 * math.pi * np.stack((u, v))
+
+
+def _fit_plane(cross: np.ndarray, weight: np.ndarray, basis: _PlaneBasis, sx: float, sy: float,
+               iterations: int = 2) -> ShiftEstimate:
     """Fit the cross-power phase with the plane -2 pi (u sx + v sy) by weighted least squares."""
-    total = float(weight.sum())
+    weighted = basis.a * weight
+    (total, _, _), (_, a11, a12), (_, _, a22) = (weighted @ basis.a.T).tolist()
     if total <= _EPS:
         return NO_SHIFT
-    wu, wv = weight * u, weight * v
-    a11, a22, a12 = float(wu @ u), float(wv @ v), float(wu @ v)
     det = a11 * a22 - a12 * a12
     if det <= 1e-9 * max(a11 * a22, _EPS):
         return NO_SHIFT
     two_pi = 2.0 * math.pi
-    phase = np.angle(cross)
-    tu, tv = two_pi * u, two_pi * v
+    # Rows 2 pi u, 2 pi v and the measured phase + pi: (sx, sy, 1) times it is the residual
+    # phase + pi in one product, ready for a single wrap.
+    plane = np.empty((3, cross.size))
+    plane[:2] = basis.two_pi_uv
+    np.arctan2(cross.imag, cross.real, out=plane[2])
+    plane[2] += math.pi
+    weighted_uv = weighted[1:]
     for _ in range(iterations):
         # Remove the current estimate so that the residual phase stays far from wrapping.
-        residual = np.remainder(phase + tu * sx + tv * sy + math.pi, two_pi) - math.pi
-        b1 = -float(wu @ residual) / two_pi
-        b2 = -float(wv @ residual) / two_pi
+        residual = np.remainder(np.array((sx, sy, 1.0)) @ plane, two_pi)
+        residual -= math.pi
+        b1, b2 = (weighted_uv @ residual).tolist()
+        b1, b2 = -b1 / two_pi, -b2 / two_pi
         sx += (a22 * b1 - a12 * b2) / det
         sy += (a11 * b2 - a12 * b1) / det
     if not (math.isfinite(sx) and math.isfinite(sy)):
         return NO_SHIFT
-    residual = phase + tu * sx + tv * sy
-    coherence = math.hypot(float(weight @ np.cos(residual)), float(weight @ np.sin(residual)))
-    return ShiftEstimate(float(sx), float(sy), min(max(coherence / total, 0.0), 1.0))
+    # The extra pi turns every phasor around, which leaves the length of their sum unchanged.
+    residual = np.array((sx, sy, 1.0)) @ plane
+    coherence = math.hypot(weight @ np.cos(residual), weight @ np.sin(residual))
+    return ShiftEstimate(sx, sy, min(max(coherence / total, 0.0), 1.0))
 
 
-def _band_cross(top: np.ndarray, bottom: np.ndarray, plan: dict) -> np.ndarray:
-    ey, ex = plan['ey'], plan['ex']
-    t = (ey @ top @ ex)[plan['keep']]
-    b = (ey @ bottom @ ex)[plan['keep']]
-    return b * np.conj(t)
+def _band_cross(maps: np.ndarray, plan: dict) -> np.ndarray:
+    """Return the cross-power spectrum of a (2, h, w) top/bottom stack on the band bins."""
+    if plan['dense'] is not None:
+        spectra = (maps.reshape(2, -1) @ plan['dense']).view(np.complex128)
+    else:
+        spectra = (plan['ey'] @ maps @ plan['ex']).reshape(2, -1)[:, plan['keep']]
+    return spectra[1] * spectra[0].conj()
 
 
 def _phase_plane(cross: np.ndarray, plan: dict, sx: float, sy: float) -> ShiftEstimate:
-    sel = plan['band']
-    u, v = np.broadcast_arrays(plan['u'], plan['v'])
-    c = cross[sel]
-    return _fit_plane(c, np.abs(c) * np.broadcast_to(plan['mult'], sel.shape)[sel],
-                      u[sel], v[sel], sx, sy)
+    c = cross[plan['band']]
+    return _fit_plane(c, np.abs(c) * plan['fft_mult'], plan['fft_fit'], sx, sy)
 
 
 def poc_fft(top: np.ndarray, bottom: np.ndarray) -> ShiftEstimate:
@@ -199,13 +234,19 @@ def poc(top: np.ndarray, bottom: np.ndarray) -> ShiftEstimate:
     The start comes from the phase of the lowest non-zero frequency on each axis (unambiguous
     for shifts below half the padded window, which is twice the contact window).
     """
-    if not _usable(top, bottom):
-        return NO_SHIFT
-    plan = _plan(top.shape)
-    cross = _band_cross(top, bottom, plan)
-    sx = -math.atan2(cross[plan['iu1']].imag, cross[plan['iu1']].real) * plan['pw'] / (2 * math.pi)
-    sy = -math.atan2(cross[plan['iv1']].imag, cross[plan['iv1']].real) * plan['ph'] / (2 * math.pi)
-    return _fit_plane(cross, np.abs(cross) * plan['bmult'], plan['bu'], plan['bv'], sx, sy)
+    return poc_stacked(np.stack((top, bottom)))
+
+
+def poc_stacked(maps: np.ndarray) -> ShiftEstimate:
+    """Do the work of :func:`poc` on the (2, h, w) stack of top and bottom."""
+    plan = _plan(maps.shape[1:])
+    cross = _band_cross(maps, plan)
+    # An empty layer gives a zero cross-power spectrum, which the fit rejects (no shift).
+    cx, cy = cross[plan['start']].tolist()
+    scale = -1.0 / (2 * math.pi)
+    sx = math.atan2(cx.imag, cx.real) * plan['pw'] * scale
+    sy = math.atan2(cy.imag, cy.real) * plan['ph'] * scale
+    return _fit_plane(cross, np.abs(cross) * plan['bmult'], plan['band_fit'], sx, sy)
 
 
 def poc_centroid_weighted(top: np.ndarray, bottom: np.ndarray) -> ShiftEstimate:
@@ -213,10 +254,10 @@ def poc_centroid_weighted(top: np.ndarray, bottom: np.ndarray) -> ShiftEstimate:
     if not _usable(top, bottom):
         return NO_SHIFT
     plan = _plan(top.shape)
-    cross = _band_cross(top, bottom, plan)
+    cross = _band_cross(np.stack((top, bottom)), plan)
     sx, sy, _ = _centroid_shift(top, bottom, plan)
     mag = np.abs(cross)
-    return _fit_plane(cross, mag * mag * plan['bmult'], plan['bu'], plan['bv'], sx, sy)
+    return _fit_plane(cross, mag * mag * plan['bmult'], plan['band_fit'], sx, sy)
 
 
 def centroid(top: np.ndarray, bottom: np.ndarray) -> ShiftEstimate:
@@ -335,7 +376,8 @@ def upsampled(top: np.ndarray, bottom: np.ndarray, factor: int = 100) -> ShiftEs
 METHODS = {m.name: m for m in (
     Method('seed', seed, True, 'cv2.phaseCorrelate on the whole raw maps, no window (paper)'),
     Method('hann', hann, False, 'cv2.phaseCorrelate with a Hann window on the contact window'),
-    Method('poc', poc, False, 'band-limited phase-plane POC seeded by the centroids (default)'),
+    Method('poc', poc, False, 'band-limited phase-plane POC seeded by the centroids (default)',
+           poc_stacked),
     Method('poc_fft', poc_fft, False, 'phase-plane POC seeded by the full POC peak'),
     Method('poc_weighted', poc_centroid_weighted, False,
            'like poc, phase weighted by the squared cross-power magnitude'),

@@ -29,8 +29,8 @@ import numpy as np
 
 from .calibration import Calibration
 from .conditioning import Conditioner, ConditioningConfig
-from .contacts import contact_windows, segment
-from .direction import DEFAULT_METHOD, get_method, NO_SHIFT
+from .contacts import segment_stacked, window_stack
+from .direction import DEFAULT_METHOD, get_method, NO_SHIFT, ShiftEstimate
 from .physics import FsrModel
 from .sampling import sampling_correction
 from .validate import check_number, check_pair
@@ -157,20 +157,23 @@ class ContactEstimator:
         """Return [(segment, ShiftEstimate)] for the contacts, strongest first."""
         t, b = check_pair(top_counts, bottom_counts)
         cfg = self.config
-        tf, bf = self.conditioner.condition_checked(t, b)
-        segments, labels = segment(tf, bf, cfg.pitch_m, cfg.min_contact_force_n,
-                                   cfg.window_margin)
-        segments = segments[:cfg.max_contacts]
+        maps = self.conditioner.condition_stacked(t, b)
+        segments, labels, components = segment_stacked(maps, cfg.pitch_m,
+                                                       cfg.min_contact_force_n, cfg.window_margin)
+        method = self._method
         out = []
         whole = None
-        for seg in segments:
-            if self._method.whole_map:
+        for seg in segments[:cfg.max_contacts]:
+            if method.whole_map:
                 if whole is None:
-                    whole = self._method.function(t.astype(np.float64), b.astype(np.float64))
+                    whole = method.function(t.astype(np.float64), b.astype(np.float64))
                 est = whole
             else:
-                tw, bw = contact_windows(tf, bf, labels, seg)
-                est = self._method.function(tw, bw)
+                window = window_stack(maps, labels, seg, alone=components == 2)
+                if method.stacked is not None:
+                    est = method.stacked(window)
+                else:
+                    est = method.function(window[0], window[1])
             if not (math.isfinite(est.dx) and math.isfinite(est.dy)):
                 est = NO_SHIFT
             elif self._correction is not None and est.confidence > 0:
@@ -185,8 +188,8 @@ class ContactEstimator:
             return est
         a1, a2 = self._correction.amplitudes(seg.bottom_spread, self._normal_force(seg))
         solve = self._correction.solve
-        return est._replace(dx=solve(est.dx, seg.bottom_col, a1, a2),
-                            dy=solve(est.dy, seg.bottom_row, a1, a2))
+        return ShiftEstimate(solve(est.dx, seg.bottom_col, a1, a2),
+                             solve(est.dy, seg.bottom_row, a1, a2), est.confidence)
 
     def _normal_force(self, seg) -> float:
         """Return the contact's normal force: sensed sum / fill_factor**2 (module docstring)."""
