@@ -12,9 +12,7 @@ from collections import defaultdict
 import math
 import os
 import pstats
-import signal
 import subprocess
-import sys
 import threading
 import time
 
@@ -29,6 +27,7 @@ from skin_driver import conversions
 from skin_driver.core.estimator import ContactEstimator, EstimatorConfig
 from skin_driver.core.physics import Press, render, SkinModel
 from skin_driver.core.protocol import encode_frame, FrameDecoder
+from skin_driver.processes import spawn, stop
 from skin_msgs.msg import SkinFrame, TactileContact, TactileContactArray
 from std_srvs.srv import Trigger
 import yaml
@@ -94,23 +93,6 @@ class Probe(Node):
         self.frames, self.contacts, self.diagnostics = [], [], []
 
 
-def _spawn(argv, log, profile_to=None, **kw):
-    head = [sys.executable] + (['-m', 'cProfile', '-o', profile_to] if profile_to else [])
-    return subprocess.Popen(head + argv, stdout=kw.pop('stdout', log),
-                            stderr=kw.pop('stderr', subprocess.STDOUT), start_new_session=True,
-                            **kw)
-
-
-def _stop(proc, timeout_s=10.0) -> None:
-    if proc.poll() is None:
-        os.killpg(proc.pid, signal.SIGINT)
-    try:
-        proc.wait(timeout_s)
-    except subprocess.TimeoutExpired:
-        os.killpg(proc.pid, signal.SIGKILL)
-        proc.wait()
-
-
 def _spin_for(executor, seconds) -> None:
     deadline = time.monotonic() + seconds
     while time.monotonic() < deadline:
@@ -167,16 +149,16 @@ def _pct(values, q):
 
 
 def _run_rate(executor, probe, rate, seconds, warmup, workdir, scene_path, port, nodes, log):
-    sim = _spawn(['-m', 'skin_driver.sim', '--scene', scene_path, '--link', port, '--rate',
-                  str(rate), '--loop'], log, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
-                 text=True)
+    sim = spawn(['-m', 'skin_driver.sim', '--scene', scene_path, '--link', port, '--rate',
+                 str(rate), '--loop'], log, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
+                text=True)
     lines = []
     reader = threading.Thread(target=lambda: lines.extend(sim.stderr), daemon=True)
     reader.start()
     deadline = time.monotonic() + 20.0
     while not any(s.startswith('SKIN_EPOCH') for s in lines):
         if time.monotonic() > deadline or sim.poll() is not None:
-            _stop(sim)
+            stop([sim], 10.0)
             raise RuntimeError(f'the simulator did not start: {"".join(lines)}')
         executor.spin_once(timeout_sec=0.01)
     epoch = float(next(s for s in lines if s.startswith('SKIN_EPOCH')).split()[1])
@@ -190,7 +172,7 @@ def _run_rate(executor, probe, rate, seconds, warmup, workdir, scene_path, port,
     node_view = _node_counters(probe.diagnostics, wall0, wall0 + wall)
     cpu = {k: 100.0 * (cpu_seconds(p) - cpu0[k]) / wall for k, p in pids.items()}
     _spin_for(executor, 0.3)
-    _stop(sim)
+    stop([sim], 10.0)
     reader.join(2.0)
     sent = dropped = None
     for s in lines:
@@ -240,11 +222,11 @@ def end_to_end(rates, seconds, warmup, workdir, domain_note='', profile=False, l
     prof = {'direction': os.path.join(workdir, 'direction.prof') if profile else None,
             'driver': None}
     nodes = {
-        'direction': _spawn(['-m', 'skin_driver.direction_node'] + ros + [
+        'direction': spawn(['-m', 'skin_driver.direction_node'] + ros + [
             '-p', 'viz_rate:=0.0',
             '-p', f'calibration_file:={os.path.join(workdir, "calibration.yaml")}'],
             node_log, prof['direction']),
-        'driver': _spawn(['-m', 'skin_driver.driver_node'] + ros + [
+        'driver': spawn(['-m', 'skin_driver.driver_node'] + ros + [
             '-p', f'port:={port}', '-p', 'reconnect_min:=0.02', '-p', 'reconnect_max:=0.1',
             '-p', 'publish_images:=false'], node_log, prof['driver']),
     }
@@ -270,7 +252,7 @@ def end_to_end(rates, seconds, warmup, workdir, domain_note='', profile=False, l
         probe.destroy_node()
         rclpy.try_shutdown()
         for p in nodes.values():
-            _stop(p)
+            stop([p], 10.0)
         node_log.close()
     profiles = {}
     for k, path in prof.items():

@@ -9,12 +9,9 @@ on the same scans. Ctrl-C stops it; every process it started is stopped with it.
 """
 
 import argparse
-import ctypes
 import math
 import os
 import shutil
-import signal
-import subprocess
 import sys
 import tempfile
 import time
@@ -31,6 +28,7 @@ from skin_driver.core.estimator import ContactEstimator, EstimatorConfig
 from skin_driver.core.heatmap import text_map
 from skin_driver.core.scene import scene_from_dict
 from skin_driver.evaluate import format_table, summarise
+from skin_driver.processes import spawn, stop
 from skin_msgs.msg import SkinFrame, TactileContactArray
 from skin_msgs.srv import Calibrate
 from std_srvs.srv import Trigger
@@ -40,7 +38,6 @@ LEAD_IN_S = 3.0
 CAL_PRESSES = 6
 CAL_PERIOD_S = 1.2
 DIR_PERIOD_S = 1.5
-PR_SET_PDEATHSIG = 1
 
 
 def demo_scene(repeats: int, pace: float = 1.0) -> dict:
@@ -186,30 +183,6 @@ class DemoMonitor(Node):
         sys.stdout.flush()
 
 
-def _die_with_parent() -> None:
-    # If the demo itself is killed (SIGKILL, closed terminal), its children must not linger.
-    if sys.platform.startswith('linux'):
-        ctypes.CDLL(None, use_errno=True).prctl(PR_SET_PDEATHSIG, signal.SIGTERM)
-
-
-def _spawn(argv, log):
-    return subprocess.Popen([sys.executable] + argv, stdout=log, stderr=subprocess.STDOUT,
-                            start_new_session=True, preexec_fn=_die_with_parent)
-
-
-def _stop_all(procs) -> None:
-    for proc in procs:
-        if proc.poll() is None:
-            os.killpg(proc.pid, signal.SIGINT)
-    deadline = time.monotonic() + 5.0
-    for proc in procs:
-        try:
-            proc.wait(max(0.1, deadline - time.monotonic()))
-        except subprocess.TimeoutExpired:
-            os.killpg(proc.pid, signal.SIGKILL)
-            proc.wait()
-
-
 def _call(executor, client, request, timeout_s):
     if not client.wait_for_service(timeout_sec=10.0):
         raise RuntimeError(f'service {client.srv_name} did not come up')
@@ -240,10 +213,10 @@ def run(args, workdir: str) -> int:
     log = open(os.path.join(workdir, 'nodes.log'), 'w')
     ros = ['--ros-args', '-r', f'__ns:={ns}', '--log-level', 'warn']
     procs = [
-        _spawn(['-m', 'skin_driver.direction_node'] + ros + [
+        spawn(['-m', 'skin_driver.direction_node'] + ros + [
             '-p', f'method:={args.method}',
             '-p', f'calibration_file:={os.path.join(workdir, "calibration.yaml")}'], log),
-        _spawn(['-m', 'skin_driver.driver_node'] + ros + [
+        spawn(['-m', 'skin_driver.driver_node'] + ros + [
             '-p', f'port:={port}', '-p', 'reconnect_max:=0.2', '-p', 'publish_images:=false'],
             log),
     ]
@@ -253,8 +226,8 @@ def run(args, workdir: str) -> int:
     executor.add_node(monitor)
     try:
         _wait(executor, lambda: monitor.tare.service_is_ready(), 20.0, 'the direction node')
-        procs.append(_spawn(['-m', 'skin_driver.sim', '--scene', scene_path, '--link', port,
-                             '--rate', str(args.rate)], log))
+        procs.append(spawn(['-m', 'skin_driver.sim', '--scene', scene_path, '--link', port,
+                            '--rate', str(args.rate)], log))
         # Tare needs its scans in the direction node, which sees them after the driver does.
         _wait(executor, lambda: monitor.estimates >= 30, 20.0, 'contacts from the direction node')
         monitor.status = 'taring the unloaded skin'
@@ -276,7 +249,7 @@ def run(args, workdir: str) -> int:
         executor.shutdown()
         monitor.destroy_node()
         rclpy.try_shutdown()
-        _stop_all(procs)
+        stop(procs)
         log.close()
     report = {'methods': {name: summarise([r[0] for r in rows], [r[1] for r in rows])
                           for name, rows in monitor.results.items()}}

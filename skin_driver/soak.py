@@ -29,8 +29,6 @@ import json
 import os
 import random
 import shutil
-import signal
-import subprocess
 import sys
 import tempfile
 import time
@@ -41,6 +39,7 @@ import rclpy
 from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.qos import HistoryPolicy, QoSProfile, ReliabilityPolicy
+from skin_driver.processes import spawn, stop
 from skin_driver.sim import SimulatedSkin
 from skin_msgs.msg import SkinFrame, TactileContactArray
 
@@ -134,24 +133,6 @@ class SoakMonitor(Node):
                     self.seen[word] += 1
 
 
-def _spawn(argv, log):
-    return subprocess.Popen([sys.executable] + argv, stdout=log, stderr=subprocess.STDOUT,
-                            start_new_session=True)
-
-
-def _stop(procs) -> None:
-    for proc in procs:
-        if proc.poll() is None:
-            os.killpg(proc.pid, signal.SIGINT)
-    deadline = time.monotonic() + 5.0
-    for proc in procs:
-        try:
-            proc.wait(max(0.1, deadline - time.monotonic()))
-        except subprocess.TimeoutExpired:
-            os.killpg(proc.pid, signal.SIGKILL)
-            proc.wait()
-
-
 class FaultCycle:
     """Inject the faults one after the other and remember what was done."""
 
@@ -210,9 +191,9 @@ def run(args, workdir: str) -> dict:
     log = open(os.path.join(workdir, 'nodes.log'), 'w')
     ros = ['--ros-args', '-r', f'__ns:={ns}', '--log-level', 'error']
     procs = {
-        'direction': _spawn(['-m', 'skin_driver.direction_node'] + ros + [
+        'direction': spawn(['-m', 'skin_driver.direction_node'] + ros + [
             '-p', f'calibration_file:={os.path.join(workdir, "calibration.yaml")}'], log),
-        'driver': _spawn(['-m', 'skin_driver.driver_node'] + ros + ['-p', f'port:={port}'], log),
+        'driver': spawn(['-m', 'skin_driver.driver_node'] + ros + ['-p', f'port:={port}'], log),
     }
     sim = SimulatedSkin(args.scene, rate_hz=args.rate, link_path=port, seed=args.seed, loop=True,
                         truth_capacity=max(10_000, int(args.rate * 20)))
@@ -265,7 +246,7 @@ def run(args, workdir: str) -> dict:
         executor.shutdown()
         monitor.destroy_node()
         rclpy.try_shutdown()
-        _stop(list(procs.values()))
+        stop(procs.values())
         sim.stop()
         log.close()
 
