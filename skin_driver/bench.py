@@ -325,7 +325,8 @@ def main(argv=None) -> int:
     if args.quick:
         args.profile = False
     if args.out is None:
-        args.out = os.path.join(os.path.dirname(DOCS), 'log', 'bench-quick') if args.quick else DOCS
+        quick_out = os.path.join(os.path.dirname(DOCS), 'log', 'bench-quick')
+        args.out = quick_out if args.quick else DOCS
     res = run(args)
     write(res, args.out)
     print(f'wrote {os.path.join(args.out, "benchmarks.md")} in {res["elapsed_s"]:.0f} s')
