@@ -41,7 +41,11 @@ hash_of() { cat "$@" | sha1sum | cut -c1-40; }
 
 # --- the virtual environment ------------------------------------------------------------------
 reqs=(tools/requirements.txt)
-[ -n "$system_ros" ] || reqs+=(tools/requirements-ros.txt)
+if [ -n "$system_ros" ]; then
+  python3 -c 'import numpy, cv2' 2>/dev/null || die "missing: numpy or OpenCV for the system python (rosdep install --from-paths . --ignore-src -y, or apt-get install python3-numpy python3-opencv)"
+else
+  reqs+=(tools/requirements-numeric.txt tools/requirements-ros.txt)
+fi
 kind="$("$py" -V 2>&1) ${system_ros:+system-ros}"
 want="$kind $(hash_of "${reqs[@]}" tools/setup.sh)"
 have=$(cat "$venv/.setup-stamp" 2>/dev/null || true)
