@@ -10,7 +10,6 @@ markers (visualization_msgs/MarkerArray). Services: ~/calibrate (skin_msgs/srv/C
 """
 
 import collections
-import dataclasses
 import math
 import os
 import time
@@ -67,7 +66,7 @@ class DirectionNode(Node):
         super().__init__('skin_direction', **kwargs)
         self._declare_parameters()
         self._calibration, self._calibration_note = self._load_calibration()
-        self._estimator = ContactEstimator(self._estimator_config(), self._calibration)
+        self._estimator = self._build_estimator(EstimatorConfig().pitch_m)
         self._recent = collections.deque(maxlen=self._p('tare.frames'))
         self._session = None
         self._stats = collections.Counter()
@@ -177,9 +176,8 @@ class DirectionNode(Node):
     def _apply_new_parameters(self, params) -> None:
         names = {param.name for param in params}
         if names & set(ESTIMATOR_PARAMETERS):
-            self._estimator = ContactEstimator(
-                self._estimator_config(self._estimator.config.pitch_m), self._calibration,
-                conditioner=self._estimator.conditioner)
+            self._estimator = self._build_estimator(self._estimator.config.pitch_m,
+                                                    self._estimator.conditioner)
             self.get_logger().info(f"estimator rebuilt for {', '.join(sorted(names))}")
         if 'calibration_file' in names:
             self._calibration, self._calibration_note = self._load_calibration()
@@ -187,23 +185,23 @@ class DirectionNode(Node):
         if 'tare.frames' in names:
             self._recent = collections.deque(self._recent, maxlen=self._p('tare.frames'))
 
-    def _estimator_config(self, pitch_m: float = 0.005) -> EstimatorConfig:
-        return EstimatorConfig(
+    def _build_estimator(self, pitch_m: float, conditioner=None) -> ContactEstimator:
+        """Return an estimator for the current parameters; a conditioner carries the tare over."""
+        config = EstimatorConfig(
             method=self._p('method'), pitch_m=pitch_m, threshold_counts=self._p('threshold'),
             min_contact_force_n=self._p('min_force'), min_confidence=self._p('min_confidence'),
             min_shift_m=self._p('min_shift'), compliance_m_per_n=self._p('compliance'),
             force_scale=self._p('force_scale'), sampling_correction=self._p('sampling_correction'),
             fill_factor=self._p('skin.fill_factor'), cover_spread_m=self._p('skin.cover_spread'),
             layer_spread_m=self._p('skin.layer_spread'))
+        return ContactEstimator(config, self._calibration, conditioner=conditioner)
 
     def _follow_pitch(self, pitch_m: float) -> None:
         """Take the taxel pitch from the frames, keeping the tare and the calibration."""
         # SkinFrame carries the pitch as float32: 0.005 arrives as 0.004999999888. A rebuild
         # recomputes the sampling-correction table (~0.5 s), so only a real change counts.
         if not math.isclose(pitch_m, self._estimator.config.pitch_m, rel_tol=1e-5):
-            self._estimator = ContactEstimator(
-                dataclasses.replace(self._estimator.config, pitch_m=pitch_m),
-                self._calibration, conditioner=self._estimator.conditioner)
+            self._estimator = self._build_estimator(pitch_m, self._estimator.conditioner)
 
     def _calibration_path(self) -> str:
         return os.path.expanduser(self._p('calibration_file'))

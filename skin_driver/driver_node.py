@@ -91,21 +91,16 @@ class SkinDriverNode(Node):
             if name in new and not str(new[name]).strip():
                 return SetParametersResult(successful=False,
                                            reason=f'parameter {name!r} must not be empty')
-        low = new.get('reconnect_min', self._p('reconnect_min'))
-        high = new.get('reconnect_max', self._p('reconnect_max'))
-        if isinstance(low, (int, float)) and isinstance(high, (int, float)) and low > high:
-            return SetParametersResult(
-                successful=False,
-                reason=f"'reconnect_min' ({low}) must not exceed 'reconnect_max' ({high})")
-        return SetParametersResult(successful=True)
+        problem = _backoff_problem(new.get('reconnect_min', self._p('reconnect_min')),
+                                   new.get('reconnect_max', self._p('reconnect_max')))
+        return SetParametersResult(successful=not problem, reason=problem)
 
     # ---- lifecycle --------------------------------------------------------------------------
     def on_configure(self, state: State) -> TransitionCallbackReturn:
         """Check the parameters and create publishers."""
-        if self._p('reconnect_min') > self._p('reconnect_max'):
-            self.get_logger().error(
-                f"parameter 'reconnect_min' ({self._p('reconnect_min')}) must not exceed "
-                f"'reconnect_max' ({self._p('reconnect_max')})")
+        problem = _backoff_problem(self._p('reconnect_min'), self._p('reconnect_max'))
+        if problem:
+            self.get_logger().error(f'parameter {problem}')
             return TransitionCallbackReturn.FAILURE
         self._frame_id = self._p('frame_id')
         self._pitch = float(self._p('pitch'))
@@ -236,6 +231,13 @@ class SkinDriverNode(Node):
         self._diag.publish([diagnostics.make_status(
             f'{self.get_fully_qualified_name()}: skin link', self._p('port'), level, message,
             values)])
+
+
+def _backoff_problem(low, high) -> str:
+    """Return why a reconnect back-off range is unusable, or '' if it is fine."""
+    if isinstance(low, (int, float)) and isinstance(high, (int, float)) and low > high:
+        return f"'reconnect_min' ({low}) must not exceed 'reconnect_max' ({high})"
+    return ''
 
 
 def main(args=None):

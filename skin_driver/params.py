@@ -58,12 +58,3 @@ def check(name: str, value: Any, description: str, *,
                              f'{", ".join(choices)} ({description})')
     if non_empty and not str(value).strip():
         raise ParameterError(f'parameter {name!r} is empty; it needs {description}')
-
-
-def range_problem(param, descriptor: ParameterDescriptor) -> Optional[str]:
-    """Return why a new value breaks the descriptor's constraints, or None if it fits."""
-    value = param.value
-    for rng in list(descriptor.integer_range) + list(descriptor.floating_point_range):
-        if not rng.from_value <= value <= rng.to_value:
-            return f'{param.name}={value} is outside [{rng.from_value}, {rng.to_value}]'
-    return None
