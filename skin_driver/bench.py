@@ -27,7 +27,7 @@ import cv2
 import numpy as np
 
 from . import bench_core, bench_report
-from .core.direction import DEFAULT_METHOD
+from .core.estimation.shift import DEFAULT_METHOD
 from .evaluate import _json_safe
 
 DOCS = os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), 'docs')

@@ -12,10 +12,11 @@ import time
 
 import numpy as np
 
-from .core.dataset import make_random_experiment, make_seed_experiment
-from .core.direction import Method, method_names, NO_SHIFT, ShiftEstimate
-from .core.estimator import ContactEstimator, EstimatorConfig
-from .core.physics import FsrModel, Press, render, SkinModel
+from .core.estimation.fsr import FsrModel
+from .core.estimation.pipeline import ContactEstimator, EstimatorConfig
+from .core.estimation.shift import Method, method_names, NO_SHIFT, ShiftEstimate
+from .core.sim.experiments import make_random_experiment, make_seed_experiment
+from .core.sim.physics import Press, render, SkinModel
 from .evaluate import evaluate, format_table, PAPER_TABLE
 
 PATCH_M = 0.08

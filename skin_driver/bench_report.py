@@ -150,7 +150,7 @@ def markdown(res, images) -> str:
            '(conditioning, segmentation, shift estimation: contacts included); the methods are '
            'interleaved in a fresh random order on every frame. Repetitions: '
            f'{how["repetitions"]}.',
-           '- Simulated skin: `skin_driver.core.physics` (default model). Bigger grids cover '
+           '- Simulated skin: `skin_driver.core.sim.physics` (default model). Bigger grids cover '
            "the same 80 mm patch as the seed's 16 x 16 at 5 mm, with a smaller pitch (the "
            "seed's future work: higher resolution); FSR force ranges scale with the taxel area "
            '(same material, same pressure -> same counts).', '']

@@ -24,9 +24,9 @@ from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.qos import qos_profile_sensor_data
 from skin_driver import conversions
-from skin_driver.core.estimator import ContactEstimator, EstimatorConfig
-from skin_driver.core.physics import Press, render, SkinModel
+from skin_driver.core.estimation.pipeline import ContactEstimator, EstimatorConfig
 from skin_driver.core.protocol import encode_frame, FrameDecoder
+from skin_driver.core.sim.physics import Press, render, SkinModel
 from skin_driver.processes import spawn, stop
 from skin_msgs.msg import SkinFrame, TactileContact, TactileContactArray
 from std_srvs.srv import Trigger

@@ -13,7 +13,7 @@ from builtin_interfaces.msg import Time
 from geometry_msgs.msg import Point, Vector3, Wrench, WrenchStamped
 import numpy as np
 from sensor_msgs.msg import Image
-from skin_driver.core.heatmap import colour_map
+from skin_driver.core.estimation.heatmap import colour_map
 from skin_msgs.msg import SkinFrame, TactileContact, TactileContactArray
 from std_msgs.msg import ColorRGBA, Header
 from visualization_msgs.msg import Marker, MarkerArray
@@ -77,7 +77,7 @@ def _finite(value: float, name: str) -> float:
 
 
 def contact_to_msg(header: Header, contact) -> TactileContact:
-    """Convert a core Contact (see skin_driver.core.estimator) into a TactileContact message."""
+    """Convert a core Contact (:mod:`skin_driver.core.estimation.pipeline`) into a message."""
     fx, fy, fz = (_finite(v, 'force') for v in contact.force_xyz_n)
     sx, sy = (_finite(v, 'shift') for v in contact.shift_m)
     direction_valid = bool(contact.direction_valid)

@@ -22,11 +22,11 @@ from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.qos import qos_profile_sensor_data
 from skin_driver import conversions
-from skin_driver.core.calibration import Calibration
-from skin_driver.core.direction import DEFAULT_METHOD
-from skin_driver.core.estimator import ContactEstimator, EstimatorConfig
-from skin_driver.core.heatmap import text_map
-from skin_driver.core.scene import scene_from_dict
+from skin_driver.core.estimation.calibration import Calibration
+from skin_driver.core.estimation.heatmap import text_map
+from skin_driver.core.estimation.pipeline import ContactEstimator, EstimatorConfig
+from skin_driver.core.estimation.shift import DEFAULT_METHOD
+from skin_driver.core.sim.scene import scene_from_dict
 from skin_driver.evaluate import format_table, summarise
 from skin_driver.processes import spawn, stop
 from skin_msgs.msg import SkinFrame, TactileContactArray

@@ -26,11 +26,11 @@ from rclpy.qos import qos_profile_sensor_data
 from rclpy.task import Future
 from sensor_msgs.msg import Image
 from skin_driver import conversions, diagnostics
-from skin_driver.core import calibration as calib
-from skin_driver.core.direction import DEFAULT_METHOD, method_names
-from skin_driver.core.estimator import ContactEstimator, EstimatorConfig
-from skin_driver.core.heatmap import colour_map
-from skin_driver.core.presses import PressSegmenter
+from skin_driver.core.estimation import calibration as calib
+from skin_driver.core.estimation.heatmap import colour_map
+from skin_driver.core.estimation.pipeline import ContactEstimator, EstimatorConfig
+from skin_driver.core.estimation.presses import PressSegmenter
+from skin_driver.core.estimation.shift import DEFAULT_METHOD, method_names
 from skin_driver.params import check, declare, ParameterError
 from skin_msgs.msg import SkinFrame, TactileContact, TactileContactArray
 from skin_msgs.srv import Calibrate
@@ -41,8 +41,7 @@ MAX_CALIBRATION_PRESSES = 1000
 MAX_CALIBRATION_S = 3600.0
 # Parameters that shape the estimator: changing one at run time rebuilds it.
 ESTIMATOR_PARAMETERS = ('method', 'threshold', 'min_force', 'min_confidence', 'min_shift',
-                        'compliance', 'force_scale', 'sampling_correction', 'skin.fill_factor',
-                        'skin.cover_spread', 'skin.layer_spread')
+                        'compliance', 'force_scale', 'skin.fill_factor')
 DEFAULT_CALIBRATION_FILE = os.path.join(
     os.environ.get('ROS_HOME', os.path.join(os.path.expanduser('~'), '.ros')),
     'skin_driver', 'calibration.yaml')
@@ -122,17 +121,8 @@ class DirectionNode(Node):
         declare(self, 'force_scale', core.force_scale,
                 'Factor on the normal force: a force calibration against a reference sensor.',
                 low=0.01, high=100.0)
-        declare(self, 'sampling_correction', core.sampling_correction,
-                'Remove the bias of the layer shift that comes from sampling the top layer on '
-                'taxels (needs the skin.* parameters to describe the skin).')
         declare(self, 'skin.fill_factor', core.fill_factor,
                 'Sensitive fraction of the pitch along each axis of a taxel.', low=0.1, high=1.0)
-        declare(self, 'skin.cover_spread', core.cover_spread_m,
-                'Spread (metres, standard deviation) of pressure through the top cover.',
-                low=0.0, high=0.02)
-        declare(self, 'skin.layer_spread', core.layer_spread_m,
-                'Extra spread (metres) of pressure through the elastic layer, seen by the bottom.',
-                low=0.0, high=0.05)
         declare(self, 'calibration_file', DEFAULT_CALIBRATION_FILE,
                 'YAML file holding (x_p, y_p); loaded at start-up, written by ~/calibrate.',
                 non_empty=True)
@@ -191,15 +181,13 @@ class DirectionNode(Node):
             method=self._p('method'), pitch_m=pitch_m, threshold_counts=self._p('threshold'),
             min_contact_force_n=self._p('min_force'), min_confidence=self._p('min_confidence'),
             min_shift_m=self._p('min_shift'), compliance_m_per_n=self._p('compliance'),
-            force_scale=self._p('force_scale'), sampling_correction=self._p('sampling_correction'),
-            fill_factor=self._p('skin.fill_factor'), cover_spread_m=self._p('skin.cover_spread'),
-            layer_spread_m=self._p('skin.layer_spread'))
+            force_scale=self._p('force_scale'), fill_factor=self._p('skin.fill_factor'))
         return ContactEstimator(config, self._calibration, conditioner=conditioner)
 
     def _follow_pitch(self, pitch_m: float) -> None:
         """Take the taxel pitch from the frames, keeping the tare and the calibration."""
-        # SkinFrame carries the pitch as float32: 0.005 arrives as 0.004999999888. A rebuild
-        # recomputes the sampling-correction table (~0.5 s), so only a real change counts.
+        # SkinFrame carries the pitch as float32: 0.005 arrives as 0.004999999888; only a real
+        # change rebuilds the estimator.
         if not math.isclose(pitch_m, self._estimator.config.pitch_m, rel_tol=1e-5):
             self._estimator = self._build_estimator(pitch_m, self._estimator.conditioner)
 

@@ -20,11 +20,11 @@ import time
 
 import numpy as np
 
-from .core.calibration import calibrate_from_shifts
-from .core.dataset import Dataset, load_dataset, make_random_experiment, \
-    make_seed_experiment, save_dataset
-from .core.direction import DEFAULT_METHOD, method_names
-from .core.estimator import ContactEstimator, EstimatorConfig
+from .core.estimation.calibration import calibrate_from_shifts
+from .core.estimation.dataset import Dataset, load_dataset, save_dataset
+from .core.estimation.pipeline import ContactEstimator, EstimatorConfig
+from .core.estimation.shift import DEFAULT_METHOD, method_names
+from .core.sim.experiments import make_random_experiment, make_seed_experiment
 
 __all__ = ['PAPER_TABLE', 'summarise', 'evaluate_method', 'evaluate', 'format_table', 'main']
 

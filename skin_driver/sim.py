@@ -35,10 +35,10 @@ import tty
 
 import numpy as np
 
-from skin_driver.core import physics
-from skin_driver.core.dataset import Dataset, save_dataset
+from skin_driver.core.estimation.dataset import Dataset, save_dataset
 from skin_driver.core.protocol import encode_frame, frame_size, MAX_SEQ
-from skin_driver.core.scene import load_scene, Scene
+from skin_driver.core.sim import physics
+from skin_driver.core.sim.scene import load_scene, Scene
 
 # Below this period frames are written in batches: one wake-up per BATCH_S instead of per frame.
 BATCH_S = 0.002

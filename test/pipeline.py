@@ -8,7 +8,7 @@ import rclpy
 from rclpy.parameter import Parameter
 from rclpy.qos import qos_profile_sensor_data
 from rosutil import ros_context, spin_until
-from skin_driver.core.scene import scene_from_dict
+from skin_driver.core.sim.scene import scene_from_dict
 from skin_driver.direction_node import DirectionNode
 from skin_driver.driver_node import SkinDriverNode
 from skin_driver.sim import SimulatedSkin

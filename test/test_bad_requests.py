@@ -18,7 +18,7 @@ from pipeline import call, overrides, pipeline, scene
 import pytest
 from rclpy.parameter import Parameter
 from rosutil import ros_context
-from skin_driver.core import calibration as calib
+from skin_driver.core.estimation import calibration as calib
 from skin_driver.direction_node import DirectionNode
 from skin_driver.driver_node import SkinDriverNode
 from skin_driver.params import ParameterError
@@ -202,7 +202,7 @@ def test_failed_write_of_a_new_calibration_keeps_the_previous_one(tmp_path):
 
 WRITER = textwrap.dedent("""
     import sys
-    from skin_driver.core.calibration import Calibration
+    from skin_driver.core.estimation.calibration import Calibration
     path = sys.argv[1]
     i = 0
     while True:

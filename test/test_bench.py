@@ -7,7 +7,7 @@ import os
 import numpy as np
 import pytest
 from skin_driver import bench, bench_core, bench_ros
-from skin_driver.core.physics import SkinModel
+from skin_driver.core.sim.physics import SkinModel
 
 # matplotlib's tick labels go through a deprecated pyparsing API; not this project's concern.
 pytestmark = pytest.mark.filterwarnings('ignore::DeprecationWarning')

@@ -4,8 +4,8 @@ import os
 
 import numpy as np
 import pytest
-from skin_driver.core.calibration import calibrate_from_shifts, Calibration
-from skin_driver.core.calibration import compliance_from_presses
+from skin_driver.core.estimation.calibration import calibrate_from_shifts, Calibration
+from skin_driver.core.estimation.calibration import compliance_from_presses
 
 
 def test_mean_and_spread_of_normal_presses():

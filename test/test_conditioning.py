@@ -2,8 +2,9 @@
 
 import numpy as np
 import pytest
-from skin_driver.core.conditioning import Conditioner, ConditioningConfig
-from skin_driver.core.physics import FsrModel, Press, render, SkinModel
+from skin_driver.core.estimation.conditioning import Conditioner, ConditioningConfig
+from skin_driver.core.estimation.fsr import FsrModel
+from skin_driver.core.sim.physics import Press, render, SkinModel
 
 
 def _tared(model=None, rng=None):

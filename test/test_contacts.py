@@ -3,8 +3,8 @@
 import numpy as np
 import pytest
 
-from skin_driver.core.contacts import (contact_windows, find_contacts, segment_stacked,
-                                       window_stack)
+from skin_driver.core.estimation.contacts import (contact_windows, find_contacts,
+                                                  segment_stacked, window_stack)
 
 
 def _blob(shape, r, c, value=1.0):

@@ -5,7 +5,7 @@ import math
 import numpy as np
 import pytest
 from skin_driver import conversions
-from skin_driver.core.estimator import Contact
+from skin_driver.core.estimation.pipeline import Contact
 from std_msgs.msg import Header
 from visualization_msgs.msg import Marker
 

@@ -1,4 +1,9 @@
-"""The core must run where no ROS is installed: it may not import rclpy or any message package."""
+"""
+The core must run where no ROS is installed, and its wings keep one import rule.
+
+No core module imports rclpy or a message package; ``estimation`` never imports ``sim``;
+``protocol`` imports neither.
+"""
 
 import ast
 import pathlib
@@ -12,39 +17,91 @@ CORE = pathlib.Path(__file__).resolve().parents[1] / 'skin_driver' / 'core'
 ROS_FREE_TOOLS = ['skin_driver.evaluate', 'skin_driver.sim']
 FORBIDDEN = ('rclpy', 'rosidl', 'builtin_interfaces', 'std_msgs', 'geometry_msgs', 'sensor_msgs',
              'skin_msgs', 'visualization_msgs', 'diagnostic_msgs', 'std_srvs', 'launch')
+# What each wing may not import (besides ROS).
+WING_RULES = {'protocol': ('estimation', 'sim'), 'estimation': ('sim', 'protocol'), 'sim': ()}
 
 
 def _core_modules():
-    return sorted(CORE.glob('*.py'))
+    return sorted(CORE.rglob('*.py'))
+
+
+def _module_name(path):
+    parts = path.relative_to(CORE.parents[1]).with_suffix('').parts
+    return '.'.join(parts[:-1] if parts[-1] == '__init__' else parts)
 
 
 def _imported_names(path):
-    tree = ast.parse(path.read_text(), filename=str(path))
-    for node in ast.walk(tree):
+    """Yield the absolute names of the modules ``path`` imports (relative ones resolved)."""
+    package = _module_name(path).split('.')
+    if path.name != '__init__.py':
+        package = package[:-1]
+    yield from _names_in(path.read_text(), package)
+
+
+def _names_in(source, package):
+    for node in ast.walk(ast.parse(source)):
         if isinstance(node, ast.Import):
             yield from (alias.name for alias in node.names)
-        elif isinstance(node, ast.ImportFrom) and node.module and node.level == 0:
-            yield node.module
+        elif isinstance(node, ast.ImportFrom):
+            base = package[:len(package) - node.level + 1] if node.level else []
+            module = '.'.join(base + ([node.module] if node.module else []))
+            if node.module:
+                yield module
+            else:
+                yield from (f'{module}.{alias.name}' for alias in node.names)
 
 
-def test_core_has_modules():
-    assert len(_core_modules()) >= 2
+def _wing(name):
+    parts = name.split('.')
+    return parts[2] if parts[:2] == ['skin_driver', 'core'] and len(parts) > 2 else None
 
 
-@pytest.mark.parametrize('path', _core_modules(), ids=lambda p: p.name)
+def test_core_has_three_wings():
+    assert {_wing(_module_name(p)) for p in _core_modules()} - {None} == set(WING_RULES)
+
+
+@pytest.mark.parametrize('path', _core_modules(), ids=lambda p: str(p.relative_to(CORE)))
 def test_core_module_names_no_ros_import(path):
     bad = [name for name in _imported_names(path) if name.split('.')[0] in FORBIDDEN]
     assert bad == [], f'{path.name} imports {bad}'
 
 
+@pytest.mark.parametrize('path', _core_modules(), ids=lambda p: str(p.relative_to(CORE)))
+def test_wings_keep_the_import_rule(path):
+    own = _wing(_module_name(path))
+    if own is None:
+        return
+    bad = [name for name in _imported_names(path) if _wing(name) in WING_RULES[own]]
+    assert bad == [], f'{own} module {path.name} imports {bad}'
+
+
+def test_the_rule_checker_resolves_relative_imports():
+    # A checker that missed relative imports could never fail on the core's own style.
+    source = 'from ..sim import physics\nfrom .fsr import FsrModel\nfrom .. import sim\n'
+    names = list(_names_in(source, ['skin_driver', 'core', 'estimation']))
+    assert [_wing(n) for n in names] == ['sim', 'estimation', 'sim']
+
+
 def test_importing_the_core_loads_no_ros_module():
-    modules = ['skin_driver.core.' + p.stem for p in _core_modules() if p.stem != '__init__']
+    modules = [_module_name(p) for p in _core_modules()]
     code = (
         'import importlib, sys\n'
         f'for m in {modules + ROS_FREE_TOOLS!r}:\n'
         '    importlib.import_module(m)\n'
         f'bad = sorted(m for m in sys.modules if m.split(".")[0] in {FORBIDDEN!r})\n'
         'print(",".join(bad))\n'
+    )
+    out = subprocess.run([sys.executable, '-c', code], capture_output=True, text=True, check=True)
+    assert out.stdout.strip() == ''
+
+
+def test_importing_estimation_loads_no_sim_module():
+    modules = [_module_name(p) for p in _core_modules() if _wing(_module_name(p)) == 'estimation']
+    code = (
+        'import importlib, sys\n'
+        f'for m in {modules!r}:\n'
+        '    importlib.import_module(m)\n'
+        'print(",".join(sorted(m for m in sys.modules if m.startswith("skin_driver.core.sim"))))\n'
     )
     out = subprocess.run([sys.executable, '-c', code], capture_output=True, text=True, check=True)
     assert out.stdout.strip() == ''

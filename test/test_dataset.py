@@ -5,9 +5,9 @@ import math
 import numpy as np
 import pytest
 
-from skin_driver.core.dataset import Dataset, load_dataset, make_random_experiment, \
-    make_seed_experiment, save_dataset
-from skin_driver.core.physics import SkinModel
+from skin_driver.core.estimation.dataset import Dataset, load_dataset, save_dataset
+from skin_driver.core.sim.experiments import make_random_experiment, make_seed_experiment
+from skin_driver.core.sim.physics import SkinModel
 
 
 def small(n=3):

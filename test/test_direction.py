@@ -5,8 +5,8 @@ import math
 import numpy as np
 import pytest
 
-from skin_driver.core import direction
-from skin_driver.core.physics import Press, render_force, SkinModel
+from skin_driver.core.estimation import shift as direction
+from skin_driver.core.sim.physics import Press, render_force, SkinModel
 
 REQUIRED = ('seed', 'hann', 'upsampled', 'centroid', 'poc', 'poc_fft', 'poc_weighted',
             'poc_peak', 'blpoc')

@@ -6,19 +6,19 @@ import math
 import numpy as np
 import pytest
 
-from skin_driver.core.calibration import calibrate_from_shifts, Calibration
-from skin_driver.core.estimator import Contact, ContactEstimator, EstimatorConfig
-from skin_driver.core.physics import Press, render, SkinModel
+from skin_driver.core.estimation.calibration import calibrate_from_shifts, Calibration
+from skin_driver.core.estimation.pipeline import Contact, ContactEstimator, EstimatorConfig
+from skin_driver.core.sim.physics import Press, render, SkinModel
 
 
 SPOT = (0.037, 0.038)
 
 
-def make(model=None, method='poc', calibration=None, seed=0, calibrate=True, correct=True):
+def make(model=None, method='poc', calibration=None, seed=0, calibrate=True):
     """Return a tared estimator calibrated with normal presses at SPOT, as the seed does."""
     model = model or SkinModel()
     rng = np.random.default_rng(seed)
-    config = EstimatorConfig(method=method, pitch_m=model.pitch_m, sampling_correction=correct)
+    config = EstimatorConfig(method=method, pitch_m=model.pitch_m)
     est = ContactEstimator(config, calibration)
     frames = [render(model, [], rng) for _ in range(10)]
     est.tare(np.stack([t for t, _ in frames]), np.stack([b for _, b in frames]))
@@ -65,9 +65,7 @@ def test_calibration_offset_is_removed():
 
 @pytest.mark.parametrize('method', ['seed', 'hann', 'upsampled', 'centroid', 'poc'])
 def test_every_method_runs_through_the_pipeline(method):
-    # upsampled, a 2.5 ms reference, would spend ~10 s on its sampling-correction table here;
-    # the correction itself is tested with poc, and the benchmark runs upsampled with it.
-    est, model, rng = make(method=method, correct=method != 'upsampled')
+    est, model, rng = make(method=method)
     press = Press(0.037, 0.038, 10.0, math.radians(45), math.radians(180), 0.0025)
     c = est.process(*render(model, [press], rng))[0]
     assert c.direction_valid
@@ -81,32 +79,6 @@ def test_config_validation():
         EstimatorConfig(pitch_m=0.0)
     with pytest.raises(ValueError, match='min_confidence'):
         EstimatorConfig(min_confidence=2.0)
-
-
-def _random_presses(count, seed, force=(5.0, 15.0), alpha=(15.0, 60.0)):
-    rng = np.random.default_rng(seed)
-    for _ in range(count):
-        yield Press(rng.uniform(0.02, 0.055), rng.uniform(0.02, 0.055), rng.uniform(*force),
-                    math.radians(rng.uniform(*alpha)), rng.uniform(-math.pi, math.pi),
-                    rng.uniform(0.0015, 0.0035))
-
-
-def test_sampling_correction_removes_the_location_dependent_bias():
-    # Small indenters at random spots and tilts: the raw shift carries a bias that depends on
-    # where the press lands on the taxel grid (about 4-5 deg of azimuth); the correction
-    # derived from the skin model brings the mean error under 2 deg.
-    model = SkinModel(noise_counts=0.0)
-    errors = {True: [], False: []}
-    ests = {on: ContactEstimator(EstimatorConfig(sampling_correction=on)) for on in errors}
-    for press in _random_presses(40, seed=3):
-        maps = render(model, [press], np.random.default_rng(0))
-        for on, est in ests.items():
-            c = est.process(*maps)[0]
-            assert c.direction_valid
-            err = (math.degrees(c.azimuth_rad - press.beta_rad) + 180) % 360 - 180
-            errors[on].append(abs(err))
-    assert np.mean(errors[True]) < 2.0
-    assert np.mean(errors[True]) < 0.5 * np.mean(errors[False])
 
 
 def test_normal_force_and_alpha_are_accurate():
@@ -124,10 +96,6 @@ def test_normal_force_and_alpha_are_accurate():
 def test_new_config_fields_are_validated():
     with pytest.raises(ValueError, match='fill_factor'):
         EstimatorConfig(fill_factor=0.0)
-    with pytest.raises(ValueError, match='sampling_correction'):
-        EstimatorConfig(sampling_correction='yes')
-    with pytest.raises(ValueError, match='layer_spread_m'):
-        EstimatorConfig(layer_spread_m=-1.0)
 
 
 def test_method_without_stacked_entry_gives_the_same_contacts():

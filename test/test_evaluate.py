@@ -5,7 +5,8 @@ import json
 import numpy as np
 
 from skin_driver import evaluate
-from skin_driver.core.dataset import make_random_experiment, make_seed_experiment, save_dataset
+from skin_driver.core.estimation.dataset import save_dataset
+from skin_driver.core.sim.experiments import make_random_experiment, make_seed_experiment
 
 
 def test_table_and_json(tmp_path, capsys):

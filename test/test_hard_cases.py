@@ -5,9 +5,9 @@ import math
 import numpy as np
 import pytest
 
-from skin_driver.core.calibration import calibrate_from_shifts
-from skin_driver.core.estimator import ContactEstimator, EstimatorConfig
-from skin_driver.core.physics import Press, render, SkinModel
+from skin_driver.core.estimation.calibration import calibrate_from_shifts
+from skin_driver.core.estimation.pipeline import ContactEstimator, EstimatorConfig
+from skin_driver.core.sim.physics import Press, render, SkinModel
 
 
 def estimator(model, method='poc', spot=None, seed=0):

@@ -9,7 +9,7 @@ from pipeline import call, overrides, pipeline, scene
 import pytest
 from rclpy.lifecycle import TransitionCallbackReturn
 from rosutil import ros_context, spin_until
-from skin_driver.core import calibration as calib
+from skin_driver.core.estimation import calibration as calib
 from skin_driver.direction_node import DirectionNode
 from skin_driver.driver_node import SkinDriverNode
 from skin_driver.params import ParameterError

@@ -5,7 +5,8 @@ import math
 import numpy as np
 import pytest
 
-from skin_driver.core.physics import FsrModel, layer_shift_m, Press, render, render_force, \
+from skin_driver.core.estimation.fsr import FsrModel
+from skin_driver.core.sim.physics import layer_shift_m, Press, render, render_force, \
     SkinModel
 
 

@@ -3,9 +3,9 @@
 import math
 
 import pytest
-from skin_driver.core.physics import Press, SkinModel
-from skin_driver.core.scene import bundled_scene_names, find_scene, load_scene
-from skin_driver.core.scene import scene_from_dict, ScenePress
+from skin_driver.core.sim.physics import Press, SkinModel
+from skin_driver.core.sim.scene import bundled_scene_names, find_scene, load_scene
+from skin_driver.core.sim.scene import scene_from_dict, ScenePress
 import yaml
 
 

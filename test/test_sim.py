@@ -11,9 +11,9 @@ import numpy as np
 import pytest
 import serial
 
-from skin_driver.core.dataset import load_dataset
+from skin_driver.core.estimation.dataset import load_dataset
 from skin_driver.core.protocol import encode_frame, FrameDecoder, header_crc, SYNC
-from skin_driver.core.scene import scene_from_dict
+from skin_driver.core.sim.scene import scene_from_dict
 from skin_driver.sim import main, render_dataset, SimulatedSkin
 
 RATE_HZ = 200.0

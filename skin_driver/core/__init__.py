@@ -1,6 +1,12 @@
 """
-ROS-free core: protocol, conditioning, estimation, calibration and simulation physics.
+ROS-free core in three wings, with one import rule.
 
-Nothing under this package may import rclpy or any ROS message package;
-test_core_is_ros_free checks it.
+* :mod:`protocol` -- the wire format between the skin's board and the driver.
+* :mod:`estimation` -- conditioning, contacts, layer shift, force, calibration maths and sessions,
+  and the dataset format they are scored on.
+* :mod:`sim` -- the simulated skin: physics, the family of skins, scenes, dataset rendering.
+
+``sim`` may import ``estimation``; ``estimation`` never imports ``sim`` (it must work on a skin
+whose physics nobody modelled) and ``protocol`` imports neither. Nothing here imports rclpy or a
+ROS message package. test_core_is_ros_free checks both rules.
 """

@@ -14,7 +14,7 @@ A scene file is a mapping::
       - {time_s: 0.5, force_n: 10, alpha_deg: 45, beta_deg: 90, duration_s: 1.0, ramp_s: 0.2}
     generator: {kind: random, seed: 1, count: 20, ...}     # optional, adds generated presses
 
-``model`` keys are the fields of :class:`skin_driver.core.physics.SkinModel`.  Angles are in
+``model`` keys are the fields of :class:`skin_driver.core.sim.physics.SkinModel`.  Angles are in
 degrees in the file only; everything a scene returns is SI with angles in radians.  A press's force
 ramps up linearly over ``ramp_s``, holds, and ramps down over the last ``ramp_s`` of its
 ``duration_s``.
@@ -31,8 +31,10 @@ from pathlib import Path
 from typing import Any, Mapping
 
 import numpy as np
-from skin_driver.core.physics import FsrModel, Press, SkinModel
 import yaml
+
+from .physics import Press, SkinModel
+from ..estimation.fsr import FsrModel
 
 PRESS_FIELDS = ('time_s', 'x_m', 'y_m', 'force_n', 'alpha_deg', 'beta_deg', 'radius_m',
                 'duration_s')

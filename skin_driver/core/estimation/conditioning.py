@@ -14,7 +14,7 @@ from dataclasses import dataclass, field
 import cv2
 import numpy as np
 
-from .physics import FsrModel
+from .fsr import FsrModel
 from .validate import check_map, check_number, check_pair, check_stack
 
 __all__ = ['ConditioningConfig', 'Conditioner']

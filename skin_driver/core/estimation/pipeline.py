@@ -3,8 +3,7 @@ The contact estimation pipeline used by the ROS nodes, the evaluator and the ben
 
 raw counts (top, bottom) -> conditioning (tare, threshold, FSR model -> force per taxel)
 -> contacts (segmentation, sub-taxel centroid, force, area, window)
--> shift between the layers in each window (named estimator from :mod:`direction`)
--> taxel-sampling bias removed (:mod:`sampling`, all methods but the paper's ``seed``)
+-> shift between the layers in each window (named estimator from :mod:`shift`)
 -> calibrated shift ``s = raw - (x_p, y_p)`` -> azimuth ``atan2(s_y, s_x)``
 -> tangential force ``|s| / compliance`` -> polar angle and 3-D force.
 
@@ -30,9 +29,8 @@ import numpy as np
 from .calibration import Calibration
 from .conditioning import Conditioner, ConditioningConfig
 from .contacts import segment_stacked, window_stack
-from .direction import DEFAULT_METHOD, get_method, NO_SHIFT, ShiftEstimate
-from .physics import FsrModel
-from .sampling import sampling_correction
+from .fsr import FsrModel
+from .shift import DEFAULT_METHOD, get_method, NO_SHIFT
 from .validate import check_number, check_pair
 
 __all__ = ['EstimatorConfig', 'Contact', 'ContactEstimator']
@@ -50,10 +48,6 @@ class EstimatorConfig:
     ``force_scale``: extra factor on the normal force (a user's force calibration; 1 = none).
     ``fill_factor``: sensitive fraction of the pitch on each axis; normal force = summed taxel
     forces / fill_factor**2.
-    ``sampling_correction``: remove the taxel-sampling bias of the shift (:mod:`sampling`) with a
-    table built from ``pitch_m``, ``fill_factor``, ``cover_spread_m`` (spread of the pressure by
-    the cover, on the top layer) and ``layer_spread_m`` (extra spread by the elastic layer, on
-    the bottom layer), the FSR model and the threshold. Never applied to ``seed``.
     """
 
     method: str = DEFAULT_METHOD
@@ -70,9 +64,6 @@ class EstimatorConfig:
     force_scale: float = 1.0
     fsr: FsrModel = field(default_factory=FsrModel)
     fill_factor: float = 0.9
-    sampling_correction: bool = True
-    cover_spread_m: float = 0.001
-    layer_spread_m: float = 0.002
 
     def __post_init__(self):
         """Validate every field and the method name."""
@@ -87,11 +78,6 @@ class EstimatorConfig:
         check_number(self.max_shift_m, 'max_shift_m', positive=True)
         check_number(self.force_scale, 'force_scale', positive=True)
         check_number(self.fill_factor, 'fill_factor', low=0.05, high=1.0)
-        check_number(self.cover_spread_m, 'cover_spread_m', non_negative=True)
-        check_number(self.layer_spread_m, 'layer_spread_m', non_negative=True)
-        if not isinstance(self.sampling_correction, bool):
-            raise ValueError(f'sampling_correction must be True or False, '
-                             f'got {self.sampling_correction!r}')
         for name in ('window_margin', 'max_contacts'):
             v = getattr(self, name)
             if isinstance(v, bool) or int(v) != v or v < 0:
@@ -136,13 +122,6 @@ class ContactEstimator:
             fsr=self.config.fsr, threshold_counts=self.config.threshold_counts,
             noise_sigmas=self.config.noise_sigmas))
         self._method = get_method(self.config.method)
-        cfg = self.config
-        self._correction = None
-        if cfg.sampling_correction and not self._method.whole_map:
-            self._correction = sampling_correction(
-                self._method.function, float(cfg.pitch_m), float(cfg.fill_factor),
-                float(cfg.cover_spread_m), float(cfg.layer_spread_m),
-                float(cfg.threshold_counts), cfg.fsr)
 
     @property
     def compliance_m_per_n(self) -> float:
@@ -176,20 +155,8 @@ class ContactEstimator:
                     est = method.function(window[0], window[1])
             if not (math.isfinite(est.dx) and math.isfinite(est.dy)):
                 est = NO_SHIFT
-            elif self._correction is not None and est.confidence > 0:
-                est = self._unbias(seg, est)
             out.append((seg, est))
         return out
-
-    def _unbias(self, seg, est):
-        """Remove the taxel-sampling bias from a window estimate (see :mod:`sampling`)."""
-        if seg.at_border or seg.bottom_force_n <= 0:
-            # The bottom imprint is cut by the edge: its centroid and spread would mislead.
-            return est
-        a1, a2 = self._correction.amplitudes(seg.bottom_spread, self._normal_force(seg))
-        solve = self._correction.solve
-        return ShiftEstimate(solve(est.dx, seg.bottom_col, a1, a2),
-                             solve(est.dy, seg.bottom_row, a1, a2), est.confidence)
 
     def _normal_force(self, seg) -> float:
         """Return the contact's normal force: sensed sum / fill_factor**2 (module docstring)."""
