@@ -86,6 +86,8 @@ def contact_to_msg(header: Header, contact) -> TactileContact:
         location=Point(x=_finite(contact.x_m, 'x'), y=_finite(contact.y_m, 'y'), z=0.0),
         magnitude=_finite(contact.force_n, 'magnitude'),
         azimuth=_finite(contact.azimuth_rad, 'azimuth') if direction_valid else 0.0,
+        azimuth_sigma=_finite(contact.azimuth_sigma_rad, 'azimuth_sigma') if direction_valid
+        else math.pi,
         polar=_finite(contact.alpha_rad, 'polar') if direction_valid else 0.0,
         shift=Vector3(x=sx, y=sy, z=0.0),
         wrench=Wrench(force=Vector3(x=fx, y=fy, z=fz)),

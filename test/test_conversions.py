@@ -14,7 +14,7 @@ HEADER = Header(frame_id='skin_link')
 
 def _contact(**changes):
     values = {'x_m': 0.03, 'y_m': 0.04, 'force_n': 7.0, 'area_m2': 5e-5, 'shift_m': (0.0, 0.002),
-              'azimuth_rad': math.pi / 2, 'alpha_rad': math.pi / 4,
+              'azimuth_rad': math.pi / 2, 'azimuth_sigma_rad': 0.05, 'alpha_rad': math.pi / 4,
               'force_xyz_n': (0.0, 7.0, -7.0), 'confidence': 0.9, 'direction_valid': True}
     values.update(changes)
     return Contact(**values)
@@ -25,6 +25,7 @@ def test_contact_message_carries_every_field():
     assert (msg.location.x, msg.location.y, msg.location.z) == (0.03, 0.04, 0.0)
     assert msg.magnitude == 7.0 and msg.azimuth == pytest.approx(math.pi / 2)
     assert msg.polar == pytest.approx(math.pi / 4) and msg.direction_valid
+    assert msg.azimuth_sigma == 0.05
     assert (msg.wrench.force.y, msg.wrench.force.z) == (7.0, -7.0)
     assert msg.shift.y == 0.002 and msg.header.frame_id == 'skin_link'
 

@@ -91,7 +91,8 @@ class Contact:
 
     ``shift_m`` is the calibrated layer shift; ``azimuth_rad`` (in (-pi, pi]) and the tangential
     part of ``force_xyz_n`` are meaningful only when ``direction_valid``; otherwise they are 0 and
-    ``alpha_rad`` is 0.
+    ``alpha_rad`` is 0. ``azimuth_sigma_rad`` is the 1-sigma uncertainty of the azimuth (pi when
+    there is no direction).
     """
 
     x_m: float
@@ -100,6 +101,7 @@ class Contact:
     area_m2: float
     shift_m: tuple
     azimuth_rad: float
+    azimuth_sigma_rad: float
     alpha_rad: float
     force_xyz_n: tuple
     confidence: float
@@ -195,10 +197,13 @@ class ContactEstimator:
                 tangential = magnitude / compliance
                 alpha = math.atan2(tangential, normal)
                 fx, fy = tangential * math.cos(azimuth), tangential * math.sin(azimuth)
+                sigma = min(math.pi, math.atan2(0.05 * pitch, magnitude))
             else:
                 azimuth = alpha = fx = fy = 0.0
+                sigma = math.pi
             contacts.append(Contact(
                 x_m=seg.x_m, y_m=seg.y_m, force_n=normal, area_m2=seg.area_m2,
-                shift_m=(_finite(sx), _finite(sy)), azimuth_rad=azimuth, alpha_rad=alpha,
+                shift_m=(_finite(sx), _finite(sy)), azimuth_rad=azimuth,
+                azimuth_sigma_rad=sigma, alpha_rad=alpha,
                 force_xyz_n=(fx, fy, -normal), confidence=conf, direction_valid=bool(valid)))
         return contacts
