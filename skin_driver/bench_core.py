@@ -25,9 +25,10 @@ SKIMAGE = 'skimage_pcc'
 SKIMAGE_UPSAMPLE = 100
 
 
-def skimage_shift(top: np.ndarray, bottom: np.ndarray) -> ShiftEstimate:
+def skimage_shift(maps: np.ndarray) -> ShiftEstimate:
     """Estimate the shift with scikit-image's upsampled phase cross-correlation (reference)."""
     from skimage.registration import phase_cross_correlation
+    top, bottom = maps
     if not (top.any() and bottom.any()):
         return NO_SHIFT
     # Registering top onto bottom gives the displacement of bottom, (dy, dx).
@@ -45,7 +46,7 @@ def bench_methods(with_reference: bool = True) -> list:
 
 def make_estimator(name: str, model: SkinModel, calibration=None) -> ContactEstimator:
     """Return the pipeline with estimator ``name`` (a registered one or the skimage reference)."""
-    registered = name if name != SKIMAGE else 'poc'
+    registered = name if name != SKIMAGE else 'centroid'
     # The no-shear floor follows the pitch (the default's 0.25 mm is 1/20 of the seed's taxel),
     # so that small shifts on fine grids are judged by the estimator, not by a fixed threshold.
     config = EstimatorConfig(method=registered, pitch_m=model.pitch_m, fsr=model.fsr,

@@ -14,6 +14,7 @@ from dataclasses import dataclass, field
 import cv2
 import numpy as np
 
+from .crosstalk import remove_line_leak
 from .fsr import FsrModel
 from .validate import check_map, check_number, check_pair, check_stack
 
@@ -27,13 +28,15 @@ class ConditioningConfig:
 
     ``threshold_counts`` is the minimum reading above baseline that counts as touch;
     after :meth:`Conditioner.tare` the per-taxel threshold is raised to ``noise_sigmas`` times
-    the measured noise when that is larger.
+    the measured noise when that is larger. ``remove_crosstalk`` takes the load that leaks along
+    the rows and columns of a passive matrix out of every scan (:mod:`crosstalk`).
     """
 
     fsr: FsrModel = field(default_factory=FsrModel)
     threshold_counts: float = 40.0
     noise_sigmas: float = 5.0
     fill_dead: bool = True
+    remove_crosstalk: bool = True
 
     def __post_init__(self):
         """Validate the thresholds."""
@@ -47,6 +50,7 @@ class _Layer:
     def __init__(self, shape):
         self.baseline = np.zeros(shape)
         self.threshold = None
+        self.noise = None
         self.gain = None
         self.dead = np.zeros(shape, dtype=bool)
 
@@ -100,6 +104,7 @@ class _Stacked:
     def __init__(self, layers, fill_dead: bool):
         self.baseline = np.stack([layer.baseline for layer in layers])
         self.threshold = np.stack([layer.threshold for layer in layers])
+        self.noise = np.stack([layer.noise for layer in layers])
         gains = [layer.gain for layer in layers]
         self.gain = None
         if any(g is not None for g in gains):
@@ -134,8 +139,11 @@ class Conditioner:
         self._shape = shape
         self._stack = None
         self._layers = (_Layer(shape), _Layer(shape))
+        # Until a tare measures it, the noise is taken as the one the threshold was set for.
+        guess = self.config.threshold_counts / max(self.config.noise_sigmas, 1.0)
         for layer in self._layers:
             layer.threshold = np.full(shape, float(self.config.threshold_counts))
+            layer.noise = np.full(shape, float(guess))
 
     def _ensure(self, shape):
         if self._shape is None:
@@ -167,6 +175,7 @@ class Conditioner:
             layer.baseline = np.where(dead, 0.0, mean)
             layer.threshold = np.maximum(self.config.threshold_counts,
                                          self.config.noise_sigmas * std)
+            layer.noise = std
             layer.dead = dead
         self._stack = None
 
@@ -210,6 +219,24 @@ class Conditioner:
             self._stack = _Stacked(self._layers, self.config.fill_dead)
         return self._stack
 
+    def force_noise(self, force: np.ndarray) -> np.ndarray:
+        """
+        Return the 1-sigma force noise (N) of each loaded taxel of a (2, rows, cols) force stack.
+
+        The count noise of the taxel (measured by the tare) times the slope of the counts-to-force
+        curve where the taxel reads; 0 where the stack holds no force.
+        """
+        st = self._stacked()
+        out = np.zeros(force.shape)
+        loaded = np.flatnonzero(force > 0)
+        if loaded.size:
+            table = self._table
+            counts = np.interp(force.ravel()[loaded], table.force, table.counts)
+            j = np.minimum(counts.astype(np.intp), table.slope.size - 1)
+            gain = 1.0 if st.gain is None else st.gain.ravel()[loaded]
+            out.ravel()[loaded] = table.slope[j] * st.noise.ravel()[loaded] * gain
+        return out
+
     def condition(self, top_counts, bottom_counts) -> tuple:
         """Return (top, bottom) per-taxel force maps in newtons (float64, new arrays)."""
         t, b = check_pair(top_counts, bottom_counts)
@@ -228,6 +255,8 @@ class Conditioner:
         c = np.empty(st.baseline.shape)
         np.subtract(t, st.baseline[0], out=c[0])
         np.subtract(b, st.baseline[1], out=c[1])
+        if self.config.remove_crosstalk:
+            remove_line_leak(c)
         # Most taxels are untouched: only the loaded ones are converted, the rest keep the force
         # of zero counts, which the FSR model defines as 0.
         loaded = np.flatnonzero(c >= st.threshold)

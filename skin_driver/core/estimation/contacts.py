@@ -1,187 +1,219 @@
-"""Segment conditioned force maps into contacts with sub-taxel location, force, area and window."""
+"""
+Find contacts in conditioned force maps and pair each top imprint with its bottom imprint.
+
+A contact starts from the top layer, whose imprint is the sharp one: connected loaded taxels,
+split where one group holds several clear peaks (two fingers close together). Its bottom imprint
+is wherever the bottom layer carries load: it may sit anywhere the layer shift takes it, touching
+the top imprint or not. With several contacts, the bottom load is shared among them by a small
+Gaussian mixture whose centres start at each top centroid plus the common shift of the whole maps,
+so neighbouring presses keep their own bottom imprints even when those overlap.
+
+Each contact comes out as one :class:`LayerPair`: a window holding the contact's top taxels and
+its share of the bottom load, ready for any shift estimator, plus the figures the pipeline needs.
+"""
 
 from __future__ import annotations
 
 from dataclasses import dataclass
-from functools import lru_cache
 
 import cv2
 import numpy as np
 
-from .validate import check_number, check_pair
+from .validate import check_number, check_stack
 
-__all__ = ['Segment', 'find_contacts', 'segment', 'segment_stacked', 'contact_windows',
-           'window_stack']
+__all__ = ['LayerPair', 'find_contacts', 'pair_layers']
+
+# A second peak of one connected top group is another contact only if the load between them
+# drops below this share of the lower peak, and the peaks are at least MIN_PEAK_DISTANCE apart.
+SADDLE_RATIO = 0.7
+MIN_PEAK_DISTANCE = 2
+_MIXTURE_ITERATIONS = 4
+# Bottom load below this share of a contact's peak share is not part of its window.
+_WINDOW_SHARE = 0.02
+_DILATE = np.ones((3, 3), np.uint8)
 
 
-@dataclass(frozen=True)
-class Segment:
+@dataclass(frozen=True, eq=False)
+class LayerPair:
     """
-    One contact found in the maps; positions in metres, window as taxel index bounds.
+    One contact: its window of both layers and its summary figures (taxel units unless said).
 
-    ``row``/``col`` are the force-weighted centroid on the top layer in (fractional) taxels;
-    ``window`` is ``(r0, r1, c0, c1)``, half-open, covering the contact on both layers plus a
-    margin, where the shift between the layers is measured. ``bottom_force_n``,
-    ``bottom_row``/``bottom_col`` and ``bottom_spread`` (variance along rows plus along columns,
-    taxels squared) describe the contact on the bottom layer (the top centroid and 0 when the
-    bottom layer carries nothing). ``at_border`` is True when the contact's taxels reach the
-    map edge.
+    ``maps`` is a (2, h, w) float64 array: the contact's own top force and its share of the bottom
+    force inside the window whose top-left taxel is ``origin`` (row, col). ``top_force_n`` and
+    ``bottom_force_n`` are the sums of the two layers; ``row``/``col`` the top centroid in the full
+    map; ``taxels`` the loaded top taxels; ``at_border`` is True when either imprint reaches the
+    edge of the map (part of it may be cut off).
     """
 
-    label: int
+    maps: np.ndarray
+    origin: tuple
     row: float
     col: float
-    x_m: float
-    y_m: float
-    force_n: float
-    area_m2: float
+    top_force_n: float
+    bottom_force_n: float
     taxels: int
-    window: tuple
-    bottom_force_n: float = 0.0
-    bottom_row: float = 0.0
-    bottom_col: float = 0.0
-    bottom_spread: float = 0.0
-    at_border: bool = False
+    at_border: bool
 
 
-def find_contacts(top_force, bottom_force, pitch_m: float, min_force_n: float = 0.05,
-                  margin: int = 1, connectivity: int = 8) -> tuple:
+def find_contacts(maps, pitch_m: float = 0.005, min_force_n: float = 0.0,
+                  max_contacts: int = 32, dead=None) -> list:
     """
-    Return (segments sorted by force descending, label map) for two conditioned force maps.
+    Return the contacts in a (2, rows, cols) stack of top and bottom force maps, as LayerPairs.
 
-    A contact is a connected group of taxels loaded on either layer (so the bottom imprint of a
-    shifted touch joins its top imprint) that carries at least ``min_force_n`` on the top layer.
-    The label map (int32, 0 = background) lets callers isolate each contact in its window.
+    ``dead`` marks top taxels whose reading was filled in from their neighbours (see
+    :meth:`conditioning.Conditioner.dead_masks`): a dip there does not separate two peaks.
+    Checks its input (finite, non-negative) and does the work of :func:`pair_layers`.
     """
-    top, bottom = check_pair(top_force, bottom_force)
-    pitch = check_number(pitch_m, 'pitch_m', positive=True)
+    stack = check_stack(maps, 'maps')
+    if stack.shape[0] != 2:
+        raise ValueError(f'maps must stack the top and the bottom layer, got {stack.shape[0]}')
+    check_number(pitch_m, 'pitch_m', positive=True)
     check_number(min_force_n, 'min_force_n', non_negative=True)
-    if connectivity not in (4, 8):
-        raise ValueError(f'connectivity must be 4 or 8, got {connectivity}')
-    if int(margin) < 0:
-        raise ValueError(f'margin must be non-negative, got {margin}')
-    return segment(top, bottom, pitch, float(min_force_n), int(margin), connectivity)
+    if dead is not None:
+        dead = np.asarray(dead, dtype=bool)
+        if dead.shape != stack.shape[1:]:
+            raise ValueError(f'dead has shape {dead.shape}, the maps {stack.shape[1:]}')
+    return pair_layers(stack.astype(np.float64), float(min_force_n), int(max_contacts), dead)
 
 
-@lru_cache(maxsize=16)
-def _grids(shape: tuple) -> tuple:
-    rr, cc = np.indices(shape)
-    rr = rr.ravel().astype(np.float64)
-    cc = cc.ravel().astype(np.float64)
-    return np.stack((np.ones_like(rr), rr, cc, rr * rr + cc * cc)), np.arange(64)[:, None]
-
-
-# Few labels: one matrix product with the one-hot label matrix beats eight bincounts.
-_ONE_HOT_LABELS = 16
-
-
-def _moments(top: np.ndarray, bottom: np.ndarray, labels: np.ndarray, n: int) -> np.ndarray:
-    """
-    Return per-label sums (8 x n) over the taxels of each label.
-
-    Rows: top force, top force * row, top force * col, bottom force, bottom force * row,
-    bottom force * col, bottom force * (row**2 + col**2), loaded top taxels.
-    """
-    basis, label_ids = _grids(top.shape)
-    w = top.ravel()
-    weights = np.empty((8, w.size))
-    np.multiply(w, basis[:3], out=weights[:3])
-    np.multiply(bottom.ravel(), basis, out=weights[3:7])
-    np.greater(w, 0, out=weights[7])
-    flat = labels.ravel()
-    if n <= _ONE_HOT_LABELS:
-        return weights @ (flat == label_ids[:n]).T.astype(np.float64)
-    return np.stack([np.bincount(flat, weights=row, minlength=n) for row in weights])
-
-
-def _single_moments(maps: np.ndarray) -> list:
-    """
-    Return the sums of :func:`_moments` for a map pair holding one contact, as [background, it].
-
-    With a single component every loaded taxel belongs to it and, the maps being non-negative
-    (checked), every other taxel is 0 on both layers, so the sums over the whole maps are its
-    sums: one matrix product, no label test.
-    """
-    basis, _ = _grids(maps.shape[1:])
-    (mass, mass_b), (sum_r, sum_rb), (sum_c, sum_cb), (_, sum_sq_b) = (
-        basis @ maps.reshape(2, -1).T).tolist()
-    count = int(np.count_nonzero(maps[0] > 0))
-    return [None, [mass, sum_r, sum_c, mass_b, sum_rb, sum_cb, sum_sq_b, count]]
-
-
-def segment(top: np.ndarray, bottom: np.ndarray, pitch: float, min_force_n: float,
-            margin: int, connectivity: int = 8) -> tuple:
-    """Do the work of :func:`find_contacts` on maps already checked (no validation)."""
-    maps = np.empty((2,) + top.shape)
-    maps[0], maps[1] = top, bottom
-    segments, labels, _ = segment_stacked(maps, pitch, min_force_n, margin, connectivity)
-    return segments, labels
-
-
-def segment_stacked(maps: np.ndarray, pitch: float, min_force_n: float, margin: int,
-                    connectivity: int = 8) -> tuple:
-    """
-    Do the work of :func:`segment` on the (2, rows, cols) float64 stack of top and bottom.
-
-    Returns (segments, label map, number of components including the background); with two
-    components the maps hold a single contact, which :func:`window_stack` can use.
-    """
+def pair_layers(maps: np.ndarray, min_force_n: float, max_contacts: int,
+                dead: np.ndarray = None) -> list:
+    """Do the work of :func:`find_contacts` on a checked float64 stack."""
     top, bottom = maps
-    mask = np.logical_or(top > 0, bottom > 0).view(np.uint8)
-    n, labels, stats, _ = cv2.connectedComponentsWithStats(mask, connectivity=connectivity,
-                                                           ltype=cv2.CV_32S)
+    loaded = (top > 0).view(np.uint8)
+    n, labels = cv2.connectedComponents(loaded, connectivity=8, ltype=cv2.CV_32S)
     if n <= 1:
-        return [], labels, n
-    if n == 2:
-        moments = _single_moments(maps)
-    else:
-        moments = _moments(top, bottom, labels, n).T.tolist()
+        return []
+    labels, n = _split_peaks(top, labels, n, dead)
     rows, cols = top.shape
-    threshold = max(float(min_force_n), 1e-12)
-    boxes = stats[:, :4].tolist()
-    segments = []
-    for k in range(1, n):
-        m, sum_r, sum_c, mb, sum_rb, sum_cb, sum_sq_b, count = moments[k]
-        if not m >= threshold:
+    flat = labels.ravel()
+    masses = np.bincount(flat, weights=top.ravel(), minlength=n)
+    keep = [k for k in range(1, n) if masses[k] > 0]
+    # The strongest top imprints first; the pipeline orders by the force it reports.
+    keep.sort(key=lambda k: -masses[k])
+    keep = keep[:max(int(max_contacts), 0)]
+    if not keep:
+        return []
+    rr, cc = np.indices(top.shape, dtype=np.float64)
+    tops = [np.where(labels == k, top, 0.0) for k in keep]
+    shares = _share_bottom(tops, bottom, rr, cc)
+    pairs = []
+    for t, b in zip(tops, shares):
+        pair = _pair(t, b, rr, cc, rows, cols)
+        if max(pair.top_force_n, pair.bottom_force_n) >= min_force_n:
+            pairs.append(pair)
+    return pairs
+
+
+def _split_peaks(top: np.ndarray, labels: np.ndarray, n: int, dead) -> tuple:
+    """Give each clear peak of a connected top group its own label; nearest peak wins a taxel."""
+    peaks = (top >= cv2.dilate(top, _DILATE)) & (top > 0)
+    pr, pc = np.nonzero(peaks)
+    if pr.size <= n - 1:
+        return labels, n
+    heights = top[pr, pc]
+    order = np.argsort(-heights, kind='stable')
+    kept = {}
+    for i in order.tolist():
+        r, c, k = int(pr[i]), int(pc[i]), int(labels[pr[i], pc[i]])
+        mine = kept.setdefault(k, [])
+        if all(_separate(top, (r, c), q, dead) for q in mine):
+            mine.append((r, c))
+    if all(len(v) == 1 for v in kept.values()):
+        return labels, n
+    out = labels.copy()
+    next_label = n
+    for k, centres in kept.items():
+        if len(centres) < 2:
             continue
-        x0, y0, ww, hh = boxes[k]
-        window = (max(y0 - margin, 0), min(y0 + hh + margin, rows),
-                  max(x0 - margin, 0), min(x0 + ww + margin, cols))
-        r = sum_r / m
-        c = sum_c / m
-        n_taxels = int(round(count))
-        if mb > 0:
-            rb = sum_rb / mb
-            cb = sum_cb / mb
-            spread = max(sum_sq_b / mb - rb * rb - cb * cb, 0.0)
-        else:
-            rb, cb, spread = r, c, 0.0
-        border = x0 == 0 or y0 == 0 or x0 + ww == cols or y0 + hh == rows
-        segments.append(Segment(k, r, c, c * pitch, r * pitch, m, n_taxels * pitch * pitch,
-                                n_taxels, window, mb, rb, cb, spread, border))
-    segments.sort(key=lambda s: -s.force_n)
-    return segments, labels, n
+        tr, tc = np.nonzero(labels == k)
+        centre = np.array(centres, dtype=np.float64)
+        d2 = (tr[:, None] - centre[None, :, 0]) ** 2 + (tc[:, None] - centre[None, :, 1]) ** 2
+        nearest = np.argmin(d2, axis=1)
+        ids = np.array([k] + list(range(next_label, next_label + len(centres) - 1)))
+        out[tr, tc] = ids[nearest]
+        next_label += len(centres) - 1
+    return out, next_label
 
 
-def contact_windows(top_force: np.ndarray, bottom_force: np.ndarray, labels: np.ndarray,
-                    segment: Segment) -> tuple:
-    """Return copies of both layers inside the segment's window with other contacts zeroed."""
-    r0, r1, c0, c1 = segment.window
-    own = labels[r0:r1, c0:c1] == segment.label
-    return (np.where(own, top_force[r0:r1, c0:c1], 0.0),
-            np.where(own, bottom_force[r0:r1, c0:c1], 0.0))
+def _separate(top: np.ndarray, p: tuple, q: tuple, dead) -> bool:
+    """Return True when the peak ``p`` stands apart from the higher peak ``q``."""
+    steps = max(abs(p[0] - q[0]), abs(p[1] - q[1]))
+    if steps < MIN_PEAK_DISTANCE:
+        return False
+    t = np.linspace(0.0, 1.0, steps + 1)
+    r = np.rint(p[0] + (q[0] - p[0]) * t).astype(np.intp)
+    c = np.rint(p[1] + (q[1] - p[1]) * t).astype(np.intp)
+    path = top[r, c]
+    if dead is not None:
+        path = path[~dead[r, c]]
+    return bool(path.size) and float(path.min()) < SADDLE_RATIO * float(top[p])
 
 
-def window_stack(maps: np.ndarray, labels: np.ndarray, segment: Segment,
-                 alone: bool = False) -> np.ndarray:
-    """
-    Return a (2, h, w) copy of :func:`contact_windows` from the stacked maps.
+def _share_bottom(tops: list, bottom: np.ndarray, rr: np.ndarray, cc: np.ndarray) -> list:
+    """Return each top imprint's share of the bottom map (shares sum to the bottom map)."""
+    if len(tops) == 1:
+        return [bottom]
+    total_b = bottom.sum()
+    if total_b <= 0:
+        return [np.zeros_like(bottom) for _ in tops]
+    mass = np.array([t.sum() for t in tops])
+    centre = np.array([[(t * rr).sum(), (t * cc).sum()] for t in tops]) / mass[:, None]
+    top_all = mass.sum()
+    # Presses made by one hand or tool mostly share their tangential direction: start every
+    # bottom imprint where the common shift of the whole maps puts it.
+    common = np.array([(bottom * rr).sum() / total_b - (centre[:, 0] * mass).sum() / top_all,
+                       (bottom * cc).sum() / total_b - (centre[:, 1] * mass).sum() / top_all])
+    mean = centre + common
+    var = np.array([_spread(t, c) for t, c in zip(tops, centre)]) + 1.0
+    weight = mass / top_all
+    loaded = bottom > 0
+    br, bc, bv = rr[loaded], cc[loaded], bottom[loaded]
+    for _ in range(_MIXTURE_ITERATIONS):
+        d2 = (br[None, :] - mean[:, 0:1]) ** 2 + (bc[None, :] - mean[:, 1:2]) ** 2
+        logp = np.log(weight)[:, None] - np.log(var)[:, None] - 0.5 * d2 / var[:, None]
+        logp -= logp.max(axis=0, keepdims=True)
+        resp = np.exp(logp)
+        resp /= resp.sum(axis=0, keepdims=True)
+        w = resp * bv[None, :]
+        got = w.sum(axis=1)
+        ok = got > 1e-12 * total_b
+        if not ok.all():
+            break
+        mean = np.stack((w @ br, w @ bc), axis=1) / got[:, None]
+        d2 = (br[None, :] - mean[:, 0:1]) ** 2 + (bc[None, :] - mean[:, 1:2]) ** 2
+        var = np.maximum((w * d2).sum(axis=1) / (2.0 * got), 0.25)
+        weight = got / got.sum()
+    shares = []
+    for k in range(len(tops)):
+        s = np.zeros_like(bottom)
+        s[loaded] = resp[k] * bv
+        shares.append(s)
+    return shares
 
-    ``alone`` says the maps hold no other component (see :func:`segment_stacked`): the window
-    then has nothing to zero and is copied as it is.
-    """
-    r0, r1, c0, c1 = segment.window
-    window = maps[:, r0:r1, c0:c1]
-    if alone:
-        return window.copy()
-    return np.where(labels[r0:r1, c0:c1] == segment.label, window, 0.0)
+
+def _spread(t: np.ndarray, centre) -> float:
+    m = t.sum()
+    rr, cc = np.indices(t.shape)
+    return float((t * ((rr - centre[0]) ** 2 + (cc - centre[1]) ** 2)).sum() / (2.0 * m))
+
+
+def _pair(t: np.ndarray, b: np.ndarray, rr, cc, rows: int, cols: int) -> LayerPair:
+    mt, mb = float(t.sum()), float(b.sum())
+    row = float((t * rr).sum() / mt) if mt > 0 else 0.0
+    col = float((t * cc).sum() / mt) if mt > 0 else 0.0
+    tr, tc = np.nonzero(t > 0)
+    own = b > _WINDOW_SHARE * b.max() if mb > 0 else np.zeros_like(t, dtype=bool)
+    br, bc = np.nonzero(own)
+    all_r = np.concatenate((tr, br))
+    all_c = np.concatenate((tc, bc))
+    r0, r1 = int(all_r.min()), int(all_r.max()) + 1
+    c0, c1 = int(all_c.min()), int(all_c.max()) + 1
+    border = r0 == 0 or c0 == 0 or r1 == rows or c1 == cols
+    r0, r1 = max(r0 - 1, 0), min(r1 + 1, rows)
+    c0, c1 = max(c0 - 1, 0), min(c1 + 1, cols)
+    window = np.empty((2, r1 - r0, c1 - c0))
+    window[0] = t[r0:r1, c0:c1]
+    window[1] = np.where(own[r0:r1, c0:c1], b[r0:r1, c0:c1], 0.0)
+    return LayerPair(window, (r0, c0), row, col, mt, float(window[1].sum()), int(tr.size),
+                     bool(border))

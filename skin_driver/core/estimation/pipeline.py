@@ -2,10 +2,19 @@
 The contact estimation pipeline used by the ROS nodes, the evaluator and the benchmark.
 
 raw counts (top, bottom) -> conditioning (tare, threshold, FSR model -> force per taxel)
--> contacts (segmentation, sub-taxel centroid, force, area, window)
--> shift between the layers in each window (named estimator from :mod:`shift`)
+-> contacts (each top imprint paired with its share of the bottom load, :mod:`contacts`)
+-> shift between the layers in each contact's window (named estimator from :mod:`shift`)
 -> calibrated shift ``s = raw - (x_p, y_p)`` -> azimuth ``atan2(s_y, s_x)``
 -> tangential force ``|s| / compliance`` -> polar angle and 3-D force.
+
+Uncertainty, from the contact's own data: the noise of each taxel's force (the tare's count noise
+through the slope of the counts-to-force curve) gives the noise of each imprint's centroid; an
+imprint narrower than a taxel adds the pixel-locking error of its sampled centroid, whose size
+follows from the imprint's measured width (a Gaussian profile of variance ``v - 1/12`` sampled on
+unit cells has a first harmonic of amplitude ``exp(-2 pi^2 (v - 1/12)) / pi`` taxels); an imprint
+cut by the map's edge adds a fifth of a taxel; the calibration adds its own standard error.
+Their root sum of squares ``sigma`` (taxels) gives ``azimuth_sigma = atan2(sigma, |s|)``; a
+shift shorter than ``MIN_SNR`` sigmas is within the noise and carries no direction.
 
 Normal force: the taxels sense only ``fill_factor**2`` of the skin area, so the summed taxel
 forces of a contact are divided by it. The bottom layer's sum is used because the elastic layer
@@ -28,12 +37,17 @@ import numpy as np
 
 from .calibration import Calibration
 from .conditioning import Conditioner, ConditioningConfig
-from .contacts import segment_stacked, window_stack
+from .contacts import LayerPair, pair_layers
 from .fsr import FsrModel
 from .shift import DEFAULT_METHOD, get_method, NO_SHIFT
 from .validate import check_number, check_pair
 
-__all__ = ['EstimatorConfig', 'Contact', 'ContactEstimator']
+__all__ = ['EstimatorConfig', 'Contact', 'ContactEstimator', 'MIN_SNR']
+
+# A shift shorter than this many standard deviations of its own noise has no direction.
+MIN_SNR = 3.0
+# Extra shift uncertainty (taxels) of an imprint cut by the edge of the map.
+_BORDER_SIGMA = 0.2
 
 
 @dataclass(frozen=True)
@@ -43,7 +57,6 @@ class EstimatorConfig:
 
     ``min_confidence``: estimates below it get ``direction_valid = False``.
     ``min_shift_m``: a calibrated shift shorter than this is no shear (alpha = 0, no direction).
-    ``max_shift_m``: a shift longer than this is not physical for the skin; no direction.
     ``compliance_m_per_n``: layer shift per tangential newton, used when the calibration has none.
     ``force_scale``: extra factor on the normal force (a user's force calibration; 1 = none).
     ``fill_factor``: sensitive fraction of the pitch on each axis; normal force = summed taxel
@@ -58,8 +71,6 @@ class EstimatorConfig:
     min_contact_force_n: float = 0.05
     min_confidence: float = 0.3
     min_shift_m: float = 2.5e-4
-    max_shift_m: float = 0.02
-    window_margin: int = 1
     max_contacts: int = 32
     force_scale: float = 1.0
     fsr: FsrModel = field(default_factory=FsrModel)
@@ -75,10 +86,9 @@ class EstimatorConfig:
         check_number(self.min_contact_force_n, 'min_contact_force_n', non_negative=True)
         check_number(self.min_confidence, 'min_confidence', low=0.0, high=1.0)
         check_number(self.min_shift_m, 'min_shift_m', non_negative=True)
-        check_number(self.max_shift_m, 'max_shift_m', positive=True)
         check_number(self.force_scale, 'force_scale', positive=True)
         check_number(self.fill_factor, 'fill_factor', low=0.05, high=1.0)
-        for name in ('window_margin', 'max_contacts'):
+        for name in ('max_contacts',):
             v = getattr(self, name)
             if isinstance(v, bool) or int(v) != v or v < 0:
                 raise ValueError(f'{name} must be a non-negative integer, got {v!r}')
@@ -135,37 +145,67 @@ class ContactEstimator:
         self.conditioner.tare(top_frames, bottom_frames)
 
     def _raw(self, top_counts, bottom_counts) -> list:
-        """Return [(segment, ShiftEstimate)] for the contacts, strongest first."""
+        """Return [(LayerPair, ShiftEstimate, sigma in taxels)] for the contacts."""
         t, b = check_pair(top_counts, bottom_counts)
         cfg = self.config
         maps = self.conditioner.condition_stacked(t, b)
-        segments, labels, components = segment_stacked(maps, cfg.pitch_m,
-                                                       cfg.min_contact_force_n, cfg.window_margin)
+        dead = self.conditioner.dead_masks()[0]
+        pairs = pair_layers(maps, 0.0, cfg.max_contacts,
+                            dead if dead is not None and dead.any() else None)
+        if not pairs:
+            return []
         method = self._method
-        out = []
+        noise = self.conditioner.force_noise(maps)
         whole = None
-        for seg in segments[:cfg.max_contacts]:
-            if method.whole_map:
-                if whole is None:
-                    whole = method.function(t.astype(np.float64), b.astype(np.float64))
-                est = whole
-            else:
-                window = window_stack(maps, labels, seg, alone=components == 2)
-                if method.stacked is not None:
-                    est = method.stacked(window)
-                else:
-                    est = method.function(window[0], window[1])
+        if method.whole_map:
+            whole = method.function(np.stack((t, b)).astype(np.float64))
+        out = []
+        for pair in pairs:
+            est = whole if whole is not None else method.function(pair.maps)
             if not (math.isfinite(est.dx) and math.isfinite(est.dy)):
                 est = NO_SHIFT
-            out.append((seg, est))
+            out.append((pair, est, self._sigma(pair, maps, noise)))
         return out
 
-    def _normal_force(self, seg) -> float:
+    def _sigma(self, pair: LayerPair, maps: np.ndarray, noise: np.ndarray) -> float:
+        """Return the 1-sigma uncertainty of one axis of the pair's shift, taxels (docstring)."""
+        r0, c0 = pair.origin
+        h, w = pair.maps.shape[1:]
+        full = maps[:, r0:r0 + h, c0:c0 + w]
+        # A contact's share of a layer carries the same share of that layer's noise.
+        share = np.divide(pair.maps, full, out=np.zeros_like(full), where=full > 0)
+        sigma_f = noise[:, r0:r0 + h, c0:c0 + w] * share
+        total = 0.0
+        rows = np.arange(h, dtype=np.float64)
+        cols = np.arange(w, dtype=np.float64)
+        for layer, err in zip(pair.maps, sigma_f):
+            mass = layer.sum()
+            if mass <= 0:
+                return math.inf
+            for axis, pos in ((0, cols), (1, rows)):
+                profile = layer.sum(axis=axis)
+                centre = profile @ pos / mass
+                d2 = (pos - centre) ** 2
+                var = profile @ d2 / mass
+                spread = (err ** 2).sum(axis=axis) @ d2 / (mass * mass)
+                lock = math.exp(-2.0 * math.pi ** 2 * max(var - 1.0 / 12.0, 0.0)) / math.pi
+                # Half of both axes: ``sigma`` stands for one axis of the shift.
+                total += 0.5 * (spread + 0.5 * lock * lock)
+        if pair.at_border:
+            total += _BORDER_SIGMA ** 2
+        cal = self.calibration
+        if cal.presses > 0:
+            pitch = self.config.pitch_m
+            total += (cal.std_x_m ** 2 + cal.std_y_m ** 2) / (2.0 * cal.presses * pitch * pitch)
+        return math.sqrt(total)
+
+    def _normal_force(self, pair: LayerPair) -> float:
         """Return the contact's normal force: sensed sum / fill_factor**2 (module docstring)."""
         cfg = self.config
-        sensed = max(seg.force_n, seg.bottom_force_n) if seg.at_border else seg.bottom_force_n
+        sensed = (max(pair.top_force_n, pair.bottom_force_n) if pair.at_border
+                  else pair.bottom_force_n)
         if sensed <= 0:
-            sensed = seg.force_n
+            sensed = pair.top_force_n
         return sensed * cfg.force_scale / (cfg.fill_factor * cfg.fill_factor)
 
     def measure_shifts(self, top_counts, bottom_counts) -> list:
@@ -175,7 +215,9 @@ class ContactEstimator:
         Use it on normal presses to feed :func:`calibration.calibrate_from_shifts`.
         """
         p = self.config.pitch_m
-        return [(est.dx * p, est.dy * p) for _, est in self._raw(top_counts, bottom_counts)]
+        raw = sorted(self._raw(top_counts, bottom_counts),
+                     key=lambda item: -self._normal_force(item[0]))
+        return [(est.dx * p, est.dy * p) for _, est, _ in raw]
 
     def process(self, top_counts, bottom_counts) -> list:
         """Return the contacts in the two raw count maps, strongest (normal force) first."""
@@ -183,27 +225,36 @@ class ContactEstimator:
         cal = self.calibration
         compliance = self.compliance_m_per_n
         pitch = cfg.pitch_m
+        # A bottom imprint more than half the grid away cannot be told from another contact's.
+        reach = 0.5 * min(np.shape(top_counts))
         contacts = []
-        for seg, est in self._raw(top_counts, bottom_counts):
+        for pair, est, sigma in self._raw(top_counts, bottom_counts):
+            normal = self._normal_force(pair)
+            if normal < cfg.min_contact_force_n:
+                continue
             raw_x, raw_y = est.dx * pitch, est.dy * pitch
             sx, sy = raw_x - cal.x_p_m, raw_y - cal.y_p_m
             magnitude = math.hypot(sx, sy)
-            normal = self._normal_force(seg)
-            conf = min(max(_finite(est.confidence), 0.0), 1.0)
-            valid = (conf >= cfg.min_confidence and cfg.min_shift_m <= magnitude
-                     and math.hypot(raw_x, raw_y) <= cfg.max_shift_m)
+            snr = magnitude / (sigma * pitch) if sigma > 0 else math.inf
+            method_conf = min(max(_finite(est.confidence), 0.0), 1.0)
+            conf = method_conf * (snr * snr / (snr * snr + MIN_SNR * MIN_SNR)
+                                  if math.isfinite(snr) else 1.0)
+            valid = (snr >= MIN_SNR and conf >= cfg.min_confidence
+                     and cfg.min_shift_m <= magnitude and math.hypot(est.dx, est.dy) <= reach)
             if valid:
                 azimuth = math.atan2(sy, sx)
                 tangential = magnitude / compliance
                 alpha = math.atan2(tangential, normal)
                 fx, fy = tangential * math.cos(azimuth), tangential * math.sin(azimuth)
-                sigma = min(math.pi, math.atan2(0.05 * pitch, magnitude))
+                azimuth_sigma = math.atan2(sigma * pitch, magnitude)
             else:
                 azimuth = alpha = fx = fy = 0.0
-                sigma = math.pi
+                azimuth_sigma = math.pi
             contacts.append(Contact(
-                x_m=seg.x_m, y_m=seg.y_m, force_n=normal, area_m2=seg.area_m2,
+                x_m=pair.col * pitch, y_m=pair.row * pitch, force_n=normal,
+                area_m2=pair.taxels * pitch * pitch,
                 shift_m=(_finite(sx), _finite(sy)), azimuth_rad=azimuth,
-                azimuth_sigma_rad=sigma, alpha_rad=alpha,
+                azimuth_sigma_rad=azimuth_sigma, alpha_rad=alpha,
                 force_xyz_n=(fx, fy, -normal), confidence=conf, direction_valid=bool(valid)))
+        contacts.sort(key=lambda c: -c.force_n)
         return contacts
