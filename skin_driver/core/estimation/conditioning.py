@@ -256,7 +256,7 @@ class Conditioner:
         np.subtract(t, st.baseline[0], out=c[0])
         np.subtract(b, st.baseline[1], out=c[1])
         if self.config.remove_crosstalk:
-            remove_line_leak(c)
+            remove_line_leak(c, st.threshold)
         # Most taxels are untouched: only the loaded ones are converted, the rest keep the force
         # of zero counts, which the FSR model defines as 0.
         loaded = np.flatnonzero(c >= st.threshold)

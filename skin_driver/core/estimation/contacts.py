@@ -15,6 +15,7 @@ its share of the bottom load, ready for any shift estimator, plus the figures th
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import lru_cache
 
 import cv2
 import numpy as np
@@ -27,7 +28,7 @@ __all__ = ['LayerPair', 'find_contacts', 'pair_layers']
 # drops below this share of the lower peak, and the peaks are at least MIN_PEAK_DISTANCE apart.
 SADDLE_RATIO = 0.7
 MIN_PEAK_DISTANCE = 2
-_MIXTURE_ITERATIONS = 4
+_MIXTURE_ITERATIONS = 3
 # Bottom load below this share of a contact's peak share is not part of its window.
 _WINDOW_SHARE = 0.02
 _DILATE = np.ones((3, 3), np.uint8)
@@ -85,21 +86,22 @@ def pair_layers(maps: np.ndarray, min_force_n: float, max_contacts: int,
     if n <= 1:
         return []
     labels, n = _split_peaks(top, labels, n, dead)
-    rows, cols = top.shape
-    flat = labels.ravel()
-    masses = np.bincount(flat, weights=top.ravel(), minlength=n)
-    keep = [k for k in range(1, n) if masses[k] > 0]
-    # The strongest top imprints first; the pipeline orders by the force it reports.
-    keep.sort(key=lambda k: -masses[k])
-    keep = keep[:max(int(max_contacts), 0)]
-    if not keep:
+    if max_contacts < 1:
         return []
-    rr, cc = np.indices(top.shape, dtype=np.float64)
-    tops = [np.where(labels == k, top, 0.0) for k in keep]
-    shares = _share_bottom(tops, bottom, rr, cc)
+    if n == 2:
+        # One top imprint (the common case): it is the whole top map, no label to test.
+        tops = top[None]
+        shares = bottom[None]
+    else:
+        masses = np.bincount(labels.ravel(), weights=top.ravel(), minlength=n)
+        # The strongest top imprints first; the pipeline orders by the force it reports.
+        keep = sorted((k for k in range(1, n) if masses[k] > 0), key=lambda k: -masses[k])
+        keep = np.array(keep[:max_contacts])[:, None, None]
+        tops = np.where(labels[None] == keep, top[None], 0.0)
+        shares = _share_bottom(tops, bottom)
     pairs = []
     for t, b in zip(tops, shares):
-        pair = _pair(t, b, rr, cc, rows, cols)
+        pair = _pair(t, b)
         if max(pair.top_force_n, pair.bottom_force_n) >= min_force_n:
             pairs.append(pair)
     return pairs
@@ -150,70 +152,81 @@ def _separate(top: np.ndarray, p: tuple, q: tuple, dead) -> bool:
     return bool(path.size) and float(path.min()) < SADDLE_RATIO * float(top[p])
 
 
-def _share_bottom(tops: list, bottom: np.ndarray, rr: np.ndarray, cc: np.ndarray) -> list:
-    """Return each top imprint's share of the bottom map (shares sum to the bottom map)."""
-    if len(tops) == 1:
-        return [bottom]
-    total_b = bottom.sum()
-    if total_b <= 0:
-        return [np.zeros_like(bottom) for _ in tops]
-    mass = np.array([t.sum() for t in tops])
-    centre = np.array([[(t * rr).sum(), (t * cc).sum()] for t in tops]) / mass[:, None]
-    top_all = mass.sum()
+def _share_bottom(tops: np.ndarray, bottom: np.ndarray) -> np.ndarray:
+    """Return each top imprint's share (K, rows, cols) of the bottom map; shares sum to it."""
+    k, rows, cols = tops.shape
+    shares = np.zeros(tops.shape)
+    loaded = np.flatnonzero(bottom > 0)
+    if loaded.size == 0:
+        return shares
+    basis = _basis((rows, cols))
+    moments = tops.reshape(k, -1) @ basis
+    mass = moments[:, 0]
+    centre = moments[:, 1:3] / mass[:, None]
+    spread = 0.5 * (moments[:, 3] / mass - (centre * centre).sum(axis=1))
+    bv = bottom.ravel()[loaded]
+    pos = basis[loaded, 1:3]
+    pos_t = pos.T.copy()
+    pos2 = basis[loaded, 3]
     # Presses made by one hand or tool mostly share their tangential direction: start every
-    # bottom imprint where the common shift of the whole maps puts it.
-    common = np.array([(bottom * rr).sum() / total_b - (centre[:, 0] * mass).sum() / top_all,
-                       (bottom * cc).sum() / total_b - (centre[:, 1] * mass).sum() / top_all])
+    # bottom imprint where the common shift of the whole maps puts it, a taxel wider than the
+    # top imprint (the elastic layer spreads it).
+    common = bv @ pos / bv.sum() - mass @ centre / mass.sum()
     mean = centre + common
-    var = np.array([_spread(t, c) for t, c in zip(tops, centre)]) + 1.0
-    weight = mass / top_all
-    loaded = bottom > 0
-    br, bc, bv = rr[loaded], cc[loaded], bottom[loaded]
+    var = np.maximum(spread, 0.0) + 1.0
+    log_weight = np.log(mass / mass.sum())
     for _ in range(_MIXTURE_ITERATIONS):
-        d2 = (br[None, :] - mean[:, 0:1]) ** 2 + (bc[None, :] - mean[:, 1:2]) ** 2
-        logp = np.log(weight)[:, None] - np.log(var)[:, None] - 0.5 * d2 / var[:, None]
-        logp -= logp.max(axis=0, keepdims=True)
-        resp = np.exp(logp)
-        resp /= resp.sum(axis=0, keepdims=True)
-        w = resp * bv[None, :]
-        got = w.sum(axis=1)
-        ok = got > 1e-12 * total_b
-        if not ok.all():
+        # Squared distances of every loaded taxel to every centre: |p|^2 - 2 p.m + |m|^2.
+        d2 = pos2 - 2.0 * (mean @ pos_t) + (mean * mean).sum(axis=1)[:, None]
+        logp = (log_weight - np.log(var))[:, None] - 0.5 * d2 / var[:, None]
+        resp = np.exp(logp - logp.max(axis=0))
+        resp /= resp.sum(axis=0)
+        w = resp * bv
+        m = w @ basis[loaded]
+        got = m[:, 0]
+        if not (got > 1e-12 * bv.sum()).all():
             break
-        mean = np.stack((w @ br, w @ bc), axis=1) / got[:, None]
-        d2 = (br[None, :] - mean[:, 0:1]) ** 2 + (bc[None, :] - mean[:, 1:2]) ** 2
-        var = np.maximum((w * d2).sum(axis=1) / (2.0 * got), 0.25)
-        weight = got / got.sum()
-    shares = []
-    for k in range(len(tops)):
-        s = np.zeros_like(bottom)
-        s[loaded] = resp[k] * bv
-        shares.append(s)
+        mean = m[:, 1:3] / got[:, None]
+        var = np.maximum(0.5 * (m[:, 3] / got - (mean * mean).sum(axis=1)), 0.25)
+        log_weight = np.log(got / got.sum())
+    shares.reshape(k, -1)[:, loaded] = resp * bv
     return shares
 
 
-def _spread(t: np.ndarray, centre) -> float:
-    m = t.sum()
-    rr, cc = np.indices(t.shape)
-    return float((t * ((rr - centre[0]) ** 2 + (cc - centre[1]) ** 2)).sum() / (2.0 * m))
+@lru_cache(maxsize=16)
+def _basis(shape: tuple) -> np.ndarray:
+    """Return the (rows * cols, 4) columns 1, row, col, row**2 + col**2 of every taxel."""
+    rr, cc = np.indices(shape, dtype=np.float64)
+    basis = np.stack((np.ones(rr.size), rr.ravel(), cc.ravel(),
+                      rr.ravel() ** 2 + cc.ravel() ** 2), axis=1)
+    basis.flags.writeable = False
+    return basis
 
 
-def _pair(t: np.ndarray, b: np.ndarray, rr, cc, rows: int, cols: int) -> LayerPair:
-    mt, mb = float(t.sum()), float(b.sum())
-    row = float((t * rr).sum() / mt) if mt > 0 else 0.0
-    col = float((t * cc).sum() / mt) if mt > 0 else 0.0
-    tr, tc = np.nonzero(t > 0)
-    own = b > _WINDOW_SHARE * b.max() if mb > 0 else np.zeros_like(t, dtype=bool)
-    br, bc = np.nonzero(own)
-    all_r = np.concatenate((tr, br))
-    all_c = np.concatenate((tc, bc))
-    r0, r1 = int(all_r.min()), int(all_r.max()) + 1
-    c0, c1 = int(all_c.min()), int(all_c.max()) + 1
+def _extent(mask: np.ndarray, axis: int) -> tuple:
+    """Return the half-open index range of the lines of ``mask`` along ``axis`` that hold a True."""
+    line = mask.any(axis=axis)
+    return int(line.argmax()), line.size - int(line[::-1].argmax())
+
+
+def _pair(t: np.ndarray, b: np.ndarray) -> LayerPair:
+    rows, cols = t.shape
+    t_rows = t.sum(axis=1)
+    t_cols = t.sum(axis=0)
+    mt = float(t_rows.sum())
+    row = float(t_rows @ np.arange(rows) / mt) if mt > 0 else 0.0
+    col = float(t_cols @ np.arange(cols) / mt) if mt > 0 else 0.0
+    touched = t > 0
+    peak = b.max()
+    own = b > _WINDOW_SHARE * peak if peak > 0 else np.zeros_like(touched)
+    both = touched | own
+    r0, r1 = _extent(both, 1)
+    c0, c1 = _extent(both, 0)
     border = r0 == 0 or c0 == 0 or r1 == rows or c1 == cols
     r0, r1 = max(r0 - 1, 0), min(r1 + 1, rows)
     c0, c1 = max(c0 - 1, 0), min(c1 + 1, cols)
     window = np.empty((2, r1 - r0, c1 - c0))
     window[0] = t[r0:r1, c0:c1]
-    window[1] = np.where(own[r0:r1, c0:c1], b[r0:r1, c0:c1], 0.0)
-    return LayerPair(window, (r0, c0), row, col, mt, float(window[1].sum()), int(tr.size),
-                     bool(border))
+    np.multiply(b[r0:r1, c0:c1], own[r0:r1, c0:c1], out=window[1])
+    return LayerPair(window, (r0, c0), row, col, mt, float(window[1].sum()),
+                     int(np.count_nonzero(touched)), bool(border))

@@ -21,8 +21,18 @@ __all__ = ['remove_line_leak', 'LEAK_SHARE']
 LEAK_SHARE = 0.25
 
 
-def remove_line_leak(counts: np.ndarray) -> None:
-    """Subtract from a (layers, rows, cols) stack of tared counts, in place, each line's leak."""
+def remove_line_leak(counts: np.ndarray, threshold: np.ndarray) -> None:
+    """
+    Subtract from a (layers, rows, cols) stack of tared counts, in place, each line's leak.
+
+    Only a leak that lifts lines over the touch ``threshold`` (same shape) matters; below it
+    the threshold zeroes the leak anyway, so scans where no line is mostly over it are left as
+    they are, at the cost of one comparison.
+    """
+    over = counts >= threshold
+    half = 0.5 * min(counts.shape[1:])
+    if not ((over.sum(axis=2) >= half).any() or (over.sum(axis=1) >= half).any()):
+        return
     # The leak is a sum of a row term and a column term: one sweep of each removes both.
     for axis in (2, 1):
         counts -= np.expand_dims(_leak(counts, axis), axis)

@@ -31,6 +31,7 @@ tangential components point along the azimuth, the direction in which the top la
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from functools import lru_cache
 import math
 
 import numpy as np
@@ -118,6 +119,16 @@ class Contact:
     direction_valid: bool
 
 
+@lru_cache(maxsize=256)
+def _axis_basis(shape: tuple) -> np.ndarray:
+    """Return the (h * w, 5) columns 1, row, col, row**2, col**2 of a window's taxels."""
+    rr, cc = np.indices(shape, dtype=np.float64)
+    basis = np.stack((np.ones(rr.size), rr.ravel(), cc.ravel(), rr.ravel() ** 2,
+                      cc.ravel() ** 2), axis=1)
+    basis.flags.writeable = False
+    return basis
+
+
 def _finite(v: float) -> float:
     return float(v) if math.isfinite(v) else 0.0
 
@@ -164,33 +175,37 @@ class ContactEstimator:
             est = whole if whole is not None else method.function(pair.maps)
             if not (math.isfinite(est.dx) and math.isfinite(est.dy)):
                 est = NO_SHIFT
-            out.append((pair, est, self._sigma(pair, maps, noise)))
+            out.append((pair, est, self._sigma(pair, maps, noise, len(pairs) == 1)))
         return out
 
-    def _sigma(self, pair: LayerPair, maps: np.ndarray, noise: np.ndarray) -> float:
+    def _sigma(self, pair: LayerPair, maps: np.ndarray, noise: np.ndarray,
+               alone: bool) -> float:
         """Return the 1-sigma uncertainty of one axis of the pair's shift, taxels (docstring)."""
         r0, c0 = pair.origin
         h, w = pair.maps.shape[1:]
-        full = maps[:, r0:r0 + h, c0:c0 + w]
-        # A contact's share of a layer carries the same share of that layer's noise.
-        share = np.divide(pair.maps, full, out=np.zeros_like(full), where=full > 0)
-        sigma_f = noise[:, r0:r0 + h, c0:c0 + w] * share
+        err2 = noise[:, r0:r0 + h, c0:c0 + w] ** 2
+        if not alone:
+            # A contact's share of a layer carries the same share of that layer's noise.
+            full = maps[:, r0:r0 + h, c0:c0 + w]
+            share = np.divide(pair.maps, full, out=np.zeros_like(full), where=full > 0)
+            err2 *= share * share
+        basis = _axis_basis((h, w))
+        moments = (pair.maps.reshape(2, -1) @ basis).tolist()
+        noises = (err2.reshape(2, -1) @ basis).tolist()
         total = 0.0
-        rows = np.arange(h, dtype=np.float64)
-        cols = np.arange(w, dtype=np.float64)
-        for layer, err in zip(pair.maps, sigma_f):
-            mass = layer.sum()
-            if mass <= 0:
+        for m, e in zip(moments, noises):
+            mass = m[0]
+            if not mass > 0:
                 return math.inf
-            for axis, pos in ((0, cols), (1, rows)):
-                profile = layer.sum(axis=axis)
-                centre = profile @ pos / mass
-                d2 = (pos - centre) ** 2
-                var = profile @ d2 / mass
-                spread = (err ** 2).sum(axis=axis) @ d2 / (mass * mass)
+            for first, second in ((1, 3), (2, 4)):
+                centre = m[first] / mass
+                var = max(m[second] / mass - centre * centre, 0.0)
+                # sum e^2 (x - c)^2 = sum e^2 x^2 - 2 c sum e^2 x + c^2 sum e^2
+                spread = (e[second] - 2.0 * centre * e[first] + centre * centre * e[0]) / (
+                    mass * mass)
                 lock = math.exp(-2.0 * math.pi ** 2 * max(var - 1.0 / 12.0, 0.0)) / math.pi
                 # Half of both axes: ``sigma`` stands for one axis of the shift.
-                total += 0.5 * (spread + 0.5 * lock * lock)
+                total += 0.5 * (max(spread, 0.0) + 0.5 * lock * lock)
         if pair.at_border:
             total += _BORDER_SIGMA ** 2
         cal = self.calibration
