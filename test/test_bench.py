@@ -23,7 +23,8 @@ def results():
                      'frames': 2, 'methods': methods, 'skimage_upsample': 100, 'rows': rows,
                      'summary': bench_core.pareto_summary(rows, methods, [16])},
         'seed': bench_core.seed_experiment(1, 12),
-        'scaling': bench_core.scaling([16], [1, 2], ['centroid', 'seed'], 1, 1, log=lambda s: None),
+        'scaling': bench_core.scaling([16], [1, 2], ['centroid', 'seed'], 1, 1,
+                                      log=lambda s: None),
         'how': {'command': 'test', 'pinned_cpu': 0, 'repetitions': 'tiny'},
         'elapsed_s': 1.0, 'generated_utc': 'now',
     }

@@ -204,7 +204,7 @@ def _basis(shape: tuple) -> np.ndarray:
 
 
 def _extent(mask: np.ndarray, axis: int) -> tuple:
-    """Return the half-open index range of the lines of ``mask`` along ``axis`` that hold a True."""
+    """Return the half-open range of the lines of ``mask`` along ``axis`` that hold a True."""
     line = mask.any(axis=axis)
     return int(line.argmax()), line.size - int(line[::-1].argmax())
 
