@@ -35,9 +35,9 @@ from .core.sim.experiments import make_scene, SCENE_KINDS
 from .core.sim.skins import family_skin, skin_names
 from .estimator_params import estimator_config, load_direction_parameters
 
-__all__ = ['PAPER_TABLE', 'CONTACT_COLUMNS', 'MethodRun', 'summarise', 'run_method',
-           'score_run', 'evaluate_method', 'evaluate', 'match_presses', 'direction_errors',
-           'write_contacts', 'format_table', 'main']
+__all__ = ['PAPER_TABLE', 'CONTACT_COLUMNS', 'MethodRun', 'summarise', 'calibrated_estimator',
+           'run_method', 'score_run', 'evaluate_method', 'evaluate', 'match_presses',
+           'direction_errors', 'write_contacts', 'format_table', 'main']
 
 # Table 1 of the seed paper (Sensors 2019, 19, 4697): beta -> (mean error, std), degrees.
 PAPER_TABLE = {0.0: (0.96, 0.64), 45.0: (1.75, 1.13), 90.0: (5.65, 0.96), 135.0: (3.98, 1.13),
@@ -146,11 +146,13 @@ def press_counts(data: Dataset) -> np.ndarray:
     return np.isfinite(data.press_x_m).sum(axis=1)
 
 
-def run_method(data: Dataset, method: str, config: EstimatorConfig = None) -> MethodRun:
+def calibrated_estimator(data: Dataset, method: str,
+                         config: EstimatorConfig = None) -> ContactEstimator:
     """
-    Run estimator ``method`` over every frame of ``data`` (``config`` gives its other settings).
+    Return estimator ``method`` (``config`` gives its other settings) made ready for ``data``.
 
-    Tares from the dataset's tare frames, calibrates (x_p, y_p) from its single normal presses.
+    Tared from the dataset's tare frames, (x_p, y_p) calibrated from its single normal presses
+    (none: uncalibrated).
     """
     base = config or EstimatorConfig(pitch_m=data.pitch_m)
     cfg = EstimatorConfig(**{**base.__dict__, 'method': method, 'pitch_m': data.pitch_m})
@@ -163,13 +165,21 @@ def run_method(data: Dataset, method: str, config: EstimatorConfig = None) -> Me
         s = est.measure_shifts(data.top[i], data.bottom[i])
         if s:
             shifts.append(s[0])
-    calibration = calibrate_from_shifts(np.array(shifts).reshape(-1, 2), max_std_m=math.inf)
+    # Without a single normal press the layers are taken as aligned (calibration.presses = 0).
+    calibration = (calibrate_from_shifts(np.array(shifts).reshape(-1, 2), max_std_m=math.inf)
+                   if shifts else Calibration())
     est = ContactEstimator(cfg, calibration, est.conditioner)
     est.process(data.top[0], data.bottom[0])  # warm the per-shape caches
+    return est
+
+
+def run_method(data: Dataset, method: str, config: EstimatorConfig = None) -> MethodRun:
+    """Run estimator ``method`` (see :func:`calibrated_estimator`) over every frame of ``data``."""
+    est = calibrated_estimator(data, method, config)
     start = time.perf_counter()
     contacts = [est.process(data.top[i], data.bottom[i]) for i in range(data.frames)]
     elapsed = time.perf_counter() - start
-    return MethodRun(method, calibration, contacts, elapsed / data.frames * 1e6)
+    return MethodRun(method, est.calibration, contacts, elapsed / data.frames * 1e6)
 
 
 def match_presses(presses: list, contacts: list, pitch_m: float) -> list:

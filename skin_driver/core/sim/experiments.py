@@ -1,8 +1,9 @@
 """
 Scenes of simulated presses, each defined once, rendered as datasets with ground truth.
 
-Scene kinds (``SCENE_KINDS``), all with 20 no-touch tare frames and, except ``paper``, a share
-of single normal presses at random interior spots for calibrating (x_p, y_p):
+Scene kinds (``SCENE_KINDS``), all with 20 no-touch tare frames and, except ``paper``, one
+frame in five (the first, the sixth, ...) a single normal press at a random interior spot for
+calibrating (x_p, y_p):
 
 * ``paper``: the seed paper's protocol: at one spot, one normal press and one alpha = 45 deg
   press at each beta = 0, 45, ..., 315 deg, repeated (:func:`paper_presses`, which the
@@ -38,7 +39,7 @@ PAPER_FORCE_N = 10.0
 PAPER_RADIUS_M = 0.004
 # Near the centre, off the taxel centres on purpose: a realistic, unaligned placement.
 PAPER_SPOT = (0.49, 0.51)
-NORMAL_SHARE = 0.2
+NORMAL_EVERY = 5
 DIAMETER_RANGE_M = (0.003, 0.007)
 ELLIPTICAL_SHARE = 0.3
 ALPHA_RANGE_DEG = (15.0, 60.0)
@@ -146,8 +147,7 @@ def make_seed_experiment(model: SkinModel = None, repeats: int = 20,
 
 
 def make_random_experiment(model: SkinModel = None, frames: int = 400,
-                           rng: np.random.Generator = None, normal_share: float = NORMAL_SHARE,
-                           force_range_n: tuple = (5.0, 15.0),
+                           rng: np.random.Generator = None, force_range_n: tuple = (5.0, 15.0),
                            alpha_range_deg: tuple = ALPHA_RANGE_DEG,
                            diameter_range_m: tuple = DIAMETER_RANGE_M,
                            border_m: float = 0.01) -> Dataset:
@@ -155,15 +155,15 @@ def make_random_experiment(model: SkinModel = None, frames: int = 400,
     model = _default_skin(model)
     rng = rng if rng is not None else np.random.default_rng(0)
     out = []
-    for _ in range(int(frames)):
+    for i in range(int(frames)):
         x, y = _interior_spot(model, rng, border_m)
         out.append([_random_press(rng, x, y, force_range_n, alpha_range_deg, diameter_range_m,
-                                  normal=rng.random() < normal_share)])
+                                  normal=i % NORMAL_EVERY == 0)])
     return _build(model, out, rng)
 
 
 def make_border_experiment(model: SkinModel = None, frames: int = 200,
-                           rng: np.random.Generator = None, normal_share: float = NORMAL_SHARE,
+                           rng: np.random.Generator = None,
                            force_range_n: tuple = (5.0, 15.0)) -> Dataset:
     """
     Render tilted presses centred from half a taxel outside to one taxel inside an edge.
@@ -176,8 +176,8 @@ def make_border_experiment(model: SkinModel = None, frames: int = 200,
     width, height = _span(model)
     pitch = model.pitch_m
     out = []
-    for _ in range(int(frames)):
-        if rng.random() < normal_share:
+    for i in range(int(frames)):
+        if i % NORMAL_EVERY == 0:
             x, y = _interior_spot(model, rng, 2 * pitch)
             out.append([_random_press(rng, x, y, force_range_n, normal=True)])
             continue
@@ -193,21 +193,20 @@ def make_border_experiment(model: SkinModel = None, frames: int = 200,
 
 
 def make_multi_experiment(model: SkinModel = None, frames: int = 200,
-                          rng: np.random.Generator = None, normal_share: float = NORMAL_SHARE,
-                          force_range_n: tuple = (5.0, 15.0),
+                          rng: np.random.Generator = None, force_range_n: tuple = (5.0, 15.0),
                           separation_taxels: tuple = (2.0, 8.0)) -> Dataset:
     """
     Render two or three presses at once (one frame in three has three), 2..8 taxels apart.
 
     A third of the pairs are 2..3 taxels apart. Each press is tilted (alpha 15..60 deg) or, one
-    in five, normal; a share ``normal_share`` of frames hold one normal press for calibration.
+    in five, normal.
     """
     model = _default_skin(model)
     rng = rng if rng is not None else np.random.default_rng(0)
     pitch = model.pitch_m
     out = []
     while len(out) < int(frames):
-        if rng.random() < normal_share:
+        if len(out) % NORMAL_EVERY == 0:
             x, y = _interior_spot(model, rng, 2 * pitch)
             out.append([_random_press(rng, x, y, force_range_n, normal=True)])
             continue
