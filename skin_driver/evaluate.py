@@ -200,14 +200,20 @@ def match_presses(presses: list, contacts: list, pitch_m: float) -> list:
 
 
 def _between(pa: dict, pb: dict, contacts: list, pitch_m: float) -> bool:
-    """Return whether a contact lies on the way between two presses (it stands for both)."""
+    """
+    Return whether a contact lies between two presses, off both ends: it stands for both.
+
+    A merged contact's centroid moves from the stronger press towards the weaker one by the
+    weaker one's share of the force; a contact at one end is that press's alone.
+    """
     ax, ay, bx, by = pa['x_m'], pa['y_m'], pb['x_m'], pb['y_m']
     length2 = (bx - ax) ** 2 + (by - ay) ** 2
+    if length2 == 0:
+        return False
     for c in contacts:
-        t = ((c.x_m - ax) * (bx - ax) + (c.y_m - ay) * (by - ay)) / length2 if length2 else 0.0
-        t = min(max(t, 0.0), 1.0)
-        if math.hypot(c.x_m - ax - t * (bx - ax), c.y_m - ay - t * (by - ay)) <= (
-                MATCH_RADIUS_TAXELS * pitch_m):
+        t = ((c.x_m - ax) * (bx - ax) + (c.y_m - ay) * (by - ay)) / length2
+        off_line = math.hypot(c.x_m - ax - t * (bx - ax), c.y_m - ay - t * (by - ay))
+        if 0.1 <= t <= 0.9 and off_line <= MATCH_RADIUS_TAXELS * pitch_m:
             return True
     return False
 
