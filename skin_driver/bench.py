@@ -1,5 +1,5 @@
 """
-`make bench`: speed against error of the estimators, the seed's experiment, end to end, scale.
+`make bench`: error against speed, the seed's experiment, end to end, scale, the skin family.
 
 Usage::
 
@@ -39,12 +39,16 @@ FULL = {
     'scale_frames': 10, 'scale_repeats': 5,
     'rates': [100.0, 1000.0, 2000.0], 'e2e_seconds': 15.0, 'e2e_warmup': 2.0,
     'stage_repeats': 1000,
+    'family_sizes': {'paper': 8, 'random': 150, 'border': 80, 'multi': 80},
+    'family_all_methods': True,
 }
 QUICK = {
     'grids': [16, 32], 'shifts': [0.5, 2.0], 'noises': [6.0], 'frames': 3,
     'seed_repeats': 3, 'random_frames': 50,
     'scale_grids': [16, 32], 'contacts': [1, 4], 'scale_frames': 3, 'scale_repeats': 2,
     'rates': [100.0, 2000.0], 'e2e_seconds': 3.0, 'e2e_warmup': 1.0, 'stage_repeats': 100,
+    'family_sizes': {'paper': 1, 'random': 15, 'border': 10, 'multi': 10},
+    'family_all_methods': False,
 }
 
 
@@ -118,6 +122,8 @@ def targets(res) -> list:
         out.append(_target('random presses valid share (default)',
                            100 * (r['valid_share'] or 0), '>= 95 %',
                            (r['valid_share'] or 0) >= 0.95, spec='.1f'))
+    if 'family' in res:
+        out += family_targets(res['family']['worst'])
     if 'scaling' in res:
         rows = res['scaling']['by_grid']
         for n, limit in ((16, 100.0), (128, 1000.0)):
@@ -143,6 +149,38 @@ def targets(res) -> list:
             out.append(_target('end to end 16x16 at 2 kHz: p99 latency', p99, '<= 2 ms',
                                p99 is not None and p99 <= 2.0,
                                f'{p99 / 2.0:.1f} x the limit' if p99 and p99 > 2 else '', '.2f'))
+    return out
+
+
+def _share_target(name, share, skin, limit) -> dict:
+    note = f'worst on {skin}' if skin else ''
+    if share is not None and share < limit:
+        note += f', {100 * (limit - share):.1f} points short'
+    return _target(name, None if share is None else 100 * share, f'>= {100 * limit:g} %',
+                   share is not None and share >= limit, note, '.1f')
+
+
+def family_targets(worst) -> list:
+    """Return the issue's targets over the whole family, each at its worst skin."""
+    d = worst[DEFAULT_METHOD]
+    out = [_share_target('family: valid share for shifts >= 1 taxel (default, worst skin)',
+                         d['large_shift_valid_share'], d['large_shift_skin'], 0.95)]
+    for kind in ('paper', 'random', 'border', 'multi'):
+        r = d[kind]['ratio_to_centroid']
+        out.append(_target(f'family {kind}: error default / centroid (worst skin)', r, '<= 1',
+                           r is not None and r <= 1.0,
+                           f'worst on {d[kind]["ratio_to_centroid_skin"]}' if r else ''))
+    r = d['paper']['ratio_to_seed']
+    out.append(_target("family paper's protocol: error default / seed (worst skin)", r, '<= 0.20',
+                       r is not None and r <= 0.2,
+                       f'worst on {d["paper"]["ratio_to_seed_skin"]}' if r else ''))
+    out.append(_share_target('family: presses >= 3 taxels apart found apart (default, worst)',
+                             d['separate_share_far'], d['separate_skin'], 0.98))
+    v = d['median_us']
+    out.append(_target("family: cost of the default per 16x16 frame pair (worst skin's median)",
+                       v, '<= 100 us', v is not None and v <= 100.0,
+                       f'worst on {d["cost_skin"]}' + (f', {v / 100:.2f} x the limit'
+                                                       if v and v > 100 else ''), '.0f'))
     return out
 
 
@@ -240,6 +278,10 @@ def run(args) -> dict:
         log("2. the seed's experiment")
         res['seed'] = bench_core.seed_experiment(cfg['seed_repeats'], cfg['random_frames'],
                                                  seed=args.seed)
+        log('5. the skin family')
+        res['family'] = bench_core.family(cfg['family_sizes'],
+                                          bench_core.family_methods(cfg['family_all_methods']),
+                                          seed=args.seed, log=log)
         log('4. scale')
         res['scaling'] = bench_core.scaling(cfg['scale_grids'], cfg['contacts'],
                                             [DEFAULT_METHOD, 'seed'], cfg['scale_frames'],
@@ -257,7 +299,8 @@ def run(args) -> dict:
         'repetitions': (f'{cfg["frames"]} frames per accuracy cell; scale: '
                         f'{cfg["scale_frames"]} frames x {cfg["scale_repeats"]} repeats per '
                         f'point; seed experiment {cfg["seed_repeats"]} repeats; '
-                        f'{cfg["random_frames"]} random presses'),
+                        f'{cfg["random_frames"]} random presses; family scenes per skin '
+                        f'{cfg["family_sizes"]} (paper: repeats of 9 frames)'),
     }
     res['machine']['load_after'] = [round(v, 2) for v in os.getloadavg()]
     res['targets'] = targets(res)
@@ -299,6 +342,8 @@ def write(res, out_dir) -> None:
                                                               out_dir)
     if 'scaling' in res:
         images['scaling'] = bench_report.plot_scaling(res['scaling'], out_dir)
+    if 'family' in res:
+        images['sigma'] = bench_report.plot_sigma(res['family']['sigma_vs_error'], out_dir)
     if 'e2e' in res:
         images['e2e'] = bench_report.plot_e2e(res['e2e']['runs'], out_dir)
     res['images'] = images

@@ -1,5 +1,5 @@
 """
-ROS-free parts of the benchmark: accuracy against speed, the seed's experiment and scaling.
+ROS-free parts of the benchmark: accuracy against speed, the seed's experiment, scaling, family.
 
 Every timing is taken in this process, on the core it is pinned to, with the estimators
 interleaved frame by frame in a shuffled order, so that machine noise hits them all alike.
@@ -14,10 +14,13 @@ import numpy as np
 
 from .core.estimation.fsr import FsrModel
 from .core.estimation.pipeline import ContactEstimator, EstimatorConfig
-from .core.estimation.shift import Method, method_names, NO_SHIFT, ShiftEstimate
-from .core.sim.experiments import make_random_experiment, make_seed_experiment
+from .core.estimation.shift import DEFAULT_METHOD, Method, method_names, NO_SHIFT, ShiftEstimate
+from .core.sim.experiments import (make_random_experiment, make_scene, make_seed_experiment,
+                                   SCENE_KINDS)
 from .core.sim.physics import Press, render, SkinModel
-from .evaluate import evaluate, format_table, PAPER_TABLE
+from .core.sim.skins import family_skin, skin_names
+from .evaluate import (calibrated_estimator, direction_errors, evaluate, format_table,
+                       MethodRun, PAPER_TABLE, score_run)
 
 PATCH_M = 0.08
 SEED_PITCH_M = 0.005
@@ -234,3 +237,116 @@ def scaling(grids, contact_counts, methods, frames, repeats, seed=0, log=print) 
                              **c} for m, c in cost.items()]
         log(f'  scaling: contacts at {n}x{n} done')
     return {'by_grid': by_grid, 'by_contacts': by_contacts}
+
+
+def family_methods(everything: bool = True) -> list:
+    """Return the methods of the family benchmark: default, seed, centroid, then the others."""
+    first = [DEFAULT_METHOD, 'seed', 'centroid']
+    return first + ([m for m in method_names() if m not in first] if everything else [])
+
+
+def _family_row(skin, kind, data, run, costs) -> dict:
+    """Return the headline figures of one method on one scene of one skin."""
+    scored = score_run(data, run)
+    summary, presses = scored['summary'], scored['presses']
+    # Scenes of several presses are scored press by press; the others frame by frame.
+    source = presses if kind == 'multi' else summary
+    return {'skin': skin, 'scene': kind, 'method': run.method, 'frames': data.frames,
+            'mean_error_deg': source['mean_error_deg'], 'valid_share': source['valid_share'],
+            'large_shift_valid_share': summary['large_shift_valid_share'],
+            'large_shift_frames': summary['large_shift_frames'],
+            'separate_share_far': presses and presses['separate_share_far'],
+            'merged_share_far': presses and presses['merged_share_far'],
+            'separate_share_close': presses and presses['separate_share_close'],
+            'median_us': 1e6 * float(np.median(costs)), 'mean_us': 1e6 * float(np.mean(costs))}
+
+
+def family(sizes: dict, methods: list, skins: list = None, seed: int = 0, log=print) -> dict:
+    """
+    Score every method on every scene of every skin of the family, side by side.
+
+    Each frame goes to every method in a fresh shuffled order (timed, contacts included, on
+    the core the process is pinned to). Returns per (skin, scene, method) rows, the cost per
+    (skin, method) over all the skin's frames, and the default's (reported azimuth sigma,
+    measured error) pairs.
+    """
+    rng = np.random.default_rng(seed)
+    rows, costs, sigma = [], [], []
+    for skin in skins or skin_names():
+        per_skin = {m: [] for m in methods}
+        for kind in SCENE_KINDS:
+            data = make_scene(kind, skin, rng, sizes[kind])
+            ests = {m: calibrated_estimator(data, m) for m in methods}
+            contacts = {m: [] for m in methods}
+            times = {m: [] for m in methods}
+            for i in range(data.frames):
+                for m in rng.permutation(methods):
+                    elapsed, found = _timed(ests[m], data.top[i], data.bottom[i])
+                    times[m].append(elapsed)
+                    contacts[m].append(found)
+            for m in methods:
+                run = MethodRun(m, ests[m].calibration, contacts[m],
+                                1e6 * float(np.mean(times[m])))
+                rows.append(_family_row(skin, kind, data, run, times[m]))
+                per_skin[m] += times[m]
+                if m == DEFAULT_METHOD:
+                    sigma += [(math.degrees(c.azimuth_sigma_rad), err, skin, kind)
+                              for _, _, err, c in direction_errors(data, run) if err is not None]
+        costs += [{'skin': skin, 'method': m, 'frames': len(t),
+                   'median_us': 1e6 * float(np.median(t)), 'mean_us': 1e6 * float(np.mean(t)),
+                   'p90_us': 1e6 * float(np.percentile(t, 90))} for m, t in per_skin.items()]
+        log(f'  family: {skin} done')
+    return {'skins': {s: family_skin(s).description for s in (skins or skin_names())},
+            'sizes': sizes, 'methods': methods, 'rows': rows, 'costs': costs,
+            'sigma_vs_error': sigma, 'worst': family_worst(rows, costs, methods)}
+
+
+def _worst(rows, key, lowest: bool):
+    """Return (value, skin) of the worst row by ``key`` (None values left out)."""
+    rated = [(r[key], r['skin']) for r in rows if r[key] is not None]
+    if not rated:
+        return None, None
+    return (min if lowest else max)(rated)
+
+
+def family_worst(rows, costs, methods) -> dict:
+    """
+    Return each method's worst case over the skins: per scene, error, valid share and more.
+
+    ``ratio_to_centroid`` and ``ratio_to_seed`` are the largest ratios of the method's mean
+    error to the centroid difference's and to seed's on the same skin and scene.
+    """
+    index = {(r['skin'], r['scene'], r['method']): r for r in rows}
+    out = {}
+    for m in methods:
+        mine = [r for r in rows if r['method'] == m]
+        entry = {}
+        for kind in SCENE_KINDS:
+            sel = [r for r in mine if r['scene'] == kind]
+            error, error_skin = _worst(sel, 'mean_error_deg', lowest=False)
+            valid, valid_skin = _worst(sel, 'valid_share', lowest=True)
+            ratios = {}
+            for ref in ('centroid', 'seed'):
+                if ref == m:
+                    ratios[ref] = (None, None)
+                    continue
+                pairs = [(r['mean_error_deg'] / index[(r['skin'], kind, ref)]['mean_error_deg'],
+                          r['skin']) for r in sel
+                         if (r['skin'], kind, ref) in index and r['mean_error_deg'] is not None
+                         and index[(r['skin'], kind, ref)]['mean_error_deg']]
+                ratios[ref] = max(pairs) if pairs else (None, None)
+            entry[kind] = {'mean_error_deg': error, 'error_skin': error_skin,
+                           'valid_share': valid, 'valid_skin': valid_skin,
+                           'ratio_to_centroid': ratios['centroid'][0],
+                           'ratio_to_centroid_skin': ratios['centroid'][1],
+                           'ratio_to_seed': ratios['seed'][0],
+                           'ratio_to_seed_skin': ratios['seed'][1]}
+        large, large_skin = _worst(mine, 'large_shift_valid_share', lowest=True)
+        separate, separate_skin = _worst(mine, 'separate_share_far', lowest=True)
+        cost, cost_skin = _worst([c for c in costs if c['method'] == m], 'median_us',
+                                 lowest=False)
+        entry.update({'large_shift_valid_share': large, 'large_shift_skin': large_skin,
+                      'separate_share_far': separate, 'separate_skin': separate_skin,
+                      'median_us': cost, 'cost_skin': cost_skin})
+        out[m] = entry
+    return out

@@ -123,6 +123,37 @@ def plot_e2e(e2e, out_dir) -> str:
     return _save(fig, out_dir, 'e2e_latency.png')
 
 
+def plot_sigma(pairs, out_dir) -> str:
+    """Scatter the default's reported azimuth sigma against its measured error, per scene."""
+    fig, ax = plt.subplots(figsize=(5.5, 4.5), constrained_layout=True)
+    kinds = list(dict.fromkeys(p[3] for p in pairs))
+    for i, kind in enumerate(kinds):
+        pts = np.array([(s, max(e, 1e-3)) for s, e, _, k in pairs if k == kind])
+        ax.scatter(pts[:, 0], pts[:, 1], s=8, alpha=0.5, color=plt.cm.tab10(i), label=kind)
+    if pairs:
+        sig = np.array([p[0] for p in pairs])
+        err = np.array([p[1] for p in pairs])
+        # Binned RMS error: where it follows the diagonal, the reported sigma is honest.
+        edges = np.geomspace(max(sig.min(), 1e-3), max(sig.max(), 1e-2), 9)
+        centres, rms = [], []
+        for lo, hi in zip(edges[:-1], edges[1:]):
+            sel = (sig >= lo) & (sig <= hi)
+            if sel.sum() >= 3:
+                centres.append(np.sqrt(lo * hi))
+                rms.append(np.sqrt(np.mean(err[sel] ** 2)))
+        ax.plot(centres, rms, 'k-o', lw=1.2, ms=4, label='RMS error per sigma bin')
+        lim = [min(sig.min(), 0.01), max(sig.max(), err.max(), 1.0)]
+        ax.plot(lim, lim, 'k--', lw=0.8, label='error = sigma')
+    ax.set_xscale('log')
+    ax.set_yscale('log')
+    ax.set_xlabel('reported azimuth_sigma [deg]')
+    ax.set_ylabel('measured azimuth error [deg]')
+    ax.set_title('Default estimator over the family: reported sigma vs error')
+    ax.grid(True, which='both', alpha=0.3)
+    ax.legend(fontsize=7)
+    return _save(fig, out_dir, 'sigma_vs_error.png')
+
+
 def _f(v, spec='.1f') -> str:
     return '-' if v is None else format(v, spec)
 
@@ -154,6 +185,8 @@ def markdown(res, images) -> str:
            "the same 80 mm patch as the seed's 16 x 16 at 5 mm, with a smaller pitch (the "
            "seed's future work: higher resolution); FSR force ranges scale with the taxel area "
            '(same material, same pressure -> same counts).', '']
+    if 'family' in res:
+        out += _family_headline(res['family'])
     out += ['## Targets', '']
     out += _table(['target', 'measured', 'limit', 'met', 'note'],
                   [(t['name'], t['measured'], t['limit'], 'yes' if t['met'] else '**no**',
@@ -201,9 +234,82 @@ def markdown(res, images) -> str:
                       [(r['grid'], r['contacts'], _f(r['contacts_found']), r['method'],
                         _f(r['median_us'])) for r in sc['by_contacts']])
         out += ['']
+    if 'family' in res:
+        out += _family_section(res['family'], images)
     if 'e2e' in res:
         out += _e2e_section(res, images)
     return '\n'.join(out) + '\n'
+
+
+def _pct(v) -> str:
+    return '-' if v is None else f'{100 * v:.0f} %'
+
+
+def _worst_cell(w: dict) -> str:
+    """Return 'error on skin, valid share on skin' of one scene's worst case."""
+    return (f'{_f(w["mean_error_deg"], ".2f")} deg ({w["error_skin"]}); valid '
+            f'{_pct(w["valid_share"])} ({w["valid_skin"]})')
+
+
+def _family_headline(fam) -> list:
+    """Return the headline: each method's worst case over the whole family."""
+    out = [f'## Headline: worst case over the {len(fam["skins"])} skins of the family', '',
+           'Each cell is the worst skin for that method and scene (mean azimuth error, and '
+           'lowest valid share), measured on the same frames for every method; section 5 '
+           'has every skin.', '']
+    rows = []
+    for m, w in fam['worst'].items():
+        rows.append([m] + [_worst_cell(w[k]) for k in ('paper', 'random', 'border', 'multi')]
+                    + [f'{_pct(w["large_shift_valid_share"])} ({w["large_shift_skin"]})',
+                       f'{_pct(w["separate_share_far"])} ({w["separate_skin"]})',
+                       f'{_f(w["median_us"], ".0f")} ({w["cost_skin"]})'])
+    out += _table(['method', "paper's protocol", 'random spot', 'border', 'multi (per press)',
+                   'valid, shift >= 1 taxel', 'apart, >= 3 taxels', 'us/frame pair'], rows)
+    return out + ['']
+
+
+def _family_section(fam, images) -> list:
+    out = ['## 5. The skin family', '',
+           'Skins (`skin_driver.core.sim.skins`; `python -m skin_driver.evaluate --skin NAME '
+           '--scene KIND` renders and scores any of them):', '']
+    out += [f'- `{name}`: {text}' for name, text in fam['skins'].items()]
+    out += ['', f'Scenes per skin (`core.sim.experiments`, sizes {fam["sizes"]}): the '
+            "paper's protocol at the skin's own force, random spots (alpha 15-60 deg, 3-7 mm "
+            'indenters, some elliptical), presses within a taxel of the border, and two or '
+            'three presses at once (some 2-3 taxels apart; scored press by press, matched by '
+            'location). Error: mean |azimuth error| of the valid directions; valid: share of '
+            'tilted presses with a valid direction. Every estimator gets every frame in a '
+            'fresh shuffled order, estimators configured as by default (the skin is unknown '
+            "to them), tared and (x_p, y_p)-calibrated from the scene's own frames.", '']
+    methods = fam['methods']
+    for kind in ('paper', 'random', 'border', 'multi'):
+        out += [f'### {kind}', '']
+        rows = []
+        for skin in fam['skins']:
+            row = [skin]
+            for m in methods:
+                r = next(x for x in fam['rows'] if (x['skin'], x['scene'], x['method'])
+                         == (skin, kind, m))
+                cell = f'{_f(r["mean_error_deg"], ".2f")} / {_pct(r["valid_share"])}'
+                if kind == 'multi':
+                    cell += f' / {_pct(r["separate_share_far"])} apart'
+                elif kind == 'paper':
+                    cell += f' / {_pct(r["large_shift_valid_share"])} large'
+                row.append(cell)
+            rows.append(row)
+        extra = {'paper': ' / valid at >= 1 taxel', 'multi': ' / apart'}.get(kind, '')
+        out += _table(['skin'] + [f'{m}: error / valid{extra}' for m in methods], rows) + ['']
+    out += ['Cost per 16 x 16 frame pair over all the frames of each skin (median us, contacts '
+            'included, one pinned core; other jobs share the machine):', '']
+    out += _table(['skin'] + methods,
+                  [[skin] + [_f(next(c['median_us'] for c in fam['costs']
+                                     if (c['skin'], c['method']) == (skin, m)), '.0f')
+                             for m in methods] for skin in fam['skins']])
+    out += ['', f'![sigma vs error]({images["sigma"]})', '',
+            "The default's reported 1-sigma azimuth uncertainty against its measured error, "
+            'one point per tilted press with a valid direction; the line is the RMS error per '
+            'sigma bin. Honest sigmas put it on the dashed diagonal.', '']
+    return out
 
 
 def _e2e_section(res, images) -> list:

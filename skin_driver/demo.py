@@ -36,30 +36,22 @@ import yaml
 
 LEAD_IN_S = 3.0
 CAL_PRESSES = 6
-CAL_PERIOD_S = 1.2
-DIR_PERIOD_S = 1.5
+PERIOD_S = 1.5
 
 
 def demo_scene(repeats: int, pace: float = 1.0) -> dict:
     """
     Return the demo's scene: a quiet lead-in, normal presses, then the eight directions.
 
-    pace < 1 plays the presses faster (the lead-in, which start-up needs, stays as it is).
+    The presses are the paper's protocol as the evaluator and the `seed` scene define it, on the
+    family's default skin. pace < 1 plays them faster (the lead-in, which start-up needs, stays).
     """
-    presses = [{'time_s': LEAD_IN_S + i * CAL_PERIOD_S * pace, 'alpha_deg': 0.0,
-                'beta_deg': 0.0, 'duration_s': 1.0 * pace} for i in range(CAL_PRESSES)]
-    start = LEAD_IN_S + (CAL_PRESSES * CAL_PERIOD_S + 0.5) * pace
-    for k in range(repeats):
-        for j, beta in enumerate(range(0, 360, 45)):
-            presses.append({'time_s': start + (k * 8 + j) * DIR_PERIOD_S * pace,
-                            'alpha_deg': 45.0, 'beta_deg': float(beta),
-                            'duration_s': 1.2 * pace})
     return {
-        'name': 'demo', 'description': 'seed experiment for make demo',
-        'model': {'rows': 16, 'cols': 16, 'pitch_m': 0.005},
-        'defaults': {'x_m': 0.0375, 'y_m': 0.0375, 'force_n': 10.0, 'radius_m': 0.004,
-                     'ramp_s': 0.3 * pace},
-        'presses': presses,
+        'name': 'demo', 'description': 'seed experiment for make demo', 'skin': 'default',
+        'generator': {'kind': 'paper', 'leading_normal': CAL_PRESSES, 'normal_per_repeat': 0,
+                      'repeats': repeats, 'start_s': LEAD_IN_S,
+                      'interval_s': PERIOD_S * pace, 'duration_s': 1.2 * pace,
+                      'ramp_s': 0.3 * pace},
     }
 
 

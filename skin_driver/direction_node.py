@@ -31,6 +31,7 @@ from skin_driver.core.estimation.heatmap import colour_map
 from skin_driver.core.estimation.pipeline import ContactEstimator, EstimatorConfig
 from skin_driver.core.estimation.presses import PressSegmenter
 from skin_driver.core.estimation.shift import DEFAULT_METHOD, method_names
+from skin_driver.estimator_params import estimator_config, ESTIMATOR_PARAMETERS
 from skin_driver.params import check, declare, ParameterError
 from skin_msgs.msg import SkinFrame, TactileContact, TactileContactArray
 from skin_msgs.srv import Calibrate
@@ -39,9 +40,6 @@ from visualization_msgs.msg import MarkerArray
 
 MAX_CALIBRATION_PRESSES = 1000
 MAX_CALIBRATION_S = 3600.0
-# Parameters that shape the estimator: changing one at run time rebuilds it.
-ESTIMATOR_PARAMETERS = ('method', 'threshold', 'min_force', 'min_confidence', 'min_shift',
-                        'compliance', 'force_scale', 'skin.fill_factor')
 DEFAULT_CALIBRATION_FILE = os.path.join(
     os.environ.get('ROS_HOME', os.path.join(os.path.expanduser('~'), '.ros')),
     'skin_driver', 'calibration.yaml')
@@ -177,11 +175,7 @@ class DirectionNode(Node):
 
     def _build_estimator(self, pitch_m: float, conditioner=None) -> ContactEstimator:
         """Return an estimator for the current parameters; a conditioner carries the tare over."""
-        config = EstimatorConfig(
-            method=self._p('method'), pitch_m=pitch_m, threshold_counts=self._p('threshold'),
-            min_contact_force_n=self._p('min_force'), min_confidence=self._p('min_confidence'),
-            min_shift_m=self._p('min_shift'), compliance_m_per_n=self._p('compliance'),
-            force_scale=self._p('force_scale'), fill_factor=self._p('skin.fill_factor'))
+        config = estimator_config({n: self._p(n) for n in ESTIMATOR_PARAMETERS}, pitch_m)
         return ContactEstimator(config, self._calibration, conditioner=conditioner)
 
     def _follow_pitch(self, pitch_m: float) -> None:

@@ -25,6 +25,9 @@ def results():
         'seed': bench_core.seed_experiment(1, 12),
         'scaling': bench_core.scaling([16], [1, 2], ['centroid', 'seed'], 1, 1,
                                       log=lambda s: None),
+        'family': bench_core.family({'paper': 1, 'random': 5, 'border': 5, 'multi': 6},
+                                    bench_core.family_methods(False), skins=['default', 'soft'],
+                                    log=lambda s: None),
         'how': {'command': 'test', 'pinned_cpu': 0, 'repetitions': 'tiny'},
         'elapsed_s': 1.0, 'generated_utc': 'now',
     }
@@ -69,6 +72,8 @@ def test_targets_name_each_figure_with_its_limit(results):
     assert any('seed-like mean azimuth error' in n for n in names)
     assert any('random presses valid share' in n for n in names)
     assert any('16x16' in n and 'cost' in n for n in names)
+    assert any(n.startswith('family') and 'centroid' in n for n in names)
+    assert any(n.startswith('family') and 'apart' in n for n in names)
     assert all({'measured', 'limit', 'met', 'note'} <= set(t) for t in bench.targets(results))
 
 
@@ -82,12 +87,31 @@ def test_write_produces_json_markdown_and_plots(results, tmp_path):
     assert data['machine']['cpu_model'] and data['machine']['numpy'] == np.__version__
     text = (tmp_path / 'benchmarks.md').read_text()
     for heading in ('## Machine and method', '## Targets', '## 1. Accuracy against speed',
-                    "## 2. The seed's experiment", '## 4. Scale'):
+                    "## 2. The seed's experiment", '## 4. Scale', '## Headline: worst case',
+                    '## 5. The skin family'):
         assert heading in text
     assert 'paper mean' in text
     for path in data['images'].values():
         assert path in text
         assert os.path.getsize(tmp_path / path) > 1000
+
+
+def test_family_scores_every_skin_scene_and_method_and_names_the_worst(results):
+    fam = results['family']
+    methods = ['poc', 'seed', 'centroid']
+    assert fam['methods'] == methods
+    assert {(r['skin'], r['scene'], r['method']) for r in fam['rows']} == {
+        (s, k, m) for s in ('default', 'soft') for k in ('paper', 'random', 'border', 'multi')
+        for m in methods}
+    assert {(c['skin'], c['method']) for c in fam['costs']} == {
+        (s, m) for s in ('default', 'soft') for m in methods}
+    for m in methods:
+        worst = fam['worst'][m]['random']
+        errors = {r['skin']: r['mean_error_deg'] for r in fam['rows']
+                  if r['method'] == m and r['scene'] == 'random'}
+        assert worst['mean_error_deg'] == max(errors.values())
+        assert errors[worst['error_skin']] == worst['mean_error_deg']
+    assert all(s > 0 and 0 <= e <= 180 for s, e, _, _ in fam['sigma_vs_error'])
 
 
 def test_scans_are_matched_to_contact_messages_by_stamp_in_order():

@@ -36,7 +36,7 @@ def test_table_and_json(tmp_path, capsys):
 
 def test_generate_and_errors(tmp_path, capsys):
     out = tmp_path / 'r.npz'
-    assert evaluate.main(['--generate', 'random', str(out)]) == 0
+    assert evaluate.main(['--generate', 'random', str(out), '--size', '20']) == 0
     assert out.exists()
     bad = tmp_path / 'bad.npz'
     bad.write_bytes(b'x')

@@ -3,6 +3,7 @@
 import math
 
 import pytest
+from skin_driver.core.sim.experiments import paper_presses
 from skin_driver.core.sim.physics import Press, SkinModel
 from skin_driver.core.sim.scene import bundled_scene_names, find_scene, load_scene
 from skin_driver.core.sim.scene import scene_from_dict, ScenePress
@@ -30,8 +31,10 @@ def test_seed_scene_is_the_papers_experiment():
     assert scene.repeat >= 3
     directions = sorted((p.alpha_deg, p.beta_deg) for p in scene.presses)
     assert directions == [(0.0, 0.0)] + [(45.0, float(b)) for b in range(0, 360, 45)]
+    # The one definition of the protocol, the evaluator's `paper` scene and the demo's too.
+    assert [p.press() for p in scene.presses] == paper_presses(scene.model)
     for p in scene.presses:
-        assert (p.x_m, p.y_m) == (0.0375, 0.0375)  # centre of taxels 0..15 at 5 mm
+        assert abs(p.x_m - 0.0375) < 0.001 and abs(p.y_m - 0.0375) < 0.001  # near the centre
         assert p.force_n == 10.0
 
 

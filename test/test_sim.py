@@ -13,7 +13,9 @@ import serial
 
 from skin_driver.core.estimation.dataset import load_dataset
 from skin_driver.core.protocol import encode_frame, FrameDecoder, header_crc, SYNC
+from skin_driver.core.sim.experiments import paper_presses
 from skin_driver.core.sim.scene import scene_from_dict
+from skin_driver.core.sim.skins import get_skin
 from skin_driver.sim import main, render_dataset, SimulatedSkin
 
 RATE_HZ = 200.0
@@ -205,7 +207,8 @@ def test_render_dataset_of_the_seed_scene():
     normal = data.alpha_deg == 0
     assert normal.sum() == 5 and np.isnan(data.azimuth_deg[normal]).all()
     assert sorted(set(data.azimuth_deg[~normal])) == list(range(0, 360, 45))
-    assert (data.force_n == 10.0).all() and (data.x_m == 0.0375).all()
+    spot = paper_presses(get_skin('default'))[0]
+    assert (data.force_n == 10.0).all() and (data.x_m == spot.x_m).all()
     assert data.tare_top.shape == (4, 16, 16)
     # Every sample is taken at full force: the press is plainly visible on the top layer.
     assert (data.top.reshape(n, -1).max(axis=1) > 1000).all()

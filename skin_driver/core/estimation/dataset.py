@@ -1,15 +1,18 @@
 """
 Offline dataset format (.npz) of raw two-layer frames with ground truth.
 
-Format (version 1, documented in docs/dataset.md): ``top``, ``bottom`` (N x rows x cols uint16
+Format (version 2, documented in docs/dataset.md): ``top``, ``bottom`` (N x rows x cols uint16
 raw counts), ``pitch_m`` (scalar), ``azimuth_deg`` (N, NaN where undefined), ``alpha_deg`` (N,
 0 for normal presses); optional ``force_n``, ``x_m``, ``y_m`` (N each) and ``tare_top``,
-``tare_bottom`` (M x rows x cols no-touch frames); ``format_version`` = 1.
+``tare_bottom`` (M x rows x cols no-touch frames); optional per-press ground truth ``press_*``
+(N x K, NaN-padded, for frames with several presses); ``format_version`` = 2. Version 1 files
+(no ``press_*``) load unchanged.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
+import math
 import os
 
 import numpy as np
@@ -17,10 +20,14 @@ import numpy as np
 from .atomic import write_atomically
 from .validate import check_number, check_stack
 
-__all__ = ['Dataset', 'save_dataset', 'load_dataset', 'FORMAT_VERSION']
+__all__ = ['Dataset', 'save_dataset', 'load_dataset', 'FORMAT_VERSION', 'PRESS_FIELDS']
 
-FORMAT_VERSION = 1
+FORMAT_VERSION = 2
+_READABLE_VERSIONS = (1, 2)
 _OPTIONAL = ('force_n', 'x_m', 'y_m')
+# Per-press ground truth, N x K: slot k of frame i holds a press when press_x_m[i, k] is finite.
+PRESS_FIELDS = ('press_x_m', 'press_y_m', 'press_force_n', 'press_azimuth_deg',
+                'press_alpha_deg', 'press_shift_m')
 
 
 def _counts_stack(value, name: str) -> np.ndarray:
@@ -59,6 +66,12 @@ class Dataset:
     y_m: np.ndarray = None
     tare_top: np.ndarray = None
     tare_bottom: np.ndarray = None
+    press_x_m: np.ndarray = None
+    press_y_m: np.ndarray = None
+    press_force_n: np.ndarray = None
+    press_azimuth_deg: np.ndarray = None
+    press_alpha_deg: np.ndarray = None
+    press_shift_m: np.ndarray = None
 
     def __post_init__(self):
         """Validate shapes, dtypes and values, and freeze copies of the arrays."""
@@ -94,8 +107,9 @@ class Dataset:
                                  f'on both layers, got {tt.shape} and {tb.shape}')
             set_(self, 'tare_top', tt.copy())
             set_(self, 'tare_bottom', tb.copy())
+        _check_presses(self, n)
         for name in ('top', 'bottom', 'alpha_deg', 'azimuth_deg', 'tare_top', 'tare_bottom',
-                     *_OPTIONAL):
+                     *_OPTIONAL, *PRESS_FIELDS):
             arr = getattr(self, name)
             if arr is not None:
                 arr.flags.writeable = False
@@ -110,6 +124,69 @@ class Dataset:
         """Return (rows, cols) of one map."""
         return tuple(self.top.shape[1:])
 
+    def presses(self, frame: int) -> list:
+        """
+        Return the ground truth of every press of ``frame`` as dicts (x_m, y_m, ... keys).
+
+        Without per-press arrays the frame's own truth stands for its one press.
+        """
+        if self.press_x_m is None:
+            one = {'azimuth_deg': float(self.azimuth_deg[frame]),
+                   'alpha_deg': float(self.alpha_deg[frame])}
+            for name in _OPTIONAL:
+                value = getattr(self, name)
+                one[name] = math.nan if value is None else float(value[frame])
+            one['shift_m'] = math.nan
+            return [one]
+        out = []
+        for k in np.flatnonzero(np.isfinite(self.press_x_m[frame])):
+            out.append({name[len('press_'):]: (math.nan if getattr(self, name) is None
+                                               else float(getattr(self, name)[frame, k]))
+                        for name in PRESS_FIELDS})
+        return out
+
+
+def _check_presses(data: Dataset, n: int) -> None:
+    """Validate and freeze the optional N x K per-press arrays (press_x_m says which exist)."""
+    given = [name for name in PRESS_FIELDS if getattr(data, name) is not None]
+    if not given:
+        return
+    required = {'press_x_m', 'press_y_m', 'press_azimuth_deg', 'press_alpha_deg'}
+    if not required <= set(given):
+        raise ValueError(f'per-press arrays need all of {", ".join(sorted(required))}')
+    first = np.asarray(data.press_x_m)
+    if first.ndim != 2 or first.shape[0] != n:
+        raise ValueError(f'press_x_m must have shape ({n}, K), got {first.shape}')
+    arrays = {}
+    for name in given:
+        arr = np.asarray(getattr(data, name))
+        if arr.dtype.kind not in 'uif':
+            raise ValueError(f'{name} must be numeric, got dtype {arr.dtype}')
+        arr = arr.astype(np.float64)
+        if arr.shape != first.shape:
+            raise ValueError(f'{name} must have shape {first.shape}, got {arr.shape}')
+        if np.isinf(arr).any():
+            raise ValueError(f'{name} contains inf')
+        arrays[name] = arr
+    present = np.isfinite(arrays['press_x_m'])
+    for name, arr in arrays.items():
+        if name == 'press_azimuth_deg':
+            continue
+        if (np.isfinite(arr) != present).any():
+            raise ValueError(f'{name} must be finite exactly where press_x_m is (NaN padding)')
+    alpha = arrays['press_alpha_deg']
+    if ((alpha[present] < 0) | (alpha[present] >= 90)).any():
+        raise ValueError('press_alpha_deg must be in [0, 90)')
+    if (~np.isfinite(arrays['press_azimuth_deg']) & present & (alpha > 0)).any():
+        raise ValueError('press_azimuth_deg is NaN for a press with press_alpha_deg > 0')
+    if (np.isfinite(arrays['press_azimuth_deg']) & ~present).any():
+        raise ValueError('press_azimuth_deg is set for a slot without a press')
+    for name in ('press_force_n', 'press_shift_m'):
+        if name in arrays and (arrays[name][present] < 0).any():
+            raise ValueError(f'{name} must be non-negative')
+    for name, arr in arrays.items():
+        object.__setattr__(data, name, arr)
+
 
 def save_dataset(path, data: Dataset) -> None:
     """Write ``data`` to ``path`` (.npz, compressed) atomically."""
@@ -117,7 +194,7 @@ def save_dataset(path, data: Dataset) -> None:
     arrays = {'format_version': np.int64(FORMAT_VERSION), 'top': data.top,
               'bottom': data.bottom, 'pitch_m': np.float64(data.pitch_m),
               'azimuth_deg': data.azimuth_deg, 'alpha_deg': data.alpha_deg}
-    for name in (*_OPTIONAL, 'tare_top', 'tare_bottom'):
+    for name in (*_OPTIONAL, 'tare_top', 'tare_bottom', *PRESS_FIELDS):
         if getattr(data, name) is not None:
             arrays[name] = getattr(data, name)
     write_atomically(path, lambda f: np.savez_compressed(f, **arrays), binary=True)
@@ -136,11 +213,11 @@ def load_dataset(path) -> Dataset:
         if missing:
             raise ValueError(f'{path}: missing arrays: {", ".join(sorted(missing))}')
         version = int(npz['format_version']) if 'format_version' in keys else FORMAT_VERSION
-        if version != FORMAT_VERSION:
+        if version not in _READABLE_VERSIONS:
             raise ValueError(f'{path}: unsupported format_version {version}')
         pitch = npz['pitch_m']
         if pitch.size != 1:
             raise ValueError(f'{path}: pitch_m must be a scalar')
         fields = {k: npz[k] for k in ('top', 'bottom', 'azimuth_deg', 'alpha_deg', *_OPTIONAL,
-                                      'tare_top', 'tare_bottom') if k in keys}
+                                      'tare_top', 'tare_bottom', *PRESS_FIELDS) if k in keys}
     return Dataset(pitch_m=float(pitch.reshape(())), **fields)

@@ -1,4 +1,23 @@
-"""Render datasets of simulated presses (the evaluator's and the benchmark's experiments)."""
+"""
+Scenes of simulated presses, each defined once, rendered as datasets with ground truth.
+
+Scene kinds (``SCENE_KINDS``), all with 20 no-touch tare frames and, except ``paper``, one
+frame in five (the first, the sixth, ...) a single normal press at a random interior spot for
+calibrating (x_p, y_p):
+
+* ``paper``: the seed paper's protocol: at one spot, one normal press and one alpha = 45 deg
+  press at each beta = 0, 45, ..., 315 deg, repeated (:func:`paper_presses`, which the
+  simulator's ``seed`` scene and the demo play too).
+* ``random``: one press at a random spot, beta, alpha 15..60 deg and indenter diameter 3..7 mm,
+  some elliptical.
+* ``border``: one tilted press centred within a taxel of an edge or a corner, partly off the skin.
+* ``multi``: two or three presses at once, some only 2..3 taxels apart.
+
+Forces follow the skin (:class:`skins.FamilySkin`): ``paper_force_n`` for the paper's protocol,
+``force_range_n`` for the others, so that every skin's shifts are meaningful. Every dataset
+carries per-press ground truth (``press_*``, N x K); the frame's own ``azimuth_deg``,
+``alpha_deg``, ``force_n``, ``x_m``, ``y_m`` are those of its strongest press.
+"""
 
 from __future__ import annotations
 
@@ -6,82 +25,232 @@ import math
 
 import numpy as np
 
-from .physics import Press, render, SkinModel
+from .physics import layer_shift_m, Press, render, SkinModel
+from .skins import family_skin, FamilySkin
 from ..estimation.dataset import Dataset
 
-__all__ = ['make_seed_experiment', 'make_random_experiment']
+__all__ = ['SCENE_KINDS', 'PAPER_ALPHA_DEG', 'PAPER_BETAS_DEG', 'paper_presses', 'make_scene',
+           'make_seed_experiment', 'make_random_experiment', 'make_border_experiment',
+           'make_multi_experiment']
+
+PAPER_ALPHA_DEG = 45.0
+PAPER_BETAS_DEG = tuple(float(b) for b in range(0, 360, 45))
+PAPER_FORCE_N = 10.0
+PAPER_RADIUS_M = 0.004
+# Near the centre, off the taxel centres on purpose: a realistic, unaligned placement.
+PAPER_SPOT = (0.49, 0.51)
+NORMAL_EVERY = 5
+DIAMETER_RANGE_M = (0.003, 0.007)
+ELLIPTICAL_SHARE = 0.3
+ALPHA_RANGE_DEG = (15.0, 60.0)
+TARE_FRAMES = 20
 
 
-def _tare(model: SkinModel, rng: np.random.Generator, frames: int = 20) -> tuple:
-    maps = [render(model, [], rng) for _ in range(frames)]
+def _span(model: SkinModel) -> tuple:
+    """Return the (x, y) extent of the taxel centres in metres."""
+    return (model.cols - 1) * model.pitch_m, (model.rows - 1) * model.pitch_m
+
+
+def paper_presses(model: SkinModel, force_n: float = PAPER_FORCE_N, repeats: int = 1, *,
+                  leading_normal: int = 0, normal_per_repeat: int = 1,
+                  rng: np.random.Generator = None, jitter_m: float = 5e-5,
+                  force_jitter: float = 0.05) -> list:
+    """
+    Return the physics presses of the paper's protocol, in the order they are made.
+
+    ``leading_normal`` normal presses first (a calibration), then per repeat
+    ``normal_per_repeat`` normal presses and one alpha = 45 deg press at each of the eight betas,
+    all at one spot with a 4 mm indenter radius. With ``rng`` each press gets the robot's
+    repeatability (``jitter_m``) and a force within +-``force_jitter``.
+    """
+    width, height = _span(model)
+    spot = (width * PAPER_SPOT[0], height * PAPER_SPOT[1])
+    angles = [None] * int(leading_normal)
+    for _ in range(int(repeats)):
+        angles += [None] * int(normal_per_repeat) + list(PAPER_BETAS_DEG)
+    presses = []
+    for beta in angles:
+        x, y, f = spot[0], spot[1], force_n
+        if rng is not None:
+            x += rng.normal(0.0, jitter_m)
+            y += rng.normal(0.0, jitter_m)
+            f *= rng.uniform(1.0 - force_jitter, 1.0 + force_jitter)
+        alpha = 0.0 if beta is None else math.radians(PAPER_ALPHA_DEG)
+        presses.append(Press(x, y, f, alpha, math.radians(beta or 0.0), PAPER_RADIUS_M))
+    return presses
+
+
+def _azimuth_deg(press: Press) -> float:
+    return math.degrees(press.beta_rad) % 360.0 if press.alpha_rad > 0 else math.nan
+
+
+def _tare(model: SkinModel, rng: np.random.Generator) -> tuple:
+    maps = [render(model, [], rng) for _ in range(TARE_FRAMES)]
     return np.stack([t for t, _ in maps]), np.stack([b for _, b in maps])
 
 
-def _build(model, presses, azimuths, rng) -> Dataset:
-    maps = [render(model, [p], rng) for p in presses]
+def _build(model: SkinModel, frames: list, rng: np.random.Generator) -> Dataset:
+    """Render frames (each a list of presses) into a dataset with per-press ground truth."""
+    frames = [sorted(f, key=lambda p: -p.force_n) for f in frames]
+    maps = [render(model, f, rng) for f in frames]
     tare_top, tare_bottom = _tare(model, rng)
+    k = max(len(f) for f in frames)
+    truth = {name: np.full((len(frames), k), np.nan) for name in (
+        'x_m', 'y_m', 'force_n', 'azimuth_deg', 'alpha_deg', 'shift_m')}
+    no_misalignment = SkinModel(**{**model.__dict__, 'misalignment_m': (0.0, 0.0)})
+    for i, presses in enumerate(frames):
+        for j, p in enumerate(presses):
+            values = {'x_m': p.x_m, 'y_m': p.y_m, 'force_n': p.force_n,
+                      'azimuth_deg': _azimuth_deg(p), 'alpha_deg': math.degrees(p.alpha_rad),
+                      'shift_m': math.hypot(*layer_shift_m(no_misalignment, p))}
+            for name, value in values.items():
+                truth[name][i, j] = value
     return Dataset(top=np.stack([t for t, _ in maps]), bottom=np.stack([b for _, b in maps]),
-                   pitch_m=model.pitch_m, azimuth_deg=np.array(azimuths, dtype=np.float64),
-                   alpha_deg=np.array([math.degrees(p.alpha_rad) for p in presses]),
-                   force_n=np.array([p.force_n for p in presses]),
-                   x_m=np.array([p.x_m for p in presses]),
-                   y_m=np.array([p.y_m for p in presses]),
-                   tare_top=tare_top, tare_bottom=tare_bottom)
+                   pitch_m=model.pitch_m, azimuth_deg=truth['azimuth_deg'][:, 0],
+                   alpha_deg=truth['alpha_deg'][:, 0], force_n=truth['force_n'][:, 0],
+                   x_m=truth['x_m'][:, 0], y_m=truth['y_m'][:, 0],
+                   tare_top=tare_top, tare_bottom=tare_bottom,
+                   **{'press_' + name: arr for name, arr in truth.items()})
+
+
+def _default_skin(model: SkinModel) -> SkinModel:
+    return model if model is not None else family_skin('default').model
+
+
+def _random_press(rng, x, y, force_range_n, alpha_range_deg=ALPHA_RANGE_DEG,
+                  diameter_range_m=DIAMETER_RANGE_M, normal: bool = False) -> Press:
+    """Return a press at (x, y): random force, beta, alpha, round or elliptical indenter."""
+    f = rng.uniform(*force_range_n)
+    radius = rng.uniform(*diameter_range_m) / 2.0
+    aspect, orientation = 1.0, 0.0
+    if rng.random() < ELLIPTICAL_SHARE:
+        aspect, orientation = rng.uniform(0.5, 0.8), rng.uniform(0.0, math.pi)
+    alpha = 0.0 if normal else math.radians(rng.uniform(*alpha_range_deg))
+    beta = rng.uniform(0.0, 2.0 * math.pi) if not normal else 0.0
+    return Press(x, y, f, alpha, beta, radius, aspect, orientation)
+
+
+def _interior_spot(model: SkinModel, rng, margin_m: float) -> tuple:
+    width, height = _span(model)
+    return (rng.uniform(margin_m, max(width - margin_m, margin_m)),
+            rng.uniform(margin_m, max(height - margin_m, margin_m)))
 
 
 def make_seed_experiment(model: SkinModel = None, repeats: int = 20,
-                         rng: np.random.Generator = None, force_n: float = 10.0,
-                         radius_m: float = 0.0025, location_m: tuple = None,
-                         jitter_m: float = 5e-5, alpha_deg: float = 45.0) -> Dataset:
-    """
-    Render the seed paper's experiment: normal presses and alpha tilts at eight azimuths.
-
-    Every repeat presses the same spot (robot-like, with ``jitter_m`` repeatability and +-5 %
-    force) once along the normal and once at each beta = 0, 45, ..., 315 degrees.
-    """
-    model = model or SkinModel(misalignment_m=(3e-4, -2e-4))
+                         rng: np.random.Generator = None,
+                         force_n: float = PAPER_FORCE_N) -> Dataset:
+    """Render the paper's protocol (:func:`paper_presses`) with the robot's repeatability."""
+    model = _default_skin(model)
     rng = rng if rng is not None else np.random.default_rng(0)
-    if location_m is None:
-        # Off the taxel centres on purpose: a realistic, unaligned placement.
-        location_m = ((model.cols - 1) * model.pitch_m * 0.49,
-                      (model.rows - 1) * model.pitch_m * 0.51)
-    presses, azimuths = [], []
-    for _ in range(int(repeats)):
-        for beta in [None] + list(range(0, 360, 45)):
-            x = location_m[0] + rng.normal(0.0, jitter_m)
-            y = location_m[1] + rng.normal(0.0, jitter_m)
-            f = force_n * rng.uniform(0.95, 1.05)
-            alpha = 0.0 if beta is None else math.radians(alpha_deg)
-            presses.append(Press(x, y, f, alpha, math.radians(beta or 0), radius_m))
-            azimuths.append(math.nan if beta is None else float(beta))
-    return _build(model, presses, azimuths, rng)
+    presses = paper_presses(model, force_n, repeats, rng=rng)
+    return _build(model, [[p] for p in presses], rng)
 
 
 def make_random_experiment(model: SkinModel = None, frames: int = 400,
-                           rng: np.random.Generator = None, normal_share: float = 0.2,
-                           force_range_n: tuple = (5.0, 15.0), alpha_range_deg=(15.0, 60.0),
-                           radius_range_m=(0.0015, 0.0035), border_m: float = 0.01) -> Dataset:
-    """
-    Render presses at random locations, azimuths, tilts and indenter radii.
-
-    A share ``normal_share`` of the frames are normal presses (alpha = 0) for calibration.
-    """
-    model = model or SkinModel(misalignment_m=(3e-4, -2e-4))
+                           rng: np.random.Generator = None, force_range_n: tuple = (5.0, 15.0),
+                           alpha_range_deg: tuple = ALPHA_RANGE_DEG,
+                           diameter_range_m: tuple = DIAMETER_RANGE_M,
+                           border_m: float = 0.01) -> Dataset:
+    """Render single presses at random spots at least ``border_m`` inside the taxel span."""
+    model = _default_skin(model)
     rng = rng if rng is not None else np.random.default_rng(0)
-    width = (model.cols - 1) * model.pitch_m
-    height = (model.rows - 1) * model.pitch_m
-    presses, azimuths = [], []
+    out = []
     for i in range(int(frames)):
-        x = rng.uniform(border_m, max(width - border_m, border_m))
-        y = rng.uniform(border_m, max(height - border_m, border_m))
-        f = rng.uniform(*force_range_n)
-        r = rng.uniform(*radius_range_m)
-        if rng.random() < normal_share:
-            presses.append(Press(x, y, f, 0.0, 0.0, r))
-            azimuths.append(math.nan)
-        else:
-            beta = rng.uniform(0.0, 360.0)
-            alpha = math.radians(rng.uniform(*alpha_range_deg))
-            presses.append(Press(x, y, f, alpha, math.radians(beta), r))
-            azimuths.append(beta)
-    return _build(model, presses, azimuths, rng)
+        x, y = _interior_spot(model, rng, border_m)
+        out.append([_random_press(rng, x, y, force_range_n, alpha_range_deg, diameter_range_m,
+                                  normal=i % NORMAL_EVERY == 0)])
+    return _build(model, out, rng)
+
+
+def make_border_experiment(model: SkinModel = None, frames: int = 200,
+                           rng: np.random.Generator = None,
+                           force_range_n: tuple = (5.0, 15.0)) -> Dataset:
+    """
+    Render tilted presses centred from half a taxel outside to one taxel inside an edge.
+
+    A quarter of them sit at a corner (both coordinates at an edge). The normal presses, for
+    the calibration, are at interior spots.
+    """
+    model = _default_skin(model)
+    rng = rng if rng is not None else np.random.default_rng(0)
+    width, height = _span(model)
+    pitch = model.pitch_m
+    out = []
+    for i in range(int(frames)):
+        if i % NORMAL_EVERY == 0:
+            x, y = _interior_spot(model, rng, 2 * pitch)
+            out.append([_random_press(rng, x, y, force_range_n, normal=True)])
+            continue
+        x, y = _interior_spot(model, rng, 0.0)
+        depth = rng.uniform(-0.5 * pitch, pitch, 2)
+        edge = rng.integers(0, 4)
+        if edge == 0 or rng.random() < 0.25:
+            x = depth[0] if rng.random() < 0.5 else width - depth[0]
+        if edge != 0:
+            y = depth[1] if edge == 1 or (edge == 3 and rng.random() < 0.5) else height - depth[1]
+        out.append([_random_press(rng, x, y, force_range_n)])
+    return _build(model, out, rng)
+
+
+def make_multi_experiment(model: SkinModel = None, frames: int = 200,
+                          rng: np.random.Generator = None, force_range_n: tuple = (5.0, 15.0),
+                          separation_taxels: tuple = (2.0, 8.0)) -> Dataset:
+    """
+    Render two or three presses at once (one frame in three has three), 2..8 taxels apart.
+
+    A third of the pairs are 2..3 taxels apart. Each press is tilted (alpha 15..60 deg) or, one
+    in five, normal.
+    """
+    model = _default_skin(model)
+    rng = rng if rng is not None else np.random.default_rng(0)
+    pitch = model.pitch_m
+    out = []
+    while len(out) < int(frames):
+        if len(out) % NORMAL_EVERY == 0:
+            x, y = _interior_spot(model, rng, 2 * pitch)
+            out.append([_random_press(rng, x, y, force_range_n, normal=True)])
+            continue
+        count = 3 if rng.random() < 1.0 / 3.0 else 2
+        spots = [_interior_spot(model, rng, 2 * pitch)]
+        for _ in range(50):
+            if len(spots) == count:
+                break
+            close = rng.random() < 1.0 / 3.0
+            low, high = (2.0, 3.0) if close else separation_taxels
+            d = rng.uniform(low, high) * pitch
+            theta = rng.uniform(0.0, 2.0 * math.pi)
+            base = spots[int(rng.integers(len(spots)))]
+            spot = (base[0] + d * math.cos(theta), base[1] + d * math.sin(theta))
+            width, height = _span(model)
+            inside = pitch <= spot[0] <= width - pitch and pitch <= spot[1] <= height - pitch
+            apart = all(math.dist(spot, s) >= 2.0 * pitch for s in spots)
+            if inside and apart:
+                spots.append(spot)
+        if len(spots) < count:
+            continue
+        out.append([_random_press(rng, x, y, force_range_n, normal=rng.random() < 0.2)
+                    for x, y in spots])
+    return _build(model, out, rng)
+
+
+SCENE_KINDS = ('paper', 'random', 'border', 'multi')
+_DEFAULT_SIZE = {'paper': 10, 'random': 300, 'border': 200, 'multi': 200}
+
+
+def make_scene(kind: str, skin, rng: np.random.Generator = None, size: int = None) -> Dataset:
+    """
+    Render scene ``kind`` on a family skin (a name or a :class:`FamilySkin`).
+
+    ``size`` is the number of repeats for ``paper`` (nine frames each), of frames otherwise.
+    """
+    member = skin if isinstance(skin, FamilySkin) else family_skin(skin)
+    if kind not in SCENE_KINDS:
+        raise ValueError(f'unknown scene kind {kind!r}; kinds are {", ".join(SCENE_KINDS)}')
+    size = _DEFAULT_SIZE[kind] if size is None else int(size)
+    rng = rng if rng is not None else np.random.default_rng(0)
+    model = member.model
+    if kind == 'paper':
+        return make_seed_experiment(model, size, rng, member.paper_force_n)
+    maker = {'random': make_random_experiment, 'border': make_border_experiment,
+             'multi': make_multi_experiment}[kind]
+    return maker(model, size, rng, force_range_n=member.force_range_n)

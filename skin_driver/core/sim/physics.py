@@ -7,13 +7,18 @@ layer between them, a 12-bit ADC reading each FSR through a voltage divider):
 * An indenter of contact radius ``radius_m`` pressing with total force ``force_n`` tilted by
   ``alpha`` from the skin normal loads the top layer with a Hertz pressure profile
   ``p(r) = p0 * sqrt(1 - r**2 / a**2)`` whose integral is the normal part ``force_n * cos(alpha)``.
+  An elliptical indenter has semi-axes ``radius_m`` and ``radius_m * aspect``, the first turned
+  by ``orientation_rad`` from +x.
 * Each taxel integrates the pressure over its active square (``fill_factor * pitch`` wide), so a
   contact that moves by a fraction of a taxel changes the map.
 * The bottom layer sees the same profile blurred by the elastic layer (Gaussian of ``spread_m``)
   and displaced along the tangential force (the seed's convention):
   ``shift = misalignment + compliance * force_n * sin(alpha) * (cos(beta), sin(beta))``.
-* Each taxel's force becomes ADC counts through :class:`FsrModel`; then come an amplifier offset,
-  row/column crosstalk of the passive matrix, Gaussian noise, dead taxels and 12-bit clipping.
+* Each taxel's force, times its own gain (``gain_spread``: FSRs differ by up to that fraction),
+  becomes ADC counts through :class:`FsrModel`; then come an amplifier offset with a per-taxel
+  spread (``baseline_spread_counts``), row/column crosstalk of the passive matrix (a share
+  ``crosstalk`` of the load of every other taxel on the same row and column), Gaussian noise, dead
+  taxels and 12-bit clipping. Per-taxel gains and offsets are fixed by the skin's ``seed``.
 """
 
 from __future__ import annotations
@@ -28,7 +33,7 @@ import numpy as np
 
 from ..estimation.fsr import FsrModel
 
-__all__ = ['SkinModel', 'Press', 'render', 'render_force', 'layer_shift_m']
+__all__ = ['SkinModel', 'Press', 'render', 'render_force', 'layer_shift_m', 'taxel_spread']
 
 
 @dataclass(frozen=True)
@@ -41,16 +46,19 @@ class Press:
     alpha_rad: float = 0.0
     beta_rad: float = 0.0
     radius_m: float = 0.0025
+    aspect: float = 1.0
+    orientation_rad: float = 0.0
 
     def __post_init__(self):
         """Reject non-finite or out-of-range values."""
-        for name in ('x_m', 'y_m', 'force_n', 'alpha_rad', 'beta_rad', 'radius_m'):
+        for name in ('x_m', 'y_m', 'force_n', 'alpha_rad', 'beta_rad', 'radius_m', 'aspect',
+                     'orientation_rad'):
             if not math.isfinite(getattr(self, name)):
                 raise ValueError(f'Press.{name} must be finite')
         if self.force_n < 0:
             raise ValueError('Press.force_n must be non-negative')
-        if self.radius_m <= 0:
-            raise ValueError('Press.radius_m must be positive')
+        if self.radius_m <= 0 or self.aspect <= 0:
+            raise ValueError('Press.radius_m and Press.aspect must be positive')
         if not 0 <= self.alpha_rad < math.pi / 2:
             raise ValueError('Press.alpha_rad must be in [0, pi/2)')
 
@@ -76,7 +84,8 @@ class SkinModel:
     Gaussian of ``spread_m`` = 2 mm; the protective cover and FSR film spread the top layer's
     pressure by ``cover_spread_m`` = 1 mm. ``fill_factor`` is the sensitive fraction of the pitch.
     ``dead_taxels`` holds ``(row, col)`` (both layers) or ``(layer, row, col)`` with layer 0 = top,
-    1 = bottom; a dead taxel reads 0.
+    1 = bottom; a dead taxel reads 0. ``gain_spread`` (a fraction, uniform in +-) and
+    ``baseline_spread_counts`` (standard deviation) make taxels differ; ``seed`` fixes which.
     """
 
     rows: int = 16
@@ -92,16 +101,22 @@ class SkinModel:
     fill_factor: float = 0.9
     baseline_counts: float = 20.0
     cover_spread_m: float = 0.001
+    gain_spread: float = 0.0
+    baseline_spread_counts: float = 0.0
+    seed: int = 0
 
     def __post_init__(self):
         """Reject inconsistent parameters."""
         if int(self.rows) < 1 or int(self.cols) < 1:
             raise ValueError('SkinModel rows and cols must be at least 1')
         for name in ('pitch_m', 'compliance_m_per_n', 'spread_m', 'noise_counts', 'crosstalk',
-                     'fill_factor', 'baseline_counts', 'cover_spread_m'):
+                     'fill_factor', 'baseline_counts', 'cover_spread_m', 'gain_spread',
+                     'baseline_spread_counts'):
             v = getattr(self, name)
             if not (math.isfinite(v) and v >= 0):
                 raise ValueError(f'SkinModel.{name} must be finite and non-negative')
+        if self.gain_spread >= 1:
+            raise ValueError('SkinModel.gain_spread must be below 1')
         if self.pitch_m <= 0 or not 0 < self.fill_factor <= 1:
             raise ValueError('SkinModel needs pitch_m > 0 and 0 < fill_factor <= 1')
         if len(self.misalignment_m) != 2 or not all(math.isfinite(v) for v in self.misalignment_m):
@@ -118,9 +133,16 @@ def layer_shift_m(model: SkinModel, press: Press) -> tuple:
             model.misalignment_m[1] + t * math.sin(press.beta_rad))
 
 
-def _hertz(x: np.ndarray, y: np.ndarray, cx: float, cy: float, radius: float) -> np.ndarray:
-    r2 = ((x - cx) ** 2)[None, :] + ((y - cy) ** 2)[:, None]
-    return np.sqrt(np.maximum(1.0 - r2 / (radius * radius), 0.0))
+def _hertz(x: np.ndarray, y: np.ndarray, cx: float, cy: float, press: Press) -> np.ndarray:
+    a = press.radius_m
+    if press.aspect == 1.0:
+        r2 = (((x - cx) ** 2)[None, :] + ((y - cy) ** 2)[:, None]) / (a * a)
+    else:
+        c, s = math.cos(press.orientation_rad), math.sin(press.orientation_rad)
+        dx, dy = (x - cx)[None, :], (y - cy)[:, None]
+        b = a * press.aspect
+        r2 = ((dx * c + dy * s) / a) ** 2 + ((dy * c - dx * s) / b) ** 2
+    return np.sqrt(np.maximum(1.0 - r2, 0.0))
 
 
 def _cell_weights(sub: int, fill: float) -> np.ndarray:
@@ -178,8 +200,8 @@ def _press_maps(model: SkinModel, press: Press) -> tuple:
     if fz <= 0:
         return top, bottom
     sx, sy = layer_shift_m(model, press)
-    a = press.radius_m
-    h = min(pitch / 24.0, a / 12.0)
+    a = press.radius_m * max(press.aspect, 1.0)
+    h = min(pitch / 24.0, press.radius_m * min(press.aspect, 1.0) / 12.0)
     sub = int(math.ceil(pitch / h))
     h = pitch / sub
     # The cover spreads the pressure on the top layer; the elastic layer adds its own spread.
@@ -200,7 +222,7 @@ def _press_maps(model: SkinModel, press: Press) -> tuple:
         # The Hertz profile is zero outside the disc: evaluate it on the disc's bounding box only.
         x0, x1 = _support(xs, cx, a)
         y0, y1 = _support(ys, cy, a)
-        fine = _hertz(xs[x0:x1], ys[y0:y1], cx, cy, a)
+        fine = _hertz(xs[x0:x1], ys[y0:y1], cx, cy, press)
         total = fine.sum()
         if total <= 0:
             # The disc fell between fine samples; put the whole force on the nearest sample.
@@ -230,9 +252,22 @@ def render_force(model: SkinModel, presses: Sequence[Press]) -> tuple:
     return top, bottom
 
 
+@lru_cache(maxsize=64)
+def taxel_spread(model: SkinModel) -> tuple:
+    """Return per-layer (gain, baseline offset) maps, 2 x rows x cols each, fixed by the seed."""
+    rng = np.random.default_rng(model.seed)
+    shape = (2, model.rows, model.cols)
+    gain = 1.0 + model.gain_spread * rng.uniform(-1.0, 1.0, shape)
+    offset = model.baseline_counts + model.baseline_spread_counts * rng.standard_normal(shape)
+    gain.flags.writeable = False
+    offset.flags.writeable = False
+    return gain, offset
+
+
 def _electronics(model: SkinModel, force: np.ndarray, layer: int,
                  rng: np.random.Generator) -> np.ndarray:
-    counts = model.fsr.force_to_counts(force) + model.baseline_counts
+    gain, offset = taxel_spread(model)
+    counts = model.fsr.force_to_counts(force * gain[layer]) + offset[layer]
     if model.crosstalk > 0:
         # A passive matrix leaks a little of every taxel sharing the row or the column.
         leak = counts.sum(axis=1, keepdims=True) + counts.sum(axis=0, keepdims=True) - 2 * counts

@@ -7,12 +7,18 @@ A scene file is a mapping::
     description: ...           # optional
     model: {rows: 16, cols: 16, pitch_m: 0.005, noise_counts: 4.0, crosstalk: 0.0,
             dead_taxels: [[3, 4]], misalignment_m: [0.0, 0.0], fsr: {r_series_ohm: 1000}}
+    skin: soft                 # or a skin of the family (core/sim/skins.py) instead of model
     repeat: 3                  # play the script this many times (default 1)
     period_s: 20.0             # length of one repetition (default: end of the last press)
     defaults: {x_m: 0.0375, y_m: 0.0375, radius_m: 0.004}   # merged into every press
     presses:
       - {time_s: 0.5, force_n: 10, alpha_deg: 45, beta_deg: 90, duration_s: 1.0, ramp_s: 0.2}
     generator: {kind: random, seed: 1, count: 20, ...}     # optional, adds generated presses
+
+Generators: ``kind: random`` (presses at random spots, ranges given per field) and ``kind: paper``
+(the paper's protocol as :func:`experiments.paper_presses` defines it: ``repeats``,
+``leading_normal``, ``normal_per_repeat``, ``force_n`` (default: the skin's ``paper_force_n``),
+one press every ``interval_s`` from ``start_s``).
 
 ``model`` keys are the fields of :class:`skin_driver.core.sim.physics.SkinModel`.  Angles are in
 degrees in the file only; everything a scene returns is SI with angles in radians.  A press's force
@@ -33,14 +39,16 @@ from typing import Any, Mapping
 import numpy as np
 import yaml
 
+from .experiments import PAPER_FORCE_N, paper_presses
 from .physics import Press, SkinModel
+from .skins import family_skin
 from ..estimation.fsr import FsrModel
 
 PRESS_FIELDS = ('time_s', 'x_m', 'y_m', 'force_n', 'alpha_deg', 'beta_deg', 'radius_m',
                 'duration_s')
 DEFAULT_RAMP_S = 0.1
-_TOP_LEVEL = ('name', 'description', 'model', 'repeat', 'period_s', 'defaults', 'presses',
-              'generator')
+_TOP_LEVEL = ('name', 'description', 'model', 'skin', 'repeat', 'period_s', 'defaults',
+              'presses', 'generator')
 
 
 @dataclass(frozen=True)
@@ -211,22 +219,56 @@ def _range(spec: Mapping, key: str, default: tuple) -> tuple:
     return low, high
 
 
-def _generate(spec: Any, model: SkinModel, first_index: int) -> list:
-    """Return presses made by a generator entry (kind: random)."""
-    if not isinstance(spec, Mapping) or spec.get('kind') != 'random':
-        raise ValueError(f'generator: only {{kind: random, ...}} is known, got {spec!r}')
-    allowed = {'kind', 'seed', 'count', 'start_s', 'interval_s', 'duration_s', 'ramp_s',
-               'force_n', 'alpha_deg', 'beta_deg', 'radius_m', 'margin_m'}
+def _check_fields(spec: Mapping, allowed: set) -> None:
     unknown = set(spec) - allowed
     if unknown:
         raise ValueError(f'generator: unknown field {sorted(unknown)[0]!r}; fields are '
                          f'{", ".join(sorted(allowed))}')
-    count = spec.get('count', 20)
-    seed = spec.get('seed', 0)
-    for key, value in (('count', count), ('seed', seed)):
-        if isinstance(value, bool) or not isinstance(value, int) or value < 0:
-            raise ValueError(f'generator: field {key!r} must be a non-negative integer, got '
-                             f'{value!r}')
+
+
+def _count(spec: Mapping, key: str, default: int) -> int:
+    value = spec.get(key, default)
+    if isinstance(value, bool) or not isinstance(value, int) or value < 0:
+        raise ValueError(f'generator: field {key!r} must be a non-negative integer, got '
+                         f'{value!r}')
+    return value
+
+
+def _generate_paper(spec: Mapping, model: SkinModel, first_index: int,
+                    paper_force_n: float) -> list:
+    """Return the paper's protocol (experiments.paper_presses) as timed scene presses."""
+    _check_fields(spec, {'kind', 'repeats', 'leading_normal', 'normal_per_repeat', 'force_n',
+                         'start_s', 'interval_s', 'duration_s', 'ramp_s'})
+    counts = {k: _count(spec, k, d)
+              for k, d in (('repeats', 1), ('leading_normal', 0), ('normal_per_repeat', 1))}
+    timing = {k: _number('generator', k, spec.get(k, d)) for k, d in (
+        ('force_n', paper_force_n), ('start_s', 0.25), ('interval_s', 1.5), ('duration_s', 1.0),
+        ('ramp_s', 0.2))}
+    presses = paper_presses(model, timing['force_n'], counts['repeats'],
+                            leading_normal=counts['leading_normal'],
+                            normal_per_repeat=counts['normal_per_repeat'])
+    out = []
+    for j, p in enumerate(presses):
+        entry = {'time_s': timing['start_s'] + j * timing['interval_s'], 'x_m': p.x_m,
+                 'y_m': p.y_m, 'force_n': p.force_n, 'alpha_deg': math.degrees(p.alpha_rad),
+                 'beta_deg': math.degrees(p.beta_rad), 'radius_m': p.radius_m,
+                 'duration_s': timing['duration_s'], 'ramp_s': timing['ramp_s']}
+        out.append(_press(first_index + j, entry, {}))
+    return out
+
+
+def _generate(spec: Any, model: SkinModel, first_index: int,
+              paper_force_n: float = PAPER_FORCE_N) -> list:
+    """Return presses made by a generator entry (kind: random or paper)."""
+    if not isinstance(spec, Mapping) or spec.get('kind') not in ('random', 'paper'):
+        raise ValueError(f'generator: only {{kind: random, ...}} and {{kind: paper, ...}} are '
+                         f'known, got {spec!r}')
+    if spec['kind'] == 'paper':
+        return _generate_paper(spec, model, first_index, paper_force_n)
+    _check_fields(spec, {'kind', 'seed', 'count', 'start_s', 'interval_s', 'duration_s',
+                         'ramp_s', 'force_n', 'alpha_deg', 'beta_deg', 'radius_m', 'margin_m'})
+    count = _count(spec, 'count', 20)
+    seed = _count(spec, 'seed', 0)
     start = _number('generator', 'start_s', spec.get('start_s', 0.5))
     interval = _number('generator', 'interval_s', spec.get('interval_s', 1.0))
     duration = _number('generator', 'duration_s', spec.get('duration_s', 0.6))
@@ -265,7 +307,17 @@ def scene_from_dict(data: Any, name: str = 'scene') -> Scene:
         if key not in _TOP_LEVEL:
             raise ValueError(f'scene {name!r}: unknown key {key!r}; keys are '
                              f'{", ".join(_TOP_LEVEL)}')
-    model = _model(data.get('model'))
+    paper_force_n = PAPER_FORCE_N
+    if data.get('skin') is not None:
+        if data.get('model') is not None:
+            raise ValueError(f'scene {name!r}: give either model or skin, not both')
+        try:
+            member = family_skin(str(data['skin']))
+        except ValueError as err:
+            raise ValueError(f'skin: {err}') from None
+        model, paper_force_n = member.model, member.paper_force_n
+    else:
+        model = _model(data.get('model'))
     defaults = data.get('defaults') or {}
     if not isinstance(defaults, Mapping):
         raise ValueError(f'defaults: must be a mapping of press fields, got {defaults!r}')
@@ -274,7 +326,7 @@ def scene_from_dict(data: Any, name: str = 'scene') -> Scene:
         raise ValueError(f'presses: must be a list, got {type(entries).__name__}')
     presses = [_press(i, e, defaults) for i, e in enumerate(entries)]
     if data.get('generator') is not None:
-        presses += _generate(data['generator'], model, len(presses))
+        presses += _generate(data['generator'], model, len(presses), paper_force_n)
     if not presses:
         raise ValueError(f'scene {name!r}: has no presses')
     repeat = data.get('repeat', 1)

@@ -1,0 +1,103 @@
+"""
+A named, seeded family of simulated skins that the evaluator, the benchmark and the tests share.
+
+Each skin differs from the project's own simulated skin (``default``) in one or more ways a real
+skin can: FSR curve and saturation, layer compliance (shifts from 0.1 to 6 taxels), cover and
+elastic-layer spread, per-taxel gains and offsets, passive-matrix crosstalk, noise, layer
+misalignment. Each also names the forces its scenes press with, so that its shifts are
+meaningful: ``paper_force_n`` for the paper's protocol (alpha = 45 deg) and ``force_range_n``
+for random presses. Everything is fixed by the skin's ``seed``: the same name always gives the
+same skin.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+import math
+
+from .physics import SkinModel
+from ..estimation.fsr import FsrModel
+
+__all__ = ['FamilySkin', 'skin_names', 'get_skin', 'family_skin']
+
+
+@dataclass(frozen=True)
+class FamilySkin:
+    """One member of the family: its model, a line of description and the forces it takes."""
+
+    name: str
+    description: str
+    model: SkinModel
+    paper_force_n: float
+    force_range_n: tuple
+
+    def shift_taxels(self, force_n: float, alpha_deg: float) -> float:
+        """Return the layer shift (taxels) that a press of this force and tilt causes."""
+        return (self.model.compliance_m_per_n * force_n * math.sin(math.radians(alpha_deg))
+                / self.model.pitch_m)
+
+
+_SOFT_FSR = FsrModel(force_at_r_max_n=0.5, force_at_r_min_n=60.0)
+_SATURATING_FSR = FsrModel(r_min_ohm=200.0, r_max_ohm=6000.0, force_at_r_max_n=0.1,
+                           force_at_r_min_n=3.0)
+_FLAT_FSR = FsrModel(r_min_ohm=500.0, r_max_ohm=2500.0, force_at_r_max_n=0.3,
+                     force_at_r_min_n=40.0)
+
+_FAMILY = (
+    FamilySkin('default', "the project's own simulated skin (seed prototype), 0.36 mm misaligned",
+               SkinModel(misalignment_m=(3e-4, -2e-4)), 10.0, (5.0, 15.0)),
+    FamilySkin('soft', 'soft thick layer: 3-6 taxel shifts at 25-40 N, wide bottom imprint',
+               SkinModel(compliance_m_per_n=9e-4, spread_m=0.003, cover_spread_m=0.0015,
+                         fsr=_SOFT_FSR, misalignment_m=(-4e-4, 3e-4), seed=2),
+               32.0, (25.0, 40.0)),
+    FamilySkin('stiff', 'stiff thin layer: shifts of 0.1-1 taxel at 10-60 N',
+               SkinModel(compliance_m_per_n=1.2e-4, spread_m=0.001, fsr=_SOFT_FSR,
+                         noise_counts=4.0, seed=3),
+               20.0, (10.0, 60.0)),
+    FamilySkin('crosstalk', 'strong passive-matrix crosstalk (1.2 % of each row and column)',
+               SkinModel(crosstalk=0.012, baseline_spread_counts=10.0, seed=4),
+               12.0, (6.0, 18.0)),
+    FamilySkin('saturating', 'FSRs saturate at 3 N per taxel: flat-topped imprints',
+               SkinModel(compliance_m_per_n=3e-4, fsr=_SATURATING_FSR, seed=5),
+               20.0, (10.0, 60.0)),
+    FamilySkin('noisy', 'noise 10 counts, gains +-10 %, offsets, misaligned by half a taxel',
+               SkinModel(compliance_m_per_n=5e-4, noise_counts=10.0, gain_spread=0.1,
+                         baseline_spread_counts=20.0, misalignment_m=(2.0e-3, -1.5e-3), seed=6),
+               15.0, (8.0, 30.0)),
+    FamilySkin('sharp', 'thin cover and layer (0.2 / 0.6 mm spread), 80 % fill: sharp imprints',
+               SkinModel(compliance_m_per_n=4e-4, spread_m=0.0006, cover_spread_m=0.0002,
+                         fill_factor=0.8, seed=7),
+               15.0, (8.0, 30.0)),
+    FamilySkin('blurred', 'thick cover and layer (2 / 4 mm spread), compliant',
+               SkinModel(compliance_m_per_n=1e-3, spread_m=0.004, cover_spread_m=0.002, seed=8),
+               10.0, (5.0, 20.0)),
+    FamilySkin('flat_fsr', 'weak FSR response (flat curve) and 8 counts of noise',
+               SkinModel(compliance_m_per_n=6e-4, fsr=_FLAT_FSR, noise_counts=8.0,
+                         gain_spread=0.05, seed=9),
+               15.0, (8.0, 30.0)),
+    FamilySkin('harsh', 'everything at once: crosstalk, gains, offsets, noise, misalignment',
+               SkinModel(compliance_m_per_n=8e-4, spread_m=0.0025, crosstalk=0.006,
+                         gain_spread=0.1, baseline_spread_counts=15.0, noise_counts=8.0,
+                         misalignment_m=(-1.5e-3, 2.0e-3), fsr=_SOFT_FSR, seed=10),
+               20.0, (10.0, 40.0)),
+)
+_BY_NAME = {s.name: s for s in _FAMILY}
+
+
+def skin_names() -> list:
+    """Return the names of the family's skins, the project's default first."""
+    return [s.name for s in _FAMILY]
+
+
+def family_skin(name: str) -> FamilySkin:
+    """Return the family member ``name`` (model, description, forces); ValueError if unknown."""
+    try:
+        return _BY_NAME[name]
+    except KeyError:
+        raise ValueError(f'unknown skin {name!r}; the family has '
+                         f'{", ".join(skin_names())}') from None
+
+
+def get_skin(name: str) -> SkinModel:
+    """Return the physics model of the family's skin ``name``."""
+    return family_skin(name).model

@@ -1,0 +1,167 @@
+"""Tests of the skin family, its physics ranges, its scenes and per-press ground truth."""
+
+import math
+
+import numpy as np
+import pytest
+
+from skin_driver.core.estimation.dataset import Dataset, load_dataset, save_dataset
+from skin_driver.core.sim.experiments import make_scene, PAPER_BETAS_DEG, SCENE_KINDS
+from skin_driver.core.sim.physics import Press, render, render_force, SkinModel, taxel_spread
+from skin_driver.core.sim.skins import family_skin, get_skin, skin_names
+
+
+def test_family_names_at_least_eight_seeded_skins_with_a_description():
+    names = skin_names()
+    assert len(names) >= 8 and names[0] == 'default' and len(set(names)) == len(names)
+    for name in names:
+        assert isinstance(get_skin(name), SkinModel)
+        assert get_skin(name) == get_skin(name)
+        text = family_skin(name).description
+        assert text and '\n' not in text
+    with pytest.raises(ValueError, match='the family has default'):
+        get_skin('no_such_skin')
+
+
+def test_family_spans_the_ranges_of_real_skins():
+    skins = [family_skin(n) for n in skin_names()]
+    smallest = min(s.shift_taxels(s.force_range_n[0], 15.0) for s in skins)
+    largest = max(s.shift_taxels(s.force_range_n[1], 60.0) for s in skins)
+    assert smallest <= 0.1 and largest >= 6.0
+    models = [s.model for s in skins]
+    assert max(m.noise_counts for m in models) == 10.0
+    assert max(m.gain_spread for m in models) == 0.1
+    assert max(m.crosstalk for m in models) > 0.01
+    half = max(math.hypot(*m.misalignment_m) / m.pitch_m for m in models)
+    assert 0.45 <= half <= 0.5
+    # The soft skin's paper press shifts the layers by 3-6 taxels, at 25-40 N.
+    soft = family_skin('soft')
+    assert 25.0 <= soft.paper_force_n <= 40.0 and 3 <= soft.shift_taxels(soft.paper_force_n,
+                                                                         45.0) <= 6
+
+
+def test_saturating_skin_saturates_below_sixty_newtons():
+    model = get_skin('saturating')
+    top, _ = render(model, [Press(0.037, 0.038, 30.0, radius_m=0.004)],
+                    np.random.default_rng(0))
+    assert top.max() >= model.fsr.saturation_counts - 3 * model.noise_counts
+
+
+def test_taxel_gains_and_offsets_are_fixed_by_the_seed():
+    model = get_skin('noisy')
+    gain, offset = taxel_spread(model)
+    assert gain.shape == offset.shape == (2, 16, 16)
+    assert (abs(gain - 1.0) <= model.gain_spread).all() and gain.std() > 0.03
+    again, _ = taxel_spread(SkinModel(**{**model.__dict__}))
+    other, _ = taxel_spread(SkinModel(**{**model.__dict__, 'seed': model.seed + 1}))
+    assert np.array_equal(gain, again) and not np.array_equal(gain, other)
+    plain, base = taxel_spread(SkinModel())
+    assert (plain == 1.0).all() and (base == SkinModel().baseline_counts).all()
+
+
+def test_elliptical_indenter_is_long_along_its_orientation_and_keeps_the_force():
+    # Full fill: every newton lands on a taxel, so the map sums to the press's force.
+    model = SkinModel(cover_spread_m=0.0005, fill_factor=1.0)
+    ys, xs = np.mgrid[0:16, 0:16]
+
+    def spread(press):
+        top, _ = render_force(model, [press])
+        w = top / top.sum()
+        cx, cy = (w * xs).sum(), (w * ys).sum()
+        return top.sum(), (w * (xs - cx) ** 2).sum(), (w * (ys - cy) ** 2).sum()
+
+    round_sum, _, _ = spread(Press(0.037, 0.038, 10.0, radius_m=0.008))
+    along_x = spread(Press(0.037, 0.038, 10.0, radius_m=0.008, aspect=0.3))
+    along_y = spread(Press(0.037, 0.038, 10.0, radius_m=0.008, aspect=0.3,
+                           orientation_rad=math.pi / 2))
+    assert along_x[1] > 2 * along_x[2] and along_y[2] > 2 * along_y[1]
+    assert along_x[1] == pytest.approx(along_y[2], rel=0.05)
+    assert along_x[0] == pytest.approx(10.0) and round_sum == pytest.approx(10.0)
+    with pytest.raises(ValueError, match='aspect'):
+        Press(0.0, 0.0, 1.0, aspect=0.0)
+
+
+def test_every_scene_carries_per_press_truth_with_the_strongest_first():
+    for kind in SCENE_KINDS:
+        data = make_scene(kind, 'default', np.random.default_rng(3), size=1 if kind == 'paper'
+                          else 10)
+        assert data.press_x_m.shape[0] == data.frames and data.tare_top is not None
+        assert np.array_equal(data.press_force_n[:, 0], data.force_n)
+        assert np.array_equal(data.press_x_m[:, 0], data.x_m)
+        assert np.array_equal(data.press_alpha_deg[:, 0], data.alpha_deg)
+        forces = np.where(np.isfinite(data.press_force_n), data.press_force_n, -1.0)
+        assert (np.diff(forces, axis=1) <= 0).all()
+        # Every scene gives the evaluator normal presses to calibrate from.
+        assert (data.alpha_deg == 0).any()
+
+
+def test_paper_scene_presses_the_skins_own_force_at_the_eight_betas():
+    data = make_scene('paper', 'soft', np.random.default_rng(0), size=2)
+    tilted = data.alpha_deg > 0
+    assert sorted(set(data.azimuth_deg[tilted])) == list(PAPER_BETAS_DEG)
+    assert data.force_n == pytest.approx(family_skin('soft').paper_force_n, rel=0.06)
+    shift = data.press_shift_m[tilted, 0] / data.pitch_m
+    assert (shift >= 3).all() and (shift <= 6).all()
+
+
+def test_border_scene_presses_within_a_taxel_of_an_edge():
+    data = make_scene('border', 'default', np.random.default_rng(1), size=40)
+    tilted = data.alpha_deg > 0
+    x, y, pitch = data.x_m[tilted], data.y_m[tilted], data.pitch_m
+    far = 15 * pitch
+    edge = np.minimum.reduce([x, y, far - x, far - y])
+    assert (edge <= pitch + 1e-12).all() and (edge >= -0.5 * pitch - 1e-12).all()
+    assert (edge < 0).any()  # some centred off the skin
+
+
+def test_multi_scene_has_pairs_and_triples_some_close_none_overlapping():
+    data = make_scene('multi', 'default', np.random.default_rng(2), size=60)
+    counts = np.isfinite(data.press_x_m).sum(axis=1)
+    assert set(counts) == {1, 2, 3}
+    gaps = []
+    for i in np.flatnonzero(counts >= 2):
+        presses = data.presses(i)
+        gaps += [math.hypot(a['x_m'] - b['x_m'], a['y_m'] - b['y_m']) / data.pitch_m
+                 for j, a in enumerate(presses) for b in presses[j + 1:]]
+    assert min(gaps) >= 2.0 and any(g < 3.0 for g in gaps) and any(g >= 3.0 for g in gaps)
+
+
+def test_format_2_round_trip_and_format_1_still_loads(tmp_path):
+    data = make_scene('multi', 'stiff', np.random.default_rng(4), size=6)
+    path = tmp_path / 'multi.npz'
+    save_dataset(path, data)
+    back = load_dataset(path)
+    assert int(np.load(path)['format_version']) == 2
+    for name in ('press_x_m', 'press_azimuth_deg', 'press_shift_m'):
+        assert np.array_equal(getattr(back, name), getattr(data, name), equal_nan=True)
+    for i in range(data.frames):
+        assert [p['x_m'] for p in back.presses(i)] == [p['x_m'] for p in data.presses(i)]
+    old = tmp_path / 'v1.npz'
+    np.savez(old, format_version=np.int64(1), top=data.top, bottom=data.bottom,
+             pitch_m=np.float64(0.005), azimuth_deg=data.azimuth_deg, alpha_deg=data.alpha_deg)
+    v1 = load_dataset(old)
+    assert v1.press_x_m is None and v1.frames == data.frames
+    assert v1.presses(1)[0]['alpha_deg'] == data.alpha_deg[1]
+
+
+def _two_presses(**over):
+    nan = math.nan
+    arrays = {'press_x_m': [[0.02, 0.04]], 'press_y_m': [[0.03, 0.03]],
+              'press_force_n': [[10.0, 5.0]], 'press_azimuth_deg': [[90.0, nan]],
+              'press_alpha_deg': [[30.0, 0.0]]}
+    arrays.update(over)
+    return Dataset(top=np.zeros((1, 4, 4)), bottom=np.zeros((1, 4, 4)), pitch_m=0.005,
+                   azimuth_deg=[90.0], alpha_deg=[30.0], **arrays)
+
+
+@pytest.mark.parametrize('over, problem', [
+    ({'press_azimuth_deg': [[math.nan, math.nan]]}, 'press_azimuth_deg is NaN'),
+    ({'press_y_m': [[0.03, math.nan]]}, 'finite exactly where press_x_m'),
+    ({'press_alpha_deg': [[30.0, 90.0]]}, r'press_alpha_deg must be in \[0, 90\)'),
+    ({'press_force_n': [[10.0]]}, 'must have shape'),
+    ({'press_x_m': None}, 'per-press arrays need all of'),
+])
+def test_bad_per_press_arrays_are_refused_by_name(over, problem):
+    assert len(_two_presses().presses(0)) == 2
+    with pytest.raises(ValueError, match=problem):
+        _two_presses(**over)
