@@ -167,7 +167,8 @@ def family_targets(worst) -> list:
                          d['large_shift_valid_share'], d['large_shift_skin'], 0.95)]
     for kind in ('paper', 'random', 'border', 'multi'):
         r = d[kind]['ratio_to_centroid']
-        out.append(_target(f'family {kind}: error default / centroid (worst skin)', r, '<= 1',
+        out.append(_target(f'family {kind}: error default / plain centroid (worst skin)', r,
+                           '<= 1',
                            r is not None and r <= 1.0,
                            f'worst on {d[kind]["ratio_to_centroid_skin"]}' if r else ''))
     r = d['paper']['ratio_to_seed']

@@ -146,17 +146,18 @@ def press_counts(data: Dataset) -> np.ndarray:
     return np.isfinite(data.press_x_m).sum(axis=1)
 
 
-def calibrated_estimator(data: Dataset, method: str,
-                         config: EstimatorConfig = None) -> ContactEstimator:
+def calibrated_estimator(data: Dataset, method: str, config: EstimatorConfig = None,
+                         **override) -> ContactEstimator:
     """
     Return estimator ``method`` (``config`` gives its other settings) made ready for ``data``.
 
     Tared from the dataset's tare frames, (x_p, y_p) calibrated from its single normal presses
-    (none: uncalibrated).
+    (none: uncalibrated). ``override`` goes to :class:`ContactEstimator` (the benchmark swaps
+    in reference shift methods that are not registered).
     """
     base = config or EstimatorConfig(pitch_m=data.pitch_m)
     cfg = EstimatorConfig(**{**base.__dict__, 'method': method, 'pitch_m': data.pitch_m})
-    est = ContactEstimator(cfg)
+    est = ContactEstimator(cfg, **override)
     if data.tare_top is not None:
         est.tare(data.tare_top, data.tare_bottom)
     normal = np.flatnonzero((data.alpha_deg == 0) & (press_counts(data) == 1))
@@ -168,7 +169,7 @@ def calibrated_estimator(data: Dataset, method: str,
     # Without a single normal press the layers are taken as aligned (calibration.presses = 0).
     calibration = (calibrate_from_shifts(np.array(shifts).reshape(-1, 2), max_std_m=math.inf)
                    if shifts else Calibration())
-    est = ContactEstimator(cfg, calibration, est.conditioner)
+    est = ContactEstimator(cfg, calibration, est.conditioner, **override)
     est.process(data.top[0], data.bottom[0])  # warm the per-shape caches
     return est
 

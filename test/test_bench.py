@@ -98,7 +98,7 @@ def test_write_produces_json_markdown_and_plots(results, tmp_path):
 
 def test_family_scores_every_skin_scene_and_method_and_names_the_worst(results):
     fam = results['family']
-    methods = ['poc', 'seed', 'centroid']
+    methods = ['centroid', 'seed', 'plain_centroid']
     assert fam['methods'] == methods
     assert {(r['skin'], r['scene'], r['method']) for r in fam['rows']} == {
         (s, k, m) for s in ('default', 'soft') for k in ('paper', 'random', 'border', 'multi')
