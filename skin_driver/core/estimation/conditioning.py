@@ -219,23 +219,9 @@ class Conditioner:
             self._stack = _Stacked(self._layers, self.config.fill_dead)
         return self._stack
 
-    def force_noise(self, force: np.ndarray) -> np.ndarray:
-        """
-        Return the 1-sigma force noise (N) of each loaded taxel of a (2, rows, cols) force stack.
-
-        The count noise of the taxel (measured by the tare) times the slope of the counts-to-force
-        curve where the taxel reads; 0 where the stack holds no force.
-        """
-        st = self._stacked()
-        out = np.zeros(force.shape)
-        loaded = np.flatnonzero(force > 0)
-        if loaded.size:
-            table = self._table
-            counts = np.interp(force.ravel()[loaded], table.force, table.counts)
-            j = np.minimum(counts.astype(np.intp), table.slope.size - 1)
-            gain = 1.0 if st.gain is None else st.gain.ravel()[loaded]
-            out.ravel()[loaded] = table.slope[j] * st.noise.ravel()[loaded] * gain
-        return out
+    def count_noise(self) -> np.ndarray:
+        """Return the (2, rows, cols) 1-sigma count noise of every taxel (measured by the tare)."""
+        return self._stacked().noise
 
     def condition(self, top_counts, bottom_counts) -> tuple:
         """Return (top, bottom) per-taxel force maps in newtons (float64, new arrays)."""
@@ -249,6 +235,17 @@ class Conditioner:
 
     def condition_stacked(self, t: np.ndarray, b: np.ndarray) -> np.ndarray:
         """Return both force maps as one new (2, rows, cols) float64 array (maps checked)."""
+        return self.force_of(self.touch_counts(t, b))
+
+    def touch_counts(self, t: np.ndarray, b: np.ndarray) -> np.ndarray:
+        """
+        Return the tared counts of both layers as a new (2, rows, cols) array (maps checked).
+
+        Line leak removed, readings under the touch threshold zeroed, dead taxels filled from
+        their neighbours. These are the sensor's own readings, free of any assumption about the
+        FSR curve: the shape of an imprint, hence its location and the layer shift, is measured
+        on them.
+        """
         if self._shape != t.shape:
             self._ensure(t.shape)
         st = self._stacked()
@@ -257,13 +254,30 @@ class Conditioner:
         np.subtract(b, st.baseline[1], out=c[1])
         if self.config.remove_crosstalk:
             remove_line_leak(c, st.threshold)
+        c[c < st.threshold] = 0.0
+        if st.dead:
+            self._revive(c, st)
+            st = self._stacked()
+            for i, fill in st.dead:
+                c[i] = fill(c[i])
+        return c
+
+    def _revive(self, c: np.ndarray, st: _Stacked) -> None:
+        """Unmark taxels taken for dead that read a touch: they only rest below zero counts."""
+        for i, fill in st.dead:
+            alive = fill.dead & (c[i] > 0)
+            if alive.any():
+                self._layers[i].dead = fill.dead & ~alive
+                self._stack = None
+
+    def force_of(self, counts: np.ndarray) -> np.ndarray:
+        """Return the per-taxel force (N) of a (2, rows, cols) stack of touch counts."""
+        st = self._stacked()
         # Most taxels are untouched: only the loaded ones are converted, the rest keep the force
         # of zero counts, which the FSR model defines as 0.
-        loaded = np.flatnonzero(c >= st.threshold)
-        force = np.zeros(c.shape)
-        force.ravel()[loaded] = self._table(c.ravel()[loaded])
+        loaded = np.flatnonzero(counts)
+        force = np.zeros(counts.shape)
+        force.ravel()[loaded] = self._table(counts.ravel()[loaded])
         if st.gain is not None:
             force *= st.gain
-        for i, fill in st.dead:
-            force[i] = fill(force[i])
         return force

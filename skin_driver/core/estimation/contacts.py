@@ -10,6 +10,8 @@ so neighbouring presses keep their own bottom imprints even when those overlap.
 
 Each contact comes out as one :class:`LayerPair`: a window holding the contact's top taxels and
 its share of the bottom load, ready for any shift estimator, plus the figures the pipeline needs.
+The geometry is found on one pair of maps (the pipeline gives the tared counts, free of any
+assumed FSR curve) and the forces are summed on another (the force maps) over the same taxels.
 """
 
 from __future__ import annotations
@@ -39,11 +41,11 @@ class LayerPair:
     """
     One contact: its window of both layers and its summary figures (taxel units unless said).
 
-    ``maps`` is a (2, h, w) float64 array: the contact's own top force and its share of the bottom
-    force inside the window whose top-left taxel is ``origin`` (row, col). ``top_force_n`` and
-    ``bottom_force_n`` are the sums of the two layers; ``row``/``col`` the top centroid in the full
-    map; ``taxels`` the loaded top taxels; ``at_border`` is True when either imprint reaches the
-    edge of the map (part of it may be cut off).
+    ``maps`` is a (2, h, w) float64 array: the contact's own top map and its share of the bottom
+    map inside the window whose top-left taxel is ``origin`` (row, col). ``top_force_n`` and
+    ``bottom_force_n`` are the contact's force sums on the two layers; ``row``/``col`` the top
+    centroid in the full map; ``taxels`` the loaded top taxels; ``at_border`` is True when either
+    imprint reaches the edge of the map (part of it may be cut off).
     """
 
     maps: np.ndarray
@@ -78,8 +80,14 @@ def find_contacts(maps, pitch_m: float = 0.005, min_force_n: float = 0.0,
 
 
 def pair_layers(maps: np.ndarray, min_force_n: float, max_contacts: int,
-                dead: np.ndarray = None) -> list:
-    """Do the work of :func:`find_contacts` on a checked float64 stack."""
+                dead: np.ndarray = None, force: np.ndarray = None) -> list:
+    """
+    Do the work of :func:`find_contacts` on a checked float64 stack.
+
+    ``force`` (same shape, loaded on the same taxels) gives the forces; ``maps`` by default.
+    """
+    if force is None:
+        force = maps
     top, bottom = maps
     loaded = (top > 0).view(np.uint8)
     n, labels = cv2.connectedComponents(loaded, connectivity=8, ltype=cv2.CV_32S)
@@ -90,18 +98,19 @@ def pair_layers(maps: np.ndarray, min_force_n: float, max_contacts: int,
         return []
     if n == 2:
         # One top imprint (the common case): it is the whole top map, no label to test.
-        tops = top[None]
-        shares = bottom[None]
+        tops, top_forces = top[None], force[:1]
+        shares, bottom_forces = bottom[None], force[1:]
     else:
         masses = np.bincount(labels.ravel(), weights=top.ravel(), minlength=n)
         # The strongest top imprints first; the pipeline orders by the force it reports.
         keep = sorted((k for k in range(1, n) if masses[k] > 0), key=lambda k: -masses[k])
-        keep = np.array(keep[:max_contacts])[:, None, None]
-        tops = np.where(labels[None] == keep, top[None], 0.0)
-        shares = _share_bottom(tops, bottom)
+        own = labels[None] == np.array(keep[:max_contacts])[:, None, None]
+        tops, top_forces = top * own, force[0] * own
+        fraction = _share_bottom(tops, bottom)
+        shares, bottom_forces = fraction * bottom, fraction * force[1]
     pairs = []
-    for t, b in zip(tops, shares):
-        pair = _pair(t, b)
+    for t, b, tf, bf in zip(tops, shares, top_forces, bottom_forces):
+        pair = _pair(t, b, tf, bf)
         if max(pair.top_force_n, pair.bottom_force_n) >= min_force_n:
             pairs.append(pair)
     return pairs
@@ -153,7 +162,7 @@ def _separate(top: np.ndarray, p: tuple, q: tuple, dead) -> bool:
 
 
 def _share_bottom(tops: np.ndarray, bottom: np.ndarray) -> np.ndarray:
-    """Return each top imprint's share (K, rows, cols) of the bottom map; shares sum to it."""
+    """Return each top imprint's share (K, rows, cols; fractions summing to 1) of the bottom."""
     k, rows, cols = tops.shape
     shares = np.zeros(tops.shape)
     loaded = np.flatnonzero(bottom > 0)
@@ -189,7 +198,7 @@ def _share_bottom(tops: np.ndarray, bottom: np.ndarray) -> np.ndarray:
         mean = m[:, 1:3] / got[:, None]
         var = np.maximum(0.5 * (m[:, 3] / got - (mean * mean).sum(axis=1)), 0.25)
         log_weight = np.log(got / got.sum())
-    shares.reshape(k, -1)[:, loaded] = resp * bv
+    shares.reshape(k, -1)[:, loaded] = resp
     return shares
 
 
@@ -209,7 +218,7 @@ def _extent(mask: np.ndarray, axis: int) -> tuple:
     return int(line.argmax()), line.size - int(line[::-1].argmax())
 
 
-def _pair(t: np.ndarray, b: np.ndarray) -> LayerPair:
+def _pair(t: np.ndarray, b: np.ndarray, tf: np.ndarray, bf: np.ndarray) -> LayerPair:
     rows, cols = t.shape
     t_rows = t.sum(axis=1)
     t_cols = t.sum(axis=0)
@@ -228,5 +237,6 @@ def _pair(t: np.ndarray, b: np.ndarray) -> LayerPair:
     window = np.empty((2, r1 - r0, c1 - c0))
     window[0] = t[r0:r1, c0:c1]
     np.multiply(b[r0:r1, c0:c1], own[r0:r1, c0:c1], out=window[1])
-    return LayerPair(window, (r0, c0), row, col, mt, float(window[1].sum()),
+    bottom_force = float((bf[r0:r1, c0:c1] * own[r0:r1, c0:c1]).sum())
+    return LayerPair(window, (r0, c0), row, col, float(tf.sum()), bottom_force,
                      int(np.count_nonzero(touched)), bool(border))

@@ -7,8 +7,11 @@ raw counts (top, bottom) -> conditioning (tare, threshold, FSR model -> force pe
 -> calibrated shift ``s = raw - (x_p, y_p)`` -> azimuth ``atan2(s_y, s_x)``
 -> tangential force ``|s| / compliance`` -> polar angle and 3-D force.
 
-Uncertainty, from the contact's own data: the noise of each taxel's force (the tare's count noise
-through the slope of the counts-to-force curve) gives the noise of each imprint's centroid; an
+Geometry and force: contacts, their windows and the shift are measured on the tared counts (the
+sensor's own readings, whatever its FSR curve); the force maps only give the contacts' forces.
+
+Uncertainty, from the contact's own data: each taxel's count noise (measured by the tare) gives
+the noise of each imprint's centroid; an
 imprint narrower than a taxel adds the pixel-locking error of its sampled centroid, whose size
 follows from the imprint's measured width (a Gaussian profile of variance ``v - 1/12`` sampled on
 unit cells has a first harmonic of amplitude ``exp(-2 pi^2 (v - 1/12)) / pi`` taxels); an imprint
@@ -164,14 +167,16 @@ class ContactEstimator:
         """Return [(LayerPair, ShiftEstimate, sigma in taxels)] for the contacts."""
         t, b = check_pair(top_counts, bottom_counts)
         cfg = self.config
-        maps = self.conditioner.condition_stacked(t, b)
-        dead = self.conditioner.dead_masks()[0]
+        conditioner = self.conditioner
+        maps = conditioner.touch_counts(t, b)
+        dead = conditioner.dead_masks()[0]
         pairs = pair_layers(maps, 0.0, cfg.max_contacts,
-                            dead if dead is not None and dead.any() else None)
+                            dead if dead is not None and dead.any() else None,
+                            conditioner.force_of(maps))
         if not pairs:
             return []
         method = self._method
-        noise = self.conditioner.force_noise(maps)
+        noise = conditioner.count_noise()
         whole = None
         if method.whole_map:
             whole = method.function(np.stack((t, b)).astype(np.float64))
@@ -188,7 +193,8 @@ class ContactEstimator:
         """Return the 1-sigma uncertainty of one axis of the pair's shift, taxels (docstring)."""
         r0, c0 = pair.origin
         h, w = pair.maps.shape[1:]
-        err2 = noise[:, r0:r0 + h, c0:c0 + w] ** 2
+        # Only the taxels over the threshold enter a centroid, with their noise.
+        err2 = np.where(pair.maps > 0, noise[:, r0:r0 + h, c0:c0 + w] ** 2, 0.0)
         if not alone:
             # A contact's share of a layer carries the same share of that layer's noise.
             full = maps[:, r0:r0 + h, c0:c0 + w]
