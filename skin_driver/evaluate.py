@@ -393,8 +393,10 @@ def format_table(report: dict) -> str:
     names = list(report['methods'])
     lines = []
     if 'frames' in report:
+        multi = report.get('multi_press_frames')
         lines += [f'frames {report["frames"]} ({report["normal_frames"]} normal, '
-                  f'{report["tilted_frames"]} tilted), map '
+                  f'{report["tilted_frames"]} tilted'
+                  + (f', {multi} with several presses' if multi else '') + '), map '
                   f'{report["shape"][0]}x{report["shape"][1]}', '']
     betas = {r['beta_deg'] for n in names for r in report['methods'][n]['per_beta']}
     paper = report.get('seed_experiment', True) and betas and betas <= set(PAPER_TABLE)
@@ -421,7 +423,10 @@ def format_table(report: dict) -> str:
                 f'{_fmt(s["valid_share"] and 100 * s["valid_share"], ".1f") + "%":>8}'
     if paper:
         line += f'{PAPER_TABLE["summary"][0]:>13.2f}{PAPER_TABLE["summary"][1]:>8.2f}'
-    lines.append(line)
+    if rows:
+        lines.append(line)
+    else:
+        lines[-1] = 'no frame holds a single tilted press: no Table 1'
     lines.append('')
     for n in names:
         s = report['methods'][n]['summary']
