@@ -160,25 +160,20 @@ def _share_target(name, share, skin, limit) -> dict:
                    share is not None and share >= limit, note, '.1f')
 
 
-def _worst_note(ratio, skin, itself: str) -> str:
-    if ratio is None:
-        return 'no valid direction to compare'
-    return f'worst on {skin}' if skin else itself
-
-
 def family_targets(worst) -> list:
     """Return the issue's targets over the whole family, each at its worst skin."""
     d = worst[DEFAULT_METHOD]
     out = [_share_target('family: valid share for shifts >= 1 taxel (default, worst skin)',
                          d['large_shift_valid_share'], d['large_shift_skin'], 0.95)]
     for kind in ('paper', 'random', 'border', 'multi'):
-        r, skin = d[kind]['ratio_to_centroid'], d[kind]['ratio_to_centroid_skin']
+        r = d[kind]['ratio_to_centroid']
         out.append(_target(f'family {kind}: error default / centroid (worst skin)', r, '<= 1',
                            r is not None and r <= 1.0,
-                           _worst_note(r, skin, 'the default is the centroid difference')))
-    r, skin = d['paper']['ratio_to_seed'], d['paper']['ratio_to_seed_skin']
+                           f'worst on {d[kind]["ratio_to_centroid_skin"]}' if r else ''))
+    r = d['paper']['ratio_to_seed']
     out.append(_target("family paper's protocol: error default / seed (worst skin)", r, '<= 0.20',
-                       r is not None and r <= 0.2, _worst_note(r, skin, 'the default is seed')))
+                       r is not None and r <= 0.2,
+                       f'worst on {d["paper"]["ratio_to_seed_skin"]}' if r else ''))
     out.append(_share_target('family: presses >= 3 taxels apart found apart (default, worst)',
                              d['separate_share_far'], d['separate_skin'], 0.98))
     v = d['median_us']

@@ -240,7 +240,7 @@ def scaling(grids, contact_counts, methods, frames, repeats, seed=0, log=print) 
 
 def family_methods(everything: bool = True) -> list:
     """Return the methods of the family benchmark: default, seed, centroid, then the others."""
-    first = list(dict.fromkeys([DEFAULT_METHOD, 'seed', 'centroid']))
+    first = [DEFAULT_METHOD, 'seed', 'centroid']
     return first + ([m for m in method_names() if m not in first] if everything else [])
 
 
@@ -313,8 +313,7 @@ def family_worst(rows, costs, methods) -> dict:
     Return each method's worst case over the skins: per scene, error, valid share and more.
 
     ``ratio_to_centroid`` and ``ratio_to_seed`` are the largest ratios of the method's mean
-    error to the centroid difference's and to seed's on the same skin and scene (1 with no
-    skin named when the method is that reference).
+    error to the centroid difference's and to seed's on the same skin and scene.
     """
     index = {(r['skin'], r['scene'], r['method']): r for r in rows}
     out = {}
@@ -328,7 +327,7 @@ def family_worst(rows, costs, methods) -> dict:
             ratios = {}
             for ref in ('centroid', 'seed'):
                 if ref == m:
-                    ratios[ref] = (1.0, None)  # the method is the reference itself
+                    ratios[ref] = (None, None)
                     continue
                 pairs = [(r['mean_error_deg'] / index[(r['skin'], kind, ref)]['mean_error_deg'],
                           r['skin']) for r in sel
