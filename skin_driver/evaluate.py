@@ -32,7 +32,7 @@ from .core.estimation.dataset import Dataset, load_dataset, save_dataset
 from .core.estimation.pipeline import ContactEstimator, EstimatorConfig
 from .core.estimation.shift import DEFAULT_METHOD, method_names
 from .core.sim.experiments import make_scene, SCENE_KINDS
-from .core.sim.skins import family_skin, skin_names
+from .core.sim.skins import family_skin, HELD_OUT, skin_names
 from .estimator_params import estimator_config, load_direction_parameters
 
 __all__ = ['PAPER_TABLE', 'CONTACT_COLUMNS', 'MethodRun', 'summarise', 'calibrated_estimator',
@@ -394,8 +394,10 @@ def format_table(report: dict) -> str:
     names = list(report['methods'])
     lines = []
     if 'frames' in report:
+        multi = report.get('multi_press_frames')
         lines += [f'frames {report["frames"]} ({report["normal_frames"]} normal, '
-                  f'{report["tilted_frames"]} tilted), map '
+                  f'{report["tilted_frames"]} tilted'
+                  + (f', {multi} with several presses' if multi else '') + '), map '
                   f'{report["shape"][0]}x{report["shape"][1]}', '']
     betas = {r['beta_deg'] for n in names for r in report['methods'][n]['per_beta']}
     paper = report.get('seed_experiment', True) and betas and betas <= set(PAPER_TABLE)
@@ -422,7 +424,10 @@ def format_table(report: dict) -> str:
                 f'{_fmt(s["valid_share"] and 100 * s["valid_share"], ".1f") + "%":>8}'
     if paper:
         line += f'{PAPER_TABLE["summary"][0]:>13.2f}{PAPER_TABLE["summary"][1]:>8.2f}'
-    lines.append(line)
+    if rows:
+        lines.append(line)
+    else:
+        lines[-1] = 'no frame holds a single tilted press: no Table 1'
     lines.append('')
     for n in names:
         s = report['methods'][n]['summary']
@@ -493,8 +498,9 @@ def _parser() -> argparse.ArgumentParser:
     parser.add_argument('--contacts', metavar='OUT.csv',
                         help="write every reported contact of every frame (the --method's)")
     parser.add_argument('--json', action='store_true', help='print one JSON object')
-    parser.add_argument('--skin', choices=skin_names(), metavar='NAME',
-                        help='generate the data from this skin of the family (see --list-skins)')
+    parser.add_argument('--skin', metavar='NAME',
+                        help='generate the data from this skin of the family (see --list-skins; '
+                             'held_out:N for one drawn at random, seed N)')
     parser.add_argument('--scene', default='paper', choices=SCENE_KINDS,
                         help='scene kind rendered with --skin (default paper)')
     parser.add_argument('--size', type=int, default=None,
@@ -526,10 +532,16 @@ def main(argv=None) -> int:
     if args.list_skins:
         for name in skin_names():
             print(f'{name:12s} {family_skin(name).description}')
+        print(f'{HELD_OUT + "N":12s} a skin drawn at random within these ranges (seed N)')
         return 0
     if args.list_methods:
         print('\n'.join(method_names()))
         return 0
+    if args.skin:
+        try:
+            family_skin(args.skin)
+        except ValueError as err:
+            parser.error(str(err))
     rng = np.random.default_rng(args.seed)
     if args.generate:
         kind, out = args.generate

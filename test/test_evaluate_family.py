@@ -42,7 +42,10 @@ def test_skin_scene_json_and_contacts_csv(tmp_path, capsys):
 def test_list_skins_names_every_skin(capsys):
     assert evaluate.main(['--list-skins']) == 0
     listed = [line.split()[0] for line in capsys.readouterr().out.splitlines()]
-    assert listed == skin_names()
+    assert listed == skin_names() + ['held_out:N']
+    with pytest.raises(SystemExit):
+        evaluate.main(['--skin', 'no_such_skin'])
+    assert 'the family has default' in capsys.readouterr().err
 
 
 def test_params_file_configures_the_evaluator_as_the_node(tmp_path, capsys):

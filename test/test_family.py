@@ -40,6 +40,22 @@ def test_family_spans_the_ranges_of_real_skins():
                                                                          45.0) <= 6
 
 
+def test_held_out_skins_are_drawn_within_the_ranges_and_reproducible():
+    skins = [family_skin(f'held_out:{n}') for n in range(30)]
+    assert family_skin('held_out:3') == skins[3] and skins[3] != skins[4]
+    assert len({s.model for s in skins}) == 30
+    for s in skins:
+        assert 0.3 <= s.shift_taxels(s.paper_force_n, 45.0) <= 5.0
+        assert s.model.noise_counts <= 10 and s.model.gain_spread <= 0.1
+        assert math.hypot(*s.model.misalignment_m) <= 0.5 * s.model.pitch_m
+        assert s.force_range_n[0] < s.paper_force_n < s.force_range_n[1]
+    for bad in ('held_out:', 'held_out:x', 'held_out:-1'):
+        with pytest.raises(ValueError, match='held_out:N'):
+            family_skin(bad)
+    # The named family stays as it is.
+    assert not any(n.startswith('held_out') for n in skin_names())
+
+
 def test_saturating_skin_saturates_below_sixty_newtons():
     model = get_skin('saturating')
     top, _ = render(model, [Press(0.037, 0.038, 30.0, radius_m=0.004)],

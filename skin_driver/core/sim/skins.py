@@ -8,6 +8,9 @@ misalignment. Each also names the forces its scenes press with, so that its shif
 meaningful: ``paper_force_n`` for the paper's protocol (alpha = 45 deg) and ``force_range_n``
 for random presses. Everything is fixed by the skin's ``seed``: the same name always gives the
 same skin.
+
+``held_out:N`` names a skin drawn at random (seed N) within the family's ranges: once an
+estimator has been tuned on the named skins, these are data it has never seen.
 """
 
 from __future__ import annotations
@@ -15,10 +18,14 @@ from __future__ import annotations
 from dataclasses import dataclass
 import math
 
+import numpy as np
+
 from .physics import SkinModel
 from ..estimation.fsr import FsrModel
 
-__all__ = ['FamilySkin', 'skin_names', 'get_skin', 'family_skin']
+__all__ = ['FamilySkin', 'HELD_OUT', 'skin_names', 'get_skin', 'family_skin', 'held_out_skin']
+
+HELD_OUT = 'held_out:'
 
 
 @dataclass(frozen=True)
@@ -89,13 +96,48 @@ def skin_names() -> list:
     return [s.name for s in _FAMILY]
 
 
+def held_out_skin(seed: int) -> FamilySkin:
+    """
+    Return a skin drawn at random within the family's ranges, named ``held_out:<seed>``.
+
+    Its paper press (alpha = 45 deg) shifts the layers by 0.3 to 5 taxels at 8 to 40 N; random
+    presses take half to one and a half times that force.
+    """
+    seed = int(seed)
+    if seed < 0:
+        raise ValueError(f'a held-out skin needs a seed >= 0, got {seed}')
+    rng = np.random.default_rng([0x5EED, seed])
+    pick = (lambda low, high: float(rng.uniform(low, high)))
+    pitch = 0.005
+    force = pick(8.0, 40.0)
+    shift_taxels = math.exp(pick(math.log(0.3), math.log(5.0)))
+    fsr = FsrModel(r_min_ohm=pick(200.0, 500.0), r_max_ohm=pick(2500.0, 6000.0),
+                   force_at_r_max_n=pick(0.1, 0.5),
+                   force_at_r_min_n=math.exp(pick(math.log(3.0), math.log(60.0))))
+    offset, angle = pick(0.0, 0.5 * pitch), pick(0.0, 2.0 * math.pi)
+    model = SkinModel(
+        compliance_m_per_n=shift_taxels * pitch / (force * math.sin(math.radians(45.0))),
+        spread_m=pick(0.0006, 0.004), cover_spread_m=pick(0.0002, 0.002),
+        fill_factor=pick(0.8, 0.95), fsr=fsr,
+        crosstalk=pick(0.0, 0.012) if rng.random() < 0.5 else 0.0,
+        gain_spread=pick(0.0, 0.1), baseline_spread_counts=pick(0.0, 20.0),
+        noise_counts=pick(2.0, 10.0),
+        misalignment_m=(offset * math.cos(angle), offset * math.sin(angle)), seed=1000 + seed)
+    return FamilySkin(f'{HELD_OUT}{seed}',
+                      f'held out (seed {seed}): {shift_taxels:.1f} taxel shift at {force:.0f} N, '
+                      f'saturates at {fsr.force_at_r_min_n:.0f} N per taxel',
+                      model, force, (0.5 * force, 1.5 * force))
+
+
 def family_skin(name: str) -> FamilySkin:
     """Return the family member ``name`` (model, description, forces); ValueError if unknown."""
+    if name.startswith(HELD_OUT) and name[len(HELD_OUT):].isdigit():
+        return held_out_skin(int(name[len(HELD_OUT):]))
     try:
         return _BY_NAME[name]
     except KeyError:
-        raise ValueError(f'unknown skin {name!r}; the family has '
-                         f'{", ".join(skin_names())}') from None
+        raise ValueError(f'unknown skin {name!r}; the family has {", ".join(skin_names())}, '
+                         f'and {HELD_OUT}N (N >= 0) draws a held-out one') from None
 
 
 def get_skin(name: str) -> SkinModel:
