@@ -28,7 +28,7 @@ __all__ = ['LayerPair', 'find_contacts', 'pair_layers']
 
 # A second peak of one connected top group is another contact only if the load between them
 # drops below this share of the lower peak, and the peaks are at least MIN_PEAK_DISTANCE apart.
-SADDLE_RATIO = 0.7
+SADDLE_RATIO = 0.85
 MIN_PEAK_DISTANCE = 2
 _MIXTURE_ITERATIONS = 3
 # Bottom load below this share of a contact's peak share is not part of its window.
@@ -148,17 +148,31 @@ def _split_peaks(top: np.ndarray, labels: np.ndarray, n: int, dead) -> tuple:
 
 
 def _separate(top: np.ndarray, p: tuple, q: tuple, dead) -> bool:
-    """Return True when the peak ``p`` stands apart from the higher peak ``q``."""
+    """
+    Return True when the peak ``p`` stands apart from the higher peak ``q``.
+
+    The load is followed along the straight line between them, interpolated between taxels (a
+    line between diagonal neighbours passes their shared corner, where two blobs that only
+    touch at a corner meet low).
+    """
     steps = max(abs(p[0] - q[0]), abs(p[1] - q[1]))
     if steps < MIN_PEAK_DISTANCE:
         return False
-    t = np.linspace(0.0, 1.0, steps + 1)
-    r = np.rint(p[0] + (q[0] - p[0]) * t).astype(np.intp)
-    c = np.rint(p[1] + (q[1] - p[1]) * t).astype(np.intp)
-    path = top[r, c]
+    t = np.linspace(0.0, 1.0, 4 * steps + 1)
+    r = p[0] + (q[0] - p[0]) * t
+    c = p[1] + (q[1] - p[1]) * t
+    r0 = np.clip(np.floor(r).astype(np.intp), 0, max(top.shape[0] - 2, 0))
+    c0 = np.clip(np.floor(c).astype(np.intp), 0, max(top.shape[1] - 2, 0))
+    r1 = np.minimum(r0 + 1, top.shape[0] - 1)
+    c1 = np.minimum(c0 + 1, top.shape[1] - 1)
+    fr, fc = r - r0, c - c0
+    values = top
     if dead is not None:
-        path = path[~dead[r, c]]
-    return bool(path.size) and float(path.min()) < SADDLE_RATIO * float(top[p])
+        # A filled-in taxel is no evidence of a dip: the path takes its higher neighbour.
+        values = np.where(dead, cv2.dilate(top, _DILATE), top)
+    path = ((1 - fr) * (1 - fc) * values[r0, c0] + (1 - fr) * fc * values[r0, c1]
+            + fr * (1 - fc) * values[r1, c0] + fr * fc * values[r1, c1])
+    return float(path.min()) < SADDLE_RATIO * float(top[p])
 
 
 def _share_bottom(tops: np.ndarray, bottom: np.ndarray) -> np.ndarray:
