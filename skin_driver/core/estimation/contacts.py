@@ -226,31 +226,29 @@ def _basis(shape: tuple) -> np.ndarray:
     return basis
 
 
-def _extent(mask: np.ndarray, axis: int) -> tuple:
-    """Return the half-open range of the lines of ``mask`` along ``axis`` that hold a True."""
-    line = mask.any(axis=axis)
-    return int(line.argmax()), line.size - int(line[::-1].argmax())
-
-
 def _pair(t: np.ndarray, b: np.ndarray, tf: np.ndarray, bf: np.ndarray) -> LayerPair:
     rows, cols = t.shape
-    t_rows = t.sum(axis=1)
-    t_cols = t.sum(axis=0)
-    mt = float(t_rows.sum())
-    row = float(t_rows @ np.arange(rows) / mt) if mt > 0 else 0.0
-    col = float(t_cols @ np.arange(cols) / mt) if mt > 0 else 0.0
-    touched = t > 0
-    peak = b.max()
-    own = b > _WINDOW_SHARE * peak if peak > 0 else np.zeros_like(touched)
-    both = touched | own
-    r0, r1 = _extent(both, 1)
-    c0, c1 = _extent(both, 0)
+    basis = _basis((rows, cols))
+    flat_t = t.ravel()
+    mt, sum_r, sum_c, _ = (flat_t @ basis).tolist()
+    row, col = (sum_r / mt, sum_c / mt) if mt > 0 else (0.0, 0.0)
+    touched = np.flatnonzero(flat_t)
+    flat_b = b.ravel()
+    peak = flat_b.max()
+    own = np.flatnonzero(flat_b > _WINDOW_SHARE * peak) if peak > 0 else touched[:0]
+    both = np.concatenate((touched, own))
+    lines, places = np.divmod(both, cols)
+    r0, r1 = int(lines.min()), int(lines.max()) + 1
+    c0, c1 = int(places.min()), int(places.max()) + 1
     border = r0 == 0 or c0 == 0 or r1 == rows or c1 == cols
     r0, r1 = max(r0 - 1, 0), min(r1 + 1, rows)
     c0, c1 = max(c0 - 1, 0), min(c1 + 1, cols)
+    kept = np.zeros(rows * cols)
+    kept[own] = 1.0
+    kept = kept.reshape(rows, cols)[r0:r1, c0:c1]
     window = np.empty((2, r1 - r0, c1 - c0))
     window[0] = t[r0:r1, c0:c1]
-    np.multiply(b[r0:r1, c0:c1], own[r0:r1, c0:c1], out=window[1])
-    bottom_force = float((bf[r0:r1, c0:c1] * own[r0:r1, c0:c1]).sum())
+    np.multiply(b[r0:r1, c0:c1], kept, out=window[1])
+    bottom_force = float((bf[r0:r1, c0:c1] * kept).sum())
     return LayerPair(window, (r0, c0), row, col, float(tf.sum()), bottom_force,
-                     int(np.count_nonzero(touched)), bool(border))
+                     int(touched.size), bool(border))
