@@ -233,7 +233,8 @@ class DirectionNode(Node):
             self._stats['contacts'] += len(contacts)
             # The array already holds the strongest contact's message: no second conversion.
             self._pub_contact.publish(array.contacts[0])
-            self._pub_wrench.publish(conversions.wrench_stamped(header, strongest.force_xyz_n))
+            self._pub_wrench.publish(conversions.wrench_stamped(
+                header, strongest.force_xyz_n, (strongest.x_m, strongest.y_m)))
         else:
             self._pub_wrench.publish(conversions.wrench_stamped(header, (0.0, 0.0, 0.0)))
         if self._session is not None:

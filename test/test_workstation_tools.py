@@ -1,4 +1,4 @@
-"""The workspace scripts work where a ROS 2 workstation user runs them, not only after make setup."""
+"""The workspace scripts work where a ROS 2 workstation user runs them, not only after setup."""
 
 import importlib.util
 import os
