@@ -418,6 +418,11 @@ def main(args=None):
         rclpy.spin(node)
     except (KeyboardInterrupt, ExternalShutdownException):
         pass
+    except Exception:  # noqa: B902 - judged by the context, re-raised unless shutting down
+        # Ctrl-C shuts the context down under a callback already running: its publish fails,
+        # and that is the shutdown, not a crash.
+        if node.context.ok():
+            raise
     finally:
         node.destroy_node()
         rclpy.try_shutdown()

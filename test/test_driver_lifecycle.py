@@ -8,7 +8,9 @@ import pytest
 import rclpy
 from rclpy.parameter import Parameter
 from rosutil import spin_until
+from skin_driver import direction_node
 from skin_driver.serial_link import DISCONNECTED
+from skin_msgs.msg import TactileContactArray
 
 pytestmark = pytest.mark.ros
 
@@ -86,3 +88,25 @@ def test_a_port_lost_while_shutting_down_is_not_reported_as_a_fault(tmp_path, ca
         driver.close()
         err = capfd.readouterr().err
         assert 'disconnected' not in err and 'Failed to publish' not in err, err
+
+
+def _spin_into(shutdown_first):
+    def spin(node):
+        publisher = node.create_publisher(TactileContactArray, 'contacts', 5)
+        if shutdown_first:
+            rclpy.shutdown(context=node.context)  # what Ctrl-C does under a running callback
+            publisher.publish(TactileContactArray())
+        raise RuntimeError('a callback failed while the node was running')
+    return spin
+
+
+def test_direction_node_ends_quietly_when_ctrl_c_lands_inside_a_callback(tmp_path, monkeypatch):
+    monkeypatch.setattr(rclpy, 'spin', _spin_into(shutdown_first=True))
+    direction_node.main(args=['--ros-args', '-p', f'calibration_file:={tmp_path / "cal.yaml"}'])
+
+
+def test_direction_node_still_fails_on_a_callback_error_while_running(tmp_path, monkeypatch):
+    monkeypatch.setattr(rclpy, 'spin', _spin_into(shutdown_first=False))
+    with pytest.raises(RuntimeError, match='a callback failed'):
+        direction_node.main(args=['--ros-args', '-p',
+                                  f'calibration_file:={tmp_path / "cal.yaml"}'])
