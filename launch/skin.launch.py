@@ -7,11 +7,28 @@ Bring up the skin: serial driver and direction node, optionally the simulated sk
 """
 
 from launch import LaunchDescription
-from launch.actions import DeclareLaunchArgument, ExecuteProcess
+from launch.actions import DeclareLaunchArgument, ExecuteProcess, OpaqueFunction
 from launch.conditions import IfCondition
 from launch.substitutions import LaunchConfiguration, PathJoinSubstitution
 from launch_ros.actions import LifecycleNode, Node
 from launch_ros.substitutions import FindPackagePrefix, FindPackageShare
+from skin_driver import rviz_config
+
+
+def _require_rviz2(context):
+    # Before anything starts: a missing rviz2 found later would leave the nodes running.
+    problem = rviz_config.rviz2_problem()
+    if problem:
+        raise RuntimeError(problem)
+    return []
+
+
+def _rviz(context):
+    template = PathJoinSubstitution([FindPackageShare('skin_driver'), 'config', 'skin.rviz'])
+    config = rviz_config.write_namespaced(template.perform(context),
+                                          LaunchConfiguration('namespace').perform(context))
+    return [Node(package='rviz2', executable='rviz2', name='skin_rviz', arguments=['-d', config],
+                 output='screen')]
 
 
 def generate_launch_description():
@@ -20,6 +37,7 @@ def generate_launch_description():
     port = LaunchConfiguration('port')
     namespace = LaunchConfiguration('namespace')
     params_file = LaunchConfiguration('params_file')
+    with_rviz = IfCondition(LaunchConfiguration('rviz'))
     arguments = [
         DeclareLaunchArgument('port', default_value='/tmp/skin0',
                               description='Serial device or pyserial URL of the skin board.'),
@@ -49,8 +67,7 @@ def generate_launch_description():
     direction = Node(
         package='skin_driver', executable='direction', name='skin_direction',
         namespace=namespace, parameters=[params_file], output='screen')
-    rviz = Node(
-        package='rviz2', executable='rviz2', name='skin_rviz',
-        arguments=['-d', PathJoinSubstitution([share, 'config', 'skin.rviz'])],
-        output='screen', condition=IfCondition(LaunchConfiguration('rviz')))
-    return LaunchDescription(arguments + [simulator, driver, direction, rviz])
+    return LaunchDescription(arguments + [
+        OpaqueFunction(function=_require_rviz2, condition=with_rviz),
+        simulator, driver, direction,
+        OpaqueFunction(function=_rviz, condition=with_rviz)])

@@ -90,7 +90,7 @@ def contact_to_msg(header: Header, contact) -> TactileContact:
         else math.pi,
         polar=_finite(contact.alpha_rad, 'polar') if direction_valid else 0.0,
         shift=Vector3(x=sx, y=sy, z=0.0),
-        wrench=Wrench(force=Vector3(x=fx, y=fy, z=fz)),
+        wrench=_wrench_at((fx, fy, fz), contact.x_m, contact.y_m),
         area=_finite(contact.area_m2, 'area'),
         confidence=min(1.0, max(0.0, _finite(contact.confidence, 'confidence'))),
         direction_valid=direction_valid,
@@ -103,10 +103,20 @@ def contacts_to_array(header: Header, contacts: Iterable) -> TactileContactArray
                                contacts=[contact_to_msg(header, c) for c in contacts])
 
 
-def wrench_stamped(header: Header, force_xyz_n: Sequence[float]) -> WrenchStamped:
-    """Return the force of a contact as a WrenchStamped in the skin frame (no torque)."""
+def _wrench_at(force_xyz_n: Sequence[float], x_m: float, y_m: float) -> Wrench:
+    """Return the wrench of a force applied at (x, y, 0): torque r x F about the frame origin."""
     fx, fy, fz = (_finite(v, 'force') for v in force_xyz_n)
-    return WrenchStamped(header=header, wrench=Wrench(force=Vector3(x=fx, y=fy, z=fz)))
+    x, y = _finite(x_m, 'x'), _finite(y_m, 'y')
+    # A wrench's torque is about its frame's origin: without r x F a transform to another frame
+    # would move the force's line of action to skin_link's origin.
+    return Wrench(force=Vector3(x=fx, y=fy, z=fz),
+                  torque=Vector3(x=y * fz, y=-x * fz, z=x * fy - y * fx))
+
+
+def wrench_stamped(header: Header, force_xyz_n: Sequence[float],
+                   at_xy_m: Sequence[float] = (0.0, 0.0)) -> WrenchStamped:
+    """Return a force applied at at_xy_m (skin plane, z = 0) as a WrenchStamped, torque r x F."""
+    return WrenchStamped(header=header, wrench=_wrench_at(force_xyz_n, *at_xy_m))
 
 
 def heatmap_markers(header: Header, force_map: np.ndarray, pitch_m: float, contacts: Iterable,

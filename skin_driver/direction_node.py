@@ -227,7 +227,8 @@ class DirectionNode(Node):
             self._stats['contacts'] += len(contacts)
             # The array already holds the strongest contact's message: no second conversion.
             self._pub_contact.publish(array.contacts[0])
-            self._pub_wrench.publish(conversions.wrench_stamped(header, strongest.force_xyz_n))
+            self._pub_wrench.publish(conversions.wrench_stamped(
+                header, strongest.force_xyz_n, (strongest.x_m, strongest.y_m)))
         else:
             self._pub_wrench.publish(conversions.wrench_stamped(header, (0.0, 0.0, 0.0)))
         if self._session is not None:
@@ -411,6 +412,11 @@ def main(args=None):
         rclpy.spin(node)
     except (KeyboardInterrupt, ExternalShutdownException):
         pass
+    except Exception:  # noqa: B902 - judged by the context, re-raised unless shutting down
+        # Ctrl-C shuts the context down under a callback already running: its publish fails,
+        # and that is the shutdown, not a crash.
+        if node.context.ok():
+            raise
     finally:
         node.destroy_node()
         rclpy.try_shutdown()

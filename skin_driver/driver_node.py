@@ -11,14 +11,19 @@ Publishes (sensor-data QoS): frame (skin_msgs/SkinFrame), top/image_raw and bott
 Diagnostics: OK while frames arrive; WARN when the link is stalled or, within the last period,
 frames were dropped (sequence gaps, frames lost while the device was away) or corrupt frames
 were rejected (line noise); ERROR while the device is missing or when it only sends frames of
-another grid size (the received shape is in the message). Parameters set at run time are checked
-as at start-up and take effect at the next configure.
+another grid size (the received shape is in the message). A change of link state is reported at
+once, not at the next period. An inactive or unconfigured driver (stopped on request) is OK and
+keeps reporting its state. Parameters set at run time are checked as at start-up; those that
+configure reads are refused with the reason while the driver is configured (deactivate, cleanup,
+set, configure, activate), never accepted and silently ignored. A link lost while the node shuts
+down (Ctrl-C stops the simulated board too) is not reported as a fault.
 
 Each message is stamped with the host time at which its last byte was read. The board's own clock
 travels in SkinFrame.device_time_us: it is not synchronised with the host, but its differences are
 exact, so consumers use it for the interval between scans and for latency measurements.
 """
 
+import threading
 import time
 
 from rcl_interfaces.msg import SetParametersResult
@@ -30,8 +35,16 @@ from sensor_msgs.msg import Image
 from skin_driver import conversions, diagnostics
 from skin_driver.core.protocol import FrameDecoder
 from skin_driver.params import declare, ParameterError
-from skin_driver.serial_link import CONNECTED, SerialLink, STALLED, STOPPED
+from skin_driver.serial_link import CONNECTED, DISCONNECTED, SerialLink, STALLED, STOPPED
 from skin_msgs.msg import SkinFrame
+
+# Read by configure: a change while configured would be accepted and change nothing.
+CONFIGURE_TIME_PARAMETERS = (
+    'port', 'baud', 'rows', 'cols', 'pitch', 'frame_id', 'publish_images', 'read_timeout',
+    'stall_timeout', 'reconnect_min', 'reconnect_max', 'diagnostics_period')
+# Ctrl-C reaches a simulated board as well as the driver: a port lost within this long before the
+# context shuts down belongs to the shutdown, not to a fault.
+SHUTDOWN_GRACE_S = 0.25
 
 
 class SkinDriverNode(Node):
@@ -42,12 +55,17 @@ class SkinDriverNode(Node):
         self._declare_parameters()
         self._link = None
         self._pubs = {}
-        self._diag = None
-        self._diag_timer = None
         self._rate = None
-        self._state_detail = 'not configured'
+        self._lifecycle = 'unconfigured'
+        self._state_detail = ''
         self._burst = 0
         self._reported = {}
+        self._report_lock = threading.Lock()
+        self._shutting_down = threading.Event()
+        self.context.on_shutdown(self._shutting_down.set)
+        # Diagnostics live as long as the node: a stopped driver still says what it is doing.
+        self._diag = diagnostics.DiagnosticPublisher(self)
+        self._diag_timer = self.create_timer(self._p('diagnostics_period'), self._report)
         self.add_on_set_parameters_callback(self._check_new_parameters)
 
     def _declare_parameters(self) -> None:
@@ -87,6 +105,12 @@ class SkinDriverNode(Node):
     def _check_new_parameters(self, params) -> SetParametersResult:
         """Refuse at run time what start-up refuses; rclpy itself checks the ranges."""
         new = {p.name: p.value for p in params}
+        fixed = [name for name in CONFIGURE_TIME_PARAMETERS if name in new]
+        if fixed and self._link is not None:
+            return SetParametersResult(successful=False, reason=(
+                f"{', '.join(map(repr, fixed))} cannot change while the driver is "
+                f'{self._lifecycle}: it is read at configure; deactivate, cleanup, set it, then '
+                'configure and activate'))
         for name in ('port', 'frame_id'):
             if name in new and not str(new[name]).strip():
                 return SetParametersResult(successful=False,
@@ -115,11 +139,11 @@ class SkinDriverNode(Node):
             self._p('port'), self._p('baud'), decoder, self._publish_frames, self._on_link_state,
             read_timeout_s=self._p('read_timeout'), stall_timeout_s=self._p('stall_timeout'),
             backoff_min_s=self._p('reconnect_min'), backoff_max_s=self._p('reconnect_max'))
-        self._diag = diagnostics.DiagnosticPublisher(self)
         self._rate = diagnostics.RateMeter(time.monotonic())
         self._reported = {}
+        self.destroy_timer(self._diag_timer)
         self._diag_timer = self.create_timer(self._p('diagnostics_period'), self._report)
-        self._state_detail = 'configured'
+        self._lifecycle = 'inactive'
         self.get_logger().info(f"configured for {self._p('port')} "
                                f"({self._p('rows')}x{self._p('cols')} taxels)")
         return TransitionCallbackReturn.SUCCESS
@@ -127,11 +151,13 @@ class SkinDriverNode(Node):
     def on_activate(self, state: State) -> TransitionCallbackReturn:
         """Open the port (retrying in the background until the device is there)."""
         result = super().on_activate(state)
+        self._lifecycle = 'active'
         self._link.start()
         return result
 
     def on_deactivate(self, state: State) -> TransitionCallbackReturn:
         """Stop reading and close the port."""
+        self._lifecycle = 'inactive'
         self._link.stop()
         return super().on_deactivate(state)
 
@@ -142,26 +168,27 @@ class SkinDriverNode(Node):
 
     def on_shutdown(self, state: State) -> TransitionCallbackReturn:
         """Stop reading and release everything."""
-        self._release()
+        self.close()
         return TransitionCallbackReturn.SUCCESS
 
     def close(self) -> None:
-        """Stop reading and release the port; safe to call in any state."""
+        """Stop reading and release the port and diagnostics; safe to call in any state."""
         self._release()
-
-    def _release(self) -> None:
-        if self._link is not None:
-            self._link.stop()
-            self._link = None
-        for pub in self._pubs.values():
-            self.destroy_lifecycle_publisher(pub)
-        self._pubs = {}
         if self._diag_timer is not None:
             self.destroy_timer(self._diag_timer)
             self._diag_timer = None
         if self._diag is not None:
             self._diag.destroy()
             self._diag = None
+
+    def _release(self) -> None:
+        self._lifecycle = 'unconfigured'
+        if self._link is not None:
+            self._link.stop()
+            self._link = None
+        for pub in self._pubs.values():
+            self.destroy_lifecycle_publisher(pub)
+        self._pubs = {}
 
     # ---- data path (runs on the link's thread) ---------------------------------------------
     def _publish_frames(self, frames, receive_monotonic: float) -> None:
@@ -180,6 +207,9 @@ class SkinDriverNode(Node):
         self._state_detail = detail
         if state == STOPPED:
             return
+        if state == DISCONNECTED and self._shutting_down.wait(SHUTDOWN_GRACE_S):
+            return
+        self._report()
         # rclpy fixes a call site's severity at its first call: one call site per severity.
         if state == CONNECTED:
             self.get_logger().info(f'skin link {state}: {detail}')
@@ -188,8 +218,19 @@ class SkinDriverNode(Node):
 
     # ---- diagnostics ------------------------------------------------------------------------
     def _report(self) -> None:
-        if self._link is None:
-            return
+        # The timer and the link's thread (on a change of state) both report.
+        with self._report_lock:
+            if self._diag is None or self._shutting_down.is_set():
+                return
+            if self._lifecycle == 'active':
+                self._report_link()
+            else:
+                self._diag.publish([diagnostics.make_status(
+                    f'{self.get_fully_qualified_name()}: skin link', self._p('port'),
+                    diagnostics.OK, f'{self._lifecycle}: not reading, as requested',
+                    {'port': self._p('port'), 'lifecycle state': self._lifecycle})])
+
+    def _report_link(self) -> None:
         rate, _ = self._rate.take(time.monotonic())
         burst, self._burst = self._burst, 0
         link, dec = self._link.stats, self._link.decoder.stats
@@ -221,6 +262,7 @@ class SkinDriverNode(Node):
             'frames': dec.frames, 'crc errors': dec.crc_errors, 'size errors': dec.size_errors,
             'last rejected shape': shape, 'version errors': dec.version_errors,
             'bytes discarded': dec.bytes_discarded, 'sequence gaps': dec.seq_gaps,
+            'implausible sequence jumps': dec.seq_implausible,
             'frames dropped': dropped,
             'frames lost while disconnected': link.frames_lost_reconnecting,
             'largest burst [frames]': burst,

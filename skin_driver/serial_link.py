@@ -145,6 +145,7 @@ class SerialLink:
     def _run(self) -> None:
         backoff = self._backoff[0]
         last_frame = time.monotonic()
+        size_errors = self.decoder.stats.size_errors  # at the latest good frame
         while not self._stop.is_set():
             if self._serial is None:
                 if not self._connect():
@@ -170,11 +171,19 @@ class SerialLink:
                     self._follow_sequence(frames, now)
                     self.stats.frames += len(frames)
                     last_frame = now
+                    size_errors = self.decoder.stats.size_errors
                     self._set_state(CONNECTED, f'reading {self.port}')
                     self._notify(self._on_frames, frames, now)
             if now - last_frame > self._stall_timeout:
-                self._set_state(STALLED, f'no frame from {self.port} for '
-                                f'{now - last_frame:.1f} s')
+                self._set_state(STALLED, self._stall_detail(now - last_frame, size_errors))
+
+    def _stall_detail(self, quiet_s: float, size_errors_before: int) -> str:
+        shape = self.decoder.last_rejected_shape
+        if self.decoder.stats.size_errors > size_errors_before and shape:
+            # Frames do arrive: saying "no frame" would send a maintainer to the cable.
+            return (f'only frames of the wrong grid size {shape[0]}x{shape[1]} from {self.port} '
+                    f'for {quiet_s:.1f} s')
+        return f'no frame from {self.port} for {quiet_s:.1f} s'
 
     def _wait_to_retry(self, backoff_s: float) -> None:
         """Wait backoff_s, or less if the device path was missing and has just appeared."""

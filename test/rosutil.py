@@ -17,7 +17,8 @@ def ros_context():
         yield context, executor
     finally:
         executor.shutdown()
-        rclpy.shutdown(context=context)
+        # A test may have shut the context down itself, as Ctrl-C does.
+        rclpy.try_shutdown(context=context)
 
 
 def spin_until(executor, condition, timeout_s=10.0):

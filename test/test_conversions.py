@@ -72,3 +72,24 @@ def test_markers_draw_grid_arrow_and_label_per_contact():
     # The arrow comes from where the push comes from: against +y, above the skin.
     assert arrow.points[0].y < 0.04 and arrow.points[0].z > 0
     assert label.text == '7.0 N β 90°'
+
+
+def _vec(v):
+    return np.array([v.x, v.y, v.z])
+
+
+def test_contact_wrench_torque_is_the_force_moment_about_the_frame_origin():
+    msg = conversions.contact_to_msg(HEADER, _contact())
+    r = _vec(msg.location)
+    assert _vec(msg.wrench.torque) == pytest.approx(np.cross(r, (0.0, 7.0, -7.0)))
+    # About the contact point itself the wrench is a pure force, as it physically is.
+    assert _vec(msg.wrench.torque) - np.cross(r, _vec(msg.wrench.force)) == pytest.approx(0.0)
+
+
+def test_wrench_stamped_carries_the_torque_of_the_force_at_its_point():
+    stamped = conversions.wrench_stamped(HEADER, (1.0, -2.0, -5.0), (0.02, 0.01))
+    assert _vec(stamped.wrench.force) == pytest.approx((1.0, -2.0, -5.0))
+    assert _vec(stamped.wrench.torque) == pytest.approx(
+        np.cross((0.02, 0.01, 0.0), (1.0, -2.0, -5.0)))
+    assert _vec(conversions.wrench_stamped(HEADER, (0.0, 0.0, 0.0)).wrench.torque) == \
+        pytest.approx(0.0)

@@ -123,9 +123,10 @@ def test_line_noise_is_a_warning_and_costs_only_the_damaged_frames(tmp_path):
             lambda s, v: s.level == WARN and 'corrupt frames rejected' in s.message), WAIT_S)
         stats = driver._link.decoder.stats
         assert sim.frames_damaged > 10 and stats.crc_errors > 0
-        # Junk between frames costs nothing; each damaged frame costs itself and no other.
-        assert stats.frames_missed == sim.frames_damaged
-        assert sim.frames_dropped == 0
+        # Junk between frames costs nothing; each damaged frame costs itself and no other. On a
+        # loaded machine the simulator may itself fall half a second behind and skip frames it
+        # never sends (frames_dropped): those are gaps too, but not the driver's.
+        assert stats.frames_missed == sim.frames_damaged + sim.frames_dropped
         assert_published_frames_are_true(sim, probe)
         assert any(max(m.top) > 1000 for m in probe.frames)
 

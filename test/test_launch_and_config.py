@@ -6,6 +6,7 @@ import pathlib
 import pytest
 import rclpy
 from rosutil import ros_context
+from skin_driver import rviz_config
 from skin_driver.direction_node import DirectionNode
 from skin_driver.driver_node import SkinDriverNode
 import yaml
@@ -58,22 +59,75 @@ def test_rviz_config_shows_the_heatmaps_markers_and_wrench():
     assert manager['Global Options']['Fixed Frame'] == 'skin_link'
 
 
-@pytest.mark.skipif(importlib.util.find_spec('launch_ros') is None,
-                    reason='launch_ros is not installed (no wheel exists); workstations with '
-                           'ROS 2 Jazzy run this test')
-def test_launch_file_declares_its_arguments_and_nodes():
-    from launch import LaunchDescription
-    from launch.actions import DeclareLaunchArgument, ExecuteProcess
+def test_rviz_config_follows_the_launch_namespace(tmp_path, monkeypatch):
+    monkeypatch.setenv('ROS_HOME', str(tmp_path))
+    path = rviz_config.write_namespaced(str(ROOT / 'config' / 'skin.rviz'), 'left')
+    manager = yaml.safe_load(pathlib.Path(path).read_text())['Visualization Manager']
+    topics = {d['Topic']['Value'] for d in manager['Displays'] if 'Topic' in d}
+    assert topics == {'/left/top/heatmap', '/left/bottom/heatmap', '/left/markers',
+                      '/left/wrench'}
+    assert rviz_config.namespaced('Value: /skin/wrench', '/robot/left_hand/') == \
+        'Value: /robot/left_hand/wrench'
+    assert rviz_config.namespaced('Value: /skin/wrench', '') == 'Value: /wrench'
+
+
+def test_missing_rviz2_is_one_line_naming_the_package(monkeypatch):
+    def not_found(name):
+        raise rviz_config.PackageNotFoundError(name)
+    monkeypatch.setattr(rviz_config, 'get_package_prefix', not_found)
+    problem = rviz_config.rviz2_problem()
+    assert 'rviz2 is not installed' in problem and '\n' not in problem
+
+
+NO_LAUNCH_ROS = pytest.mark.skipif(
+    importlib.util.find_spec('launch_ros') is None,
+    reason='launch_ros is not installed (no wheel exists); workstations with ROS 2 Jazzy run '
+           'this test')
+
+
+def _load_launch_file():
     spec = importlib.util.spec_from_file_location('skin_launch',
                                                   ROOT / 'launch' / 'skin.launch.py')
     module = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(module)
-    description = module.generate_launch_description()
+    return module
+
+
+@NO_LAUNCH_ROS
+def test_launch_file_declares_its_arguments_and_nodes():
+    from launch import LaunchContext, LaunchDescription
+    from launch.actions import DeclareLaunchArgument, ExecuteProcess
+    from launch.utilities import perform_substitutions
+    description = _load_launch_file().generate_launch_description()
     assert isinstance(description, LaunchDescription)
     names = {a.name for a in description.entities if isinstance(a, DeclareLaunchArgument)}
     assert names == {'port', 'params_file', 'namespace', 'sim', 'scene', 'sim_rate', 'rviz'}
     executables = [getattr(a, 'node_executable', None) for a in description.entities]
-    assert {'driver', 'direction', 'rviz2'} <= set(executables)
-    processes = [a for a in description.entities if isinstance(a, ExecuteProcess)
-                 and a.name == 'skin_sim']
+    assert {'driver', 'direction'} <= set(executables)
+    # ExecuteProcess keeps its name as substitutions until launch performs them (nodes have
+    # none until launched).
+    processes = [a for a in description.entities if isinstance(a, ExecuteProcess) and a.name
+                 and perform_substitutions(LaunchContext(), a.name) == 'skin_sim']
     assert len(processes) == 1
+
+
+@NO_LAUNCH_ROS
+def test_rviz_without_rviz2_fails_up_front_and_starts_nothing(tmp_path, monkeypatch):
+    from launch import LaunchDescription, LaunchService
+    from launch.actions import IncludeLaunchDescription, RegisterEventHandler
+    from launch.event_handlers import OnProcessStart
+    from launch.launch_description_sources import PythonLaunchDescriptionSource
+
+    def not_found(name):
+        raise rviz_config.PackageNotFoundError(name)
+    monkeypatch.setattr(rviz_config, 'get_package_prefix', not_found)
+    started = []
+    service = LaunchService()
+    service.include_launch_description(LaunchDescription([
+        RegisterEventHandler(OnProcessStart(on_start=lambda event, _: started.append(event))),
+        IncludeLaunchDescription(
+            PythonLaunchDescriptionSource(str(ROOT / 'launch' / 'skin.launch.py')),
+            launch_arguments={'rviz': 'true', 'sim': 'true',
+                              'port': str(tmp_path / 'skin0')}.items())]))
+    assert service.run() != 0
+    assert [e.process_name for e in started] == []

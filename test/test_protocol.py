@@ -264,10 +264,25 @@ def test_damaged_frame_costs_only_itself():
 def test_sequence_gaps_wrap_and_device_restart():
     dec = FrameDecoder()
     seqs = [2 ** 32 - 2, 2 ** 32 - 1, 0, 3, 4, 9, 1, 2]
-    for s in seqs:
-        dec.feed(frame_bytes(s, (2, 2), time_us=0))
+    # A 1 kHz scan: the device clock moves on with the frames, lost ones included.
+    times = [0, 1000, 2000, 5000, 6000, 11000, 1000, 2000]
+    for s, t in zip(seqs, times):
+        dec.feed(frame_bytes(s, (2, 2), time_us=t))
     # Gaps: 0 -> 3 (2 missed), 4 -> 9 (4 missed); the wrap is continuous; 9 -> 1 is a restart.
     assert (dec.stats.seq_gaps, dec.stats.frames_missed) == (2, 6)
+    assert dec.stats.seq_implausible == 0
+
+
+def test_a_corrupt_but_valid_sequence_number_is_not_billions_of_dropped_frames():
+    dec = FrameDecoder()
+    # Frame 3 arrives with seq 2**31 - 10 and passing checks; the device clock moved 1 ms.
+    for s, t in [(1, 1000), (2, 2000), (2 ** 31 - 10, 3000), (4, 4000), (5, 5000)]:
+        dec.feed(frame_bytes(s, (2, 2), time_us=t))
+    assert dec.stats.frames == 5
+    assert (dec.stats.seq_gaps, dec.stats.frames_missed, dec.stats.seq_implausible) == (0, 0, 1)
+    # A real gap stays one: 5 -> 9 with the clock 4 ms on.
+    dec.feed(frame_bytes(9, (2, 2), time_us=9000))
+    assert (dec.stats.seq_gaps, dec.stats.frames_missed) == (1, 3)
 
 
 def test_reset_forgets_partial_frame_and_last_seq_but_keeps_stats():

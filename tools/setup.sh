@@ -43,6 +43,7 @@ hash_of() { cat "$@" | sha1sum | cut -c1-40; }
 reqs=(tools/requirements.txt)
 if [ -n "$system_ros" ]; then
   python3 -c 'import numpy, cv2' 2>/dev/null || die "missing: numpy or OpenCV for the system python (rosdep install --from-paths . --ignore-src -y, or apt-get install python3-numpy python3-opencv)"
+  python3 -c 'import matplotlib, skimage' 2>/dev/null || die "missing: matplotlib or scikit-image for the system python, which the tests need (rosdep install --from-paths . --ignore-src -y, or apt-get install python3-matplotlib python3-skimage)"
 else
   reqs+=(tools/requirements-numeric.txt tools/requirements-ros.txt)
 fi

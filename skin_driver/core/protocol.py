@@ -40,6 +40,9 @@ CRC_SIZE = 4
 MAX_COUNT = 4095
 MAX_SEQ = 2 ** 32 - 1
 MAX_DEVICE_TIME_US = 2 ** 64 - 1
+# No scan of both layers takes less than a microsecond of the device's clock: a forward jump of
+# the sequence number by more frames than microseconds passed is a corrupt number, not a loss.
+MIN_SCAN_US = 1
 _CRC = struct.Struct('<I')
 _COUNTS = np.dtype('<u2')
 
@@ -134,6 +137,7 @@ class DecoderStats:
     bytes_discarded: int = 0  # bytes that were not part of an accepted frame
     seq_gaps: int = 0         # times the sequence number jumped forwards by more than one
     frames_missed: int = 0    # frames skipped by those jumps
+    seq_implausible: int = 0  # forward jumps the device clock cannot explain (corrupt seq)
 
 
 class FrameDecoder:
@@ -166,7 +170,7 @@ class FrameDecoder:
             self._max_frame = frame_size(self._max_rows, self._max_cols)
         self._expected = expected_shape
         self._buf = bytearray()
-        self._last_seq: int | None = None
+        self._last: tuple[int, int] | None = None  # (seq, device time) of the newest frame
         self.stats = DecoderStats()
         # (rows, cols) of the newest frame refused for its size, for diagnostics.
         self.last_rejected_shape: tuple[int, int] | None = None
@@ -185,7 +189,7 @@ class FrameDecoder:
         """Drop buffered bytes and forget the last sequence number; keep the statistics."""
         self.stats.bytes_discarded += len(self._buf)
         self._buf = bytearray()
-        self._last_seq = None
+        self._last = None
 
     def feed(self, data: bytes) -> list[Frame]:
         """
@@ -265,7 +269,7 @@ class FrameDecoder:
                 counts = counts.astype(np.uint16)
                 counts.flags.writeable = False
             layers = counts.reshape(2, rows, cols)
-            self._count_seq(seq)
+            self._count_seq(seq, time_us)
             frames.append(Frame(seq, time_us, rows, cols, layers[0], layers[1]))
             stats.frames += 1
             pos += size
@@ -276,13 +280,16 @@ class FrameDecoder:
             return (rows, cols) == self._expected
         return 1 <= rows <= self._max_rows and 1 <= cols <= self._max_cols
 
-    def _count_seq(self, seq: int) -> None:
-        last = self._last_seq
-        self._last_seq = seq
+    def _count_seq(self, seq: int, time_us: int) -> None:
+        last = self._last
+        self._last = (seq, time_us)
         if last is None:
             return
-        step = (seq - last) & MAX_SEQ
+        step = (seq - last[0]) & MAX_SEQ
         # A backward jump or a repeat means the device restarted: nothing is known to be missed.
         if 1 < step <= MAX_SEQ // 2:
+            if (step - 1) * MIN_SCAN_US > time_us - last[1]:
+                self.stats.seq_implausible += 1
+                return
             self.stats.seq_gaps += 1
             self.stats.frames_missed += step - 1
