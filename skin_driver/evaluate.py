@@ -7,7 +7,10 @@ Usage::
     python -m skin_driver.evaluate --generate seed|random OUT.npz [--seed N]
 
 The alpha = 0 frames calibrate (x_p, y_p); every other frame's strongest contact is compared
-with the ground-truth azimuth. ROS-free.
+with the ground-truth azimuth. With a ``split`` array (dataset format 2) only the calibration
+frames (split = 1) calibrate, and more fully: alpha = 0 frames with ``force_n`` give (x_p, y_p)
+and the force curves, tilted ones with ``force_n`` the compliance; only split = 0 frames are
+scored. ``--calibration-frames`` adds such frames to a generated dataset. ROS-free.
 """
 
 from __future__ import annotations
@@ -20,11 +23,13 @@ import time
 
 import numpy as np
 
-from .core.estimation.calibration import calibrate_from_shifts
 from .core.estimation.dataset import Dataset, load_dataset, save_dataset
 from .core.estimation.pipeline import ContactEstimator, EstimatorConfig
+from .core.estimation.session import CalibrationRefused, CalibrationSession
 from .core.estimation.shift import DEFAULT_METHOD, method_names
-from .core.sim.experiments import make_random_experiment, make_seed_experiment
+from .core.sim.experiments import (add_calibration_frames, make_random_experiment,
+                                   make_seed_experiment)
+from .core.sim.physics import SkinModel
 
 __all__ = ['PAPER_TABLE', 'summarise', 'evaluate_method', 'evaluate', 'format_table', 'main']
 
@@ -114,6 +119,46 @@ def _force_errors(data: Dataset, frames: np.ndarray, results: list) -> dict:
     return out
 
 
+def _run_session(est: ContactEstimator, data: Dataset, frames: np.ndarray, kind: str,
+                 **session_args) -> str:
+    """Calibrate ``kind`` from single frames at full load; put it in force; return a note."""
+    try:
+        session = CalibrationSession(est, kind, presses=frames.size, **session_args)
+    except CalibrationRefused as err:
+        return f'{kind}: refused: {err}'
+    for i in frames:
+        top, bottom = data.top[i], data.bottom[i]
+        session.add_press(session.record(top, bottom, est.process(top, bottom)))
+    try:
+        outcome = session.finish()
+    except CalibrationRefused as err:
+        return f'{kind}: refused: {err}'
+    est.calibration = outcome.calibration
+    return f'{kind}: {outcome.message}'
+
+
+def calibrate_from_frames(est: ContactEstimator, data: Dataset, frames: np.ndarray,
+                          full: bool) -> list:
+    """
+    Calibrate ``est`` from ``frames`` of ``data``; return one note per part.
+
+    Always (x_p, y_p) from the alpha = 0 frames; with ``full`` and ``force_n`` also the force
+    curves from them and the compliance from the tilted frames. A refused part is noted and
+    the estimator keeps what it had.
+    """
+    normal = frames[data.alpha_deg[frames] == 0]
+    tilted = frames[data.alpha_deg[frames] > 0]
+    notes = [_run_session(est, data, normal, 'offset', max_std_m=math.inf)]
+    if full and data.force_n is not None:
+        known = normal[data.force_n[normal] > 0]
+        notes.append(_run_session(est, data, known, 'force', forces_n=data.force_n[known]))
+        tilted = tilted[data.force_n[tilted] > 0]
+        notes.append(_run_session(est, data, tilted, 'compliance',
+                                  forces_n=data.force_n[tilted],
+                                  alphas_rad=np.radians(data.alpha_deg[tilted])))
+    return notes
+
+
 def evaluate_method(data: Dataset, method: str, config: EstimatorConfig = None) -> dict:
     """Return the Table 1 figures of one estimator on ``data`` (see docs/dataset.md)."""
     base = config or EstimatorConfig(pitch_m=data.pitch_m)
@@ -121,15 +166,14 @@ def evaluate_method(data: Dataset, method: str, config: EstimatorConfig = None) 
     est = ContactEstimator(cfg)
     if data.tare_top is not None:
         est.tare(data.tare_top, data.tare_bottom)
-    normal = np.flatnonzero(data.alpha_deg == 0)
-    shifts = []
-    for i in normal:
-        s = est.measure_shifts(data.top[i], data.bottom[i])
-        if s:
-            shifts.append(s[0])
-    calibration = calibrate_from_shifts(np.array(shifts).reshape(-1, 2), max_std_m=math.inf)
-    est = ContactEstimator(cfg, calibration, est.conditioner)
-    tilted = np.flatnonzero(data.alpha_deg > 0)
+    everything = np.arange(data.frames)
+    if data.split is None:
+        notes = calibrate_from_frames(est, data, everything, full=False)
+        scored = everything
+    else:
+        notes = calibrate_from_frames(est, data, everything[data.split == 1], full=True)
+        scored = everything[data.split == 0]
+    tilted = scored[data.alpha_deg[scored] > 0]
     if tilted.size:
         est.process(data.top[tilted[0]], data.bottom[tilted[0]])  # warm the per-shape caches
     start = time.perf_counter()
@@ -140,13 +184,15 @@ def evaluate_method(data: Dataset, method: str, config: EstimatorConfig = None) 
     report = summarise(data.azimuth_deg[tilted], estimates)
     report['summary']['us_per_frame'] = elapsed / tilted.size * 1e6 if tilted.size else None
     report['summary'].update(_force_errors(data, tilted, results))
-    return {'method': method, 'calibration': calibration.to_dict(), **report}
+    return {'method': method, 'calibration': est.calibration.to_dict(),
+            'calibration_notes': notes, **report}
 
 
 def evaluate(data: Dataset, method: str = DEFAULT_METHOD) -> dict:
     """Return the figures of ``method`` and of ``seed`` on ``data`` as one JSON-ready dict."""
     names = [method] if method == 'seed' else [method, 'seed']
-    tilted = data.alpha_deg > 0
+    scored = np.ones(data.frames, dtype=bool) if data.split is None else data.split == 0
+    tilted = (data.alpha_deg > 0) & scored
     # The paper's Table 1 is the eight azimuths at alpha = 45 deg: compare only like with like.
     seed_like = bool(tilted.any() and np.allclose(data.alpha_deg[tilted], 45.0)
                      and set(np.round(data.azimuth_deg[tilted], 6)) <= set(PAPER_TABLE))
@@ -155,6 +201,7 @@ def evaluate(data: Dataset, method: str = DEFAULT_METHOD) -> dict:
         'seed_experiment': seed_like,
         'normal_frames': int((data.alpha_deg == 0).sum()),
         'tilted_frames': int((data.alpha_deg > 0).sum()),
+        'calibration_frames': 0 if data.split is None else int(data.split.sum()),
         'methods': {n: evaluate_method(data, n) for n in names},
     }
 
@@ -172,9 +219,11 @@ def format_table(report: dict) -> str:
     names = list(report['methods'])
     lines = []
     if 'frames' in report:
+        cal = report.get('calibration_frames')
         lines += [f'frames {report["frames"]} ({report["normal_frames"]} normal, '
-                  f'{report["tilted_frames"]} tilted), map '
-                  f'{report["shape"][0]}x{report["shape"][1]}', '']
+                  f'{report["tilted_frames"]} tilted'
+                  + (f'; {cal} of them calibrate, the rest are scored' if cal else '')
+                  + f'), map {report["shape"][0]}x{report["shape"][1]}', '']
     betas = {r['beta_deg'] for n in names for r in report['methods'][n]['per_beta']}
     paper = report.get('seed_experiment', True) and betas and betas <= set(PAPER_TABLE)
     head = f'{"beta [deg]":>10}' + ''.join(f'{n + " mean":>16}{"std":>8}{"valid":>8}'
@@ -216,6 +265,9 @@ def format_table(report: dict) -> str:
             lines.append(f'{" " * len(n)}  alpha error {_fmt(s["alpha_mean_error_deg"])} deg '
                          f'(std {_fmt(s["alpha_std_error_deg"])}, '
                          f'bias {_fmt(s["alpha_bias_deg"], "+.2f")}){force}')
+    for n in names:
+        for note in report['methods'][n].get('calibration_notes', [])[1:]:
+            lines.append(f'{n} calibration, {note}')
     if paper:
         lines.append('paper: Klimaszewski et al., Sensors 2019, 19, 4697, Table 1 '
                      '(real skin, Fanuc robot, alpha = 45 deg)')
@@ -242,6 +294,9 @@ def main(argv=None) -> int:
     parser.add_argument('--generate', nargs=2, metavar=('KIND', 'OUT'),
                         help='write a simulated dataset (KIND seed or random) and exit')
     parser.add_argument('--seed', type=int, default=0, help='random seed for --generate')
+    parser.add_argument('--calibration-frames', action='store_true',
+                        help='with --generate: put 16 normal presses over 5-60 N and 16 tilted '
+                        'presses of known load in front, as calibration frames (split = 1)')
     args = parser.parse_args(argv)
     if args.generate:
         kind, out = args.generate
@@ -252,6 +307,8 @@ def main(argv=None) -> int:
             data = make_random_experiment(rng=rng)
         else:
             parser.error(f'--generate KIND must be seed or random, got {kind!r}')
+        if args.calibration_frames:
+            data = add_calibration_frames(data, SkinModel(misalignment_m=(3e-4, -2e-4)), rng)
         save_dataset(out, data)
         print(f'wrote {data.frames} frames to {out}')
         return 0

@@ -5,6 +5,9 @@ Format (version 1, documented in docs/dataset.md): ``top``, ``bottom`` (N x rows
 raw counts), ``pitch_m`` (scalar), ``azimuth_deg`` (N, NaN where undefined), ``alpha_deg`` (N,
 0 for normal presses); optional ``force_n``, ``x_m``, ``y_m`` (N each) and ``tare_top``,
 ``tare_bottom`` (M x rows x cols no-touch frames); ``format_version`` = 1.
+
+Format 2 adds optional arrays; version 1 files still load. ``split`` (N, uint8): 1 marks a
+calibration frame, 0 a scored frame; without it every frame is used as in format 1.
 """
 
 from __future__ import annotations
@@ -19,7 +22,8 @@ from .validate import check_number, check_stack
 
 __all__ = ['Dataset', 'save_dataset', 'load_dataset', 'FORMAT_VERSION']
 
-FORMAT_VERSION = 1
+FORMAT_VERSION = 2
+_VERSIONS = (1, 2)
 _OPTIONAL = ('force_n', 'x_m', 'y_m')
 
 
@@ -59,6 +63,7 @@ class Dataset:
     y_m: np.ndarray = None
     tare_top: np.ndarray = None
     tare_bottom: np.ndarray = None
+    split: np.ndarray = None
 
     def __post_init__(self):
         """Validate shapes, dtypes and values, and freeze copies of the arrays."""
@@ -84,6 +89,12 @@ class Dataset:
                 set_(self, name, _vector(getattr(self, name), name, n))
         if self.force_n is not None and (self.force_n < 0).any():
             raise ValueError('force_n must be non-negative')
+        if self.split is not None:
+            split = np.asarray(self.split)
+            if split.shape != (n,) or split.dtype.kind not in 'uib' or not np.isin(
+                    split, (0, 1)).all():
+                raise ValueError(f'split must be ({n},) integers 0 (scored) or 1 (calibration)')
+            set_(self, 'split', split.astype(np.uint8))
         if (self.tare_top is None) != (self.tare_bottom is None):
             raise ValueError('tare_top and tare_bottom must be given together')
         if self.tare_top is not None:
@@ -95,7 +106,7 @@ class Dataset:
             set_(self, 'tare_top', tt.copy())
             set_(self, 'tare_bottom', tb.copy())
         for name in ('top', 'bottom', 'alpha_deg', 'azimuth_deg', 'tare_top', 'tare_bottom',
-                     *_OPTIONAL):
+                     'split', *_OPTIONAL):
             arr = getattr(self, name)
             if arr is not None:
                 arr.flags.writeable = False
@@ -117,7 +128,7 @@ def save_dataset(path, data: Dataset) -> None:
     arrays = {'format_version': np.int64(FORMAT_VERSION), 'top': data.top,
               'bottom': data.bottom, 'pitch_m': np.float64(data.pitch_m),
               'azimuth_deg': data.azimuth_deg, 'alpha_deg': data.alpha_deg}
-    for name in (*_OPTIONAL, 'tare_top', 'tare_bottom'):
+    for name in (*_OPTIONAL, 'tare_top', 'tare_bottom', 'split'):
         if getattr(data, name) is not None:
             arrays[name] = getattr(data, name)
     write_atomically(path, lambda f: np.savez_compressed(f, **arrays), binary=True)
@@ -136,11 +147,11 @@ def load_dataset(path) -> Dataset:
         if missing:
             raise ValueError(f'{path}: missing arrays: {", ".join(sorted(missing))}')
         version = int(npz['format_version']) if 'format_version' in keys else FORMAT_VERSION
-        if version != FORMAT_VERSION:
+        if version not in _VERSIONS:
             raise ValueError(f'{path}: unsupported format_version {version}')
         pitch = npz['pitch_m']
         if pitch.size != 1:
             raise ValueError(f'{path}: pitch_m must be a scalar')
         fields = {k: npz[k] for k in ('top', 'bottom', 'azimuth_deg', 'alpha_deg', *_OPTIONAL,
-                                      'tare_top', 'tare_bottom') if k in keys}
+                                      'tare_top', 'tare_bottom', 'split') if k in keys}
     return Dataset(pitch_m=float(pitch.reshape(())), **fields)
