@@ -113,6 +113,7 @@ class CalibrationSession:
         self.max_std_m = max_std_m
         self.accepted = []
         self.ignored = 0
+        self.last_ignored = ''
         self._segmenter = PressSegmenter(start_force_n=start_force_n,
                                          normal_tolerance_m=normal_tolerance_m)
 
@@ -163,25 +164,28 @@ class CalibrationSession:
         if self.done:
             return ''
         if self.kind == 'offset' and not record.looks_normal:
-            self.ignored += 1
-            return ('press ignored, it does not look normal (its shift grew by '
-                    f'{record.shift_growth_m:.6f} m with its force); press straight down')
+            return self._ignore('press ignored: it did not look normal (its shift grew by '
+                                f'{record.shift_growth_m:.6f} m with its force); press straight '
+                                'down')
         if self.kind == 'compliance' and not self.forces_n.size and record.wrench_n is None:
-            self.ignored += 1
-            return 'press ignored: no reference wrench arrived during it'
+            return self._ignore('press ignored: no reference wrench arrived during it')
         if not all(math.isfinite(v) for v in record.shift_m) and self.kind != 'force':
-            self.ignored += 1
-            return 'press ignored: no layer shift could be measured'
+            return self._ignore('press ignored: no layer shift could be measured')
         self.accepted.append(record)
         n = len(self.accepted)
         known = f' of known force {self.forces_n[n - 1]:.2f} N' if self.forces_n.size else ''
         return f'press {n}/{self.wanted}{known} recorded ({record.peak_force_n:.2f} N as read)'
 
+    def _ignore(self, note: str) -> str:
+        self.ignored += 1
+        self.last_ignored = note
+        return note
+
     def finish(self) -> Outcome:
         """Fit the presses; raise CalibrationRefused with the reason when they do not do."""
         if not self.accepted:
             raise CalibrationRefused(f'no usable press of the {self.wanted} asked for '
-                                     f'({self.ignored} ignored)')
+                                     f'({self.ignored} ignored; {self.last_ignored})')
         try:
             return getattr(self, f'_fit_{self.kind}')()
         except CalibrationRefused:
