@@ -11,9 +11,10 @@ the weights come from non-negative least squares. Above the last knot the last s
 
 The fit covers the counts the presses reached: the knots sit at quantiles of the presses' peak
 counts. It is refused, with a reason in newtons, when there are too few presses, when their
-forces do not span a range (the curve would be a guess outside one point), when a piece of the
-curve comes out flat (the presses disagree with any increasing curve: a force was wrong or a
-press missed the skin) or when the fit leaves large residuals.
+forces do not span a range (the curve would be a guess outside one point), when a heavier press
+read fewer counts than a lighter one (the presses disagree with any increasing curve: a force was
+wrong or a press missed the skin) or when the fit leaves large residuals. A piece that the fit
+leaves flat is merged into its neighbour, so the curve always rises strictly.
 """
 
 from __future__ import annotations
@@ -29,9 +30,12 @@ MIN_PRESSES = 6
 # The largest known force must be this many times the smallest: a range, not a point.
 MIN_FORCE_SPAN = 3.0
 MAX_RELATIVE_RESIDUAL = 0.25
+# A press this many times heavier than another must read more counts.
+MONOTONE_MARGIN = 1.5
 # Presses whose peak counts reach this share of the highest peak may be saturated.
 SATURATION_SHARE = 0.99
-_PEAK_QUANTILES = (0.0, 0.25, 0.5, 0.75, 1.0)
+_PEAK_QUANTILES = (0.0, 0.5, 1.0)
+_POOLED_QUANTILES = (0.25, 0.5, 0.75, 0.9)
 
 
 @dataclass(frozen=True)
@@ -97,6 +101,20 @@ class CurveFit:
     used: int
 
 
+def _check_monotone(press_counts, press_gains, known: np.ndarray) -> None:
+    """Refuse presses where clearly more force read fewer counts."""
+    total = np.array([float(np.dot(g, c)) for c, g in zip(press_counts, press_gains)])
+    # Near saturation the counts hardly grow, and places differ a little: only a clear
+    # difference in force must show.
+    clash = (known[None, :] > MONOTONE_MARGIN * known[:, None]) & (total[None, :] < total[:, None])
+    if clash.any():
+        i, j = (int(v[0]) for v in np.nonzero(clash))
+        raise ValueError(
+            f'the presses disagree with an increasing force curve: {known[j]:.2f} N read '
+            f'fewer counts than {known[i]:.2f} N; check the known forces and their order, '
+            'and press squarely on the skin')
+
+
 def _nnls(a: np.ndarray, b: np.ndarray, max_rounds: int = 100) -> np.ndarray:
     """Return x >= 0 minimising |a x - b| (Lawson and Hanson's active set; a has few columns)."""
     x = np.zeros(a.shape[1])
@@ -159,7 +177,7 @@ def fit_force_curve(press_counts: Sequence[np.ndarray], press_gains: Sequence[np
     # A saturated layer reads the same peak under more force: those presses say nothing about
     # the curve, which is then fitted over the presses below saturation.
     capped = peaks >= SATURATION_SHARE * peaks.max()
-    if capped.sum() >= 2 and known[capped].max() > MIN_FORCE_SPAN ** 0.5 * known[capped].min():
+    if capped.sum() >= 2 and known[capped].max() > 1.2 * known[capped].min():
         keep = ~capped
         if keep.sum() < MIN_PRESSES or known[keep].max() < MIN_FORCE_SPAN * known[keep].min():
             raise ValueError(f'the layer saturates from {known[capped].min():.2f} N on; press '
@@ -172,24 +190,28 @@ def fit_force_curve(press_counts: Sequence[np.ndarray], press_gains: Sequence[np
                            for c, g in zip(press_counts, press_gains)]) * known / target
         return CurveFit(curve, tuple(fitted.tolist()), tuple((fitted - known).tolist()),
                         int(keep.sum()))
-    knots = np.unique(np.concatenate(([0.0], np.quantile(peaks, _PEAK_QUANTILES))))
-    # A piece below the weakest press's peak holds most taxels of every press: split it.
-    knots = np.unique(np.concatenate((knots, [knots[1] / 2.0])))
-    design = np.stack([
-        (np.asarray(g, dtype=np.float64)[:, None]
-         * _basis(np.asarray(c, dtype=np.float64), knots)).sum(axis=0)
-        for c, g in zip(press_counts, press_gains)])
-    # Scale the columns so that NNLS weighs every piece alike.
-    scale = np.maximum(design.max(axis=0), 1e-12)
-    weights = _nnls(design / scale, target)
-    slopes = weights / scale
-    flat = np.flatnonzero(slopes <= 0)
-    if flat.size:
-        k = int(flat[0])
-        raise ValueError(
-            f'the presses disagree with an increasing force curve: counts {knots[k]:.0f} to '
-            f'{knots[k + 1]:.0f} would give no more force; check the known forces '
-            f'({known.min():.2f} to {known.max():.2f} N) and press squarely on the skin')
+    _check_monotone(press_counts, press_gains, known)
+    pooled = np.concatenate([np.asarray(c, dtype=np.float64) for c in press_counts])
+    knots = np.unique(np.concatenate(([0.0], np.quantile(peaks, _PEAK_QUANTILES),
+                                      np.quantile(pooled, _POOLED_QUANTILES))))
+    # Relative errors: a light press counts as much as a heavy one.
+    row_weight = 1.0 / target
+    while True:
+        design = np.stack([
+            (np.asarray(g, dtype=np.float64)[:, None]
+             * _basis(np.asarray(c, dtype=np.float64), knots)).sum(axis=0)
+            for c, g in zip(press_counts, press_gains)])
+        # Scale the columns so that NNLS weighs every piece alike.
+        scale = np.maximum(design.max(axis=0), 1e-12)
+        slopes = _nnls(design / scale * row_weight[:, None], target * row_weight) / scale
+        flat = np.flatnonzero(slopes <= 0)
+        if flat.size == 0 or knots.size <= 2:
+            break
+        # A flat piece is merged into its neighbours: the curve stays strictly increasing.
+        k = int(flat[0]) + 1
+        knots = np.delete(knots, min(k, knots.size - 2))
+    if (slopes <= 0).any():
+        raise ValueError('no increasing force curve fits the presses; check the known forces')
     fitted_sensed = design @ slopes
     fitted = fitted_sensed * known / target
     residuals = fitted - known

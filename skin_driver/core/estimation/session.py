@@ -213,28 +213,34 @@ class CalibrationSession:
         known = self.forces_n[:n]
         fill = self.estimator.config.fill_factor
         gains = self.estimator.conditioner.gain_maps()
-        fits = []
-        for layer, name in enumerate(('top', 'bottom')):
+        fits = {}
+        notes = ''
+        # The normal force is the bottom layer's sum: its curve must fit. The top layer (the
+        # same film) may borrow it when its own presses do not make a curve.
+        for layer, name in ((1, 'bottom'), (0, 'top')):
             counts, weights = [], []
             for r in self.accepted:
                 mask = r.counts[layer] > 0
                 counts.append(r.counts[layer][mask])
                 weights.append(gains[layer][mask])
             try:
-                fits.append(fit_force_curve(counts, weights, known * fill * fill, known))
+                fits[name] = fit_force_curve(counts, weights, known * fill * fill, known)
             except ValueError as err:
-                raise CalibrationRefused(f'{name} layer: {err}') from None
+                if name == 'bottom':
+                    raise CalibrationRefused(f'{name} layer: {err}') from None
+                fits[name] = fits['bottom']
+                notes += f'; the top layer takes the bottom curve ({err})'
         new = self.estimator.calibration.updated(
-            force_curves=(fits[0].curve, fits[1].curve), force_presses=n)
+            force_curves=(fits['top'].curve, fits['bottom'].curve), force_presses=n)
         # The pipeline's normal force is the bottom layer's sum: report that layer's fit.
-        bottom = fits[1]
+        bottom = fits['bottom']
         rms = math.sqrt(float(np.mean(np.square(bottom.residuals_n))))
         saturated = ''.join(f'; the {name} layer saturated in {n - fit.used} presses, '
                             'left out of its curve'
-                            for name, fit in zip(('top', 'bottom'), fits) if fit.used < n)
+                            for name, fit in fits.items() if fit.used < n)
         return Outcome(new, n, bottom.fitted_n, bottom.residuals_n,
                        f'force curves from {n} presses over {known.min():.2f} to '
-                       f'{known.max():.2f} N; residual rms {rms:.3f} N{saturated}')
+                       f'{known.max():.2f} N; residual rms {rms:.3f} N{saturated}{notes}')
 
     def _known_loads(self) -> tuple:
         """Return (tangential, normal) known force per accepted press, newtons."""
