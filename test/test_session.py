@@ -29,12 +29,12 @@ def feed(session, est, rng, presses):
     """Stream each press as a ramp up, a hold and a ramp down, with quiet scans between."""
     notes = []
     for press in presses:
-        for share in [0.0] * 4 + list(np.linspace(0.1, 1.0, 8)) + [1.0] * 4 + [0.5, 0.2]:
+        for share in [0.0] * 10 + list(np.linspace(0.1, 1.0, 8)) + [1.0] * 4 + [0.5, 0.2]:
             scaled = Press(press.x_m, press.y_m, press.force_n * share, press.alpha_rad,
                            press.beta_rad, press.radius_m)
             top, bottom = render(SKIN, [scaled] if share else [], rng)
             notes.append(session.add_scan(top, bottom, est.process(top, bottom)))
-    for _ in range(4):
+    for _ in range(10):
         top, bottom = render(SKIN, [], rng)
         notes.append(session.add_scan(top, bottom, est.process(top, bottom)))
     return [n for n in notes if n]
@@ -95,7 +95,7 @@ def test_compliance_from_a_reference_wrench_fed_with_the_scans():
     session = CalibrationSession(est, 'compliance', presses=3)
     for f, beta in ((6.0, 0.0), (8.0, 2.0), (5.0, 4.0)):
         alpha = math.radians(30.0)
-        for share in [0.0] * 3 + list(np.linspace(0.2, 1.0, 6)) + [1.0] * 3 + [0.0] * 4:
+        for share in [0.0] * 3 + list(np.linspace(0.2, 1.0, 6)) + [1.0] * 3 + [0.0] * 10:
             load = f * share
             wrench = (load * math.sin(alpha) * math.cos(beta),
                       load * math.sin(alpha) * math.sin(beta), -load * math.cos(alpha))

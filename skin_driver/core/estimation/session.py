@@ -80,12 +80,14 @@ class CalibrationSession:
     def __init__(self, estimator, kind: str, presses: int = 0,
                  forces_n: Sequence[float] = (), alphas_rad: Sequence[float] = (),
                  max_std_m: float = 0.0005, normal_tolerance_m: float = 0.0005,
-                 start_force_n: float = 0.5):
+                 start_force_n: float = 0.5, release_scans: int = 10):
         """
         Start a session on ``estimator`` (a pipeline.ContactEstimator, read, never changed).
 
         ``presses`` is how many to collect; for force and compliance with known loads it is
-        the number of known forces. Raises CalibrationRefused on inconsistent arguments.
+        the number of known forces. A press ends after ``release_scans`` scans without touch:
+        more than a lost scan or two, so that a press is never counted twice. Raises
+        CalibrationRefused on inconsistent arguments.
         """
         if kind not in KINDS:
             raise CalibrationRefused(f'calibration kind {kind!r} is not one of {KINDS}')
@@ -115,6 +117,7 @@ class CalibrationSession:
         self.ignored = 0
         self.last_ignored = ''
         self._segmenter = PressSegmenter(start_force_n=start_force_n,
+                                         release_scans=release_scans,
                                          normal_tolerance_m=normal_tolerance_m)
 
     @property
