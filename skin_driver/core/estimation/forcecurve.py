@@ -14,7 +14,7 @@ counts. It is refused, with a reason in newtons, when there are too few presses,
 forces do not span a range (the curve would be a guess outside one point), when a heavier press
 read fewer counts than a lighter one (the presses disagree with any increasing curve: a force was
 wrong or a press missed the skin) or when the fit leaves large residuals. A piece that the fit
-leaves flat is merged into its neighbour, so the curve always rises strictly.
+leaves flat keeps a negligible slope, so the curve always rises strictly.
 """
 
 from __future__ import annotations
@@ -35,7 +35,8 @@ MONOTONE_MARGIN = 1.5
 # Presses whose peak counts reach this share of the highest peak may be saturated.
 SATURATION_SHARE = 0.99
 _PEAK_QUANTILES = (0.0, 0.5, 1.0)
-_POOLED_QUANTILES = (0.25, 0.5, 0.75, 0.9)
+_POOLED_QUANTILES = (0.05, 0.1, 0.2, 0.35, 0.5, 0.75, 0.9)
+FLAT_SLOPE = 1e-6
 
 
 @dataclass(frozen=True)
@@ -192,26 +193,28 @@ def fit_force_curve(press_counts: Sequence[np.ndarray], press_gains: Sequence[np
                         int(keep.sum()))
     _check_monotone(press_counts, press_gains, known)
     pooled = np.concatenate([np.asarray(c, dtype=np.float64) for c in press_counts])
-    knots = np.unique(np.concatenate(([0.0], np.quantile(peaks, _PEAK_QUANTILES),
+    inner = np.unique(np.concatenate((np.quantile(peaks, _PEAK_QUANTILES),
                                       np.quantile(pooled, _POOLED_QUANTILES))))
+    inner = inner[inner > 0]
+    # Fewer pieces than presses: the presses pin every piece down.
+    pieces = max(3, n - 2)
+    if inner.size > pieces:
+        inner = inner[np.round(np.linspace(0, inner.size - 1, pieces)).astype(int)]
+    knots = np.concatenate(([0.0], inner))
     # Relative errors: a light press counts as much as a heavy one.
     row_weight = 1.0 / target
-    while True:
-        design = np.stack([
-            (np.asarray(g, dtype=np.float64)[:, None]
-             * _basis(np.asarray(c, dtype=np.float64), knots)).sum(axis=0)
-            for c, g in zip(press_counts, press_gains)])
-        # Scale the columns so that NNLS weighs every piece alike.
-        scale = np.maximum(design.max(axis=0), 1e-12)
-        slopes = _nnls(design / scale * row_weight[:, None], target * row_weight) / scale
-        flat = np.flatnonzero(slopes <= 0)
-        if flat.size == 0 or knots.size <= 2:
-            break
-        # A flat piece is merged into its neighbours: the curve stays strictly increasing.
-        k = int(flat[0]) + 1
-        knots = np.delete(knots, min(k, knots.size - 2))
-    if (slopes <= 0).any():
+    design = np.stack([
+        (np.asarray(g, dtype=np.float64)[:, None]
+         * _basis(np.asarray(c, dtype=np.float64), knots)).sum(axis=0)
+        for c, g in zip(press_counts, press_gains)])
+    # Scale the columns so that NNLS weighs every piece alike.
+    scale = np.maximum(design.max(axis=0), 1e-12)
+    slopes = _nnls(design / scale * row_weight[:, None], target * row_weight) / scale
+    if not (slopes > 0).any():
         raise ValueError('no increasing force curve fits the presses; check the known forces')
+    # A flat piece (an FSR that barely conducts reads counts but little force) keeps a slope
+    # too small to matter, so that the curve still rises strictly and can be stored.
+    slopes = np.maximum(slopes, FLAT_SLOPE * slopes.max())
     fitted_sensed = design @ slopes
     fitted = fitted_sensed * known / target
     residuals = fitted - known

@@ -80,7 +80,7 @@ class CalibrationSession:
     def __init__(self, estimator, kind: str, presses: int = 0,
                  forces_n: Sequence[float] = (), alphas_rad: Sequence[float] = (),
                  max_std_m: float = 0.0005, normal_tolerance_m: float = 0.0005,
-                 start_force_n: float = 0.5, release_scans: int = 10):
+                 start_force_n: float = 0.5, release_scans: int = 5):
         """
         Start a session on ``estimator`` (a pipeline.ContactEstimator, read, never changed).
 
