@@ -9,7 +9,9 @@ loads the calibration file into the estimator, and offers
   of known normal force;
 * ``~/calibrate_compliance`` (skin_msgs/srv/CalibrateCompliance): the compliance from presses of
   known tilted load, given in the request or read from the WrenchStamped topic named by
-  ``calibration.wrench_topic``.
+  ``calibration.wrench_topic``;
+* ``~/calibrate_gains`` (skin_msgs/srv/CalibrateGains): per-taxel gains from a plate over the
+  skin or many presses spread over it.
 
 The node calls :meth:`feed` with every scan and its contacts. The calibration lives in the
 estimator alone (``get_estimator()`` returns the one in use, even after the node rebuilt it). A
@@ -27,7 +29,7 @@ from rclpy.task import Future
 from skin_driver.core.estimation.calibration import Calibration
 from skin_driver.core.estimation.session import CalibrationRefused, CalibrationSession
 from skin_driver.params import declare
-from skin_msgs.srv import Calibrate, CalibrateCompliance, CalibrateForce
+from skin_msgs.srv import Calibrate, CalibrateCompliance, CalibrateForce, CalibrateGains
 
 MAX_CALIBRATION_PRESSES = 1000
 MAX_CALIBRATION_S = 3600.0
@@ -99,7 +101,8 @@ class CalibrationServices:
         for srv, name, handler in ((Calibrate, '~/calibrate', self._on_calibrate),
                                    (CalibrateForce, '~/calibrate_force', self._on_force),
                                    (CalibrateCompliance, '~/calibrate_compliance',
-                                    self._on_compliance)):
+                                    self._on_compliance),
+                                   (CalibrateGains, '~/calibrate_gains', self._on_gains)):
             # A call waits for presses: in a group of its own it cannot hold up the frames it
             # waits for, which run in the node's default group.
             node.create_service(srv, name, handler,
@@ -204,6 +207,11 @@ class CalibrationServices:
         return await self._run(response, problem, 'compliance', request.timeout, args,
                                _answer_compliance)
 
+    async def _on_gains(self, request, response):
+        problem = request_problem(request.presses, request.timeout)
+        return await self._run(response, problem, 'gains', request.timeout,
+                               {'presses': request.presses or 1}, _answer_gains)
+
     async def _run(self, response, problem: str, kind: str, timeout: float, args: dict,
                    answer):
         """Run one session and answer; every failure answers with the calibration in force."""
@@ -276,3 +284,15 @@ def _answer_compliance(response, cal: Calibration, outcome) -> None:
     response.compliance = cal.compliance_m_per_n
     response.fitted = list(outcome.fitted) if outcome else []
     response.residuals = list(outcome.residuals) if outcome else []
+
+
+def _answer_gains(response, cal: Calibration, outcome) -> None:
+    top, bottom = cal.gain_maps()
+    if top is None:
+        response.gain_min = response.gain_max = 1.0
+    else:
+        response.gain_min = float(min(top.min(), bottom.min()))
+        response.gain_max = float(max(top.max(), bottom.max()))
+    response.covered = 0.0
+    if outcome is not None:
+        response.covered = outcome.covered

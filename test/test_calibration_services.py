@@ -10,7 +10,7 @@ from skin_driver.calibration_services import default_calibration_file
 from skin_driver.core.estimation.calibration import Calibration
 from skin_driver.core.estimation.forcecurve import ForceCurve
 from skin_driver.direction_node import DirectionNode
-from skin_msgs.srv import CalibrateCompliance, CalibrateForce
+from skin_msgs.srv import CalibrateCompliance, CalibrateForce, CalibrateGains
 
 pytestmark = pytest.mark.ros
 
@@ -83,6 +83,10 @@ def test_bad_requests_answer_the_calibration_in_force_and_change_nothing(tmp_pat
             force = call(executor, node, CalibrateForce, '/skin_direction/calibrate_force',
                          CalibrateForce.Request(forces=[5.0] * 6, timeout=0.3))
             assert not force.success and 'timed out' in force.message
+            gains = call(executor, node, CalibrateGains, '/skin_direction/calibrate_gains',
+                         CalibrateGains.Request(presses=1, timeout=0.3))
+            assert not gains.success and 'timed out' in gains.message
+            assert (gains.gain_min, gains.gain_max) == (1.0, 1.0)  # no gains in force
             assert node._estimator.calibration == previous
         finally:
             node.destroy_node()

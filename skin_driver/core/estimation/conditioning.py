@@ -204,6 +204,11 @@ class Conditioner:
             self._assumed if curve is None else _ForceTable(curve.counts_to_force, full_scale)
             for curve in (top_curve, bottom_curve))
 
+    def force_of_counts(self, counts) -> np.ndarray:
+        """Return the force of (2, rows, cols) counts above baseline by each layer's curve."""
+        counts = np.asarray(counts, dtype=np.float64)
+        return np.stack([table(np.maximum(c, 0.0)) for table, c in zip(self._tables, counts)])
+
     def loaded_counts(self, top_counts, bottom_counts) -> np.ndarray:
         """
         Return both layers' counts above baseline as one (2, rows, cols) array, 0 where untouched.

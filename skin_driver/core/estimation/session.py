@@ -11,6 +11,8 @@ with :meth:`CalibrationSession.add_press`), and calls :meth:`finish` when :attr:
   layer's counts-to-force curve (:mod:`forcecurve`).
 * ``compliance``: presses of known force and polar angle (``forces_n`` and ``alphas_rad``, or a
   reference wrench fed with each scan) give the layer shift per tangential newton.
+* ``gains``: a uniform load, or many presses spread over the skin, give the per-taxel gains
+  (:mod:`gains` says what the user does).
 
 :meth:`finish` returns the calibration in force with that part replaced; it never changes the
 estimator. Putting the result in force, and storing it, is the front end's business, so a
@@ -27,11 +29,12 @@ import numpy as np
 
 from .calibration import calibrate_from_shifts, Calibration, compliance_from_presses
 from .forcecurve import fit_force_curve
+from .gains import gains_from_force_sums
 from .presses import PressSegmenter
 
 __all__ = ['KINDS', 'PressRecord', 'Outcome', 'CalibrationRefused', 'CalibrationSession']
 
-KINDS = ('offset', 'force', 'compliance')
+KINDS = ('offset', 'force', 'compliance', 'gains')
 MIN_COMPLIANCE_PRESSES = 3
 
 
@@ -64,7 +67,8 @@ class Outcome:
 
     ``fitted`` and ``residuals`` are per press, in newtons (force: the force the new curve gives
     back) or metres (offset: shift from the mean; compliance: shift minus compliance times
-    tangential force).
+    tangential force); for gains ``fitted`` is (smallest, largest) gain and ``covered`` the share
+    of the taxels the presses reached.
     """
 
     calibration: Calibration
@@ -72,6 +76,7 @@ class Outcome:
     fitted: tuple
     residuals: tuple
     message: str
+    covered: float = 1.0
 
 
 class CalibrationSession:
@@ -102,8 +107,8 @@ class CalibrationSession:
         if kind == 'compliance' and alphas.size != forces.size:
             raise CalibrationRefused(f'{forces.size} forces but {alphas.size} alphas; give one '
                                      'alpha per force (or neither, with a reference wrench)')
-        if kind == 'offset' and forces.size:
-            raise CalibrationRefused('an offset calibration takes no known forces')
+        if kind in ('offset', 'gains') and forces.size:
+            raise CalibrationRefused(f'a {kind} calibration takes no known forces')
         wanted = int(forces.size or presses)
         if wanted < 1:
             raise CalibrationRefused('ask for at least one press')
@@ -172,7 +177,8 @@ class CalibrationSession:
                                 'down')
         if self.kind == 'compliance' and not self.forces_n.size and record.wrench_n is None:
             return self._ignore('press ignored: no reference wrench arrived during it')
-        if not all(math.isfinite(v) for v in record.shift_m) and self.kind != 'force':
+        if not all(math.isfinite(v) for v in record.shift_m) and self.kind in (
+                'offset', 'compliance'):
             return self._ignore('press ignored: no layer shift could be measured')
         self.accepted.append(record)
         n = len(self.accepted)
@@ -275,3 +281,15 @@ class CalibrationSession:
                        f'compliance {compliance:.4e} m/N from {n} presses with '
                        f'{tangential.min():.2f} to {tangential.max():.2f} N tangential; '
                        f'residual rms {math.sqrt(float(np.mean(residuals ** 2))):.6f} m')
+
+    def _fit_gains(self) -> Outcome:
+        n = len(self.accepted)
+        conditioner = self.estimator.conditioner
+        sums = sum(conditioner.force_of_counts(r.counts) for r in self.accepted)
+        gains, covered = gains_from_force_sums(sums, n)
+        new = self.estimator.calibration.updated(gains=(gains[0], gains[1]))
+        share = float(covered.mean())
+        return Outcome(new, n, (float(gains.min()), float(gains.max())), (),
+                       f'taxel gains from {n} press{"es" if n != 1 else ""} covering '
+                       f'{100 * share:.0f} % of the taxels: {gains.min():.2f} to '
+                       f'{gains.max():.2f}', covered=share)
