@@ -67,18 +67,14 @@ def declare_calibration_parameters(node) -> None:
             '~/calibrate_compliance reads the load from; empty: loads come in the request.')
 
 
-def request_problem(presses: int, timeout: float, forces=(), alphas=None) -> str:
-    """Return why a calibration request cannot be served, or '' if it can."""
+def request_problem(presses: int, timeout: float, forces=()) -> str:
+    """Return why a request's counts or timeout cannot be served, or ''."""
     if presses > MAX_CALIBRATION_PRESSES or len(forces) > MAX_CALIBRATION_PRESSES:
         return (f'presses {max(presses, len(forces))} is more than {MAX_CALIBRATION_PRESSES}; '
                 'ask for 0 (the default) or a number up to that')
     if not (math.isfinite(timeout) and 0.0 <= timeout <= MAX_CALIBRATION_S):
         return (f'timeout {timeout} s is not in (0, {MAX_CALIBRATION_S:.0f}]; ask for '
                 '0 (the default) or a number of seconds in that range')
-    if not all(math.isfinite(f) and f > 0 for f in forces):
-        return 'every force must be a positive number of newtons'
-    if alphas is not None and not all(math.isfinite(a) and 0 <= a < math.pi / 2 for a in alphas):
-        return 'every alpha must be in [0, pi/2) radians'
     return ''
 
 
@@ -198,7 +194,7 @@ class CalibrationServices:
 
     async def _on_compliance(self, request, response):
         forces, alphas = list(request.forces), list(request.alphas)
-        problem = request_problem(request.presses, request.timeout, forces, alphas)
+        problem = request_problem(request.presses, request.timeout, forces)
         if not problem and not forces and self._wrench_sub is None:
             problem = ('no forces in the request and no calibration.wrench_topic to read them '
                        'from; give forces and alphas, or name the force sensor topic')

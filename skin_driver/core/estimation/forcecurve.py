@@ -4,17 +4,21 @@ A skin's own counts-to-force curve, fitted from presses of known normal force.
 The assumed :class:`fsr.FsrModel` is only a guess at a real skin's FSR film, divider and ADC. A
 press of known normal force ``F`` tells the sum of the curve over the taxels it loads:
 ``sum_i gain_i * g(c_i) = F * fill_factor**2`` (the pipeline divides the sensed sum by
-``fill_factor**2``). The curve ``g`` is piecewise linear in the counts above baseline, a sum of
-clipped ramps ``h_k(c) = clip(c - knot_k, 0, knot_{k+1} - knot_k)`` with non-negative weights
-(the slope of each piece), so any non-decreasing curve can be fitted and no fit can decrease;
-the weights come from non-negative least squares. Above the last knot the last slope goes on.
+``fill_factor**2``). The curve is ``g(c) = sum_k w_k h_k(u(c))``, where ``u`` is the force the
+assumed model gives the counts (without its saturation) and ``h_k(u) = clip(u - knot_k, 0,
+knot_{k+1} - knot_k)`` are clipped ramps (the last one unclipped). The weights, the slopes of
+the pieces, come from non-negative least squares, so no fit can decrease. The fit corrects the
+assumed curve: where the presses say little, at the rim of a contact, the assumed shape stays,
+and a skin that matches the assumption keeps it.
 
 The fit covers the counts the presses reached: the knots sit at quantiles of the presses' peak
-counts. It is refused, with a reason in newtons, when there are too few presses, when their
-forces do not span a range (the curve would be a guess outside one point), when a heavier press
-read fewer counts than a lighter one (the presses disagree with any increasing curve: a force was
-wrong or a press missed the skin) or when the fit leaves large residuals. A piece that the fit
-leaves flat keeps a negligible slope, so the curve always rises strictly.
+and taxel forces, and the curve is stored as knots in counts up to the highest count pressed;
+past it the last slope goes on. It is refused, with a reason in newtons, when there are too few
+presses, when their forces do not span a range (the curve would be a guess outside one point),
+when a heavier press read fewer counts than a lighter one (the presses disagree with any
+increasing curve: a force was wrong or a press missed the skin) or when the fit leaves large
+residuals. A flat first piece is merged into the next; other flat pieces keep a negligible
+slope.
 """
 
 from __future__ import annotations
@@ -23,6 +27,8 @@ from dataclasses import dataclass
 from typing import Sequence
 
 import numpy as np
+
+from .fsr import FsrModel
 
 __all__ = ['ForceCurve', 'CurveFit', 'fit_force_curve', 'MIN_PRESSES', 'MIN_FORCE_SPAN']
 
@@ -37,17 +43,18 @@ SATURATION_SHARE = 0.99
 _PEAK_QUANTILES = (0.0, 0.5, 1.0)
 _POOLED_QUANTILES = (0.05, 0.1, 0.2, 0.35, 0.5, 0.75, 0.9)
 FLAT_SLOPE = 1e-6
+_GRID = 129
 
 
 @dataclass(frozen=True)
 class ForceCurve:
-    """Sensed taxel force (N) at the knots (counts above baseline); both start at 0."""
+    """Sensed taxel force (N) at the knots (counts above baseline): from (0, 0), never falling."""
 
     counts: tuple
     force_n: tuple
 
     def __post_init__(self):
-        """Reject curves that are not increasing from (0, 0)."""
+        """Reject curves that fall or do not start at (0, 0)."""
         c = np.asarray(self.counts, dtype=np.float64)
         f = np.asarray(self.force_n, dtype=np.float64)
         if c.ndim != 1 or c.shape != f.shape or c.size < 2:
@@ -58,8 +65,8 @@ class ForceCurve:
             raise ValueError('a force curve starts at 0 counts, 0 N')
         if (np.diff(c) <= 0).any():
             raise ValueError('force curve counts must increase')
-        if (np.diff(f) <= 0).any():
-            raise ValueError('force curve forces must increase (the curve must be monotone)')
+        if (np.diff(f) < 0).any() or f[-1] <= 0:
+            raise ValueError('force curve forces must not decrease (the curve must be monotone)')
         object.__setattr__(self, 'counts', tuple(float(v) for v in c))
         object.__setattr__(self, 'force_n', tuple(float(v) for v in f))
 
@@ -67,7 +74,7 @@ class ForceCurve:
         """Return the sensed force of ``counts`` above baseline; the last slope goes on."""
         c = np.maximum(np.asarray(counts, dtype=np.float64), 0.0)
         knots, force = self.counts, self.force_n
-        slope = (force[-1] - force[-2]) / (knots[-1] - knots[-2])
+        slope = (force[-1] - force[-2]) / (knots[-1] - knots[-2])  # 0 past a saturation
         return np.where(c <= knots[-1], np.interp(c, knots, force),
                         force[-1] + slope * (c - knots[-1]))
 
@@ -141,24 +148,30 @@ def _nnls(a: np.ndarray, b: np.ndarray, max_rounds: int = 100) -> np.ndarray:
     return x
 
 
-def _basis(counts: np.ndarray, knots: np.ndarray) -> np.ndarray:
-    """Return the clipped ramps of the counts, one column per piece (last one unclipped)."""
+def _basis(u: np.ndarray, knots: np.ndarray) -> np.ndarray:
+    """Return the clipped ramps of u, one column per piece (last one unclipped)."""
     lo = knots[:-1]
     width = np.diff(knots)
-    ramps = np.clip(counts[:, None] - lo[None, :], 0.0, None)
+    ramps = np.clip(u[:, None] - lo[None, :], 0.0, None)
     ramps[:, :-1] = np.minimum(ramps[:, :-1], width[None, :-1])
     return ramps
 
 
 def fit_force_curve(press_counts: Sequence[np.ndarray], press_gains: Sequence[np.ndarray],
-                    sensed_n: Sequence[float], known_n: Sequence[float]) -> CurveFit:
+                    sensed_n: Sequence[float], known_n: Sequence[float],
+                    assumed: FsrModel = None, full_scale: int = None) -> CurveFit:
     """
     Fit one layer's curve; raise ValueError with the reason when it must be refused.
 
     ``press_counts[k]`` holds the counts above baseline of the taxels press k loaded (above
     threshold), ``press_gains[k]`` their gains, ``sensed_n[k]`` the force those taxels must
     sum to (known force times fill_factor**2) and ``known_n[k]`` the known force for messages.
+    The curve corrects ``assumed`` (default :class:`FsrModel`): it is a monotone piecewise
+    linear function of the assumed force, which keeps the assumed shape where the presses say
+    little (a contact's rim) and is the identity on a skin that matches the assumption.
     """
+    assumed = assumed or FsrModel()
+    full_scale = assumed.full_scale if full_scale is None else int(full_scale)
     known = np.asarray(known_n, dtype=np.float64)
     target = np.asarray(sensed_n, dtype=np.float64)
     n = len(press_counts)
@@ -186,14 +199,17 @@ def fit_force_curve(press_counts: Sequence[np.ndarray], press_gains: Sequence[np
                              f'largest at least {MIN_FORCE_SPAN:g} times the smallest')
         curve = fit_force_curve([c for c, k in zip(press_counts, keep) if k],
                                 [g for g, k in zip(press_gains, keep) if k],
-                                target[keep], known[keep]).curve
+                                target[keep], known[keep], assumed, full_scale).curve
         fitted = np.array([float(np.dot(g, curve.counts_to_force(c)))
                            for c, g in zip(press_counts, press_gains)]) * known / target
         return CurveFit(curve, tuple(fitted.tolist()), tuple((fitted - known).tolist()),
                         int(keep.sum()))
     _check_monotone(press_counts, press_gains, known)
-    pooled = np.concatenate([np.asarray(c, dtype=np.float64) for c in press_counts])
-    inner = np.unique(np.concatenate((np.quantile(peaks, _PEAK_QUANTILES),
+    forces = [assumed.counts_to_force(np.asarray(c, dtype=np.float64), saturate=False)
+              for c in press_counts]
+    peaks_f = np.array([float(np.max(f)) for f in forces])
+    pooled = np.concatenate(forces)
+    inner = np.unique(np.concatenate((np.quantile(peaks_f, _PEAK_QUANTILES),
                                       np.quantile(pooled, _POOLED_QUANTILES))))
     inner = inner[inner > 0]
     # Fewer pieces than presses: the presses pin every piece down.
@@ -203,13 +219,18 @@ def fit_force_curve(press_counts: Sequence[np.ndarray], press_gains: Sequence[np
     knots = np.concatenate(([0.0], inner))
     # Relative errors: a light press counts as much as a heavy one.
     row_weight = 1.0 / target
-    design = np.stack([
-        (np.asarray(g, dtype=np.float64)[:, None]
-         * _basis(np.asarray(c, dtype=np.float64), knots)).sum(axis=0)
-        for c, g in zip(press_counts, press_gains)])
-    # Scale the columns so that NNLS weighs every piece alike.
-    scale = np.maximum(design.max(axis=0), 1e-12)
-    slopes = _nnls(design / scale * row_weight[:, None], target * row_weight) / scale
+    while True:
+        design = np.stack([
+            (np.asarray(g, dtype=np.float64)[:, None] * _basis(f, knots)).sum(axis=0)
+            for f, g in zip(forces, press_gains)])
+        # Scale the columns so that NNLS weighs every piece alike.
+        scale = np.maximum(design.max(axis=0), 1e-12)
+        slopes = _nnls(design / scale * row_weight[:, None], target * row_weight) / scale
+        # A flat first piece would zero the rim of every imprint, which the shift between the
+        # layers is measured on: merge it into the next until the curve rises from 0.
+        if slopes[0] > FLAT_SLOPE * slopes.max() or knots.size <= 2:
+            break
+        knots = np.delete(knots, 1)
     if not (slopes > 0).any():
         raise ValueError('no increasing force curve fits the presses; check the known forces')
     # A flat piece (an FSR that barely conducts reads counts but little force) keeps a slope
@@ -223,7 +244,10 @@ def fit_force_curve(press_counts: Sequence[np.ndarray], press_gains: Sequence[np
         raise ValueError(f'press {worst + 1} of {known[worst]:.2f} N is fitted as '
                          f'{fitted[worst]:.2f} N; the presses disagree with one curve '
                          '(a wrong known force, or two things touching?)')
-    force_at_knots = np.concatenate(([0.0], np.cumsum(slopes * np.diff(knots))))
-    curve = ForceCurve(tuple(knots), tuple(force_at_knots))
+    # Stored in counts: the correction of the assumed force, sampled over the counts pressed;
+    # past them the curve goes on with its last slope.
+    grid = np.linspace(0.0, min(float(peaks.max()), full_scale), _GRID)
+    corrected = _basis(assumed.counts_to_force(grid, saturate=False), knots) @ slopes
+    curve = ForceCurve(tuple(grid), tuple(np.maximum.accumulate(corrected)))
     return CurveFit(curve, tuple(float(v) for v in fitted),
                     tuple(float(v) for v in residuals), n)

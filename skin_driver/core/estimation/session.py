@@ -233,7 +233,8 @@ class CalibrationSession:
                 counts.append(r.counts[layer][mask])
                 weights.append(gains[layer][mask])
             try:
-                fits[name] = fit_force_curve(counts, weights, known * fill * fill, known)
+                fits[name] = fit_force_curve(counts, weights, known * fill * fill, known,
+                                             self.estimator.conditioner.config.fsr)
             except ValueError as err:
                 if name == 'bottom':
                     raise CalibrationRefused(f'{name} layer: {err}') from None
