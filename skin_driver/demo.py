@@ -37,7 +37,7 @@ from skin_msgs.srv import Calibrate, CalibrateCompliance, CalibrateForce
 from std_srvs.srv import Trigger
 import yaml
 
-LEAD_IN_S = 3.0
+LEAD_IN_S = 4.0
 CAL_PRESSES = 6
 CAL_PERIOD_S = 1.2
 DIR_PERIOD_S = 1.5

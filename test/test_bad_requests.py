@@ -177,6 +177,8 @@ def test_calibrate_with_absurdly_many_presses_fails_clearly_and_keeps_the_file(t
         assert not result.success
         assert 'presses 4294967295 is more than 1000' in result.message
         assert 'previous calibration stays in force' in result.message
+        # A refused request answers the calibration in force, not zeros.
+        assert (result.x_p, result.y_p) == (0.0003, -0.0001)
         assert direction._estimator.calibration == previous
     assert calib.Calibration.load_yaml(str(tmp_path / 'calibration.yaml')) == previous
 

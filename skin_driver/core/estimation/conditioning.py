@@ -204,19 +204,21 @@ class Conditioner:
             self._assumed if curve is None else _ForceTable(curve.counts_to_force, full_scale)
             for curve in (top_curve, bottom_curve))
 
-    def force_of_counts(self, counts) -> np.ndarray:
-        """Return the force of (2, rows, cols) counts above baseline by each layer's curve."""
-        counts = np.asarray(counts, dtype=np.float64)
-        return np.stack([table(np.maximum(c, 0.0)) for table, c in zip(self._tables, counts)])
+    def force_of(self, counts: np.ndarray) -> np.ndarray:
+        """Return the per-taxel force (N, gains applied) of a (2, rows, cols) touch-count stack."""
+        counts = np.maximum(np.asarray(counts, dtype=np.float64), 0.0)
+        force = np.stack([table(c) for table, c in zip(self._tables, counts)])
+        gain = self._stacked().gain
+        return force if gain is None else force * gain
 
-    def loaded_counts(self, top_counts, bottom_counts) -> np.ndarray:
+    def touch_counts(self, t: np.ndarray, b: np.ndarray) -> np.ndarray:
         """
         Return both layers' counts above baseline as one (2, rows, cols) array, 0 where untouched.
 
         Untouched means below the threshold, or a dead taxel. A force calibration fits its curve
         to exactly these counts.
         """
-        t, b = check_pair(top_counts, bottom_counts)
+        t, b = check_pair(t, b)
         self._ensure(t.shape)
         st = self._stacked()
         c = np.stack([t, b]).astype(np.float64) - st.baseline

@@ -148,7 +148,7 @@ class CalibrationSession:
             press = self._segmenter.add(0.0, None)
         if press is None:
             return ''
-        counts = np.mean([self.estimator.conditioner.loaded_counts(t, b)
+        counts = np.mean([self.estimator.conditioner.touch_counts(t, b)
                           for t, b, _ in press.plateau], axis=0)
         wrenches = [w for _, _, w in press.plateau if w is not None]
         wrench = tuple(np.mean(wrenches, axis=0)) if wrenches else None
@@ -160,7 +160,7 @@ class CalibrationSession:
     def record(self, top_counts, bottom_counts, contacts, wrench_n=None) -> PressRecord:
         """Return the record of a press seen in one scan at full load (no stream needed)."""
         cal = self.estimator.calibration
-        counts = self.estimator.conditioner.loaded_counts(top_counts, bottom_counts)
+        counts = self.estimator.conditioner.touch_counts(top_counts, bottom_counts)
         if not contacts:
             return PressRecord(0.0, (math.nan, math.nan), counts, wrench_n=wrench_n)
         c = contacts[0]
@@ -286,7 +286,8 @@ class CalibrationSession:
     def _fit_gains(self) -> Outcome:
         n = len(self.accepted)
         conditioner = self.estimator.conditioner
-        sums = sum(conditioner.force_of_counts(r.counts) for r in self.accepted)
+        # What each taxel sensed, without the gains in force: those are being replaced.
+        sums = sum(conditioner.force_of(r.counts) for r in self.accepted) / conditioner.gain_maps()
         gains, covered = gains_from_force_sums(sums, n)
         new = self.estimator.calibration.updated(gains=(gains[0], gains[1]))
         share = float(covered.mean())
