@@ -2,10 +2,13 @@
 `make demo`: the whole pipeline on the simulated skin, watched live in the terminal.
 
 Starts the direction node and the serial driver, then the simulated skin on a pseudo-terminal
-playing the seed paper's experiment (normal presses, then alpha = 45 deg at the eight azimuths).
-It tares and calibrates through the services, shows what the skin feels, and ends with Table 1
-of the paper next to the same table for this driver's estimator and the paper's method, measured
-on the same scans. Ctrl-C stops it; every process it started is stopped with it.
+playing the seed paper's experiment (normal presses, then alpha = 45 deg at the eight azimuths) on
+a skin whose FSR curve and compliance are not the driver's assumed ones. It tares, calibrates
+(x_p, y_p), the force curve (presses of known force) and the compliance (presses of known tilted
+load) through the services, shows what the skin feels, and ends with Table 1 of the paper next
+to the same table for this driver's estimator and the paper's method, measured on the same
+scans, and the force and alpha errors. Ctrl-C stops it; every process it started is stopped
+with it.
 """
 
 import argparse
@@ -30,27 +33,70 @@ from skin_driver.core.sim.scene import scene_from_dict
 from skin_driver.evaluate import format_table, summarise
 from skin_driver.processes import spawn, stop
 from skin_msgs.msg import SkinFrame, TactileContactArray
-from skin_msgs.srv import Calibrate
+from skin_msgs.srv import Calibrate, CalibrateCompliance, CalibrateForce
 from std_srvs.srv import Trigger
 import yaml
 
-LEAD_IN_S = 3.0
+LEAD_IN_S = 4.0
 CAL_PRESSES = 6
-PERIOD_S = 1.5
+CAL_PERIOD_S = 1.2
+DIR_PERIOD_S = 1.5
+# Presses of known normal force (a force gauge or a robot would make them), newtons, each at
+# another place (x, y) in metres: places differ in how a press falls on the taxels, which pins
+# the curve down between the forces.
+FORCE_PRESSES = (5.0, 20.0, 10.0, 35.0, 15.0, 30.0, 8.0, 25.0)
+FORCE_PLACES = ((0.030, 0.045), (0.046, 0.031), (0.038, 0.039), (0.027, 0.028),
+                (0.049, 0.047), (0.034, 0.050), (0.044, 0.024), (0.025, 0.041))
+# Presses of known tilted load: (force N, alpha deg, beta deg).
+TILTED_PRESSES = ((8.0, 30.0, 45.0), (6.0, 40.0, 135.0), (10.0, 20.0, 225.0), (7.0, 35.0, 315.0))
+# Before each calibration step the service call needs a moment: a pause without presses.
+STEP_GAP_S = 1.5
+# The simulated skin is not the one the driver assumes: another FSR film and divider, and an
+# elastic layer 1.5 times as soft. Without force calibration |F| comes out several times too
+# high.
+SKIN_MODEL = {'rows': 16, 'cols': 16, 'pitch_m': 0.005, 'compliance_m_per_n': 1.05e-3,
+              'fsr': {'r_series_ohm': 2000.0, 'r_min_ohm': 150.0, 'r_max_ohm': 6000.0,
+                      'force_at_r_min_n': 40.0}}
+
+
+def _steps(pace: float) -> dict:
+    """Return the scene times (s) at which each calibration step and the directions start."""
+    offset = LEAD_IN_S
+    force = offset + (CAL_PRESSES * CAL_PERIOD_S + STEP_GAP_S) * pace
+    compliance = force + (len(FORCE_PRESSES) * CAL_PERIOD_S + STEP_GAP_S) * pace
+    directions = compliance + (len(TILTED_PRESSES) * CAL_PERIOD_S + STEP_GAP_S) * pace
+    return {'offset': offset, 'force': force, 'compliance': compliance,
+            'directions': directions}
 
 
 def demo_scene(repeats: int, pace: float = 1.0) -> dict:
     """
-    Return the demo's scene: a quiet lead-in, normal presses, then the eight directions.
+    Return the demo's scene: a quiet lead-in, the calibration presses, then the eight directions.
 
-    The presses are the paper's protocol as the evaluator and the `seed` scene define it, on the
-    family's default skin. pace < 1 plays them faster (the lead-in, which start-up needs, stays).
+    The calibration presses (offset, known forces, known tilted loads), then the paper's
+    protocol as the evaluator and the `seed` scene define it, on a skin whose FSR curve and
+    compliance are not the driver's assumed ones. pace < 1 plays them faster (the lead-in, which
+    start-up needs, stays).
     """
+    steps = _steps(pace)
+    presses = [{'time_s': steps['offset'] + i * CAL_PERIOD_S * pace, 'alpha_deg': 0.0,
+                'beta_deg': 0.0, 'duration_s': 0.8 * pace} for i in range(CAL_PRESSES)]
+    presses += [{'time_s': steps['force'] + i * CAL_PERIOD_S * pace, 'force_n': f,
+                 'x_m': x, 'y_m': y, 'alpha_deg': 0.0, 'beta_deg': 0.0,
+                 'duration_s': 0.8 * pace}
+                for i, (f, (x, y)) in enumerate(zip(FORCE_PRESSES, FORCE_PLACES))]
+    presses += [{'time_s': steps['compliance'] + i * CAL_PERIOD_S * pace, 'force_n': f,
+                 'alpha_deg': a, 'beta_deg': b, 'duration_s': 0.8 * pace}
+                for i, (f, a, b) in enumerate(TILTED_PRESSES)]
     return {
-        'name': 'demo', 'description': 'seed experiment for make demo', 'skin': 'default',
-        'generator': {'kind': 'paper', 'leading_normal': CAL_PRESSES, 'normal_per_repeat': 0,
-                      'repeats': repeats, 'start_s': LEAD_IN_S,
-                      'interval_s': PERIOD_S * pace, 'duration_s': 1.2 * pace,
+        'name': 'demo', 'description': 'seed experiment for make demo, after a calibration',
+        'model': SKIN_MODEL,
+        'defaults': {'x_m': 0.0375, 'y_m': 0.0375, 'force_n': 10.0, 'radius_m': 0.004,
+                     'ramp_s': 0.3 * pace},
+        'presses': presses,
+        'generator': {'kind': 'paper', 'leading_normal': 0, 'normal_per_repeat': 0,
+                      'repeats': repeats, 'start_s': steps['directions'],
+                      'interval_s': DIR_PERIOD_S * pace, 'duration_s': 1.2 * pace,
                       'ramp_s': 0.3 * pace},
     }
 
@@ -74,12 +120,18 @@ class DemoMonitor(Node):
         # The paper's method runs here on the very scans the node sees, for the side-by-side table.
         self.seed = ContactEstimator(EstimatorConfig(method='seed'), self.calibration)
         self.results = {method: [], 'seed': []}
+        # (true |F|, estimated |F|, true alpha, estimated alpha) of the node's contacts.
+        self.forces = []
         self.status = 'waiting for the skin'
         self.create_subscription(SkinFrame, 'frame', self._on_frame, qos_profile_sensor_data)
         self.create_subscription(TactileContactArray, 'contacts', self._on_contacts,
                                  qos_profile_sensor_data)
         self.tare = self.create_client(Trigger, 'skin_direction/tare')
         self.calibrate = self.create_client(Calibrate, 'skin_direction/calibrate')
+        self.calibrate_force = self.create_client(CalibrateForce,
+                                                  'skin_direction/calibrate_force')
+        self.calibrate_compliance = self.create_client(CalibrateCompliance,
+                                                       'skin_direction/calibrate_compliance')
         self._last_draw = 0.0
 
     def scene_time(self, stamp) -> float:
@@ -116,7 +168,12 @@ class DemoMonitor(Node):
         if self.calibrated:
             spec = self.truth(self.scene_time(msg.header.stamp))
             if spec is not None and spec.alpha_deg > 0:
-                self._record(self.method, spec, msg.contacts[0] if msg.contacts else None)
+                contact = msg.contacts[0] if msg.contacts else None
+                self._record(self.method, spec, contact)
+                if contact is not None and contact.direction_valid:
+                    f = contact.wrench.force
+                    self.forces.append((spec.force_n, math.sqrt(f.x * f.x + f.y * f.y + f.z * f.z),
+                                        spec.alpha_deg, math.degrees(contact.polar)))
         self.draw()
 
     def _record(self, method, spec, contact) -> None:
@@ -125,11 +182,13 @@ class DemoMonitor(Node):
                                else contact.azimuth_rad) if valid else math.nan
         self.results[method].append((spec.beta_deg, azimuth))
 
-    def set_calibration(self, response) -> None:
-        """Apply the calibration the service returned to the side-by-side seed estimator."""
-        self.calibration = Calibration(x_p_m=response.x_p, y_p_m=response.y_p,
-                                       std_x_m=response.std_x, std_y_m=response.std_y,
-                                       presses=response.presses_used)
+    def now(self) -> float:
+        """Return the scene time of the newest scan seen (s), or 0."""
+        return max(self.device_time.values()) * 1e-6 if self.device_time else 0.0
+
+    def set_calibration(self, path: str) -> None:
+        """Give the side-by-side seed estimator the calibration the node wrote."""
+        self.calibration = Calibration.load_yaml(path)
         self.seed.calibration = self.calibration
         self.calibrated = True
 
@@ -193,6 +252,46 @@ def _wait(executor, condition, timeout_s, what):
         executor.spin_once(timeout_sec=0.05)
 
 
+def _step(executor, monitor, client, request, status: str, start_s: float, pace: float):
+    """Call one calibration service in the quiet gap before ``start_s``; return its answer."""
+    # Not earlier: the presses of the step before must not count for this one.
+    _wait(executor, lambda: monitor.now() >= start_s - 0.5 * STEP_GAP_S * pace, 120.0,
+          f'the scene to reach {start_s:.1f} s')
+    monitor.status = status
+    response = _call(executor, client, request, 120.0)
+    if not response.success:
+        raise RuntimeError(f'{status.split(":")[0]} failed: {response.message}')
+    return response
+
+
+def calibrate(executor, monitor, scene_dict, pace: float, path: str) -> None:
+    """Calibrate the offset, the force curve and the compliance through the services."""
+    steps = _steps(pace)
+    timeout = 60.0
+    offset = _step(executor, monitor, monitor.calibrate,
+                   Calibrate.Request(presses=CAL_PRESSES - 1, timeout=timeout),
+                   f'calibrating (x_p, y_p): the scene makes {CAL_PRESSES} normal presses',
+                   0.0, pace)
+    print(f'calibrated (x_p {offset.x_p * 1e3:.2f} mm, y_p {offset.y_p * 1e3:.2f} mm)')
+    force = _step(executor, monitor, monitor.calibrate_force,
+                  CalibrateForce.Request(forces=list(FORCE_PRESSES), timeout=timeout),
+                  f'calibrating the force curve: presses of known force '
+                  f'{", ".join(f"{f:g}" for f in FORCE_PRESSES)} N', steps['force'], pace)
+    print('force calibrated from {} presses; fitted/known: {}'.format(
+        force.presses_used, ', '.join(f'{a:.1f}/{k:g} N'
+                                      for a, k in zip(force.fitted, FORCE_PRESSES))))
+    compliance = _step(
+        executor, monitor, monitor.calibrate_compliance,
+        CalibrateCompliance.Request(forces=[t[0] for t in TILTED_PRESSES],
+                                    alphas=[math.radians(t[1]) for t in TILTED_PRESSES],
+                                    timeout=timeout),
+        'calibrating the compliance: presses of known tilted load', steps['compliance'], pace)
+    print(f'compliance calibrated: {compliance.compliance:.3e} m/N '
+          f'(the simulated skin has {scene_dict["model"]["compliance_m_per_n"]:.3e})')
+    monitor.set_calibration(path)
+    monitor.status = 'calibrated; alpha = 45 deg presses at 8 azimuths'
+
+
 def run(args, workdir: str) -> int:
     """Run the demo in workdir; return the exit status."""
     scene_dict = demo_scene(args.repeats, args.pace)
@@ -226,14 +325,8 @@ def run(args, workdir: str) -> int:
         result = _call(executor, monitor.tare, Trigger.Request(), 10.0)
         if not result.success:
             raise RuntimeError(f'tare refused: {result.message}')
-        monitor.status = f'calibrating: the scene makes {CAL_PRESSES} normal presses'
-        response = _call(executor, monitor.calibrate,
-                         Calibrate.Request(presses=CAL_PRESSES - 1, timeout=20.0), 30.0)
-        if not response.success:
-            raise RuntimeError(f'calibration failed: {response.message}')
-        monitor.set_calibration(response)
-        monitor.status = (f'calibrated (x_p {response.x_p * 1e3:.2f} mm, y_p '
-                          f'{response.y_p * 1e3:.2f} mm); alpha = 45 deg presses at 8 azimuths')
+        calibrate(executor, monitor, scene_dict, args.pace,
+                  os.path.join(workdir, 'calibration.yaml'))
         _wait(executor, lambda: (monitor.device_time and max(monitor.device_time.values()) * 1e-6
                                  > scene.duration_s + 0.3), scene.duration_s + 30.0, 'the scene')
         monitor.draw(force=True)
@@ -249,6 +342,12 @@ def run(args, workdir: str) -> int:
           f'{args.repeats} rounds at {args.rate:g} Hz; {args.method} ran in the direction node, '
           "seed (the paper's plain phase correlation) on the same scans\n")
     print(format_table(report))
+    if monitor.forces:
+        rows = np.array(monitor.forces)
+        force_error = 100.0 * np.abs(rows[:, 1] / rows[:, 0] - 1.0).mean()
+        alpha_error = np.abs(rows[:, 3] - rows[:, 2]).mean()
+        print(f'\nafter calibration, on {len(rows)} scans: |F| mean error {force_error:.1f} %, '
+              f'alpha mean error {alpha_error:.1f} deg ({args.method}, direction node)')
     return 0
 
 

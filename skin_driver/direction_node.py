@@ -5,55 +5,33 @@ Subscribes to frame (skin_msgs/SkinFrame). Publishes contacts (TactileContactArr
 empty when nothing touches), contact (the strongest TactileContact, when there is one) and wrench
 (its force as geometry_msgs/WrenchStamped; zero when nothing touches, so a controller sees the
 release). For rviz, at most viz_rate times a second: top/heatmap and bottom/heatmap (rgb8) and
-markers (visualization_msgs/MarkerArray). Services: ~/calibrate (skin_msgs/srv/Calibrate) and
-~/tare (std_srvs/srv/Trigger). Diagnostics on /diagnostics.
+markers (visualization_msgs/MarkerArray). Services: ~/tare (std_srvs/srv/Trigger) and the
+calibration services of calibration_services.py. Diagnostics on /diagnostics.
 """
 
 import collections
 import math
-import os
 import time
 
 from geometry_msgs.msg import WrenchStamped
 import numpy as np
 from rcl_interfaces.msg import SetParametersResult
 import rclpy
-from rclpy.callback_groups import MutuallyExclusiveCallbackGroup
 from rclpy.event_handler import PublisherEventCallbacks
 from rclpy.executors import ExternalShutdownException
 from rclpy.node import Node
 from rclpy.qos import qos_profile_sensor_data
-from rclpy.task import Future
 from sensor_msgs.msg import Image
 from skin_driver import conversions, diagnostics
-from skin_driver.core.estimation import calibration as calib
+from skin_driver.calibration_services import CalibrationServices
 from skin_driver.core.estimation.heatmap import colour_map
 from skin_driver.core.estimation.pipeline import ContactEstimator, EstimatorConfig
-from skin_driver.core.estimation.presses import PressSegmenter
 from skin_driver.core.estimation.shift import DEFAULT_METHOD, method_names
 from skin_driver.estimator_params import estimator_config, ESTIMATOR_PARAMETERS
 from skin_driver.params import check, declare, ParameterError
 from skin_msgs.msg import SkinFrame, TactileContact, TactileContactArray
-from skin_msgs.srv import Calibrate
 from std_srvs.srv import Trigger
 from visualization_msgs.msg import MarkerArray
-
-MAX_CALIBRATION_PRESSES = 1000
-MAX_CALIBRATION_S = 3600.0
-DEFAULT_CALIBRATION_FILE = os.path.join(
-    os.environ.get('ROS_HOME', os.path.join(os.path.expanduser('~'), '.ros')),
-    'skin_driver', 'calibration.yaml')
-
-
-class _Session:
-    """One calibration call in progress."""
-
-    def __init__(self, wanted: int, segmenter: PressSegmenter, future: Future):
-        self.wanted = wanted
-        self.segmenter = segmenter
-        self.future = future
-        self.accepted = []
-        self.rejected = 0
 
 
 class DirectionNode(Node):
@@ -62,10 +40,9 @@ class DirectionNode(Node):
     def __init__(self, **kwargs):
         super().__init__('skin_direction', **kwargs)
         self._declare_parameters()
-        self._calibration, self._calibration_note = self._load_calibration()
         self._estimator = self._build_estimator(EstimatorConfig().pitch_m)
+        self._calibrator = CalibrationServices(self, lambda: self._estimator)
         self._recent = collections.deque(maxlen=self._p('tare.frames'))
-        self._session = None
         self._stats = collections.Counter()
         self._cost = []
         self._last_viz = 0.0
@@ -83,17 +60,13 @@ class DirectionNode(Node):
                           for layer in ('top', 'bottom')}
         self._pub_markers = self.create_publisher(MarkerArray, 'markers', 5, **quiet)
         self.create_subscription(SkinFrame, 'frame', self._on_frame, qos_profile_sensor_data)
-        # The calibration call waits for presses: in a group of its own it cannot hold up the
-        # frames it waits for, which run in the node's default group.
-        self.create_service(Calibrate, '~/calibrate', self._on_calibrate,
-                            callback_group=MutuallyExclusiveCallbackGroup())
         self.create_service(Trigger, '~/tare', self._on_tare)
         self._diag = diagnostics.DiagnosticPublisher(self)
         self.create_timer(self._p('diagnostics_period'), self._report)
         self.add_on_set_parameters_callback(self._check_new_parameters)
         self.add_post_set_parameters_callback(self._apply_new_parameters)
         self.get_logger().info(
-            f"estimating with '{self._p('method')}'; {self._calibration_note}")
+            f"estimating with '{self._p('method')}'; {self._calibrator.note}")
 
     # ---- parameters -------------------------------------------------------------------------
     def _declare_parameters(self) -> None:
@@ -121,21 +94,6 @@ class DirectionNode(Node):
                 low=0.01, high=100.0)
         declare(self, 'skin.fill_factor', core.fill_factor,
                 'Sensitive fraction of the pitch along each axis of a taxel.', low=0.1, high=1.0)
-        declare(self, 'calibration_file', DEFAULT_CALIBRATION_FILE,
-                'YAML file holding (x_p, y_p); loaded at start-up, written by ~/calibrate.',
-                non_empty=True)
-        declare(self, 'calibration.presses', 8,
-                'Normal presses ~/calibrate records when the request asks for 0.',
-                low=1, high=MAX_CALIBRATION_PRESSES)
-        declare(self, 'calibration.timeout', 60.0,
-                'Seconds ~/calibrate waits when the request asks for 0.',
-                low=0.1, high=MAX_CALIBRATION_S)
-        declare(self, 'calibration.max_std', 0.0005,
-                "Largest spread (metres, standard deviation) of the presses' shifts accepted.",
-                low=1.0e-6, high=0.1)
-        declare(self, 'calibration.normal_tolerance', 0.0005,
-                "How far a press's shift may grow with its force (metres) and look normal.",
-                low=1.0e-6, high=0.1)
         declare(self, 'tare.frames', 20, 'Scans averaged into the unloaded baseline by ~/tare.',
                 low=1, high=10000)
         declare(self, 'viz_rate', 15.0,
@@ -155,8 +113,6 @@ class DirectionNode(Node):
             try:
                 if param.name == 'method':
                     check('method', param.value, 'a shift estimator', choices=method_names())
-                elif param.name == 'calibration_file':
-                    check('calibration_file', param.value, 'a YAML file path', non_empty=True)
             except ParameterError as err:
                 return SetParametersResult(successful=False, reason=str(err))
         return SetParametersResult(successful=True)
@@ -167,16 +123,16 @@ class DirectionNode(Node):
             self._estimator = self._build_estimator(self._estimator.config.pitch_m,
                                                     self._estimator.conditioner)
             self.get_logger().info(f"estimator rebuilt for {', '.join(sorted(names))}")
-        if 'calibration_file' in names:
-            self._calibration, self._calibration_note = self._load_calibration()
-            self._estimator.calibration = self._calibration
         if 'tare.frames' in names:
             self._recent = collections.deque(self._recent, maxlen=self._p('tare.frames'))
 
     def _build_estimator(self, pitch_m: float, conditioner=None) -> ContactEstimator:
         """Return an estimator for the current parameters; a conditioner carries the tare over."""
         config = estimator_config({n: self._p(n) for n in ESTIMATOR_PARAMETERS}, pitch_m)
-        return ContactEstimator(config, self._calibration, conditioner=conditioner)
+        # The estimator holds the calibration: a new one takes over the one in force.
+        previous = getattr(self, '_estimator', None)
+        calibration = previous.calibration if previous is not None else None
+        return ContactEstimator(config, calibration, conditioner=conditioner)
 
     def _follow_pitch(self, pitch_m: float) -> None:
         """Take the taxel pitch from the frames, keeping the tare and the calibration."""
@@ -184,21 +140,6 @@ class DirectionNode(Node):
         # change rebuilds the estimator.
         if not math.isclose(pitch_m, self._estimator.config.pitch_m, rel_tol=1e-5):
             self._estimator = self._build_estimator(pitch_m, self._estimator.conditioner)
-
-    def _calibration_path(self) -> str:
-        return os.path.expanduser(self._p('calibration_file'))
-
-    def _load_calibration(self):
-        path = self._calibration_path()
-        if not os.path.exists(path):
-            return calib.Calibration(), f'no calibration file at {path} yet: (x_p, y_p) = (0, 0)'
-        try:
-            cal = calib.Calibration.load_yaml(path)
-        except (OSError, ValueError) as err:
-            self.get_logger().error(f'ignoring calibration file {path}: {err}')
-            return calib.Calibration(), f'calibration file {path} unreadable: (x_p, y_p) = (0, 0)'
-        return cal, (f'calibration from {path}: x_p = {cal.x_p_m * 1e3:.3f} mm, '
-                     f'y_p = {cal.y_p_m * 1e3:.3f} mm')
 
     # ---- data path --------------------------------------------------------------------------
     def _on_frame(self, msg: SkinFrame) -> None:
@@ -231,8 +172,7 @@ class DirectionNode(Node):
                 header, strongest.force_xyz_n, (strongest.x_m, strongest.y_m)))
         else:
             self._pub_wrench.publish(conversions.wrench_stamped(header, (0.0, 0.0, 0.0)))
-        if self._session is not None:
-            self._feed_session(contacts)
+        self._calibrator.feed(top, bottom, contacts)
         self._visualise(header, msg.pitch, top, bottom, contacts)
 
     def _visualise(self, header, pitch, top, bottom, contacts) -> None:
@@ -249,92 +189,6 @@ class DirectionNode(Node):
             conversions.rgb_to_image(header, colour_map(bottom_force, full)))
         self._pub_markers.publish(conversions.heatmap_markers(
             header, top_force, float(pitch), contacts, full))
-
-    # ---- calibration --------------------------------------------------------------------------
-    def _raw_shift(self, contact):
-        """Return the contact's shift before the current calibration was subtracted."""
-        return (contact.shift_m[0] + self._calibration.x_p_m,
-                contact.shift_m[1] + self._calibration.y_p_m)
-
-    def _feed_session(self, contacts) -> None:
-        session = self._session
-        if contacts:
-            press = session.segmenter.add(contacts[0].force_n, self._raw_shift(contacts[0]))
-        else:
-            press = session.segmenter.add(0.0, None)
-        if press is None:
-            return
-        if press.looks_normal:
-            session.accepted.append(press)
-            self.get_logger().info(f'calibration: press {len(session.accepted)}/{session.wanted} '
-                                   f'recorded ({press.peak_force_n:.1f} N)')
-        else:
-            session.rejected += 1
-            self.get_logger().warning(
-                'calibration: press ignored, it does not look normal (its shift grew by '
-                f'{press.shift_growth_m * 1e3:.2f} mm with force); press straight down')
-        if len(session.accepted) >= session.wanted and not session.future.done():
-            session.future.set_result('done')
-
-    async def _on_calibrate(self, request, response):
-        if self._session is not None:
-            response.success = False
-            response.message = 'a calibration is already running; wait for it to finish'
-            return response
-        refusal = _calibrate_request_problem(request)
-        if refusal:
-            response.success = False
-            response.message = refusal + '; the previous calibration stays in force'
-            return response
-        wanted = request.presses or self._p('calibration.presses')
-        timeout = request.timeout or self._p('calibration.timeout')
-        future = Future()
-        self._session = _Session(wanted, PressSegmenter(
-            normal_tolerance_m=self._p('calibration.normal_tolerance')), future)
-        timer = self.create_timer(timeout, lambda: future.done() or future.set_result('timeout'))
-        self.get_logger().info(f'calibration: press the skin straight down {wanted} times '
-                               f'(within {timeout:.0f} s)')
-        try:
-            outcome = await future
-        finally:
-            self.destroy_timer(timer)
-            session, self._session = self._session, None
-        return self._finish_calibration(session, outcome, timeout, response)
-
-    def _finish_calibration(self, session, outcome, timeout, response):
-        response.presses_used = len(session.accepted)
-        old = self._calibration
-        response.x_p, response.y_p = old.x_p_m, old.y_p_m
-        response.std_x, response.std_y = old.std_x_m, old.std_y_m
-        if outcome == 'timeout':
-            response.success = False
-            response.message = (
-                f'timed out after {timeout:.0f} s with {len(session.accepted)} of '
-                f'{session.wanted} normal presses ({session.rejected} presses did not look '
-                'normal); the previous calibration stays in force')
-            return response
-        try:
-            new = calib.calibrate_from_shifts(
-                [p.shift_m for p in session.accepted], max_std_m=self._p('calibration.max_std'),
-                compliance_m_per_n=old.compliance_m_per_n)
-            new.save_yaml(self._calibration_path())
-        except (ValueError, OSError) as err:
-            response.success = False
-            response.message = f'{err}; the previous calibration stays in force'
-            return response
-        self._calibration = new
-        self._estimator.calibration = new
-        response.success = True
-        response.x_p, response.y_p = new.x_p_m, new.y_p_m
-        response.std_x, response.std_y = new.std_x_m, new.std_y_m
-        used = len(session.accepted)
-        response.message = (f'calibrated from {used} press{"es" if used != 1 else ""}: x_p = '
-                            f'{new.x_p_m * 1e3:.3f} mm, y_p = {new.y_p_m * 1e3:.3f} mm; '
-                            'written to '
-                            f'{self._calibration_path()}')
-        self._calibration_note = response.message
-        self.get_logger().info(response.message)
-        return response
 
     # ---- tare -------------------------------------------------------------------------------
     def _on_tare(self, request, response):
@@ -368,17 +222,15 @@ class DirectionNode(Node):
     def _report(self) -> None:
         rate, _ = self._rate.take(time.monotonic())
         cost, self._cost = self._cost, []
-        cal = self._calibration
         values = {
             'method': self._p('method'), 'frame rate [Hz]': rate,
             'frames': self._stats['frames'], 'bad frames': self._stats['bad frames'],
             'contacts': self._stats['contacts'],
             'mean cost [us]': 1e6 * sum(cost) / len(cost) if cost else 0.0,
             'max cost [us]': 1e6 * max(cost) if cost else 0.0,
-            'x_p [m]': cal.x_p_m, 'y_p [m]': cal.y_p_m,
-            'calibrating': self._session is not None,
+            **self._calibrator.diagnostic_values(),
         }
-        level, message = diagnostics.OK, self._calibration_note
+        level, message = diagnostics.OK, self._calibrator.note
         if self._stats['frames'] == 0:
             level, message = diagnostics.WARN, 'no frame received yet'
         elif rate == 0.0:
@@ -386,17 +238,6 @@ class DirectionNode(Node):
         self._diag.publish([diagnostics.make_status(
             f'{self.get_fully_qualified_name()}: contact estimation', 'skin', level, message,
             values)])
-
-
-def _calibrate_request_problem(request) -> str:
-    """Return why a Calibrate request cannot be served, or '' if it can."""
-    if request.presses > MAX_CALIBRATION_PRESSES:
-        return (f'presses {request.presses} is more than {MAX_CALIBRATION_PRESSES}; ask for '
-                '0 (the default) or a number up to that')
-    if not (math.isfinite(request.timeout) and 0.0 <= request.timeout <= MAX_CALIBRATION_S):
-        return (f'timeout {request.timeout} s is not in (0, {MAX_CALIBRATION_S:.0f}]; ask for '
-                '0 (the default) or a number of seconds in that range')
-    return ''
 
 
 def main(args=None):

@@ -11,7 +11,10 @@ Usage::
 
 The single normal presses calibrate (x_p, y_p); every single tilted press's strongest contact is
 compared with the ground-truth azimuth; frames with several presses are matched press by press
-(docs/dataset.md). ROS-free.
+(docs/dataset.md). With a ``split`` array (dataset format 2) only the calibration frames
+(split = 1) calibrate, and more fully: alpha = 0 frames with ``force_n`` give (x_p, y_p) and the
+force curves, tilted ones with ``force_n`` the compliance; only split = 0 frames are scored.
+``--calibration-frames`` adds such frames to a generated dataset. ROS-free.
 """
 
 from __future__ import annotations
@@ -28,10 +31,11 @@ import numpy as np
 
 from .core.estimation.atomic import write_atomically
 from .core.estimation.calibration import calibrate_from_shifts, Calibration
-from .core.estimation.dataset import Dataset, load_dataset, save_dataset
+from .core.estimation.dataset import Dataset, load_dataset, PRESS_FIELDS, save_dataset
 from .core.estimation.pipeline import ContactEstimator, EstimatorConfig
+from .core.estimation.session import CalibrationRefused, CalibrationSession
 from .core.estimation.shift import DEFAULT_METHOD, method_names
-from .core.sim.experiments import make_scene, SCENE_KINDS
+from .core.sim.experiments import add_calibration_frames, make_scene, SCENE_KINDS
 from .core.sim.skins import family_skin, HELD_OUT, skin_names
 from .estimator_params import estimator_config, load_direction_parameters
 
@@ -131,12 +135,13 @@ def _force_errors(data: Dataset, frames: np.ndarray, results: list) -> dict:
 
 @dataclass(frozen=True)
 class MethodRun:
-    """One estimator run over every frame of a dataset: its calibration and contacts."""
+    """One estimator run over the scored frames of a dataset: its calibration and contacts."""
 
     method: str
     calibration: Calibration
     contacts: list
     us_per_frame: float
+    notes: tuple = ()
 
 
 def press_counts(data: Dataset) -> np.ndarray:
@@ -146,41 +151,106 @@ def press_counts(data: Dataset) -> np.ndarray:
     return np.isfinite(data.press_x_m).sum(axis=1)
 
 
+def scored_part(data: Dataset) -> Dataset:
+    """Return the frames of ``data`` that are scored: all, or those with split = 0."""
+    if data.split is None:
+        return data
+    keep = np.flatnonzero(data.split == 0)
+    per_frame = ('top', 'bottom', 'azimuth_deg', 'alpha_deg', 'force_n', 'x_m', 'y_m',
+                 *PRESS_FIELDS)
+    fields = {k: (None if getattr(data, k) is None else getattr(data, k)[keep])
+              for k in per_frame}
+    return Dataset(pitch_m=data.pitch_m, tare_top=data.tare_top, tare_bottom=data.tare_bottom,
+                   **fields)
+
+
+def _run_session(est: ContactEstimator, data: Dataset, frames: np.ndarray, kind: str,
+                 **session_args) -> str:
+    """Calibrate ``kind`` from single frames at full load; put it in force; return a note."""
+    try:
+        session = CalibrationSession(est, kind, presses=frames.size, **session_args)
+    except CalibrationRefused as err:
+        return f'{kind}: refused: {err}'
+    for i in frames:
+        top, bottom = data.top[i], data.bottom[i]
+        session.add_press(session.record(top, bottom, est.process(top, bottom)))
+    try:
+        outcome = session.finish()
+    except CalibrationRefused as err:
+        return f'{kind}: refused: {err}'
+    est.calibration = outcome.calibration
+    return f'{kind}: {outcome.message}'
+
+
+def calibrate_from_frames(est: ContactEstimator, data: Dataset, frames: np.ndarray) -> list:
+    """
+    Calibrate ``est`` fully from the calibration ``frames`` of ``data``; return a note per part.
+
+    (x_p, y_p) and, with ``force_n``, the force curves from the alpha = 0 frames, the compliance
+    from the tilted ones. A refused part is noted and the estimator keeps what it had.
+    """
+    normal = frames[data.alpha_deg[frames] == 0]
+    tilted = frames[data.alpha_deg[frames] > 0]
+    notes = [_run_session(est, data, normal, 'offset', max_std_m=math.inf)]
+    if data.force_n is not None:
+        known = normal[data.force_n[normal] > 0]
+        notes.append(_run_session(est, data, known, 'force', forces_n=data.force_n[known]))
+        tilted = tilted[data.force_n[tilted] > 0]
+        notes.append(_run_session(est, data, tilted, 'compliance',
+                                  forces_n=data.force_n[tilted],
+                                  alphas_rad=np.radians(data.alpha_deg[tilted])))
+    return notes
+
+
 def calibrated_estimator(data: Dataset, method: str, config: EstimatorConfig = None,
-                         **override) -> ContactEstimator:
+                         notes: list = None, **override) -> ContactEstimator:
     """
     Return estimator ``method`` (``config`` gives its other settings) made ready for ``data``.
 
-    Tared from the dataset's tare frames, (x_p, y_p) calibrated from its single normal presses
-    (none: uncalibrated). ``override`` goes to :class:`ContactEstimator` (the benchmark swaps
-    in reference shift methods that are not registered).
+    Tared from the dataset's tare frames. With a ``split``, calibrated fully from the split = 1
+    frames (:func:`calibrate_from_frames`, its notes appended to ``notes``); without, (x_p, y_p)
+    from the single normal presses (none: uncalibrated). ``override`` goes to
+    :class:`ContactEstimator` (the benchmark swaps in reference shift methods that are not
+    registered).
     """
     base = config or EstimatorConfig(pitch_m=data.pitch_m)
     cfg = EstimatorConfig(**{**base.__dict__, 'method': method, 'pitch_m': data.pitch_m})
     est = ContactEstimator(cfg, **override)
     if data.tare_top is not None:
         est.tare(data.tare_top, data.tare_bottom)
-    normal = np.flatnonzero((data.alpha_deg == 0) & (press_counts(data) == 1))
-    shifts = []
-    for i in normal:
-        s = est.measure_shifts(data.top[i], data.bottom[i])
-        if s:
-            shifts.append(s[0])
-    # Without a single normal press the layers are taken as aligned (calibration.presses = 0).
-    calibration = (calibrate_from_shifts(np.array(shifts).reshape(-1, 2), max_std_m=math.inf)
-                   if shifts else Calibration())
-    est = ContactEstimator(cfg, calibration, est.conditioner, **override)
+    if data.split is not None:
+        found = calibrate_from_frames(est, data, np.flatnonzero(data.split == 1))
+        if notes is not None:
+            notes.extend(found)
+    else:
+        normal = np.flatnonzero((data.alpha_deg == 0) & (press_counts(data) == 1))
+        shifts = []
+        for i in normal:
+            s = est.measure_shifts(data.top[i], data.bottom[i])
+            if s:
+                shifts.append(s[0])
+        # Without a single normal press the layers are taken as aligned (calibration.presses 0).
+        calibration = (calibrate_from_shifts(np.array(shifts).reshape(-1, 2),
+                                             max_std_m=math.inf)
+                       if shifts else Calibration())
+        est = ContactEstimator(cfg, calibration, est.conditioner, **override)
     est.process(data.top[0], data.bottom[0])  # warm the per-shape caches
     return est
 
 
 def run_method(data: Dataset, method: str, config: EstimatorConfig = None) -> MethodRun:
-    """Run estimator ``method`` (see :func:`calibrated_estimator`) over every frame of ``data``."""
-    est = calibrated_estimator(data, method, config)
+    """
+    Run estimator ``method`` (see :func:`calibrated_estimator`) over the scored frames.
+
+    Its contacts are those of :func:`scored_part` ``(data)``, frame by frame.
+    """
+    notes = []
+    est = calibrated_estimator(data, method, config, notes)
+    data = scored_part(data)
     start = time.perf_counter()
     contacts = [est.process(data.top[i], data.bottom[i]) for i in range(data.frames)]
     elapsed = time.perf_counter() - start
-    return MethodRun(method, est.calibration, contacts, elapsed / data.frames * 1e6)
+    return MethodRun(method, est.calibration, contacts, elapsed / data.frames * 1e6, tuple(notes))
 
 
 def match_presses(presses: list, contacts: list, pitch_m: float) -> list:
@@ -317,13 +387,13 @@ def score_run(data: Dataset, run: MethodRun) -> dict:
     report['summary']['us_per_frame'] = run.us_per_frame
     report['summary'].update(_force_errors(data, tilted, results))
     report['summary'].update(_large_shift_valid(data, run, tilted))
-    return {'method': run.method, 'calibration': run.calibration.to_dict(), **report,
-            'presses': score_presses(data, run)}
+    return {'method': run.method, 'calibration': run.calibration.to_dict(),
+            'calibration_notes': list(run.notes), **report, 'presses': score_presses(data, run)}
 
 
 def evaluate_method(data: Dataset, method: str, config: EstimatorConfig = None) -> dict:
     """Return the figures of one estimator on ``data`` (see docs/dataset.md)."""
-    return score_run(data, run_method(data, method, config))
+    return score_run(scored_part(data), run_method(data, method, config))
 
 
 def _seed_like(data: Dataset) -> bool:
@@ -341,19 +411,21 @@ def evaluate(data: Dataset, method: str = DEFAULT_METHOD, config: EstimatorConfi
     ``runs`` (a dict), when given, receives each :class:`MethodRun` by method name.
     """
     names = [method] if method == 'seed' else [method, 'seed']
+    scored = scored_part(data)
     methods = {}
     for n in names:
         run = run_method(data, n, config)
         if runs is not None:
             runs[n] = run
-        methods[n] = score_run(data, run)
-    single = press_counts(data) == 1
+        methods[n] = score_run(scored, run)
+    single = press_counts(scored) == 1
     return {
         'frames': data.frames, 'shape': list(data.shape), 'pitch_m': data.pitch_m,
-        'seed_experiment': _seed_like(data),
-        'normal_frames': int(((data.alpha_deg == 0) & single).sum()),
-        'tilted_frames': int(((data.alpha_deg > 0) & single).sum()),
+        'seed_experiment': _seed_like(scored),
+        'normal_frames': int(((scored.alpha_deg == 0) & single).sum()),
+        'tilted_frames': int(((scored.alpha_deg > 0) & single).sum()),
         'multi_press_frames': int((~single).sum()),
+        'calibration_frames': 0 if data.split is None else int(data.split.sum()),
         'methods': methods,
     }
 
@@ -395,10 +467,12 @@ def format_table(report: dict) -> str:
     lines = []
     if 'frames' in report:
         multi = report.get('multi_press_frames')
+        cal = report.get('calibration_frames')
         lines += [f'frames {report["frames"]} ({report["normal_frames"]} normal, '
                   f'{report["tilted_frames"]} tilted'
-                  + (f', {multi} with several presses' if multi else '') + '), map '
-                  f'{report["shape"][0]}x{report["shape"][1]}', '']
+                  + (f', {multi} with several presses' if multi else '')
+                  + (f'; {cal} more calibrate, the others are scored' if cal else '')
+                  + f'), map {report["shape"][0]}x{report["shape"][1]}', '']
     betas = {r['beta_deg'] for n in names for r in report['methods'][n]['per_beta']}
     paper = report.get('seed_experiment', True) and betas and betas <= set(PAPER_TABLE)
     head = f'{"beta [deg]":>10}' + ''.join(f'{n + " mean":>16}{"std":>8}{"valid":>8}'
@@ -445,6 +519,8 @@ def format_table(report: dict) -> str:
                          f'bias {_fmt(s["alpha_bias_deg"], "+.2f")}){force}')
     for n in names:
         lines += _extra_lines(n, report['methods'][n])
+        for note in report['methods'][n].get('calibration_notes', []):
+            lines.append(f'{n} calibration, {note}')
     if paper:
         lines.append('paper: Klimaszewski et al., Sensors 2019, 19, 4697, Table 1 '
                      '(real skin, Fanuc robot, alpha = 45 deg)')
@@ -509,6 +585,9 @@ def _parser() -> argparse.ArgumentParser:
                         help=f'write a simulated dataset (KIND one of {", ".join(SCENE_KINDS)}) '
                              'of --skin (default: default) and exit')
     parser.add_argument('--seed', type=int, default=0, help='random seed for generated data')
+    parser.add_argument('--calibration-frames', action='store_true',
+                        help='with --generate: put 16 normal presses over 5-60 N and 16 tilted '
+                        'presses of known load in front, as calibration frames (split = 1)')
     parser.add_argument('--list-skins', action='store_true', help='list the family and exit')
     parser.add_argument('--list-methods', action='store_true', help='list estimators and exit')
     return parser
@@ -548,6 +627,8 @@ def main(argv=None) -> int:
         if kind not in SCENE_KINDS:
             parser.error(f'--generate KIND must be one of {", ".join(SCENE_KINDS)}, got {kind!r}')
         data = make_scene(kind, args.skin or 'default', rng, args.size)
+        if args.calibration_frames:
+            data = add_calibration_frames(data, family_skin(args.skin or 'default').model, rng)
         save_dataset(out, data)
         print(f'wrote {data.frames} frames to {out}')
         return 0

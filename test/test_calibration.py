@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 from skin_driver.core.estimation.calibration import calibrate_from_shifts, Calibration
 from skin_driver.core.estimation.calibration import compliance_from_presses
+from skin_driver.core.estimation.forcecurve import ForceCurve
 
 
 def test_mean_and_spread_of_normal_presses():
@@ -61,3 +62,26 @@ def test_yaml_validation(tmp_path, text, message):
     path.write_text(text)
     with pytest.raises(ValueError, match=message):
         Calibration.load_yaml(path)
+
+
+def test_version_2_round_trip_with_curves_and_gains_and_version_1_still_loads(tmp_path):
+    curves = (ForceCurve((0.0, 500.0, 3000.0), (0.0, 0.5, 9.0)),
+              ForceCurve((0.0, 800.0, 3500.0), (0.0, 0.7, 12.0)))
+    gains = (np.full((2, 3), 1.1), np.full((2, 3), 0.9))
+    cal = Calibration(1e-4, -2e-4, 1e-5, 2e-5, 12, 7e-4, force_curves=curves, gains=gains,
+                      force_presses=16, compliance_presses=16, made_utc='2026-11-22T05:00:00Z')
+    path = tmp_path / 'cal.yaml'
+    cal.save_yaml(path)
+    assert 'version: 2' in path.read_text()
+    back = Calibration.load_yaml(path)
+    assert back == cal
+    np.testing.assert_array_equal(back.gain_maps()[0], gains[0])
+    assert 'made 2026-11-22T05:00:00Z' in back.describe()
+    old = tmp_path / 'v1.yaml'
+    old.write_text('format: skin_driver/calibration\nversion: 1\nx_p_m: 0.0003\n'
+                   'y_p_m: -0.0001\nstd_x_m: 0.0\nstd_y_m: 0.0\npresses: 5\n'
+                   'compliance_m_per_n: 0.0\n')
+    assert Calibration.load_yaml(old) == Calibration(x_p_m=0.0003, y_p_m=-0.0001, presses=5)
+    old.write_text(old.read_text().replace('version: 1', 'version: 3'))
+    with pytest.raises(ValueError, match='unsupported calibration version 3'):
+        Calibration.load_yaml(old)

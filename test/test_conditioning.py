@@ -95,7 +95,7 @@ def test_inputs_are_not_modified_and_errors_are_clear():
 
 def test_force_lookup_equals_interpolation_of_the_table_bit_for_bit():
     cond = Conditioner()
-    table = cond._table
+    table = cond._tables[0]
     counts = np.concatenate([[0.0, 0.25, 1.0, 1.5, 39.99, 40.0, 4094.0, 4094.5, 4095.0, 5000.0],
                              np.random.default_rng(3).uniform(0.0, 4095.0, 500)])
     np.testing.assert_array_equal(table(counts), np.interp(counts, table.counts, table.force))

@@ -61,6 +61,8 @@ def test_minimal_file_without_optional_arrays(tmp_path):
     ({'alpha_deg': np.array([0.0, 95.0, 45.0])}, 'alpha_deg'),
     ({'azimuth_deg': np.array([math.nan, math.nan, 90.0])}, 'azimuth_deg is NaN'),
     ({'force_n': np.array([1.0, -1.0, 1.0])}, 'force_n must be non-negative'),
+    ({'split': np.array([0, 2, 1])}, 'split must be'),
+    ({'split': np.array([0, 1])}, 'split must be'),
 ])
 def test_validation(change, message):
     with pytest.raises(ValueError, match=message):
@@ -87,3 +89,18 @@ def test_arrays_are_read_only_copies():
     assert data.top[0, 0, 0] == 0
     with pytest.raises(ValueError):
         data.top[0, 0, 0] = 1
+
+
+def test_format_1_loads_and_format_2_keeps_the_split(tmp_path):
+    old = tmp_path / 'v1.npz'
+    np.savez(old, format_version=np.int64(1), **small())
+    assert load_dataset(old).split is None
+    path = tmp_path / 'v2.npz'
+    save_dataset(path, Dataset(**small(), split=np.array([1, 0, 0])))
+    with np.load(path) as npz:
+        assert int(npz['format_version']) == 2
+    back = load_dataset(path)
+    assert back.split.dtype == np.uint8 and back.split.tolist() == [1, 0, 0]
+    np.savez(tmp_path / 'v3.npz', format_version=np.int64(3), **small())
+    with pytest.raises(ValueError, match='unsupported format_version 3'):
+        load_dataset(tmp_path / 'v3.npz')

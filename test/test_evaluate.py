@@ -3,10 +3,14 @@
 import json
 
 import numpy as np
+import pytest
 
 from skin_driver import evaluate
 from skin_driver.core.estimation.dataset import save_dataset
-from skin_driver.core.sim.experiments import make_random_experiment, make_seed_experiment
+from skin_driver.core.estimation.fsr import FsrModel
+from skin_driver.core.sim.experiments import (add_calibration_frames, make_random_experiment,
+                                              make_seed_experiment)
+from skin_driver.core.sim.physics import SkinModel
 
 
 def test_table_and_json(tmp_path, capsys):
@@ -51,3 +55,24 @@ def test_the_papers_table_stands_beside_the_seed_experiment_only():
     assert seed_like['seed_experiment'] and not random['seed_experiment']
     assert 'paper mean' in evaluate.format_table(seed_like)
     assert 'paper mean' not in evaluate.format_table(random)
+
+
+def test_calibration_frames_make_force_and_alpha_right_on_another_skin():
+    # Another FSR curve and three times the compliance: the assumed model is far off here.
+    skin = SkinModel(misalignment_m=(3e-4, -2e-4), compliance_m_per_n=2.1e-3,
+                     fsr=FsrModel(r_series_ohm=2000.0, r_min_ohm=150.0, r_max_ohm=6000.0,
+                                  force_at_r_min_n=40.0))
+    rng = np.random.default_rng(5)
+    scored = make_random_experiment(skin, frames=40, rng=rng, alpha_range_deg=(15.0, 40.0))
+    plain = evaluate.evaluate_method(scored, 'poc')['summary']
+    assert plain['force_mean_error_pct'] > 30.0
+    data = add_calibration_frames(scored, skin, rng)
+    assert data.split.tolist() == [1] * 32 + [0] * 40
+    report = evaluate.evaluate_method(data, 'poc')
+    summary = report['summary']
+    assert summary['frames'] == 32  # only the scored tilted frames (one in five is normal)
+    assert summary['force_mean_error_pct'] < 15.0 and summary['alpha_mean_error_deg'] < 5.0
+    assert summary['valid_share'] >= 0.95
+    calibration = report['calibration']
+    assert calibration['force_presses'] == 16 and calibration['compliance_presses'] == 16
+    assert calibration['compliance_m_per_n'] == pytest.approx(2.1e-3, rel=0.1)

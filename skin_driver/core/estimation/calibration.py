@@ -1,5 +1,5 @@
 """
-Skin calibration: the layer offset (x_p, y_p) from normal presses and the layer compliance.
+Skin calibration: layer offset, compliance, force curves and taxel gains, and their YAML file.
 
 ``(x_p, y_p)`` is the mean shift between the layers under presses along the normal (alpha = 0),
 the seed's calibration point; the azimuth is measured from it.
@@ -9,11 +9,17 @@ a tangential force and hence the polar angle. Calibrate it by pressing with know
 (for instance a force gauge or a robot at a known alpha): collect the calibrated shifts
 ``s_i = raw_shift_i - (x_p, y_p)`` and the tangential forces ``T_i = F_i sin(alpha_i)``, then
 :func:`compliance_from_presses` returns the least-squares slope ``sum(|s_i| T_i) / sum(T_i**2)``.
+
+``force_curves`` (top, bottom) replace the assumed FSR model once a force calibration has run
+(:mod:`forcecurve`); ``gains`` (top, bottom maps) even out taxels that read more or less than
+their neighbours (:mod:`gains`). The file is versioned YAML: version 2 adds the curves, the gains
+and ``made_utc``; version 1 files still load.
 """
 
 from __future__ import annotations
 
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, replace
+import datetime
 import math
 import os
 
@@ -21,21 +27,55 @@ import numpy as np
 import yaml
 
 from .atomic import write_atomically
-from .validate import check_number
+from .forcecurve import ForceCurve
+from .validate import check_map, check_number
 
-__all__ = ['Calibration', 'calibrate_from_shifts', 'compliance_from_presses']
+__all__ = ['Calibration', 'calibrate_from_shifts', 'compliance_from_presses', 'utc_now']
 
 _FORMAT = 'skin_driver/calibration'
-_VERSION = 1
+_VERSION = 2
+_VERSIONS = (1, 2)
 _FIELDS = ('x_p_m', 'y_p_m', 'std_x_m', 'std_y_m', 'presses', 'compliance_m_per_n')
+_COUNTS = ('presses', 'force_presses', 'compliance_presses')
+
+
+def utc_now() -> str:
+    """Return the time now as ISO 8601 UTC, to the second (when a calibration was made)."""
+    return datetime.datetime.now(datetime.timezone.utc).strftime('%Y-%m-%dT%H:%M:%SZ')
+
+
+def _curves(value):
+    if value is None:
+        return None
+    if len(value) != 2 or not all(isinstance(c, ForceCurve) for c in value):
+        raise ValueError('force_curves must be (top, bottom) ForceCurve objects')
+    return tuple(value)
+
+
+def _gains(value):
+    if value is None:
+        return None
+    if len(value) != 2:
+        raise ValueError('gains must be (top, bottom) maps')
+    maps = [check_map(g, name) for g, name in zip(value, ('top gains', 'bottom gains'))]
+    if maps[0].shape != maps[1].shape:
+        raise ValueError('top and bottom gains differ in shape')
+    for m in maps:
+        if not (m > 0).all():
+            raise ValueError('gains must be positive')
+    # Nested tuples keep the calibration immutable and comparable with ==.
+    return tuple(tuple(tuple(float(v) for v in row) for row in m) for m in maps)
 
 
 @dataclass(frozen=True)
 class Calibration:
     """
-    Layer offset and its spread from ``presses`` normal presses, plus the compliance.
+    Everything a skin was calibrated with; a field left at its default was not calibrated.
 
-    ``compliance_m_per_n`` = 0 means not calibrated (the estimator then uses its configured one).
+    ``compliance_m_per_n`` = 0: the estimator uses its configured compliance. ``force_curves``
+    None: the assumed FSR model. ``gains`` None: every taxel at 1. ``presses``,
+    ``force_presses`` and ``compliance_presses`` count the presses behind each part;
+    ``made_utc`` is when the newest part was made (ISO 8601, '' when unknown).
     """
 
     x_p_m: float = 0.0
@@ -44,21 +84,65 @@ class Calibration:
     std_y_m: float = 0.0
     presses: int = 0
     compliance_m_per_n: float = 0.0
+    force_curves: tuple = None
+    gains: tuple = None
+    force_presses: int = 0
+    compliance_presses: int = 0
+    made_utc: str = ''
 
     def __post_init__(self):
-        """Reject non-finite or negative values."""
+        """Reject non-finite or negative values and malformed curves or gains."""
         check_number(self.x_p_m, 'x_p_m')
         check_number(self.y_p_m, 'y_p_m')
         check_number(self.std_x_m, 'std_x_m', non_negative=True)
         check_number(self.std_y_m, 'std_y_m', non_negative=True)
         check_number(self.compliance_m_per_n, 'compliance_m_per_n', non_negative=True)
-        if isinstance(self.presses, bool) or int(self.presses) != self.presses or self.presses < 0:
-            raise ValueError(f'presses must be a non-negative integer, got {self.presses!r}')
+        for name in _COUNTS:
+            v = getattr(self, name)
+            if isinstance(v, bool) or int(v) != v or v < 0:
+                raise ValueError(f'{name} must be a non-negative integer, got {v!r}')
+        if not isinstance(self.made_utc, str):
+            raise ValueError(f'made_utc must be a string, got {self.made_utc!r}')
+        object.__setattr__(self, 'force_curves', _curves(self.force_curves))
+        object.__setattr__(self, 'gains', _gains(self.gains))
+
+    def gain_maps(self):
+        """Return the gains as (top, bottom) float arrays, or (None, None)."""
+        if self.gains is None:
+            return None, None
+        return tuple(np.array(g, dtype=np.float64) for g in self.gains)
+
+    def updated(self, **changes) -> 'Calibration':
+        """Return a copy with ``changes`` applied and ``made_utc`` set to now."""
+        return replace(self, **{'made_utc': utc_now(), **changes})
+
+    def describe(self) -> str:
+        """Return one line saying what is calibrated, for logs and diagnostics (SI units)."""
+        parts = [f'x_p = {self.x_p_m:.6f} m, y_p = {self.y_p_m:.6f} m ({self.presses} presses)']
+        if self.compliance_m_per_n:
+            parts.append(f'compliance {self.compliance_m_per_n:.3e} m/N '
+                         f'({self.compliance_presses} presses)')
+        if self.force_curves:
+            parts.append(f'force curve up to {self.force_curves[1].counts[-1]:.0f} counts '
+                         f'({self.force_presses} presses)')
+        if self.gains:
+            parts.append('taxel gains')
+        return '; '.join(parts) + (f'; made {self.made_utc}' if self.made_utc else '')
 
     def to_dict(self) -> dict:
-        """Return the fields as plain Python numbers."""
+        """Return the fields as plain Python values (numbers, strings, lists)."""
         d = asdict(self)
-        return {k: (int(d[k]) if k == 'presses' else float(d[k])) for k in _FIELDS}
+        out = {k: (int(d[k]) if k in _COUNTS else float(d[k])) for k in _FIELDS}
+        out['force_presses'] = int(self.force_presses)
+        out['compliance_presses'] = int(self.compliance_presses)
+        out['made_utc'] = self.made_utc
+        out['force_curves'] = (None if self.force_curves is None else
+                               {layer: c.to_dict() for layer, c in
+                                zip(('top', 'bottom'), self.force_curves)})
+        out['gains'] = (None if self.gains is None else
+                        {layer: [list(row) for row in g] for layer, g in
+                         zip(('top', 'bottom'), self.gains)})
+        return out
 
     def save_yaml(self, path) -> None:
         """Write the calibration to ``path`` atomically (temp file, fsync, rename)."""
@@ -67,7 +151,7 @@ class Calibration:
 
     @classmethod
     def load_yaml(cls, path) -> 'Calibration':
-        """Read and validate a calibration written by :meth:`save_yaml`."""
+        """Read and validate a calibration written by :meth:`save_yaml` (version 1 or 2)."""
         path = os.fspath(path)
         try:
             with open(path, 'r', encoding='utf-8') as f:
@@ -78,18 +162,32 @@ class Calibration:
             raise ValueError(f'{path}: expected a mapping of calibration fields')
         if doc.get('format', _FORMAT) != _FORMAT:
             raise ValueError(f'{path}: format is {doc.get("format")!r}, expected {_FORMAT!r}')
-        if doc.get('version', _VERSION) != _VERSION:
+        if doc.get('version', 1) not in _VERSIONS:
             raise ValueError(f'{path}: unsupported calibration version {doc.get("version")!r}')
         missing = [k for k in _FIELDS if k not in doc]
         if missing:
             raise ValueError(f'{path}: missing fields: {", ".join(missing)}')
         values = {}
-        for k in _FIELDS:
+        for k in (*_FIELDS, 'force_presses', 'compliance_presses'):
+            if k not in doc:
+                continue
             v = doc[k]
             if isinstance(v, bool) or not isinstance(v, (int, float)):
                 raise ValueError(f'{path}: {k} must be a number, got {v!r}')
             values[k] = v
-        return cls(**values)
+        try:
+            values['made_utc'] = str(doc.get('made_utc') or '')
+            curves = doc.get('force_curves')
+            if curves is not None:
+                values['force_curves'] = tuple(ForceCurve.from_dict(curves[layer])
+                                               for layer in ('top', 'bottom'))
+            gains = doc.get('gains')
+            if gains is not None:
+                values['gains'] = tuple(np.array(gains[layer], dtype=np.float64)
+                                        for layer in ('top', 'bottom'))
+            return cls(**values)
+        except (KeyError, TypeError, ValueError) as exc:
+            raise ValueError(f'{path}: {exc}') from None
 
 
 def calibrate_from_shifts(shifts_m, max_std_m: float = 0.001,

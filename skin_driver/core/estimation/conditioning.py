@@ -2,7 +2,8 @@
 Turn raw ADC counts of both layers into per-taxel force maps.
 
 Per taxel and layer: subtract the baseline (tare), zero what is below the noise threshold, convert
-the remaining counts to force through the FSR divider model (:class:`physics.FsrModel`), multiply
+the remaining counts to force through the FSR divider model (:class:`fsr.FsrModel`) or through the
+skin's own fitted curve (:class:`forcecurve.ForceCurve`, set by a force calibration), multiply
 by the optional per-taxel gain, and replace dead or stuck taxels by the mean of their live
 neighbours so that a dead taxel inside a contact does not fake a shift between the layers.
 """
@@ -64,12 +65,12 @@ class _ForceTable:
     scattered counts of a contact.
     """
 
-    def __init__(self, fsr: FsrModel):
-        self.counts = np.arange(fsr.full_scale + 1, dtype=np.float64)
-        self.force = fsr.counts_to_force(self.counts)
+    def __init__(self, counts_to_force, full_scale: int):
+        self.counts = np.arange(full_scale + 1, dtype=np.float64)
+        self.force = counts_to_force(self.counts)
         # A zero slope past the last count keeps readings above full scale at the last force.
         self.slope = np.append(np.diff(self.force), 0.0)
-        self.last = float(fsr.full_scale)
+        self.last = float(full_scale)
 
     def __call__(self, c: np.ndarray) -> np.ndarray:
         """Return the force of ``c`` counts above baseline (``c`` >= 0)."""
@@ -124,7 +125,10 @@ class Conditioner:
         self._shape = None
         self._layers = None
         self._stack = None
-        self._table = _ForceTable(self.config.fsr)
+        assumed = _ForceTable(self.config.fsr.counts_to_force, self.config.fsr.full_scale)
+        # One table per layer: a fitted curve (forcecurve.ForceCurve) replaces the assumed one.
+        self._tables = (assumed, assumed)
+        self._assumed = assumed
         if shape is not None:
             self._reset(tuple(int(s) for s in shape))
 
@@ -198,6 +202,22 @@ class Conditioner:
             self._layers[i].gain = None if gain is None else np.array(gain, dtype=np.float64)
         self._stack = None
 
+    def set_force_curves(self, top_curve, bottom_curve) -> None:
+        """
+        Convert counts with fitted curves (objects with ``counts_to_force``) per layer.
+
+        None for a layer goes back to the assumed FSR model of the configuration.
+        """
+        full_scale = self.config.fsr.full_scale
+        self._tables = tuple(
+            self._assumed if curve is None else _ForceTable(curve.counts_to_force, full_scale)
+            for curve in (top_curve, bottom_curve))
+
+    def gain_maps(self) -> np.ndarray:
+        """Return both layers' gains as one (2, rows, cols) array (1 where none is set)."""
+        st = self._stacked()
+        return np.ones(st.baseline.shape) if st.gain is None else st.gain.copy()
+
     def set_dead(self, top_dead, bottom_dead) -> None:
         """Mark dead or stuck taxels (boolean maps, True = ignore and fill from neighbours)."""
         for i, (mask, name) in enumerate(((top_dead, 'top_dead'), (bottom_dead, 'bottom_dead'))):
@@ -244,7 +264,7 @@ class Conditioner:
         Line leak removed, readings under the touch threshold zeroed, dead taxels filled from
         their neighbours. These are the sensor's own readings, free of any assumption about the
         FSR curve: the shape of an imprint, hence its location and the layer shift, is measured
-        on them.
+        on them, and a force calibration fits its curve to them.
         """
         if self._shape != t.shape:
             self._ensure(t.shape)
@@ -271,13 +291,20 @@ class Conditioner:
                 self._stack = None
 
     def force_of(self, counts: np.ndarray) -> np.ndarray:
-        """Return the per-taxel force (N) of a (2, rows, cols) stack of touch counts."""
+        """Return the per-taxel force (N, gains applied) of a (2, rows, cols) touch-count stack."""
         st = self._stacked()
         # Most taxels are untouched: only the loaded ones are converted, the rest keep the force
         # of zero counts, which the FSR model defines as 0.
         loaded = np.flatnonzero(counts)
         force = np.zeros(counts.shape)
-        force.ravel()[loaded] = self._table(counts.ravel()[loaded])
+        flat_c, flat_f = counts.ravel(), force.ravel()
+        top, bottom = self._tables
+        if top is bottom:
+            flat_f[loaded] = top(flat_c[loaded])
+        else:
+            split = int(np.searchsorted(loaded, counts[0].size))
+            flat_f[loaded[:split]] = top(flat_c[loaded[:split]])
+            flat_f[loaded[split:]] = bottom(flat_c[loaded[split:]])
         if st.gain is not None:
             force *= st.gain
         return force

@@ -5,8 +5,9 @@ Format (version 2, documented in docs/dataset.md): ``top``, ``bottom`` (N x rows
 raw counts), ``pitch_m`` (scalar), ``azimuth_deg`` (N, NaN where undefined), ``alpha_deg`` (N,
 0 for normal presses); optional ``force_n``, ``x_m``, ``y_m`` (N each) and ``tare_top``,
 ``tare_bottom`` (M x rows x cols no-touch frames); optional per-press ground truth ``press_*``
-(N x K, NaN-padded, for frames with several presses); ``format_version`` = 2. Version 1 files
-(no ``press_*``) load unchanged.
+(N x K, NaN-padded, for frames with several presses) and ``split`` (N, uint8: 1 marks a
+calibration frame, 0 a scored frame; without it every frame is scored); ``format_version`` = 2.
+Version 1 files (no ``press_*``, no ``split``) load unchanged.
 """
 
 from __future__ import annotations
@@ -72,6 +73,7 @@ class Dataset:
     press_azimuth_deg: np.ndarray = None
     press_alpha_deg: np.ndarray = None
     press_shift_m: np.ndarray = None
+    split: np.ndarray = None
 
     def __post_init__(self):
         """Validate shapes, dtypes and values, and freeze copies of the arrays."""
@@ -97,6 +99,12 @@ class Dataset:
                 set_(self, name, _vector(getattr(self, name), name, n))
         if self.force_n is not None and (self.force_n < 0).any():
             raise ValueError('force_n must be non-negative')
+        if self.split is not None:
+            split = np.asarray(self.split)
+            if split.shape != (n,) or split.dtype.kind not in 'uib' or not np.isin(
+                    split, (0, 1)).all():
+                raise ValueError(f'split must be ({n},) integers 0 (scored) or 1 (calibration)')
+            set_(self, 'split', split.astype(np.uint8))
         if (self.tare_top is None) != (self.tare_bottom is None):
             raise ValueError('tare_top and tare_bottom must be given together')
         if self.tare_top is not None:
@@ -109,7 +117,7 @@ class Dataset:
             set_(self, 'tare_bottom', tb.copy())
         _check_presses(self, n)
         for name in ('top', 'bottom', 'alpha_deg', 'azimuth_deg', 'tare_top', 'tare_bottom',
-                     *_OPTIONAL, *PRESS_FIELDS):
+                     'split', *_OPTIONAL, *PRESS_FIELDS):
             arr = getattr(self, name)
             if arr is not None:
                 arr.flags.writeable = False
@@ -194,7 +202,7 @@ def save_dataset(path, data: Dataset) -> None:
     arrays = {'format_version': np.int64(FORMAT_VERSION), 'top': data.top,
               'bottom': data.bottom, 'pitch_m': np.float64(data.pitch_m),
               'azimuth_deg': data.azimuth_deg, 'alpha_deg': data.alpha_deg}
-    for name in (*_OPTIONAL, 'tare_top', 'tare_bottom', *PRESS_FIELDS):
+    for name in (*_OPTIONAL, 'tare_top', 'tare_bottom', 'split', *PRESS_FIELDS):
         if getattr(data, name) is not None:
             arrays[name] = getattr(data, name)
     write_atomically(path, lambda f: np.savez_compressed(f, **arrays), binary=True)
@@ -219,5 +227,6 @@ def load_dataset(path) -> Dataset:
         if pitch.size != 1:
             raise ValueError(f'{path}: pitch_m must be a scalar')
         fields = {k: npz[k] for k in ('top', 'bottom', 'azimuth_deg', 'alpha_deg', *_OPTIONAL,
-                                      'tare_top', 'tare_bottom', *PRESS_FIELDS) if k in keys}
+                                      'tare_top', 'tare_bottom', 'split', *PRESS_FIELDS)
+                  if k in keys}
     return Dataset(pitch_m=float(pitch.reshape(())), **fields)

@@ -76,12 +76,18 @@ class FsrModel:
         gs = conductance * self.r_series_ohm
         return self.full_scale * gs / (1.0 + gs)
 
-    def counts_to_force(self, counts: np.ndarray) -> np.ndarray:
-        """Invert :meth:`force_to_counts`; saturated counts give ``force_at_r_min_n``."""
-        c = np.clip(np.asarray(counts, dtype=np.float64), 0.0, self.saturation_counts)
+    def counts_to_force(self, counts: np.ndarray, saturate: bool = True) -> np.ndarray:
+        """
+        Invert :meth:`force_to_counts`; saturated counts give ``force_at_r_min_n``.
+
+        ``saturate=False`` follows the power law on past the saturation (up to one count below
+        full scale): a skin that saturates later than this model reads such counts.
+        """
+        top = self.saturation_counts if saturate else self.full_scale - 1.0
+        c = np.clip(np.asarray(counts, dtype=np.float64), 0.0, top)
         with np.errstate(divide='ignore', invalid='ignore'):
             gs = c / (self.full_scale - c)
             f = self.force_at_r_max_n * (gs * self.r_max_ohm / self.r_series_ohm) ** (
                 1.0 / self.exponent)
         f = np.where(c > 0, f + self.activation_n, 0.0)
-        return np.minimum(f, self.force_at_r_min_n + self.activation_n)
+        return np.minimum(f, self.force_at_r_min_n + self.activation_n) if saturate else f

@@ -148,11 +148,25 @@ class ContactEstimator:
         benchmark's references).
         """
         self.config = config or EstimatorConfig()
-        self.calibration = calibration or Calibration()
         self.conditioner = conditioner or Conditioner(ConditioningConfig(
             fsr=self.config.fsr, threshold_counts=self.config.threshold_counts,
             noise_sigmas=self.config.noise_sigmas))
+        self.calibration = calibration or Calibration()
         self._method = shift or get_method(self.config.method)
+
+    @property
+    def calibration(self) -> Calibration:
+        """Return the calibration in force."""
+        return self._calibration
+
+    @calibration.setter
+    def calibration(self, calibration: Calibration) -> None:
+        """Put ``calibration`` in force, its force curves and gains in the conditioner too."""
+        self.conditioner.set_force_curves(*(calibration.force_curves or (None, None)))
+        top, bottom = calibration.gain_maps()
+        if top is not None or self.conditioner.shape is not None:
+            self.conditioner.set_gain(top, bottom)
+        self._calibration = calibration
 
     @property
     def compliance_m_per_n(self) -> float:

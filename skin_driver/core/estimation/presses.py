@@ -5,27 +5,40 @@ Calibration needs the layer shift of presses made straight down. Under a normal 
 between the layers is the skin's fixed offset and does not grow with force; under a tilted press
 it grows in proportion to the tangential force. So a press looks normal when its shift at full
 force is the same as at half force, within a tolerance.
+
+A calibration with a known load needs what the skin read at full load: the plateau of a press is
+its scans within ``PLATEAU_SHARE`` of the peak force, and a caller may attach anything to each
+scan (counts, a reference sensor's wrench) to get it back for the plateau.
 """
 
 from dataclasses import dataclass, field
 import math
-from typing import List, Optional, Tuple
+from typing import Any, List, Optional, Tuple
+
+PLATEAU_SHARE = 0.97
 
 
 @dataclass(frozen=True)
 class Press:
-    """One completed press: its peak force and layer shift (raw, before calibration)."""
+    """
+    One completed press: its peak force and layer shift (raw, before calibration).
+
+    ``plateau_shift_m`` is the mean shift over the plateau scans, ``plateau`` what the caller
+    attached to them, in order.
+    """
 
     peak_force_n: float
     shift_m: Tuple[float, float]
     shift_growth_m: float
     scans: int
     looks_normal: bool
+    plateau_shift_m: Tuple[float, float] = (0.0, 0.0)
+    plateau: tuple = ()
 
 
 @dataclass
 class _Open:
-    samples: List[Tuple[float, float, float]] = field(default_factory=list)
+    samples: List[Tuple[float, float, float, Any]] = field(default_factory=list)
 
 
 class PressSegmenter:
@@ -49,15 +62,21 @@ class PressSegmenter:
         self._open: Optional[_Open] = None
         self._quiet = 0
 
-    def add(self, force_n: float, shift_m: Optional[Tuple[float, float]]) -> Optional[Press]:
-        """Add one scan (force 0 or shift None when nothing touches); return a finished press."""
+    def add(self, force_n: float, shift_m: Optional[Tuple[float, float]],
+            payload: Any = None) -> Optional[Press]:
+        """
+        Add one scan (force 0 or shift None when nothing touches); return a finished press.
+
+        ``payload`` comes back in :attr:`Press.plateau` when the scan is on the plateau.
+        """
         touching = (shift_m is not None and math.isfinite(force_n)
                     and force_n >= self.start_force_n
                     and all(math.isfinite(v) for v in shift_m))
         if touching:
             if self._open is None:
                 self._open = _Open()
-            self._open.samples.append((float(force_n), float(shift_m[0]), float(shift_m[1])))
+            self._open.samples.append((float(force_n), float(shift_m[0]), float(shift_m[1]),
+                                       payload))
             self._quiet = 0
             return None
         if self._open is None:
@@ -70,6 +89,10 @@ class PressSegmenter:
 
     def _summarise(self, samples) -> Press:
         peak = max(s[0] for s in samples)
+        top = [s for s in samples if s[0] >= PLATEAU_SHARE * peak]
+        plateau = {'plateau_shift_m': (sum(s[1] for s in top) / len(top),
+                                       sum(s[2] for s in top) / len(top)),
+                   'plateau': tuple(s[3] for s in top)}
         strong = [s for s in samples if s[0] >= 0.5 * peak]
         weight = sum(s[0] for s in strong)
         sx = sum(s[0] * s[1] for s in strong) / weight
@@ -83,7 +106,7 @@ class PressSegmenter:
         var_f = sum((s[0] - mean_f) ** 2 for s in loaded) / n
         if var_f < (0.1 * peak) ** 2:
             # The force hardly changed: nothing tells a tilt from an offset.
-            return Press(peak, (sx, sy), math.inf, len(samples), False)
+            return Press(peak, (sx, sy), math.inf, len(samples), False, **plateau)
         slopes = []
         for axis in (1, 2):
             mean_s = sum(s[axis] for s in loaded) / n
@@ -91,4 +114,5 @@ class PressSegmenter:
             slopes.append(cov / var_f)
         growth = math.hypot(*slopes) * peak
         return Press(peak_force_n=peak, shift_m=(sx, sy), shift_growth_m=growth,
-                     scans=len(samples), looks_normal=growth <= self.normal_tolerance_m)
+                     scans=len(samples), looks_normal=growth <= self.normal_tolerance_m,
+                     **plateau)

@@ -31,7 +31,7 @@ from ..estimation.dataset import Dataset
 
 __all__ = ['SCENE_KINDS', 'PAPER_ALPHA_DEG', 'PAPER_BETAS_DEG', 'paper_presses', 'make_scene',
            'make_seed_experiment', 'make_random_experiment', 'make_border_experiment',
-           'make_multi_experiment']
+           'make_multi_experiment', 'add_calibration_frames']
 
 PAPER_ALPHA_DEG = 45.0
 PAPER_BETAS_DEG = tuple(float(b) for b in range(0, 360, 45))
@@ -254,3 +254,73 @@ def make_scene(kind: str, skin, rng: np.random.Generator = None, size: int = Non
     maker = {'random': make_random_experiment, 'border': make_border_experiment,
              'multi': make_multi_experiment}[kind]
     return maker(model, size, rng, force_range_n=member.force_range_n)
+
+
+def add_calibration_frames(data: Dataset, model: SkinModel, rng: np.random.Generator = None,
+                           normal: int = 16, tilted: int = 16,
+                           normal_force_range_n: tuple = (5.0, 60.0),
+                           tilted_force_range_n: tuple = (5.0, 15.0),
+                           alpha_range_deg: tuple = (20.0, 45.0), radius_m: float = 0.004,
+                           border_m: float = 0.015) -> Dataset:
+    """
+    Return ``data`` with calibration frames of ``model`` in front (dataset format 2 ``split``).
+
+    The calibration frames are what a user with a force gauge or a robot makes: ``normal``
+    presses straight down with forces spread evenly over ``normal_force_range_n``, then
+    ``tilted`` presses of known force and alpha at random azimuths, all at random places at
+    least ``border_m`` inside the skin with an indenter of ``radius_m``. ``data``'s frames keep
+    their order and become the scored frames (split 0); its tare frames are kept.
+    """
+    rng = rng if rng is not None else np.random.default_rng(0)
+    width = (model.cols - 1) * model.pitch_m
+    height = (model.rows - 1) * model.pitch_m
+
+    def place():
+        return (rng.uniform(border_m, max(width - border_m, border_m)),
+                rng.uniform(border_m, max(height - border_m, border_m)))
+
+    presses, azimuths = [], []
+    for f in rng.permutation(np.linspace(*normal_force_range_n, int(normal))):
+        presses.append(Press(*place(), float(f), 0.0, 0.0, radius_m))
+        azimuths.append(math.nan)
+    for _ in range(int(tilted)):
+        beta = rng.uniform(0.0, 360.0)
+        presses.append(Press(*place(), rng.uniform(*tilted_force_range_n),
+                             math.radians(rng.uniform(*alpha_range_deg)), math.radians(beta),
+                             radius_m))
+        azimuths.append(beta)
+    maps = [render(model, [p], rng) for p in presses]
+    k = len(presses)
+
+    def joined(name, values):
+        own = getattr(data, name)
+        return None if own is None else np.concatenate([np.asarray(values), own])
+
+    def press_truth(name, values):
+        # The calibration frames hold one press each: slot 0, the other slots empty.
+        own = getattr(data, name)
+        if own is None:
+            return None
+        pad = np.full((k,) + own.shape[1:], np.nan)
+        pad[:, 0] = values
+        return np.concatenate([pad, own])
+
+    return Dataset(
+        top=np.concatenate([np.stack([t for t, _ in maps]), data.top]),
+        bottom=np.concatenate([np.stack([b for _, b in maps]), data.bottom]),
+        pitch_m=data.pitch_m,
+        azimuth_deg=np.concatenate([azimuths, data.azimuth_deg]),
+        alpha_deg=np.concatenate([[math.degrees(p.alpha_rad) for p in presses],
+                                  data.alpha_deg]),
+        force_n=joined('force_n', [p.force_n for p in presses]),
+        x_m=joined('x_m', [p.x_m for p in presses]), y_m=joined('y_m', [p.y_m for p in presses]),
+        tare_top=data.tare_top, tare_bottom=data.tare_bottom,
+        split=np.concatenate([np.ones(k, dtype=np.uint8), np.zeros(data.frames, np.uint8)]),
+        press_x_m=press_truth('press_x_m', [p.x_m for p in presses]),
+        press_y_m=press_truth('press_y_m', [p.y_m for p in presses]),
+        press_force_n=press_truth('press_force_n', [p.force_n for p in presses]),
+        press_azimuth_deg=press_truth('press_azimuth_deg', azimuths),
+        press_alpha_deg=press_truth('press_alpha_deg',
+                                    [math.degrees(p.alpha_rad) for p in presses]),
+        press_shift_m=press_truth('press_shift_m', [model.compliance_m_per_n
+                                                    * p.tangential_force_n for p in presses]))

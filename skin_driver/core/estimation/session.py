@@ -1,0 +1,297 @@
+"""
+A calibration session: presses in, a new calibration (or a clear refusal) out. ROS-free.
+
+A front end (the direction node's services, the evaluator, a script) makes a session for one
+kind of calibration, feeds it every scan with the contacts the estimator found (or whole presses
+with :meth:`CalibrationSession.add_press`), and calls :meth:`finish` when :attr:`done`:
+
+* ``offset``: presses straight down give ``(x_p, y_p)``; presses whose shift grows with their
+  force are tilted and are ignored.
+* ``force``: presses of known normal force (``forces_n``, one per press, in order) give each
+  layer's counts-to-force curve (:mod:`forcecurve`).
+* ``compliance``: presses of known force and polar angle (``forces_n`` and ``alphas_rad``, or a
+  reference wrench fed with each scan) give the layer shift per tangential newton.
+* ``gains``: a uniform load, or many presses spread over the skin, give the per-taxel gains
+  (:mod:`gains` says what the user does).
+
+:meth:`finish` returns the calibration in force with that part replaced; it never changes the
+estimator. Putting the result in force, and storing it, is the front end's business, so a
+refusal (:class:`CalibrationRefused`) leaves everything as it was.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+import math
+from typing import Optional, Sequence
+
+import numpy as np
+
+from .calibration import calibrate_from_shifts, Calibration, compliance_from_presses
+from .forcecurve import fit_force_curve
+from .gains import gains_from_force_sums
+from .presses import PressSegmenter
+
+__all__ = ['KINDS', 'PressRecord', 'Outcome', 'CalibrationRefused', 'CalibrationSession']
+
+KINDS = ('offset', 'force', 'compliance', 'gains')
+MIN_COMPLIANCE_PRESSES = 3
+
+
+class CalibrationRefused(ValueError):
+    """The presses do not make a calibration; the message says why (SI units)."""
+
+
+@dataclass(frozen=True)
+class PressRecord:
+    """
+    What one press showed at full load.
+
+    ``shift_m`` is the raw layer shift (before the offset is removed), ``counts`` both layers'
+    counts above baseline (2 x rows x cols, 0 where untouched), ``wrench_n`` the reference
+    sensor's mean force (x, y, z) in the skin frame when one was fed.
+    """
+
+    peak_force_n: float
+    shift_m: tuple
+    counts: np.ndarray
+    looks_normal: bool = True
+    shift_growth_m: float = 0.0
+    wrench_n: Optional[tuple] = None
+
+
+@dataclass(frozen=True)
+class Outcome:
+    """
+    A successful session: the new calibration and how well it fits each press.
+
+    ``fitted`` and ``residuals`` are per press, in newtons (force: the force the new curve gives
+    back) or metres (offset: shift from the mean; compliance: shift minus compliance times
+    tangential force); for gains ``fitted`` is (smallest, largest) gain and ``covered`` the share
+    of the taxels the presses reached.
+    """
+
+    calibration: Calibration
+    presses_used: int
+    fitted: tuple
+    residuals: tuple
+    message: str
+    covered: float = 1.0
+
+
+class CalibrationSession:
+    """Collect presses of one kind from a stream of scans and fit that part of the calibration."""
+
+    def __init__(self, estimator, kind: str, presses: int = 0,
+                 forces_n: Sequence[float] = (), alphas_rad: Sequence[float] = (),
+                 max_std_m: float = 0.0005, normal_tolerance_m: float = 0.0005,
+                 start_force_n: float = 0.5, release_scans: int = 5):
+        """
+        Start a session on ``estimator`` (a pipeline.ContactEstimator, read, never changed).
+
+        ``presses`` is how many to collect; for force and compliance with known loads it is
+        the number of known forces. A press ends after ``release_scans`` scans without touch:
+        more than a lost scan or two, so that a press is never counted twice. Raises
+        CalibrationRefused on inconsistent arguments.
+        """
+        if kind not in KINDS:
+            raise CalibrationRefused(f'calibration kind {kind!r} is not one of {KINDS}')
+        forces = np.asarray(forces_n, dtype=np.float64).ravel()
+        alphas = np.asarray(alphas_rad, dtype=np.float64).ravel()
+        if not (np.isfinite(forces).all() and (forces > 0).all()):
+            raise CalibrationRefused('every known force must be a positive number of newtons')
+        if not (np.isfinite(alphas).all() and ((alphas >= 0) & (alphas < math.pi / 2)).all()):
+            raise CalibrationRefused('every alpha must be in [0, pi/2) radians')
+        if kind == 'force' and forces.size == 0:
+            raise CalibrationRefused('a force calibration needs the known force of each press')
+        if kind == 'compliance' and alphas.size != forces.size:
+            raise CalibrationRefused(f'{forces.size} forces but {alphas.size} alphas; give one '
+                                     'alpha per force (or neither, with a reference wrench)')
+        if kind in ('offset', 'gains') and forces.size:
+            raise CalibrationRefused(f'a {kind} calibration takes no known forces')
+        wanted = int(forces.size or presses)
+        if wanted < 1:
+            raise CalibrationRefused('ask for at least one press')
+        self.estimator = estimator
+        self.kind = kind
+        self.wanted = wanted
+        self.forces_n = forces
+        self.alphas_rad = alphas
+        self.max_std_m = max_std_m
+        self.accepted = []
+        self.ignored = 0
+        self.last_ignored = ''
+        self._segmenter = PressSegmenter(start_force_n=start_force_n,
+                                         release_scans=release_scans,
+                                         normal_tolerance_m=normal_tolerance_m)
+
+    @property
+    def done(self) -> bool:
+        """Return True once the wanted presses are in."""
+        return len(self.accepted) >= self.wanted
+
+    def add_scan(self, top_counts, bottom_counts, contacts, wrench_n=None) -> str:
+        """
+        Feed one scan and the contacts found in it (strongest first); '' or a note on a press.
+
+        ``wrench_n`` is a reference sensor's force (x, y, z) in the skin frame at this scan.
+        """
+        if self.done:
+            return ''
+        cal = self.estimator.calibration
+        if contacts:
+            c = contacts[0]
+            payload = (top_counts, bottom_counts, wrench_n)
+            press = self._segmenter.add(c.force_n, (c.shift_m[0] + cal.x_p_m,
+                                                    c.shift_m[1] + cal.y_p_m), payload)
+        else:
+            press = self._segmenter.add(0.0, None)
+        if press is None:
+            return ''
+        counts = np.mean([self.estimator.conditioner.touch_counts(t, b)
+                          for t, b, _ in press.plateau], axis=0)
+        wrenches = [w for _, _, w in press.plateau if w is not None]
+        wrench = tuple(np.mean(wrenches, axis=0)) if wrenches else None
+        return self.add_press(PressRecord(
+            peak_force_n=press.peak_force_n, shift_m=press.plateau_shift_m, counts=counts,
+            looks_normal=press.looks_normal, shift_growth_m=press.shift_growth_m,
+            wrench_n=wrench))
+
+    def record(self, top_counts, bottom_counts, contacts, wrench_n=None) -> PressRecord:
+        """Return the record of a press seen in one scan at full load (no stream needed)."""
+        cal = self.estimator.calibration
+        counts = self.estimator.conditioner.touch_counts(top_counts, bottom_counts)
+        if not contacts:
+            return PressRecord(0.0, (math.nan, math.nan), counts, wrench_n=wrench_n)
+        c = contacts[0]
+        return PressRecord(c.force_n, (c.shift_m[0] + cal.x_p_m, c.shift_m[1] + cal.y_p_m),
+                           counts, wrench_n=wrench_n)
+
+    def add_press(self, record: PressRecord) -> str:
+        """Add one press; return a note saying whether it counts (for a person)."""
+        if self.done:
+            return ''
+        if self.kind == 'offset' and not record.looks_normal:
+            return self._ignore('press ignored: it did not look normal (its shift grew by '
+                                f'{record.shift_growth_m:.6f} m with its force); press straight '
+                                'down')
+        if self.kind == 'compliance' and not self.forces_n.size and record.wrench_n is None:
+            return self._ignore('press ignored: no reference wrench arrived during it')
+        if not all(math.isfinite(v) for v in record.shift_m) and self.kind in (
+                'offset', 'compliance'):
+            return self._ignore('press ignored: no layer shift could be measured')
+        self.accepted.append(record)
+        n = len(self.accepted)
+        known = f' of known force {self.forces_n[n - 1]:.2f} N' if self.forces_n.size else ''
+        return f'press {n}/{self.wanted}{known} recorded ({record.peak_force_n:.2f} N as read)'
+
+    def _ignore(self, note: str) -> str:
+        self.ignored += 1
+        self.last_ignored = note
+        return note
+
+    def finish(self) -> Outcome:
+        """Fit the presses; raise CalibrationRefused with the reason when they do not do."""
+        if not self.accepted:
+            raise CalibrationRefused(f'no usable press of the {self.wanted} asked for '
+                                     f'({self.ignored} ignored; {self.last_ignored})')
+        try:
+            return getattr(self, f'_fit_{self.kind}')()
+        except CalibrationRefused:
+            raise
+        except ValueError as err:
+            raise CalibrationRefused(str(err)) from None
+
+    # ---- one fit per kind --------------------------------------------------------------------
+    def _fit_offset(self) -> Outcome:
+        previous = self.estimator.calibration
+        shifts = np.array([r.shift_m for r in self.accepted])
+        fit = calibrate_from_shifts(shifts, max_std_m=self.max_std_m)
+        new = previous.updated(x_p_m=fit.x_p_m, y_p_m=fit.y_p_m, std_x_m=fit.std_x_m,
+                               std_y_m=fit.std_y_m, presses=fit.presses)
+        residuals = tuple(float(math.hypot(x - fit.x_p_m, y - fit.y_p_m)) for x, y in shifts)
+        return Outcome(new, fit.presses, tuple(map(tuple, shifts.tolist())), residuals,
+                       f'offset from {fit.presses} normal presses: x_p = {fit.x_p_m:.6f} m, '
+                       f'y_p = {fit.y_p_m:.6f} m (std {fit.std_x_m:.6f}, {fit.std_y_m:.6f} m)')
+
+    def _fit_force(self) -> Outcome:
+        n = len(self.accepted)
+        if n < self.wanted:
+            raise CalibrationRefused(f'only {n} of the {self.wanted} presses of known force '
+                                     'were made')
+        known = self.forces_n[:n]
+        fill = self.estimator.config.fill_factor
+        gains = self.estimator.conditioner.gain_maps()
+        fits = {}
+        notes = ''
+        # The normal force is the bottom layer's sum: its curve must fit. The top layer (the
+        # same film) may borrow it when its own presses do not make a curve.
+        for layer, name in ((1, 'bottom'), (0, 'top')):
+            counts, weights = [], []
+            for r in self.accepted:
+                mask = r.counts[layer] > 0
+                counts.append(r.counts[layer][mask])
+                weights.append(gains[layer][mask])
+            try:
+                fits[name] = fit_force_curve(counts, weights, known * fill * fill, known,
+                                             self.estimator.conditioner.config.fsr)
+            except ValueError as err:
+                if name == 'bottom':
+                    raise CalibrationRefused(f'{name} layer: {err}') from None
+                fits[name] = fits['bottom']
+                notes += f'; the top layer takes the bottom curve ({err})'
+        new = self.estimator.calibration.updated(
+            force_curves=(fits['top'].curve, fits['bottom'].curve), force_presses=n)
+        # The pipeline's normal force is the bottom layer's sum: report that layer's fit.
+        bottom = fits['bottom']
+        rms = math.sqrt(float(np.mean(np.square(bottom.residuals_n))))
+        saturated = ''.join(f'; the {name} layer saturated in {n - fit.used} presses, '
+                            'left out of its curve'
+                            for name, fit in fits.items() if fit.used < n)
+        return Outcome(new, n, bottom.fitted_n, bottom.residuals_n,
+                       f'force curves from {n} presses over {known.min():.2f} to '
+                       f'{known.max():.2f} N; residual rms {rms:.3f} N{saturated}{notes}')
+
+    def _known_loads(self) -> tuple:
+        """Return (tangential, normal) known force per accepted press, newtons."""
+        n = len(self.accepted)
+        if self.forces_n.size:
+            f, a = self.forces_n[:n], self.alphas_rad[:n]
+            return f * np.sin(a), f * np.cos(a)
+        w = np.array([r.wrench_n for r in self.accepted], dtype=np.float64)
+        return np.hypot(w[:, 0], w[:, 1]), np.abs(w[:, 2])
+
+    def _fit_compliance(self) -> Outcome:
+        n = len(self.accepted)
+        if n < MIN_COMPLIANCE_PRESSES:
+            raise CalibrationRefused(f'{n} tilted press{"es" if n != 1 else ""}; the compliance '
+                                     f'needs at least {MIN_COMPLIANCE_PRESSES}')
+        tangential, _ = self._known_loads()
+        previous = self.estimator.calibration
+        offset = (previous.x_p_m, previous.y_p_m)
+        shifts = np.array([r.shift_m for r in self.accepted])
+        compliance = compliance_from_presses(shifts, tangential, offset)
+        if not (math.isfinite(compliance) and compliance > 0):
+            raise CalibrationRefused('the layer shift does not grow with the tangential force; '
+                                     'press at alpha > 0 with a known load')
+        magnitude = np.hypot(shifts[:, 0] - offset[0], shifts[:, 1] - offset[1])
+        residuals = magnitude - compliance * tangential
+        new = previous.updated(compliance_m_per_n=compliance, compliance_presses=n)
+        return Outcome(new, n, tuple(float(v) for v in compliance * tangential),
+                       tuple(float(v) for v in residuals),
+                       f'compliance {compliance:.4e} m/N from {n} presses with '
+                       f'{tangential.min():.2f} to {tangential.max():.2f} N tangential; '
+                       f'residual rms {math.sqrt(float(np.mean(residuals ** 2))):.6f} m')
+
+    def _fit_gains(self) -> Outcome:
+        n = len(self.accepted)
+        conditioner = self.estimator.conditioner
+        # What each taxel sensed, without the gains in force: those are being replaced.
+        sums = sum(conditioner.force_of(r.counts) for r in self.accepted) / conditioner.gain_maps()
+        gains, covered = gains_from_force_sums(sums, n)
+        new = self.estimator.calibration.updated(gains=(gains[0], gains[1]))
+        share = float(covered.mean())
+        return Outcome(new, n, (float(gains.min()), float(gains.max())), (),
+                       f'taxel gains from {n} press{"es" if n != 1 else ""} covering '
+                       f'{100 * share:.0f} % of the taxels: {gains.min():.2f} to '
+                       f'{gains.max():.2f}', covered=share)

@@ -1,0 +1,55 @@
+"""Per-taxel gains from a uniform load or from presses spread over the skin."""
+
+import numpy as np
+import pytest
+from skin_driver.core.estimation.fsr import FsrModel
+from skin_driver.core.estimation.gains import gains_from_force_sums
+from skin_driver.core.estimation.pipeline import ContactEstimator, EstimatorConfig
+from skin_driver.core.estimation.session import CalibrationRefused, CalibrationSession
+
+FSR = FsrModel()
+# A fixed pattern: every taxel 0.75 to 1.25 times as sensitive as it should be.
+PATTERN = np.random.default_rng(7).uniform(0.75, 1.25, (2, 16, 16))
+
+
+def counts_of(model_force, rng):
+    """Return (top, bottom) counts of force maps through the sensitivity pattern."""
+    out = []
+    for layer, force in enumerate(model_force):
+        counts = FSR.force_to_counts(force * PATTERN[layer]) + rng.normal(0.0, 3.0, force.shape)
+        out.append(np.clip(np.rint(counts), 0, 4095).astype(np.uint16))
+    return out
+
+
+def test_a_uniform_load_recovers_the_gain_pattern_and_evens_the_skin_out():
+    rng = np.random.default_rng(0)
+    est = ContactEstimator(EstimatorConfig())
+    session = CalibrationSession(est, 'gains', presses=1)
+    # A plate with a weight: 3 N on every taxel, 10 % more on one side (a plate is never
+    # quite level).
+    plate = 3.0 * np.broadcast_to(1.0 + 0.1 * np.linspace(0.0, 1.0, 16), (2, 16, 16))
+    top, bottom = counts_of(plate, rng)
+    session.add_press(session.record(top, bottom, est.process(top, bottom)))
+    outcome = session.finish()
+    corrected = np.stack(outcome.calibration.gain_maps()) * PATTERN
+    # The pattern's spread (14 %) is cut to less than a third; what is left is the noise of a
+    # median over a neighbourhood.
+    assert np.std(PATTERN) > 0.12
+    assert np.std(corrected / corrected.mean()) < 0.045
+    est.calibration = outcome.calibration
+    even = np.stack(est.conditioner.condition(top, bottom)) / plate
+    assert np.std(even / even.mean()) < 0.045
+
+
+def test_too_little_coverage_is_refused():
+    sums = np.zeros((2, 16, 16))
+    sums[:, 5:8, 5:8] = 1.0
+    with pytest.raises(ValueError, match='only 4 % of its taxels'):
+        gains_from_force_sums(sums, 3)
+    est = ContactEstimator()
+    session = CalibrationSession(est, 'gains', presses=1)
+    top = np.zeros((16, 16), np.uint16)
+    top[7, 7] = 3000
+    session.add_press(session.record(top, top, est.process(top, top)))
+    with pytest.raises(CalibrationRefused, match='press evenly over the whole skin'):
+        session.finish()

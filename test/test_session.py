@@ -1,0 +1,137 @@
+"""Tests of the ROS-free calibration session fed with simulated scans of a non-default skin."""
+
+import math
+
+import numpy as np
+import pytest
+from skin_driver.core.estimation.calibration import Calibration
+from skin_driver.core.estimation.fsr import FsrModel
+from skin_driver.core.estimation.pipeline import ContactEstimator, EstimatorConfig
+from skin_driver.core.estimation.session import CalibrationRefused, CalibrationSession
+from skin_driver.core.sim.physics import Press, render, SkinModel
+
+# Another FSR curve and three times the default compliance: the assumed model is wrong here.
+SKIN = SkinModel(misalignment_m=(4e-4, -2e-4), compliance_m_per_n=2.1e-3,
+                 fsr=FsrModel(r_series_ohm=2000.0, r_min_ohm=150.0, r_max_ohm=6000.0,
+                              force_at_r_min_n=40.0))
+FORCES = np.linspace(5.0, 40.0, 8)
+
+
+def tared(seed=0):
+    rng = np.random.default_rng(seed)
+    est = ContactEstimator(EstimatorConfig())
+    quiet = [render(SKIN, [], rng) for _ in range(10)]
+    est.tare(np.stack([q[0] for q in quiet]), np.stack([q[1] for q in quiet]))
+    return est, rng
+
+
+def feed(session, est, rng, presses):
+    """Stream each press as a ramp up, a hold and a ramp down, with quiet scans between."""
+    notes = []
+    for press in presses:
+        for share in [0.0] * 10 + list(np.linspace(0.1, 1.0, 8)) + [1.0] * 4 + [0.5, 0.2]:
+            scaled = Press(press.x_m, press.y_m, press.force_n * share, press.alpha_rad,
+                           press.beta_rad, press.radius_m)
+            top, bottom = render(SKIN, [scaled] if share else [], rng)
+            notes.append(session.add_scan(top, bottom, est.process(top, bottom)))
+    for _ in range(10):
+        top, bottom = render(SKIN, [], rng)
+        notes.append(session.add_scan(top, bottom, est.process(top, bottom)))
+    return [n for n in notes if n]
+
+
+def force_of(est, rng, force_n, where=(0.04, 0.035)):
+    top, bottom = render(SKIN, [Press(*where, force_n, radius_m=0.004)], rng)
+    return est.process(top, bottom)[0].force_n
+
+
+def test_force_session_makes_newtons_right_on_another_fsr_curve():
+    est, rng = tared()
+    before = force_of(est, rng, 20.0)
+    assert before > 1.5 * 20.0  # the assumed curve is far off on this skin
+    session = CalibrationSession(est, 'force', forces_n=FORCES)
+    places = rng.uniform(0.02, 0.055, (FORCES.size, 2))
+    notes = feed(session, est, rng, [Press(x, y, f, radius_m=0.004)
+                                     for (x, y), f in zip(places, FORCES)])
+    assert session.done and len(notes) == FORCES.size
+    outcome = session.finish()
+    assert est.calibration == Calibration()  # finish never changes what is in force
+    est.calibration = outcome.calibration
+    assert outcome.presses_used == FORCES.size
+    for f in (8.0, 20.0, 35.0):
+        assert force_of(est, rng, f) == pytest.approx(f, rel=0.1)
+
+
+def test_offset_session_ignores_tilted_presses_and_finds_the_misalignment():
+    est, rng = tared(1)
+    session = CalibrationSession(est, 'offset', presses=2)
+    tilted = Press(0.04, 0.04, 10.0, math.radians(40.0), 0.0, 0.004)
+    notes = feed(session, est, rng, [tilted, Press(0.035, 0.04, 10.0, radius_m=0.004),
+                                     Press(0.045, 0.035, 12.0, radius_m=0.004)])
+    assert 'did not look normal' in notes[0] and session.ignored == 1
+    cal = session.finish().calibration
+    assert (cal.x_p_m, cal.y_p_m) == pytest.approx(SKIN.misalignment_m, abs=2e-4)
+    assert cal.made_utc
+
+
+def test_compliance_session_from_known_tilted_loads():
+    est, rng = tared(2)
+    est.calibration = Calibration(x_p_m=SKIN.misalignment_m[0], y_p_m=SKIN.misalignment_m[1])
+    forces, alphas = [6.0, 8.0, 5.0, 7.0], np.radians([30.0, 20.0, 40.0, 25.0])
+    betas = np.radians([0.0, 90.0, 200.0, 300.0])
+    session = CalibrationSession(est, 'compliance', forces_n=forces, alphas_rad=alphas)
+    feed(session, est, rng, [Press(0.04, 0.04, f, a, b, 0.004)
+                             for f, a, b in zip(forces, alphas, betas)])
+    outcome = session.finish()
+    assert outcome.calibration.compliance_m_per_n == pytest.approx(
+        SKIN.compliance_m_per_n, rel=0.15)
+    assert outcome.calibration.x_p_m == SKIN.misalignment_m[0]  # the other parts are kept
+    assert len(outcome.residuals) == 4
+
+
+def test_compliance_from_a_reference_wrench_fed_with_the_scans():
+    est, rng = tared(3)
+    est.calibration = Calibration(x_p_m=SKIN.misalignment_m[0], y_p_m=SKIN.misalignment_m[1])
+    session = CalibrationSession(est, 'compliance', presses=3)
+    for f, beta in ((6.0, 0.0), (8.0, 2.0), (5.0, 4.0)):
+        alpha = math.radians(30.0)
+        for share in [0.0] * 3 + list(np.linspace(0.2, 1.0, 6)) + [1.0] * 3 + [0.0] * 10:
+            load = f * share
+            wrench = (load * math.sin(alpha) * math.cos(beta),
+                      load * math.sin(alpha) * math.sin(beta), -load * math.cos(alpha))
+            top, bottom = render(SKIN, [Press(0.04, 0.04, load, alpha, beta, 0.004)]
+                                 if share else [], rng)
+            session.add_scan(top, bottom, est.process(top, bottom), wrench)
+    assert session.done
+    assert session.finish().calibration.compliance_m_per_n == pytest.approx(
+        SKIN.compliance_m_per_n, rel=0.15)
+
+
+@pytest.mark.parametrize('forces, message', [
+    ([10.0, 11.0, 12.0, 10.5, 11.5, 12.5], 'span only'),
+    ([5.0, 10.0, 20.0], 'needs at least 6'),
+])
+def test_a_refused_force_session_leaves_the_calibration_in_force(forces, message):
+    est, rng = tared(4)
+    previous = Calibration(x_p_m=1e-4, compliance_m_per_n=1e-3, presses=3)
+    est.calibration = previous
+    probe = render(SKIN, [Press(0.04, 0.04, 20.0, radius_m=0.004)], rng)
+    maps = est.conditioner.condition(*probe)
+    session = CalibrationSession(est, 'force', forces_n=forces)
+    feed(session, est, rng, [Press(0.04, 0.04, f, radius_m=0.004) for f in forces])
+    with pytest.raises(CalibrationRefused, match=message):
+        session.finish()
+    assert est.calibration is previous
+    np.testing.assert_array_equal(est.conditioner.condition(*probe), maps)
+
+
+@pytest.mark.parametrize('kind, args, message', [
+    ('force', {}, 'known force of each press'),
+    ('force', {'forces_n': [5.0, -1.0]}, 'positive'),
+    ('compliance', {'forces_n': [5.0], 'alphas_rad': []}, 'one alpha per force'),
+    ('compliance', {'forces_n': [5.0], 'alphas_rad': [2.0]}, 'pi/2'),
+    ('twist', {}, 'not one of'),
+])
+def test_inconsistent_requests_are_refused_at_once(kind, args, message):
+    with pytest.raises(CalibrationRefused, match=message):
+        CalibrationSession(ContactEstimator(), kind, presses=3, **args)
