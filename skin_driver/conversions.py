@@ -97,9 +97,11 @@ def contact_to_msg(header: Header, contact) -> TactileContact:
     )
 
 
-def contacts_to_array(header: Header, contacts: Iterable) -> TactileContactArray:
-    """Convert core contacts (strongest first) into a TactileContactArray."""
-    return TactileContactArray(header=header,
+def contacts_to_array(header: Header, contacts: Iterable, sequence: int = 0,
+                      device_time_us: int = 0) -> TactileContactArray:
+    """Convert core contacts (strongest first) of one scan into a TactileContactArray."""
+    return TactileContactArray(header=header, sequence=sequence & 0xFFFFFFFF,
+                               device_time_us=int(device_time_us),
                                contacts=[contact_to_msg(header, c) for c in contacts])
 
 

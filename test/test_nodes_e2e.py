@@ -109,7 +109,7 @@ def test_calibrate_records_normal_presses_and_the_file_is_loaded_at_start_up(tmp
     with ros_context() as (context, _):
         node = DirectionNode(context=context, parameter_overrides=overrides(
             {'calibration_file': str(path)}))
-        assert node._calibration.x_p_m == result.x_p
+        assert node.host.calibration.x_p_m == result.x_p
         node.destroy_node()
 
 
@@ -123,7 +123,7 @@ def test_calibrate_times_out_without_presses_and_keeps_the_previous_calibration(
         assert not result.success
         assert 'timed out' in result.message and 'previous calibration' in result.message
         assert (result.x_p, result.y_p) == (0.0002, 0.0001)
-        assert direction._calibration == previous
+        assert direction.host.calibration == previous
     assert calib.Calibration.load_yaml(str(tmp_path / 'calibration.yaml')) == previous
 
 
