@@ -260,7 +260,10 @@ def main(args=None):
     rclpy.init(args=args)
     try:
         node = SkinDriverNode()
-        direction = DirectionNode(subscribe=False) if node.fused else None
+        # launch_ros names a node with a process-wide rule (-r __node:=skin_driver); a rule of
+        # the node's own takes precedence and keeps this one skin_direction.
+        direction = DirectionNode(subscribe=False, cli_args=[
+            '--ros-args', '-r', '__node:=skin_direction']) if node.fused else None
     except ParameterError as err:
         rclpy.logging.get_logger('skin_driver').fatal(str(err))
         rclpy.try_shutdown()

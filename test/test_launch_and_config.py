@@ -71,7 +71,8 @@ def test_launch_file_declares_its_arguments_and_nodes():
     description = module.generate_launch_description()
     assert isinstance(description, LaunchDescription)
     names = {a.name for a in description.entities if isinstance(a, DeclareLaunchArgument)}
-    assert names == {'port', 'params_file', 'namespace', 'sim', 'scene', 'sim_rate', 'rviz'}
+    assert names == {'port', 'params_file', 'namespace', 'sim', 'scene', 'sim_rate', 'rviz',
+                     'fused'}
     executables = [getattr(a, 'node_executable', None) for a in description.entities]
     assert {'driver', 'direction', 'rviz2'} <= set(executables)
     processes = [a for a in description.entities if isinstance(a, ExecuteProcess)
