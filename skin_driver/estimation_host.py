@@ -67,6 +67,7 @@ class EstimationHost:
         self._cost_sum = self._cost_max = 0.0
         self._cost_count = 0
         self._latest = None
+        self._writer = conversions.ContactArrayWriter()
         self._rate = diagnostics.RateMeter(time.monotonic())
         self._rebuilders = []
 
@@ -217,7 +218,7 @@ class EstimationHost:
             contacts = estimator.process(top, bottom)
             cost = time.perf_counter() - start
             # Converting here means a non-finite value never reaches a publisher.
-            array = conversions.contacts_to_array(header, contacts, sequence, device_time_us)
+            array = self._writer.fill(header, contacts, sequence, device_time_us)
         except ValueError as err:
             self.reject(sequence, err)
             return

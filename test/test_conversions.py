@@ -72,3 +72,15 @@ def test_markers_draw_grid_arrow_and_label_per_contact():
     # The arrow comes from where the push comes from: against +y, above the skin.
     assert arrow.points[0].y < 0.04 and arrow.points[0].z > 0
     assert label.text == '7.0 N β 90°'
+
+
+def test_a_reused_array_carries_each_scan_exactly_as_a_new_one_would():
+    writer = conversions.ContactArrayWriter()
+    two = [_contact(), _contact(x_m=0.01, direction_valid=False, force_n=3.0)]
+    first = writer.fill(HEADER, two, sequence=2 ** 32 + 5, device_time_us=7)
+    assert first == conversions.contacts_to_array(HEADER, two, 5, 7)
+    assert first.sequence == 5 and len(first.contacts) == 2
+    one = [_contact(y_m=0.02, azimuth_rad=-1.0)]
+    second = writer.fill(HEADER, one, sequence=6, device_time_us=8)
+    assert second == conversions.contacts_to_array(HEADER, one, 6, 8)
+    assert writer.fill(HEADER, [], 7, 9).contacts == []
