@@ -183,8 +183,11 @@ class SkinDriverNode(Node):
                 # Contacts first: they are what a controller waits for.
                 self.estimation.process(header, frame.seq, frame.device_time_us, self._pitch,
                                         frame.top, frame.bottom)
-            self._pubs['frame'].publish(conversions.skin_frame_to_msg(
-                header, frame.seq, frame.device_time_us, self._pitch, frame.top, frame.bottom))
+            # Nobody listening (fused, nothing recording): no message to build and serialise.
+            if self._pubs['frame'].get_subscription_count():
+                self._pubs['frame'].publish(conversions.skin_frame_to_msg(
+                    header, frame.seq, frame.device_time_us, self._pitch, frame.top,
+                    frame.bottom))
             if 'top' in self._pubs:
                 self._pubs['top'].publish(conversions.counts_to_image(header, frame.top))
                 self._pubs['bottom'].publish(conversions.counts_to_image(header, frame.bottom))

@@ -57,13 +57,14 @@ class Probe:
 
     def __init__(self, node, *, keep_messages: bool = False, frames: bool = False,
                  depth: Optional[int] = None, diagnostics: int = 200,
-                 on_contacts: Optional[Callable] = None, on_frame: Optional[Callable] = None):
+                 on_contacts: Optional[Callable] = None, on_frame: Optional[Callable] = None,
+                 on_status: Optional[Callable] = None):
         """
         Subscribe on node: contacts always, frame if asked (or given on_frame), /diagnostics.
 
         keep_messages keeps every message (tests); depth deepens the best-effort queue (the
-        default is the sensor-data QoS a controller would use); on_contacts and on_frame are
-        called with each message after it is recorded.
+        default is the sensor-data QoS a controller would use); on_contacts, on_frame and
+        on_status are called with each message (status) after it is recorded.
         """
         self.node = node
         self.keep = keep_messages
@@ -74,6 +75,7 @@ class Probe:
         self.statuses = collections.deque(maxlen=diagnostics)
         self._on_contacts_hook = on_contacts
         self._on_frame_hook = on_frame
+        self._on_status_hook = on_status
         qos = QoSProfile(depth=depth or 5, history=HistoryPolicy.KEEP_LAST,
                          reliability=ReliabilityPolicy.BEST_EFFORT)
         node.create_subscription(TactileContactArray, 'contacts', self._on_contacts, qos)
@@ -106,6 +108,8 @@ class Probe:
         now = time.monotonic()
         for status in msg.status:
             self.statuses.append((now, status))
+            if self._on_status_hook is not None:
+                self._on_status_hook(status)
 
     def reset(self) -> None:
         """Forget everything recorded so far."""

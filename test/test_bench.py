@@ -89,15 +89,6 @@ def test_write_produces_json_markdown_and_plots(results, tmp_path):
         assert os.path.getsize(tmp_path / path) > 1000
 
 
-def test_scans_are_matched_to_contact_messages_by_stamp_in_order():
-    frames = [(10, 0, 0), (10, 1, 500), (20, 2, 1000)]
-    contacts = [(10, 1.0, 1), (10, 1.5, 1), (20, 2.0, 0), (30, 3.0, 0)]
-    matched = bench_ros._match(frames, contacts, 100.0, (0.0, 0.001))
-    # Two scans share stamp 10 (one read); stamp 30 has no frame, and 1000 us is out of window.
-    assert matched == [pytest.approx((100.0, 10e-9, 1.0)),
-                       pytest.approx((100.0005, 10e-9, 1.5))]
-
-
 def test_cpu_seconds_of_this_process_and_of_a_missing_one():
     assert bench_ros.cpu_seconds(os.getpid()) > 0
     assert bench_ros.cpu_seconds(2 ** 22 + 12345) == 0.0
