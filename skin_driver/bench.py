@@ -195,6 +195,45 @@ def why_e2e(e2e) -> list:
     return lines
 
 
+def tradeoffs(e2e) -> list:
+    """Return what each layout costs and buys, with this run's figures."""
+    runs = {(r['layout'], r['rate_hz']): r for r in e2e['runs']}
+    lines = []
+    for rate in sorted({r['rate_hz'] for r in e2e['runs']}):
+        split, fused = runs.get(('split', rate)), runs.get(('fused', rate))
+        if not (split and fused):
+            continue
+        lines.append(
+            f'At {rate:g} Hz the fused driver used {hot_path_us(fused):.0f} us of CPU per scan '
+            f'against {hot_path_us(split):.0f} us for driver + direction node split '
+            f'({hot_path_us(fused) / max(hot_path_us(split), 1e-9):.2f} x); p99 '
+            f'{_f(fused["latency_ms"]["p99"])} ms against {_f(split["latency_ms"]["p99"])} ms; '
+            f'lost {fused["lost"]} against {split["lost"]} scans.')
+    lines += [
+        'Fused saves, per scan, the SkinFrame message (built, serialised, sent, received, '
+        "deserialised) and one wake-up of rclpy's Python executor, which dominated the split "
+        'layout; the contacts leave the process as soon as the estimate is done.',
+        'Fused costs: estimation runs on the thread that reads the port, so a slow scan delays '
+        'the reads behind it (the kernel and the board buffer them: a 64 kB pty or USB buffer '
+        'holds ~60 scans at 16 x 16); a crash in estimation takes the link down with it; and '
+        "the driver process needs the estimator's dependencies (OpenCV, numpy).",
+        'Split is for recorded frames (`ros2 bag play` of `frame`), for running the estimator '
+        'on another machine than the serial port, and for rates up to a few hundred hertz, '
+        'where its cost does not matter; the direction node and the fused driver share one '
+        'implementation (`skin_driver/estimation_host.py`), so parameters, `~/tare`, '
+        '`~/calibrate`, diagnostics and topic names are the same either way.',
+        'Both skip the serialisation of topics nobody subscribes to (frame, contact, wrench, '
+        'contacts are each checked per scan): the CPU figures above have one subscriber, on '
+        '`contacts`; a controller on `wrench` as well adds the "publish contact + wrench" '
+        'stage cost, a recorder on `frame` the SkinFrame stage cost.',
+    ]
+    return lines
+
+
+def _f(v, spec='.2f') -> str:
+    return '-' if v is None else format(v, spec)
+
+
 def _losses(r) -> str:
     """Return where the lost scans of one run went, from the nodes' own counters."""
     if not r['lost']:
@@ -286,6 +325,7 @@ def _e2e(cfg, args, log) -> dict:
                                                log=log)
             out['profiles'] = profiles
         out['why'] = why_e2e(out)
+        out['tradeoffs'] = tradeoffs(out)
         return out
     finally:
         shutil.rmtree(workdir, ignore_errors=True)
