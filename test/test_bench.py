@@ -109,8 +109,8 @@ def _e2e_run(layout, rate, lost, p99, cpu):
 def test_end_to_end_targets_and_report_cover_both_layouts_at_each_rate(results, tmp_path):
     e2e = {'seconds': 60.0, 'warmup_s': 3.0, 'cores': 2, 'load': [1, 1, 1],
            'load_before': [1, 1, 1], 'stage_costs_us': {'estimator.process (1 contact)': 80.0},
-           'runs': [_e2e_run('split', 1000.0, 12, 3.0, {'sim': 150, 'driver': 90,
-                                                          'direction': 400, 'probe': 120}),
+           'runs': [_e2e_run('split', 1000.0, 12, 3.0,
+                             {'sim': 150, 'driver': 90, 'direction': 400, 'probe': 120}),
                     _e2e_run('fused', 1000.0, 0, 1.5, {'sim': 150, 'driver': 200, 'probe': 120})]}
     e2e['why'] = bench.why_e2e(e2e)
     e2e['tradeoffs'] = bench.tradeoffs(e2e)
