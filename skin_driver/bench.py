@@ -27,6 +27,7 @@ import cv2
 import numpy as np
 
 from . import bench_core, bench_report
+from .bench_report import label
 from .core.estimation.shift import DEFAULT_METHOD
 from .evaluate import _json_safe
 
@@ -37,7 +38,7 @@ FULL = {
     'frames': 24, 'seed_repeats': 20, 'random_frames': 400,
     'scale_grids': [16, 32, 64, 128], 'contacts': [1, 2, 3, 4, 5, 6, 7, 8],
     'scale_frames': 10, 'scale_repeats': 5,
-    'rates': [1000.0, 2000.0], 'e2e_seconds': 60.0, 'e2e_warmup': 3.0,
+    'rates': [1000.0, 2000.0], 'e2e_seconds': 60.0, 'e2e_warmup': 3.0, 'priorities': [0, 50],
     'stage_repeats': 1000,
 }
 QUICK = {
@@ -45,6 +46,7 @@ QUICK = {
     'seed_repeats': 3, 'random_frames': 50,
     'scale_grids': [16, 32], 'contacts': [1, 4], 'scale_frames': 3, 'scale_repeats': 2,
     'rates': [1000.0, 2000.0], 'e2e_seconds': 3.0, 'e2e_warmup': 1.0, 'stage_repeats': 100,
+    'priorities': [0],
 }
 
 
@@ -146,7 +148,7 @@ def e2e_targets(e2e) -> list:
     """Return the real-time targets per layout and rate: nothing lost, p99, hot-path CPU."""
     out = []
     for r in e2e['runs']:
-        name = f'{r["layout"]} at {r["rate_hz"] / 1000:g} kHz'
+        name = f'{label(r)} at {r["rate_hz"] / 1000:g} kHz'
         lost = r['lost']
         out.append(_target(f'{name}: scans lost in {r["seconds"]:g} s', lost, '0', lost == 0,
                            f'of {r["expected_scans"]} ({100 * lost / r["expected_scans"]:.2f} %)'
@@ -187,7 +189,7 @@ def why_e2e(e2e) -> list:
         cpu = r['cpu_us_per_scan']
         total = sum(cpu.values())
         lines.append(
-            f'{r["layout"]} at {r["rate_hz"]:g} Hz: CPU per scan '
+            f'{label(r)} at {r["rate_hz"]:g} Hz: CPU per scan '
             + ', '.join(f'{k} {v:.0f} us' for k, v in cpu.items())
             + f'; together {total * r["rate_hz"] / 1e4:.0f} % of one core of the '
             f'{e2e["cores"] * 100} % the machine has (load average {e2e["load"]}, other jobs '
@@ -197,15 +199,16 @@ def why_e2e(e2e) -> list:
 
 def tradeoffs(e2e) -> list:
     """Return what each layout costs and buys, with this run's figures."""
-    runs = {(r['layout'], r['rate_hz']): r for r in e2e['runs']}
+    runs = {(r['layout'], r['rate_hz'], r.get('priority', 0)): r for r in e2e['runs']}
     lines = []
-    for rate in sorted({r['rate_hz'] for r in e2e['runs']}):
-        split, fused = runs.get(('split', rate)), runs.get(('fused', rate))
+    for rate, priority in sorted({(r['rate_hz'], r.get('priority', 0)) for r in e2e['runs']}):
+        split, fused = runs.get(('split', rate, priority)), runs.get(('fused', rate, priority))
         if not (split and fused):
             continue
+        how = f' (SCHED_FIFO {priority})' if priority else ''
         lines.append(
-            f'At {rate:g} Hz the fused driver used {hot_path_us(fused):.0f} us of CPU per scan '
-            f'against {hot_path_us(split):.0f} us for driver + direction node split '
+            f'At {rate:g} Hz{how} the fused driver used {hot_path_us(fused):.0f} us of CPU per '
+            f'scan against {hot_path_us(split):.0f} us for driver + direction node split '
             f'({hot_path_us(fused) / max(hot_path_us(split), 1e-9):.2f} x); p99 '
             f'{_f(fused["latency_ms"]["p99"])} ms against {_f(split["latency_ms"]["p99"])} ms; '
             f'lost {fused["lost"]} against {split["lost"]} scans.')
@@ -311,8 +314,10 @@ def _e2e(cfg, args, log) -> dict:
     workdir = tempfile.mkdtemp(prefix='skin_bench_')
     try:
         load = [round(v, 2) for v in os.getloadavg()]
-        runs, _ = bench_ros.end_to_end(cfg['rates'], cfg['e2e_seconds'], cfg['e2e_warmup'],
-                                       workdir, log=log)
+        runs = []
+        for priority in cfg['priorities']:
+            runs += bench_ros.end_to_end(cfg['rates'], cfg['e2e_seconds'], cfg['e2e_warmup'],
+                                         workdir, log=log, priority=priority)[0]
         out = {'seconds': cfg['e2e_seconds'], 'warmup_s': cfg['e2e_warmup'], 'runs': runs,
                'cores': os.cpu_count(), 'load_before': load,
                'load': [round(v, 2) for v in os.getloadavg()]}

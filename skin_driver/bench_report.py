@@ -17,6 +17,12 @@ with warnings.catch_warnings():
     import matplotlib.pyplot as plt
 
 
+def label(run) -> str:
+    """Return a run's layout, with its scheduling when it was not the default."""
+    priority = run.get('priority', 0)
+    return run['layout'] + (f', SCHED_FIFO {priority}' if priority else '')
+
+
 def _save(fig, out_dir, name) -> str:
     os.makedirs(os.path.join(out_dir, 'img'), exist_ok=True)
     path = os.path.join('img', name)
@@ -111,7 +117,7 @@ def plot_scaling(scale, out_dir) -> str:
 def plot_e2e(e2e, out_dir) -> str:
     """Plot the latency percentiles of every layout at every rate."""
     fig, ax = plt.subplots(figsize=(7, 4))
-    labels = [f'{r["layout"]}\n{r["rate_hz"] / 1000:g} kHz' for r in e2e]
+    labels = [f'{label(r)}\n{r["rate_hz"] / 1000:g} kHz'.replace(', ', '\n') for r in e2e]
     x = np.arange(len(e2e))
     for k, key in enumerate(('p50', 'p99', 'max')):
         ax.bar(x + 0.27 * k, [r['latency_ms'][key] or 0 for r in e2e], 0.27, label=key)
@@ -237,15 +243,17 @@ def _e2e_section(res, images) -> list:
            "board's own part, from the scan's device time to its last byte at the driver, "
            "is shown apart (it holds the simulator's 2 ms write batching).",
            '- **CPU per scan**: CPU seconds of each process over the measured window '
-           "(/proc/<pid>/stat, user + system) divided by the scans sent in it. The probe's "
-           'own is shown for completeness.', '',
+           '(/proc/<pid>/stat, user + system) divided by the scans that process handled in it '
+           '(the simulator: sent; the driver: decoded; the direction node: estimated; the '
+           "probe: received), so that lost scans do not flatter it. The probe's own is shown "
+           'for completeness.', '',
            f'Load average before the runs {e.get("load_before")}, after {e["load"]} '
            f'({e["cores"]} cores, shared with other jobs).', '',
            f'![latency]({images["e2e"]})', '']
     rows = []
     for r in e['runs']:
         cpu = r['cpu_us_per_scan']
-        rows.append((r['layout'], f'{r["rate_hz"]:g}', r['expected_scans'],
+        rows.append((label(r), f'{r["rate_hz"]:g}', r['expected_scans'],
                      r['received'], r['lost'], _ms(r['latency_ms']),
                      _ms(r['board_to_driver_ms']), _ms(r['latency_from_device_time_ms']),
                      ' / '.join(f'{k} {v:.0f}' for k, v in cpu.items())))
@@ -257,7 +265,7 @@ def _e2e_section(res, images) -> list:
     out += _table(['layout', 'rate [Hz]', 'driver decoded [Hz]', 'driver sequence gaps',
                    'estimated [Hz]', 'estimator mean cost, last period [us]',
                    'simulator: frames it could not write (whole run)'],
-                  [(r['layout'], f'{r["rate_hz"]:g}', _f(r['driver_decoded_hz']),
+                  [(label(r), f'{r["rate_hz"]:g}', _f(r['driver_decoded_hz']),
                     _f(r['driver_sequence_gaps'], '.0f'), _f(r['estimated_hz']),
                     _f(r['estimator_mean_us']), _f(r['sim_frames_dropped'], '.0f'))
                    for r in e['runs']])

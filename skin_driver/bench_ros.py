@@ -83,21 +83,28 @@ def _params_file(workdir) -> str:
     return path
 
 
-def _start_layout(layout, ros, params, log, profile_to=None) -> dict:
+def realtime_prefix(priority: int) -> list:
+    """Return the command prefix that runs a process SCHED_FIFO at priority (none for 0)."""
+    return ['chrt', '-f', str(priority)] if priority else []
+
+
+def _start_layout(layout, ros, params, log, profile_to=None, priority=0) -> dict:
     """Start the nodes of one layout; return {process name: Popen}."""
     args = ros + ['--params-file', params]
+    rt = realtime_prefix(priority)
     if layout == 'fused':
         return {'driver': spawn(['-m', 'skin_driver.driver_node'] + args + ['-p', 'fused:=true'],
-                                log)}
-    return {'direction': spawn(['-m', 'skin_driver.direction_node'] + args, log, profile_to),
-            'driver': spawn(['-m', 'skin_driver.driver_node'] + args, log)}
+                                log, prefix=rt)}
+    return {'direction': spawn(['-m', 'skin_driver.direction_node'] + args, log, profile_to,
+                               prefix=rt),
+            'driver': spawn(['-m', 'skin_driver.driver_node'] + args, log, prefix=rt)}
 
 
-def _start_sim(executor, scene_path, port, rate, log):
+def _start_sim(executor, scene_path, port, rate, log, priority=0):
     """Start the simulated skin; return (process, its stderr lines, epoch in host seconds)."""
     sim = spawn(['-m', 'skin_driver.sim', '--scene', scene_path, '--link', port, '--rate',
-                 str(rate), '--loop'], log, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
-                text=True)
+                 str(rate), '--loop'], log, prefix=realtime_prefix(priority),
+                stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
     lines = []
     reader = threading.Thread(target=lambda: lines.extend(sim.stderr), daemon=True)
     reader.start()
@@ -120,9 +127,10 @@ def _sim_counts(lines):
     return None, None
 
 
-def _run(executor, probe, layout, nodes, rate, seconds, warmup, scene_path, port, log):
+def _run(executor, probe, layout, nodes, rate, seconds, warmup, scene_path, port, log,
+         priority=0):
     """Measure one layout at one rate; return its figures."""
-    sim, lines, reader, epoch = _start_sim(executor, scene_path, port, rate, log)
+    sim, lines, reader, epoch = _start_sim(executor, scene_path, port, rate, log, priority)
     probe.reset()
     _spin_for(executor, warmup)
     pids = {'sim': sim.pid, **{k: p.pid for k, p in nodes.items()}, 'probe': os.getpid()}
@@ -139,9 +147,14 @@ def _run(executor, probe, layout, nodes, rate, seconds, warmup, scene_path, port
     sent, dropped = _sim_counts(lines)
     expected = int(round(seconds * rate))
     seen = probe.summary((warmup, warmup + seconds), expected=expected, epoch_s=epoch)
-    scans = rate * wall
+    decoded_hz = driver.get('frames', 0) / driver['span_s'] if driver else None
+    estimated_hz = direction.get('frames', 0) / direction['span_s'] if direction else None
+    # CPU per scan each process handled: the scans it never saw cost it nothing.
+    handled_hz = {'sim': rate, 'driver': decoded_hz or rate,
+                  'direction': estimated_hz or rate, 'probe': seen['received'] / seconds or rate}
     return {
-        'layout': layout, 'rate_hz': rate, 'seconds': seconds, 'expected_scans': expected,
+        'layout': layout, 'priority': priority, 'rate_hz': rate, 'seconds': seconds,
+        'expected_scans': expected,
         'sim_frames_sent': sent, 'sim_frames_dropped': dropped,
         'received': seen['received'], 'lost': seen['lost'],
         'sequence_gaps': seen['sequence_gaps'],
@@ -151,21 +164,24 @@ def _run(executor, probe, layout, nodes, rate, seconds, warmup, scene_path, port
         'board_to_driver_ms': seen['last_byte_after_device_time_ms'],
         'scans_with_contact': seen['with_contact'] / max(seen['received'], 1),
         'cpu_percent': {k: 100.0 * v / wall for k, v in cpu.items()},
-        'cpu_us_per_scan': {k: 1e6 * v / scans for k, v in cpu.items()},
-        'driver_decoded_hz': driver.get('frames', 0) / driver['span_s'] if driver else None,
+        'cpu_us_per_scan': {k: 1e6 * v / (handled_hz[k] * wall) for k, v in cpu.items()},
+        'driver_decoded_hz': decoded_hz,
         'driver_sequence_gaps': driver.get('sequence gaps') if driver else None,
-        'estimated_hz': direction.get('frames', 0) / direction['span_s'] if direction else None,
+        'estimated_hz': estimated_hz,
         'estimator_mean_us': (float(direction['latest'].get('mean cost [us]', 'nan'))
                               if direction else None),
     }
 
 
-def end_to_end(rates, seconds, warmup, workdir, layouts=LAYOUTS, profile=False, log=print):
+def end_to_end(rates, seconds, warmup, workdir, layouts=LAYOUTS, profile=False, log=print,
+               priority=0):
     """
     Run every layout at every rate, one after the other, and return one result per run.
 
     The layouts take turns at each rate (in alternating order), so that both see the same
-    machine: other jobs share it, and only a side-by-side comparison means anything.
+    machine: other jobs share it, and only a side-by-side comparison means anything. With a
+    priority, the simulated board, the nodes and this subscriber run SCHED_FIFO at it, as a
+    force-control deployment runs its loop (the board is hardware: it never waits for a core).
     """
     scene = bench_scene(seconds + warmup + 2.0)
     scene_path = os.path.join(workdir, 'bench_scene.yaml')
@@ -174,6 +190,9 @@ def end_to_end(rates, seconds, warmup, workdir, layouts=LAYOUTS, profile=False, 
     port = os.path.join(workdir, 'skin0')
     params = _params_file(workdir)
     node_log = open(os.path.join(workdir, 'nodes.log'), 'w')
+    if priority:
+        # Before rclpy.init: the middleware's threads inherit the policy.
+        os.sched_setscheduler(0, os.SCHED_FIFO, os.sched_param(priority))
     rclpy.init()
     executor = SingleThreadedExecutor()
     results, profiles = [], {}
@@ -181,10 +200,10 @@ def end_to_end(rates, seconds, warmup, workdir, layouts=LAYOUTS, profile=False, 
         for i, rate in enumerate(rates):
             order = layouts if i % 2 == 0 else tuple(reversed(layouts))
             for layout in order:
-                ns = f'/skin_bench_{os.getpid()}_{layout}_{int(rate)}'
+                ns = f'/skin_bench_{os.getpid()}_{layout}_{int(rate)}_{priority}'
                 ros = ['--ros-args', '-r', f'__ns:={ns}', '--log-level', 'warn']
                 prof = os.path.join(workdir, f'{layout}.prof') if profile else None
-                nodes = _start_layout(layout, ros, params, node_log, prof)
+                nodes = _start_layout(layout, ros, params, node_log, prof, priority)
                 node = Node('skin_bench_probe', namespace=ns)
                 executor.add_node(node)
                 probe = Probe(node)
@@ -196,13 +215,14 @@ def end_to_end(rates, seconds, warmup, workdir, layouts=LAYOUTS, profile=False, 
                             raise RuntimeError(f'the {layout} layout did not come up')
                         executor.spin_once(timeout_sec=0.05)
                     results.append(_run(executor, probe, layout, nodes, rate, seconds, warmup,
-                                        scene_path, port, node_log))
+                                        scene_path, port, node_log, priority))
                 finally:
                     executor.remove_node(node)
                     node.destroy_node()
                     stop(nodes.values(), 10.0)
                 r = results[-1]
-                log(f'  {layout} {rate:g} Hz: {r["received_rate_hz"]:.0f} Hz received, '
+                log(f'  {layout} (priority {priority}) {rate:g} Hz: '
+                    f'{r["received_rate_hz"]:.0f} Hz received, '
                     f'{r["lost"]} lost, p99 {r["latency_ms"]["p99"]} ms, CPU/scan '
                     + ', '.join(f'{k} {v:.0f} us' for k, v in r['cpu_us_per_scan'].items()))
                 if prof and os.path.exists(prof):
@@ -211,6 +231,8 @@ def end_to_end(rates, seconds, warmup, workdir, layouts=LAYOUTS, profile=False, 
         executor.shutdown()
         rclpy.try_shutdown()
         node_log.close()
+        if priority:
+            os.sched_setscheduler(0, os.SCHED_OTHER, os.sched_param(0))
     return results, profiles
 
 
