@@ -226,8 +226,9 @@ def _e2e_section(res, images) -> list:
            'in its executor, publishes `contacts`, `contact`, `wrench`);',
            '- **fused**: `python -m skin_driver.driver_node --ros-args -p fused:=true` (the '
            'reader thread decodes each scan, estimates it and publishes `contacts`, `contact` '
-           'and `wrench`, then `frame`; the skin_direction node in the same process serves '
-           'parameters, `~/tare`, `~/calibrate` and diagnostics from the executor).', '',
+           'and `wrench`, then `frame` if anyone subscribes; the skin_direction node in the '
+           'same process serves parameters, `~/tare`, `~/calibrate` and diagnostics from the '
+           'executor).', '',
            'Both with `publish_images:=false` and `viz_rate:=0.0`. Simulated skin: `python -m '
            'skin_driver.sim --rate R --loop` on a pseudo-terminal (a tilted 10 N press on the '
            "skin ~90 % of the time; above 500 Hz it writes every 2 ms, as a USB board's "
