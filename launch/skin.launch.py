@@ -4,11 +4,12 @@ Bring up the skin: serial driver and direction node, optionally the simulated sk
     ros2 launch skin_driver skin.launch.py                      # a real skin on /tmp/skin0
     ros2 launch skin_driver skin.launch.py port:=/dev/ttyACM0
     ros2 launch skin_driver skin.launch.py sim:=true rviz:=true  # simulated skin + heatmap
+    ros2 launch skin_driver skin.launch.py fused:=true          # estimate in the driver process
 """
 
 from launch import LaunchDescription
 from launch.actions import DeclareLaunchArgument, ExecuteProcess, OpaqueFunction
-from launch.conditions import IfCondition
+from launch.conditions import IfCondition, UnlessCondition
 from launch.substitutions import LaunchConfiguration, PathJoinSubstitution
 from launch_ros.actions import LifecycleNode, Node
 from launch_ros.substitutions import FindPackagePrefix, FindPackageShare
@@ -38,6 +39,7 @@ def generate_launch_description():
     namespace = LaunchConfiguration('namespace')
     params_file = LaunchConfiguration('params_file')
     with_rviz = IfCondition(LaunchConfiguration('rviz'))
+    fused = LaunchConfiguration('fused')
     arguments = [
         DeclareLaunchArgument('port', default_value='/tmp/skin0',
                               description='Serial device or pyserial URL of the skin board.'),
@@ -54,6 +56,10 @@ def generate_launch_description():
                               description='Scans per second of the simulated skin.'),
         DeclareLaunchArgument('rviz', default_value='false',
                               description='Start rviz2 with the heatmap configuration.'),
+        DeclareLaunchArgument('fused', default_value='false',
+                              description='Estimate contacts inside the driver process, on its '
+                                          'serial reader thread (1-2 kHz), instead of in a '
+                                          'separate direction node.'),
     ]
     # The simulator is a device, not a ROS node: it takes no --ros-args.
     simulator = ExecuteProcess(
@@ -63,10 +69,13 @@ def generate_launch_description():
         name='skin_sim', output='screen', condition=IfCondition(LaunchConfiguration('sim')))
     driver = LifecycleNode(
         package='skin_driver', executable='driver', name='skin_driver', namespace=namespace,
-        parameters=[params_file, {'port': port}], output='screen')
+        parameters=[params_file, {'port': port, 'fused': fused}], output='screen')
+    # Fused, the driver process runs the skin_direction node itself (same name, parameters from
+    # the same section of params_file, same services and topics).
     direction = Node(
         package='skin_driver', executable='direction', name='skin_direction',
-        namespace=namespace, parameters=[params_file], output='screen')
+        namespace=namespace, parameters=[params_file], output='screen',
+        condition=UnlessCondition(fused))
     return LaunchDescription(arguments + [
         OpaqueFunction(function=_require_rviz2, condition=with_rviz),
         simulator, driver, direction,

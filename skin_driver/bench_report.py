@@ -17,6 +17,12 @@ with warnings.catch_warnings():
     import matplotlib.pyplot as plt
 
 
+def label(run) -> str:
+    """Return a run's layout, with its scheduling when it was not the default."""
+    priority = run.get('priority', 0)
+    return run['layout'] + (f', SCHED_FIFO {priority}' if priority else '')
+
+
 def _save(fig, out_dir, name) -> str:
     os.makedirs(os.path.join(out_dir, 'img'), exist_ok=True)
     path = os.path.join('img', name)
@@ -109,16 +115,16 @@ def plot_scaling(scale, out_dir) -> str:
 
 
 def plot_e2e(e2e, out_dir) -> str:
-    """Plot the end-to-end latency percentiles per rate."""
-    fig, ax = plt.subplots(figsize=(6, 4))
-    rates = [r['rate_hz'] for r in e2e]
-    x = np.arange(len(rates))
-    for k, (key, label) in enumerate((('latency_p50_ms', 'p50'), ('latency_p99_ms', 'p99'))):
-        ax.bar(x + 0.35 * k, [r[key] or 0 for r in e2e], 0.35, label=label)
-    ax.axhline(2.0, color='r', ls=':', label='target p99 at 2 kHz')
-    ax.set_xticks(x + 0.17, [f'{r:g} Hz' for r in rates])
+    """Plot the latency percentiles of every layout at every rate."""
+    fig, ax = plt.subplots(figsize=(7, 4))
+    labels = [f'{label(r)}\n{r["rate_hz"] / 1000:g} kHz'.replace(', ', '\n') for r in e2e]
+    x = np.arange(len(e2e))
+    for k, key in enumerate(('p50', 'p99', 'max')):
+        ax.bar(x + 0.27 * k, [r['latency_ms'][key] or 0 for r in e2e], 0.27, label=key)
+    ax.axhline(2.0, color='r', ls=':', label='target p99 (2 ms)')
+    ax.set_xticks(x + 0.27, labels)
     ax.set_yscale('log')
-    ax.set_ylabel('device timestamp -> contact message [ms]')
+    ax.set_ylabel("scan's last byte -> contacts at subscriber [ms]")
     ax.legend()
     return _save(fig, out_dir, 'e2e_latency.png')
 
@@ -312,65 +318,75 @@ def _family_section(fam, images) -> list:
     return out
 
 
+def _ms(d) -> str:
+    return ' / '.join(_f(d[k], '.2f') for k in ('p50', 'p99', 'max'))
+
+
 def _e2e_section(res, images) -> list:
     e = res['e2e']
-    out = ['## 3. End to end through ROS', '',
-           'Separate processes: `python -m skin_driver.sim --link ... --rate R --scene '
-           'bench.yaml --loop` -> `python -m skin_driver.driver_node --ros-args -p '
-           'publish_images:=false` -> `python -m skin_driver.direction_node --ros-args -p '
-           'viz_rate:=0.0` (default estimator) -> a subscriber in the bench process (sensor-data '
-           'QoS). The scene keeps a tilted 10 N press on the skin ~90 % of the time. Latency: '
-           "arrival of the contacts message minus the wall-clock instant of the scan's device "
-           'timestamp (`SKIN_EPOCH` printed by the simulator + device_time_us); split at the '
-           "driver's header stamp (host time when it read the scan). Dropped: scans of the "
-           'window without a contacts message at the subscriber; of these, scans the subscriber '
-           'never saw on `frame` (sequence gaps: lost in the simulator, the driver or the '
-           'subscriber\'s own queue) and scans it saw whose contacts never arrived; "sim" is '
-           'what the simulator counted as dropped over the whole run, '
-           f'warm-up included. {e["seconds"]} s measured per rate after {e["warmup_s"]} s '
-           'of warm-up. CPU: % of one core from /proc/<pid>/stat over the measured window. '
-           'Nodes are not pinned (they must share the 2 cores).', '',
+    out = ['## 3. End to end through ROS: split against fused', '',
+           'Two layouts, measured one after the other in the same run (at each rate they take '
+           'turns, in alternating order), on the same simulated skin, scene and parameters:', '',
+           '- **split**: `python -m skin_driver.driver_node` (serial reader thread publishes '
+           '`frame`) -> `python -m skin_driver.direction_node` (subscribes to `frame`, estimates '
+           'in its executor, publishes `contacts`, `contact`, `wrench`);',
+           '- **fused**: `python -m skin_driver.driver_node --ros-args -p fused:=true` (the '
+           'reader thread decodes each scan, estimates it and publishes `contacts`, `contact` '
+           'and `wrench`, then `frame` if anyone subscribes; the skin_direction node in the '
+           'same process serves parameters, `~/tare`, `~/calibrate` and diagnostics from the '
+           'executor).', '',
+           'Both with `publish_images:=false` and `viz_rate:=0.0`. Simulated skin: `python -m '
+           'skin_driver.sim --rate R --loop` on a pseudo-terminal (a tilted 10 N press on the '
+           "skin ~90 % of the time; above 500 Hz it writes every 2 ms, as a USB board's "
+           'packets would come). Subscriber: `skin_driver.probe.Probe` in the bench process, '
+           'on `contacts` only, sensor-data QoS (best effort, depth 5), as a controller would '
+           "subscribe. Each contacts message carries its scan's sequence number and device "
+           f'time. Per run: {e["warmup_s"]:g} s warm-up, then {e["seconds"]:g} s measured.', '',
+           '- **lost**: scans of the measured window (by device time) with no contacts message '
+           "at the subscriber, wherever they were lost (the simulator's pty, the driver, the "
+           'frame topic, the contacts topic).',
+           "- **latency**: from the scan's last byte (the header stamp: the driver's host time "
+           'when its read returned the scan) to the contacts message at the subscriber. The '
+           "board's own part, from the scan's device time to its last byte at the driver, "
+           "is shown apart (it holds the simulator's 2 ms write batching).",
+           '- **CPU per scan**: CPU seconds of each process over the measured window '
+           '(/proc/<pid>/stat, user + system) divided by the scans that process handled in it '
+           '(the simulator: sent; the driver: decoded; the direction node: estimated; the '
+           "probe: received), so that lost scans do not flatter it. The probe's own is shown "
+           'for completeness.', '',
+           f'Load average before the runs {e.get("load_before")}, after {e["load"]} '
+           f'({e["cores"]} cores, shared with other jobs).', '',
            f'![latency]({images["e2e"]})', '']
     rows = []
     for r in e['runs']:
-        cpu = r['cpu_percent']
-        rows.append((f'{r["rate_hz"]:g}', _f(r['received_rate_hz']),
-                     f'{r["dropped_scans"]} ({r["frame_sequence_gaps"]} / '
-                     f'{r["lost_after_driver"]}; sim {r["sim_frames_dropped"]})',
-                     f'{_f(r["latency_p50_ms"], ".2f")} / {_f(r["latency_p99_ms"], ".2f")}',
-                     f'{_f(r["device_to_driver_p50_ms"], ".2f")} / '
-                     f'{_f(r["device_to_driver_p99_ms"], ".2f")}',
-                     f'{_f(r["driver_to_contact_p50_ms"], ".2f")} / '
-                     f'{_f(r["driver_to_contact_p99_ms"], ".2f")}',
-                     ' / '.join(_f(cpu[k], '.0f')
-                                for k in ('sim', 'driver', 'direction', 'probe'))))
-    out += _table(['rate [Hz]', 'received [Hz]', 'dropped (seq gaps / lost after driver; sim)',
-                   'latency p50 / p99 [ms]', 'device -> driver p50 / p99',
-                   'driver -> contacts p50 / p99', 'CPU % sim / driver / direction / probe'],
-                  rows)
-    out += ['', "Where the scans went, from the nodes' own counters on /diagnostics over the "
-            'same window (driver: frames decoded and sequence gaps it saw, i.e. frames the '
-            'simulator dropped; direction node: scans processed and its mean estimator cost in '
-            'the last second, as loaded):', '']
-    rows = []
-    for r in e['runs']:
-        d = r.get('node_counters', {}).get('driver', {})
-        n = r.get('node_counters', {}).get('direction', {})
-        rows.append((f'{r["rate_hz"]:g}', _f(d.get('rate_hz')), _f(d.get('sequence gaps'), '.0f'),
-                     _f(n.get('rate_hz')), _f(n.get('mean_cost_us_last_period')),
-                     _f(n.get('max_cost_us_last_period')), _f(r['received_rate_hz'])))
-    out += _table(['rate [Hz]', 'driver decoded [Hz]', 'driver seq gaps',
-                   'direction processed [Hz]', 'direction mean cost [us]',
-                   'direction max cost [us]', 'contacts at subscriber [Hz]'], rows)
-    out += ['', 'Per-scan cost of each stage at 16 x 16, measured in the bench process '
-            '(one core, no contention from the chain):', '']
+        cpu = r['cpu_us_per_scan']
+        rows.append((label(r), f'{r["rate_hz"]:g}', r['expected_scans'],
+                     r['received'], r['lost'], _ms(r['latency_ms']),
+                     _ms(r['board_to_driver_ms']), _ms(r['latency_from_device_time_ms']),
+                     ' / '.join(f'{k} {v:.0f}' for k, v in cpu.items())))
+    out += _table(['layout', 'rate [Hz]', 'scans sent', 'contacts received', 'lost',
+                   'last byte -> subscriber p50 / p99 / max [ms]',
+                   'device time -> last byte [ms]', 'device time -> subscriber [ms]',
+                   'CPU per scan [us]'], rows)
+    out += ['', "The nodes' own counters over the same window (/diagnostics):", '']
+    out += _table(['layout', 'rate [Hz]', 'driver decoded [Hz]', 'driver sequence gaps',
+                   'estimated [Hz]', 'estimator mean cost, last period [us]',
+                   'simulator: frames it could not write (whole run)'],
+                  [(label(r), f'{r["rate_hz"]:g}', _f(r['driver_decoded_hz']),
+                    _f(r['driver_sequence_gaps'], '.0f'), _f(r['estimated_hz']),
+                    _f(r['estimator_mean_us']), _f(r['sim_frames_dropped'], '.0f'))
+                   for r in e['runs']])
+    out += ['', 'Per-scan cost of each stage at 16 x 16 with one press, measured in the bench '
+            'process (least mean of five rounds of repeats: the machine is shared):', '']
     out += _table(['stage', 'us per scan'], [(k, _f(v)) for k, v in e['stage_costs_us'].items()])
     out += ['']
     if e.get('why'):
-        out += ['### Why the 2 kHz target is missed', ''] + [f'- {w}' for w in e['why']] + ['']
+        out += ['### Where the time goes', ''] + [f'- {w}' for w in e['why']] + ['']
+    if e.get('tradeoffs'):
+        out += ['### Which layout when', ''] + [f'- {w}' for w in e['tradeoffs']] + ['']
     for name, rows in e.get('profiles', {}).items():
-        out += [f'cProfile of the {name} node (separate profiled run at 2 kHz, whole process '
-                'including start-up; own time; cProfile slows it, so compare shares only):', '']
+        out += [f'cProfile of the {name} (separate profiled run, whole process including '
+                'start-up; own time; cProfile slows it, so compare shares only):', '']
         out += _table(['function', 'calls', 'own s', 'share'],
                       [(r['function'], r['calls'], _f(r['own_s'], '.2f'),
                         _f(100 * r['own_share']) + ' %') for r in rows])

@@ -76,31 +76,76 @@ def _finite(value: float, name: str) -> float:
     return value
 
 
-def contact_to_msg(header: Header, contact) -> TactileContact:
-    """Convert a core Contact (:mod:`skin_driver.core.estimation.pipeline`) into a message."""
+def contact_to_msg(header: Header, contact, out: TactileContact = None) -> TactileContact:
+    """
+    Convert a core Contact (:mod:`skin_driver.core.estimation.pipeline`) into a message.
+
+    With ``out`` the message is filled in place and returned: publish() serialises at once, so
+    one message can carry scan after scan. A refused contact leaves ``out`` as it was.
+    Fields a contact never sets (location.z, shift.z) stay 0; the torque is r x F about the
+    frame origin.
+    """
     fx, fy, fz = (_finite(v, 'force') for v in contact.force_xyz_n)
     sx, sy = (_finite(v, 'shift') for v in contact.shift_m)
+    x, y = _finite(contact.x_m, 'x'), _finite(contact.y_m, 'y')
+    magnitude = _finite(contact.force_n, 'magnitude')
+    area = _finite(contact.area_m2, 'area')
+    confidence = min(1.0, max(0.0, _finite(contact.confidence, 'confidence')))
     direction_valid = bool(contact.direction_valid)
-    return TactileContact(
-        header=header,
-        location=Point(x=_finite(contact.x_m, 'x'), y=_finite(contact.y_m, 'y'), z=0.0),
-        magnitude=_finite(contact.force_n, 'magnitude'),
-        azimuth=_finite(contact.azimuth_rad, 'azimuth') if direction_valid else 0.0,
-        azimuth_sigma=_finite(contact.azimuth_sigma_rad, 'azimuth_sigma') if direction_valid
-        else math.pi,
-        polar=_finite(contact.alpha_rad, 'polar') if direction_valid else 0.0,
-        shift=Vector3(x=sx, y=sy, z=0.0),
-        wrench=_wrench_at((fx, fy, fz), contact.x_m, contact.y_m),
-        area=_finite(contact.area_m2, 'area'),
-        confidence=min(1.0, max(0.0, _finite(contact.confidence, 'confidence'))),
-        direction_valid=direction_valid,
-    )
+    if direction_valid:
+        azimuth = _finite(contact.azimuth_rad, 'azimuth')
+        sigma = _finite(contact.azimuth_sigma_rad, 'azimuth_sigma')
+        polar = _finite(contact.alpha_rad, 'polar')
+    else:
+        azimuth, sigma, polar = 0.0, math.pi, 0.0
+    msg = TactileContact() if out is None else out
+    msg.header = header
+    msg.location.x, msg.location.y = x, y
+    msg.magnitude = magnitude
+    msg.azimuth, msg.azimuth_sigma, msg.polar = azimuth, sigma, polar
+    msg.shift.x, msg.shift.y = sx, sy
+    force = msg.wrench.force
+    force.x, force.y, force.z = fx, fy, fz
+    # A wrench's torque is about its frame's origin: r x F with r = (x, y, 0).
+    torque = msg.wrench.torque
+    torque.x, torque.y, torque.z = y * fz, -x * fz, x * fy - y * fx
+    msg.area = area
+    msg.confidence = confidence
+    msg.direction_valid = direction_valid
+    return msg
 
 
-def contacts_to_array(header: Header, contacts: Iterable) -> TactileContactArray:
-    """Convert core contacts (strongest first) into a TactileContactArray."""
-    return TactileContactArray(header=header,
-                               contacts=[contact_to_msg(header, c) for c in contacts])
+class ContactArrayWriter:
+    """
+    Fill one TactileContactArray (and its contacts) scan after scan instead of building anew.
+
+    For a publisher's hot path: publish() serialises the message at once, so the next scan may
+    overwrite it. Building the messages afresh costs about three times as much in rclpy.
+    """
+
+    def __init__(self):
+        self.array = TactileContactArray()
+        self._pool = []
+
+    def fill(self, header: Header, contacts: Sequence, sequence: int = 0,
+             device_time_us: int = 0) -> TactileContactArray:
+        """Return the array holding these contacts (strongest first) of one scan."""
+        pool = self._pool
+        while len(pool) < len(contacts):
+            pool.append(TactileContact())
+        filled = [contact_to_msg(header, c, pool[i]) for i, c in enumerate(contacts)]
+        array = self.array
+        array.header = header
+        array.sequence = sequence & 0xFFFFFFFF
+        array.device_time_us = int(device_time_us)
+        array.contacts = filled
+        return array
+
+
+def contacts_to_array(header: Header, contacts: Sequence, sequence: int = 0,
+                      device_time_us: int = 0) -> TactileContactArray:
+    """Convert core contacts (strongest first) of one scan into a new TactileContactArray."""
+    return ContactArrayWriter().fill(header, contacts, sequence, device_time_us)
 
 
 def _wrench_at(force_xyz_n: Sequence[float], x_m: float, y_m: float) -> Wrench:

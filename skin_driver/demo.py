@@ -23,7 +23,6 @@ import numpy as np
 import rclpy
 from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.node import Node
-from rclpy.qos import qos_profile_sensor_data
 from skin_driver import conversions
 from skin_driver.core.estimation.calibration import Calibration
 from skin_driver.core.estimation.heatmap import text_map
@@ -31,6 +30,7 @@ from skin_driver.core.estimation.pipeline import ContactEstimator, EstimatorConf
 from skin_driver.core.estimation.shift import DEFAULT_METHOD
 from skin_driver.core.sim.scene import scene_from_dict
 from skin_driver.evaluate import format_table, summarise
+from skin_driver.probe import Probe
 from skin_driver.processes import spawn, stop
 from skin_msgs.msg import SkinFrame, TactileContactArray
 from skin_msgs.srv import Calibrate, CalibrateCompliance, CalibrateForce
@@ -101,15 +101,15 @@ def demo_scene(repeats: int, pace: float = 1.0) -> dict:
     }
 
 
-class DemoMonitor(Node):
-    """Watch frames and contacts, drive the services and keep the ground-truth comparison."""
+class DemoMonitor:
+    """Watch frames and contacts through a Probe, drive the services, compare with the truth."""
 
-    def __init__(self, scene, namespace: str, method: str, live: bool):
-        super().__init__('skin_demo', namespace=namespace)
+    def __init__(self, node, scene, method: str, live: bool):
+        self.node = node
         self.scene = scene
         self.live = live
         self.method = method
-        self.device_time = {}
+        self.device_time_us = 0
         self.last_frame = None
         self.last_contacts = []
         self.last_truth = []
@@ -123,21 +123,14 @@ class DemoMonitor(Node):
         # (true |F|, estimated |F|, true alpha, estimated alpha) of the node's contacts.
         self.forces = []
         self.status = 'waiting for the skin'
-        self.create_subscription(SkinFrame, 'frame', self._on_frame, qos_profile_sensor_data)
-        self.create_subscription(TactileContactArray, 'contacts', self._on_contacts,
-                                 qos_profile_sensor_data)
-        self.tare = self.create_client(Trigger, 'skin_direction/tare')
-        self.calibrate = self.create_client(Calibrate, 'skin_direction/calibrate')
-        self.calibrate_force = self.create_client(CalibrateForce,
+        self.probe = Probe(node, on_frame=self._on_frame, on_contacts=self._on_contacts)
+        self.tare = node.create_client(Trigger, 'skin_direction/tare')
+        self.calibrate = node.create_client(Calibrate, 'skin_direction/calibrate')
+        self.calibrate_force = node.create_client(CalibrateForce,
                                                   'skin_direction/calibrate_force')
-        self.calibrate_compliance = self.create_client(CalibrateCompliance,
+        self.calibrate_compliance = node.create_client(CalibrateCompliance,
                                                        'skin_direction/calibrate_compliance')
         self._last_draw = 0.0
-
-    def scene_time(self, stamp) -> float:
-        """Return the scene time of the scan with this header stamp, or NaN if unknown."""
-        us = self.device_time.get((stamp.sec, stamp.nanosec))
-        return math.nan if us is None else us * 1e-6
 
     def truth(self, t: float):
         """Return the press at full force at scene time t, or None."""
@@ -149,10 +142,7 @@ class DemoMonitor(Node):
 
     def _on_frame(self, msg: SkinFrame) -> None:
         self.frames += 1
-        key = (msg.header.stamp.sec, msg.header.stamp.nanosec)
-        self.device_time[key] = msg.device_time_us
-        if len(self.device_time) > 2000:
-            self.device_time.pop(next(iter(self.device_time)))
+        self.device_time_us = max(self.device_time_us, msg.device_time_us)
         top, bottom = conversions.skin_frame_layers(msg)
         self.last_frame = (top, bottom)
         self.last_truth = self.scene.active_at(msg.device_time_us * 1e-6)
@@ -166,7 +156,7 @@ class DemoMonitor(Node):
         self.estimates += 1
         self.last_contacts = msg.contacts
         if self.calibrated:
-            spec = self.truth(self.scene_time(msg.header.stamp))
+            spec = self.truth(msg.device_time_us * 1e-6)
             if spec is not None and spec.alpha_deg > 0:
                 contact = msg.contacts[0] if msg.contacts else None
                 self._record(self.method, spec, contact)
@@ -184,7 +174,7 @@ class DemoMonitor(Node):
 
     def now(self) -> float:
         """Return the scene time of the newest scan seen (s), or 0."""
-        return max(self.device_time.values()) * 1e-6 if self.device_time else 0.0
+        return self.device_time_us * 1e-6
 
     def set_calibration(self, path: str) -> None:
         """Give the side-by-side seed estimator the calibration the node wrote."""
@@ -303,18 +293,24 @@ def run(args, workdir: str) -> int:
     ns = '/skin_demo'
     log = open(os.path.join(workdir, 'nodes.log'), 'w')
     ros = ['--ros-args', '-r', f'__ns:={ns}', '--log-level', 'warn']
-    procs = [
-        spawn(['-m', 'skin_driver.direction_node'] + ros + [
-            '-p', f'method:={args.method}',
-            '-p', f'calibration_file:={os.path.join(workdir, "calibration.yaml")}'], log),
-        spawn(['-m', 'skin_driver.driver_node'] + ros + [
-            '-p', f'port:={port}', '-p', 'reconnect_max:=0.2', '-p', 'publish_images:=false'],
-            log),
-    ]
+    params = os.path.join(workdir, 'params.yaml')
+    with open(params, 'w') as f:
+        yaml.safe_dump({
+            '/**/skin_driver': {'ros__parameters': {
+                'port': port, 'reconnect_max': 0.2, 'publish_images': False,
+                'fused': args.fused}},
+            '/**/skin_direction': {'ros__parameters': {
+                'method': args.method,
+                'calibration_file': os.path.join(workdir, 'calibration.yaml')}}}, f)
+    ros += ['--params-file', params]
+    procs = [spawn(['-m', 'skin_driver.driver_node'] + ros, log)]
+    if not args.fused:
+        procs.append(spawn(['-m', 'skin_driver.direction_node'] + ros, log))
     rclpy.init()
     executor = SingleThreadedExecutor()
-    monitor = DemoMonitor(scene, ns, args.method, live=args.live)
-    executor.add_node(monitor)
+    node = Node('skin_demo', namespace=ns)
+    monitor = DemoMonitor(node, scene, args.method, live=args.live)
+    executor.add_node(node)
     try:
         _wait(executor, lambda: monitor.tare.service_is_ready(), 20.0, 'the direction node')
         procs.append(spawn(['-m', 'skin_driver.sim', '--scene', scene_path, '--link', port,
@@ -327,19 +323,20 @@ def run(args, workdir: str) -> int:
             raise RuntimeError(f'tare refused: {result.message}')
         calibrate(executor, monitor, scene_dict, args.pace,
                   os.path.join(workdir, 'calibration.yaml'))
-        _wait(executor, lambda: (monitor.device_time and max(monitor.device_time.values()) * 1e-6
-                                 > scene.duration_s + 0.3), scene.duration_s + 30.0, 'the scene')
+        _wait(executor, lambda: monitor.device_time_us * 1e-6 > scene.duration_s + 0.3,
+              scene.duration_s + 30.0, 'the scene')
         monitor.draw(force=True)
     finally:
         executor.shutdown()
-        monitor.destroy_node()
+        node.destroy_node()
         rclpy.try_shutdown()
         stop(procs)
         log.close()
     report = {'methods': {name: summarise([r[0] for r in rows], [r[1] for r in rows])
                           for name, rows in monitor.results.items()}}
+    where = 'the fused driver' if args.fused else 'the direction node'
     print(f'\nTable 1: azimuth error at alpha = 45 deg, every scan at full force, '
-          f'{args.repeats} rounds at {args.rate:g} Hz; {args.method} ran in the direction node, '
+          f'{args.repeats} rounds at {args.rate:g} Hz; {args.method} ran in {where}, '
           "seed (the paper's plain phase correlation) on the same scans\n")
     print(format_table(report))
     if monitor.forces:
@@ -359,6 +356,8 @@ def main(argv=None) -> int:
     parser.add_argument('--rate', type=float, default=100.0, help='scans per second of the skin')
     parser.add_argument('--pace', type=float, default=1.0,
                         help='time scale of the presses (0.5: twice as fast), 0.3 to 3')
+    parser.add_argument('--fused', action='store_true',
+                        help='estimate in the driver process (fused) instead of a direction node')
     parser.add_argument('--plain', dest='live', action='store_false',
                         help='print status lines instead of redrawing the terminal')
     parser.set_defaults(live=sys.stdout.isatty())

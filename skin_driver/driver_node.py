@@ -18,6 +18,11 @@ configure reads are refused with the reason while the driver is configured (deac
 set, configure, activate), never accepted and silently ignored. A link lost while the node shuts
 down (Ctrl-C stops the simulated board too) is not reported as a fault.
 
+Fused (parameter fused, read at start-up): the process also runs the skin_direction node (same
+parameters, services, topics and diagnostics as the separate direction node) and estimates every
+scan on the serial reader thread right after decoding it, before the frame is published: no
+executor and no SkinFrame round trip between the last byte and the contacts.
+
 Each message is stamped with the host time at which its last byte was read. The board's own clock
 travels in SkinFrame.device_time_us: it is not synchronised with the host, but its differences are
 exact, so consumers use it for the interval between scans and for latency measurements.
@@ -28,12 +33,13 @@ import time
 
 from rcl_interfaces.msg import SetParametersResult
 import rclpy
-from rclpy.executors import ExternalShutdownException
+from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.lifecycle import Node, State, TransitionCallbackReturn
 from rclpy.qos import qos_profile_sensor_data
 from sensor_msgs.msg import Image
 from skin_driver import conversions, diagnostics
 from skin_driver.core.protocol import FrameDecoder
+from skin_driver.direction_node import DirectionNode
 from skin_driver.params import declare, ParameterError
 from skin_driver.serial_link import CONNECTED, DISCONNECTED, SerialLink, STALLED, STOPPED
 from skin_msgs.msg import SkinFrame
@@ -66,6 +72,7 @@ class SkinDriverNode(Node):
         # Diagnostics live as long as the node: a stopped driver still says what it is doing.
         self._diag = diagnostics.DiagnosticPublisher(self)
         self._diag_timer = self.create_timer(self._p('diagnostics_period'), self._report)
+        self.estimation = None  # an EstimationHost fed on the reader thread when fused
         self.add_on_set_parameters_callback(self._check_new_parameters)
 
     def _declare_parameters(self) -> None:
@@ -98,6 +105,10 @@ class SkinDriverNode(Node):
                 'reappears is reopened at once).', low=0.01, high=60.0)
         declare(self, 'diagnostics_period', 1.0, 'Seconds between two /diagnostics reports.',
                 low=0.1, high=60.0)
+        self.fused = declare(
+            self, 'fused', False,
+            'Estimate contacts on the serial reader thread of this process (a skin_direction '
+            'node inside the driver) instead of in a separate direction node.', read_only=True)
 
     def _p(self, name):
         return self.get_parameter(name).value
@@ -195,8 +206,15 @@ class SkinDriverNode(Node):
         stamp = self.get_clock().now().to_msg()
         header = conversions.make_header(stamp, self._frame_id)
         for frame in frames:
-            self._pubs['frame'].publish(conversions.skin_frame_to_msg(
-                header, frame.seq, frame.device_time_us, self._pitch, frame.top, frame.bottom))
+            if self.estimation is not None:
+                # Contacts first: they are what a controller waits for.
+                self.estimation.process(header, frame.seq, frame.device_time_us, self._pitch,
+                                        frame.top, frame.bottom)
+            # Nobody listening (fused, nothing recording): no message to build and serialise.
+            if self._pubs['frame'].get_subscription_count():
+                self._pubs['frame'].publish(conversions.skin_frame_to_msg(
+                    header, frame.seq, frame.device_time_us, self._pitch, frame.top,
+                    frame.bottom))
             if 'top' in self._pubs:
                 self._pubs['top'].publish(conversions.counts_to_image(header, frame.top))
                 self._pubs['bottom'].publish(conversions.counts_to_image(header, frame.bottom))
@@ -287,21 +305,36 @@ def main(args=None):
     rclpy.init(args=args)
     try:
         node = SkinDriverNode()
+        # launch_ros names a node with a process-wide rule (-r __node:=skin_driver); a rule of
+        # the node's own takes precedence and keeps this one skin_direction.
+        direction = DirectionNode(subscribe=False, cli_args=[
+            '--ros-args', '-r', '__node:=skin_direction']) if node.fused else None
     except ParameterError as err:
         rclpy.logging.get_logger('skin_driver').fatal(str(err))
         rclpy.try_shutdown()
         raise SystemExit(1)
+    executor = SingleThreadedExecutor()
+    executor.add_node(node)
+    if direction is not None:
+        node.estimation = direction.host
+        executor.add_node(direction)
     try:
         if node.autostart:
             if node.trigger_configure() != TransitionCallbackReturn.SUCCESS:
                 raise SystemExit(1)
             node.trigger_activate()
-        rclpy.spin(node)
+        executor.spin()
     except (KeyboardInterrupt, ExternalShutdownException):
         pass
+    except Exception:  # noqa: B902 - judged by the context, re-raised unless shutting down
+        # As in the direction node: a publish failing under Ctrl-C is the shutdown.
+        if node.context.ok():
+            raise
     finally:
         node.close()
         node.destroy_node()
+        if direction is not None:
+            direction.destroy_node()
         rclpy.try_shutdown()
 
 

@@ -23,10 +23,12 @@ def _die_with_parent() -> None:
         ctypes.CDLL(None, use_errno=True).prctl(PR_SET_PDEATHSIG, signal.SIGTERM)
 
 
-def spawn(argv: List[str], log, profile_to: Optional[str] = None,
+def spawn(argv: List[str], log, profile_to: Optional[str] = None, prefix: Iterable[str] = (),
           **popen) -> subprocess.Popen:
-    """Run `python argv...` (optionally under cProfile writing profile_to), output to log."""
-    head = [sys.executable] + (['-m', 'cProfile', '-o', profile_to] if profile_to else [])
+    """Run `[prefix...] python argv...` (optionally under cProfile), output to log."""
+    head = list(prefix) + [sys.executable]
+    if profile_to:
+        head += ['-m', 'cProfile', '-o', profile_to]
     popen.setdefault('stdout', log)
     popen.setdefault('stderr', subprocess.STDOUT)
     return subprocess.Popen(head + argv, start_new_session=True, preexec_fn=_die_with_parent,

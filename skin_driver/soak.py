@@ -33,15 +33,15 @@ import sys
 import tempfile
 import time
 
-from diagnostic_msgs.msg import DiagnosticArray
 import numpy as np
 import rclpy
 from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.node import Node
-from rclpy.qos import HistoryPolicy, QoSProfile, ReliabilityPolicy
+from skin_driver.probe import Probe, values
 from skin_driver.processes import spawn, stop
 from skin_driver.sim import SimulatedSkin
-from skin_msgs.msg import SkinFrame, TactileContactArray
+from skin_msgs.msg import SkinFrame
+import yaml
 
 FAULT_PERIOD_S = 4.0      # one fault starts every this many seconds
 MEMORY_PERIOD_S = 2.0     # resident memory sampled this often
@@ -73,29 +73,28 @@ def drift_mb_per_hour(samples) -> float:
     return float(slope * 3600.0)
 
 
-class SoakMonitor(Node):
-    """Count and check what the pipeline publishes."""
+class SoakMonitor:
+    """Count and check what the pipeline publishes, through a Probe on node."""
 
-    def __init__(self, namespace: str, sim: SimulatedSkin):
-        super().__init__('skin_soak', namespace=namespace)
+    def __init__(self, node, sim: SimulatedSkin):
         self.sim = sim
         self.received = 0
         self.first_seq = None
         self.seqs_after_mark = []
         self.mismatched = 0
         self.unknown = 0
-        self.contacts = 0
         self.last_frame_s = 0.0
         self.link = None
         self.levels = collections.Counter()
         self.seen = collections.Counter()
         self.diag_count = 0
-        deep = QoSProfile(depth=5000, history=HistoryPolicy.KEEP_LAST,
-                          reliability=ReliabilityPolicy.BEST_EFFORT)
-        self.create_subscription(SkinFrame, 'frame', self._on_frame, deep)
-        self.create_subscription(TactileContactArray, 'contacts', self._on_contacts, deep)
-        self.create_subscription(DiagnosticArray, '/diagnostics', self._on_diag, 50)
-        self._prefix = namespace.rstrip('/') + '/'
+        self._prefix = node.get_namespace().rstrip('/') + '/'
+        self.probe = Probe(node, depth=5000, on_frame=self._on_frame, on_status=self._on_status)
+
+    @property
+    def contacts(self) -> int:
+        """Return the number of contacts messages received."""
+        return len(self.probe.record.sequence)
 
     def _on_frame(self, msg: SkinFrame) -> None:
         self.received += 1
@@ -115,22 +114,18 @@ class SoakMonitor(Node):
                 or not np.array_equal(bottom, truth.bottom.ravel())):
             self.mismatched += 1
 
-    def _on_contacts(self, msg: TactileContactArray) -> None:
-        self.contacts += 1
-
-    def _on_diag(self, msg: DiagnosticArray) -> None:
-        for status in msg.status:
-            if not status.name.startswith(self._prefix) or not status.name.endswith('skin link'):
-                continue
-            self.diag_count += 1
-            self.link = {kv.key: kv.value for kv in status.values}
-            self.link['level'] = int.from_bytes(status.level, 'little') \
-                if isinstance(status.level, bytes) else int(status.level)
-            self.link['message'] = status.message
-            self.levels[self.link['level']] += 1
-            for word in ('stalled', 'disconnected', 'corrupt', 'dropped', 'wrong grid'):
-                if word in status.message:
-                    self.seen[word] += 1
+    def _on_status(self, status) -> None:
+        if not status.name.startswith(self._prefix) or not status.name.endswith('skin link'):
+            return
+        self.diag_count += 1
+        self.link = values(status)
+        self.link['level'] = int.from_bytes(status.level, 'little') \
+            if isinstance(status.level, bytes) else int(status.level)
+        self.link['message'] = status.message
+        self.levels[self.link['level']] += 1
+        for word in ('stalled', 'disconnected', 'corrupt', 'dropped', 'wrong grid'):
+            if word in status.message:
+                self.seen[word] += 1
 
 
 class FaultCycle:
@@ -189,18 +184,23 @@ def run(args, workdir: str) -> dict:
     port = os.path.join(workdir, 'skin0')
     ns = f'/skin_soak_{os.getpid()}'
     log = open(os.path.join(workdir, 'nodes.log'), 'w')
-    ros = ['--ros-args', '-r', f'__ns:={ns}', '--log-level', 'error']
-    procs = {
-        'direction': spawn(['-m', 'skin_driver.direction_node'] + ros + [
-            '-p', f'calibration_file:={os.path.join(workdir, "calibration.yaml")}'], log),
-        'driver': spawn(['-m', 'skin_driver.driver_node'] + ros + ['-p', f'port:={port}'], log),
-    }
+    params = os.path.join(workdir, 'params.yaml')
+    with open(params, 'w') as f:
+        yaml.safe_dump({
+            '/**/skin_driver': {'ros__parameters': {'port': port, 'fused': args.fused}},
+            '/**/skin_direction': {'ros__parameters': {
+                'calibration_file': os.path.join(workdir, 'calibration.yaml')}}}, f)
+    ros = ['--ros-args', '-r', f'__ns:={ns}', '--log-level', 'error', '--params-file', params]
+    procs = {'driver': spawn(['-m', 'skin_driver.driver_node'] + ros, log)}
+    if not args.fused:
+        procs['direction'] = spawn(['-m', 'skin_driver.direction_node'] + ros, log)
     sim = SimulatedSkin(args.scene, rate_hz=args.rate, link_path=port, seed=args.seed, loop=True,
                         truth_capacity=max(10_000, int(args.rate * 20)))
     rclpy.init()
     executor = SingleThreadedExecutor()
-    monitor = SoakMonitor(ns, sim)
-    executor.add_node(monitor)
+    node = Node('skin_soak', namespace=ns)
+    monitor = SoakMonitor(node, sim)
+    executor.add_node(node)
     memory = {name: [] for name in procs}
     faults = FaultCycle(sim, args.seed)
     try:
@@ -244,7 +244,7 @@ def run(args, workdir: str) -> dict:
         return summarise(args, sim, monitor, faults, memory, alive)
     finally:
         executor.shutdown()
-        monitor.destroy_node()
+        node.destroy_node()
         rclpy.try_shutdown()
         stop(procs.values())
         sim.stop()
@@ -262,6 +262,7 @@ def summarise(args, sim, monitor, faults, memory, alive) -> dict:
     lost_on_line = sim.frames_damaged + sim.frames_wrong_shape + sim.frames_unread + discarded
     report = {
         'duration_s': args.duration, 'rate_hz': args.rate, 'scene': args.scene,
+        'layout': 'fused' if args.fused else 'split',
         'faults_injected': dict(faults.injected),
         'reconnect_s_max': max(faults.reconnect_s, default=float('nan')),
         'device': {'sequence_numbers_used': used, 'frames_sent': sim.frames_sent,
@@ -311,6 +312,8 @@ def main(argv=None) -> int:
     parser.add_argument('--duration', type=float, default=300.0, help='seconds (300)')
     parser.add_argument('--rate', type=float, default=1000.0, help='scans per second (1000)')
     parser.add_argument('--scene', default='random', help='bundled scene or YAML (random)')
+    parser.add_argument('--fused', action='store_true',
+                        help='estimate in the driver process (fused) instead of a direction node')
     parser.add_argument('--seed', type=int, default=0, help='seed of the faults and the noise')
     parser.add_argument('--json', default=os.path.join('log', 'soak.json'),
                         help='where to write the summary (log/soak.json)')

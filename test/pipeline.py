@@ -1,18 +1,15 @@
 """A whole pipeline in one test process: simulated skin on a pty, driver, direction node, probe."""
 
-import collections
 import contextlib
 
-from diagnostic_msgs.msg import DiagnosticArray
 import rclpy
 from rclpy.parameter import Parameter
-from rclpy.qos import qos_profile_sensor_data
 from rosutil import ros_context, spin_until
 from skin_driver.core.sim.scene import scene_from_dict
 from skin_driver.direction_node import DirectionNode
 from skin_driver.driver_node import SkinDriverNode
+from skin_driver.probe import Probe
 from skin_driver.sim import SimulatedSkin
-from skin_msgs.msg import SkinFrame, TactileContactArray
 
 
 def scene(presses, rows=16, cols=16, **model):
@@ -31,41 +28,15 @@ def overrides(values):
     return [Parameter(name, value=value) for name, value in values.items()]
 
 
-class Probe:
-    """Subscriptions that collect what the pipeline publishes."""
-
-    def __init__(self, node):
-        self.frames = []
-        self.contacts = []
-        self.diagnostics = collections.deque(maxlen=200)
-        node.create_subscription(SkinFrame, 'frame', self.frames.append, qos_profile_sensor_data)
-        node.create_subscription(TactileContactArray, 'contacts', self.contacts.append,
-                                 qos_profile_sensor_data)
-        node.create_subscription(DiagnosticArray, '/diagnostics',
-                                 lambda msg: self.diagnostics.append(msg), 10)
-
-    def link_status(self):
-        """Return the newest skin-link DiagnosticStatus, or None."""
-        for msg in reversed(self.diagnostics):
-            for status in msg.status:
-                if status.name.endswith('skin link'):
-                    return status
-        return None
-
-    def link_statuses(self):
-        """Return every skin-link DiagnosticStatus still kept, oldest first."""
-        return [status for msg in self.diagnostics for status in msg.status
-                if status.name.endswith('skin link')]
-
-    def saw_link_status(self, predicate):
-        """Return whether a kept skin-link status satisfies predicate(status, values)."""
-        return any(predicate(status, {kv.key: kv.value for kv in status.values})
-                   for status in self.link_statuses())
-
-
 @contextlib.contextmanager
-def pipeline(tmp_path, the_scene, rate_hz=200.0, driver=None, direction=None, loop=False):
-    """Yield (sim, driver node, direction node, probe, executor) wired on a fresh context."""
+def pipeline(tmp_path, the_scene, rate_hz=200.0, driver=None, direction=None, loop=False,
+             fused=False):
+    """
+    Yield (sim, driver node, direction node, probe, executor) wired on a fresh context.
+
+    fused: the direction node takes its scans from the driver's reader thread, as in the
+    driver's fused mode, instead of from the frame topic.
+    """
     link = str(tmp_path / 'skin0')
     sim = SimulatedSkin(the_scene, rate_hz=rate_hz, link_path=link, seed=1, loop=loop)
     driver_params = {'port': link, 'rows': the_scene.model.rows, 'cols': the_scene.model.cols,
@@ -74,11 +45,13 @@ def pipeline(tmp_path, the_scene, rate_hz=200.0, driver=None, direction=None, lo
     direction_params = {'calibration_file': str(tmp_path / 'calibration.yaml'),
                         'diagnostics_period': 0.2, **(direction or {})}
     with ros_context() as (context, executor):
-        direction_node = DirectionNode(context=context,
+        direction_node = DirectionNode(subscribe=not fused, context=context,
                                        parameter_overrides=overrides(direction_params))
         driver_node = SkinDriverNode(context=context, parameter_overrides=overrides(driver_params))
+        if fused:
+            driver_node.estimation = direction_node.host
         probe_node = rclpy.create_node('probe', context=context)
-        probe = Probe(probe_node)
+        probe = Probe(probe_node, keep_messages=True, frames=True)
         for node in (direction_node, driver_node, probe_node):
             executor.add_node(node)
         sim.start()

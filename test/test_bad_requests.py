@@ -115,7 +115,12 @@ def test_direction_refuses_an_unknown_method_at_run_time_and_applies_a_known_one
             (result,) = node.set_parameters([Parameter('method', value='bogus')])
             assert not result.successful and "'method' is 'bogus'" in result.reason
             (result,) = node.set_parameters([Parameter('method', value='seed')])
-            assert result.successful and node._estimator.config.method == 'seed'
+            assert result.successful
+            # The estimator is rebuilt off the executor thread; it is in force once that is done.
+            deadline = time.monotonic() + 10.0
+            while node.host.rebuilding and time.monotonic() < deadline:
+                time.sleep(0.01)
+            assert node.host.estimator.config.method == 'seed'
         finally:
             node.destroy_node()
 
@@ -179,7 +184,7 @@ def test_calibrate_with_absurdly_many_presses_fails_clearly_and_keeps_the_file(t
         assert 'previous calibration stays in force' in result.message
         # A refused request answers the calibration in force, not zeros.
         assert (result.x_p, result.y_p) == (0.0003, -0.0001)
-        assert direction._estimator.calibration == previous
+        assert direction.host.estimator.calibration == previous
     assert calib.Calibration.load_yaml(str(tmp_path / 'calibration.yaml')) == previous
 
 
@@ -191,12 +196,12 @@ def test_failed_write_of_a_new_calibration_keeps_the_previous_one(tmp_path):
     the_scene = scene(NORMAL_PRESSES, misalignment_m=[0.001, 0.0])
     with pipeline(tmp_path, the_scene, direction={'calibration_file': str(path)}) as (
             sim, _, direction, __, executor):
-        before = direction._estimator.calibration
+        before = direction.host.estimator.calibration
         result = call(executor, direction, Calibrate, '/skin_direction/calibrate',
                       Calibrate.Request(presses=2, timeout=8.0))
         assert not result.success, result.message
         assert 'previous calibration stays in force' in result.message
-        assert direction._estimator.calibration == before
+        assert direction.host.estimator.calibration == before
         assert (result.x_p, result.y_p) == (before.x_p_m, before.y_p_m)
 
 

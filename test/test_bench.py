@@ -114,15 +114,44 @@ def test_family_scores_every_skin_scene_and_method_and_names_the_worst(results):
     assert all(s > 0 and 0 <= e <= 180 for s, e, _, _ in fam['sigma_vs_error'])
 
 
-def test_scans_are_matched_to_contact_messages_by_stamp_in_order():
-    frames = [(10, 0, 0), (10, 1, 500), (20, 2, 1000)]
-    contacts = [(10, 1.0, 1), (10, 1.5, 1), (20, 2.0, 0), (30, 3.0, 0)]
-    matched = bench_ros._match(frames, contacts, 100.0, (0.0, 0.001))
-    # Two scans share stamp 10 (one read); stamp 30 has no frame, and 1000 us is out of window.
-    assert matched == [pytest.approx((100.0, 10e-9, 1.0)),
-                       pytest.approx((100.0005, 10e-9, 1.5))]
-
-
 def test_cpu_seconds_of_this_process_and_of_a_missing_one():
     assert bench_ros.cpu_seconds(os.getpid()) > 0
     assert bench_ros.cpu_seconds(2 ** 22 + 12345) == 0.0
+
+
+def _e2e_run(layout, rate, lost, p99, cpu):
+    latency = {'p50': p99 / 2, 'p99': p99, 'max': p99 * 2}
+    return {'layout': layout, 'rate_hz': rate, 'seconds': 60.0, 'expected_scans': int(60 * rate),
+            'sim_frames_sent': int(60 * rate), 'sim_frames_dropped': 0, 'received':
+            int(60 * rate) - lost, 'lost': lost, 'sequence_gaps': lost,
+            'received_rate_hz': rate, 'latency_ms': latency,
+            'latency_from_device_time_ms': latency, 'board_to_driver_ms': latency,
+            'scans_with_contact': 0.9, 'cpu_percent': {}, 'cpu_us_per_scan': cpu,
+            'driver_decoded_hz': rate, 'driver_sequence_gaps': 0, 'estimated_hz': rate,
+            'estimator_mean_us': 80.0}
+
+
+def test_end_to_end_targets_and_report_cover_both_layouts_at_each_rate(results, tmp_path):
+    e2e = {'seconds': 60.0, 'warmup_s': 3.0, 'cores': 2, 'load': [1, 1, 1],
+           'load_before': [1, 1, 1], 'stage_costs_us': {'estimator.process (1 contact)': 80.0},
+           'runs': [_e2e_run('split', 1000.0, 12, 3.0,
+                             {'sim': 150, 'driver': 90, 'direction': 400, 'probe': 120}),
+                    _e2e_run('fused', 1000.0, 0, 1.5, {'sim': 150, 'driver': 200, 'probe': 120})]}
+    e2e['why'] = bench.why_e2e(e2e)
+    e2e['tradeoffs'] = bench.tradeoffs(e2e)
+    targets = {t['name']: t for t in bench.e2e_targets(e2e)}
+    assert not targets['split at 1 kHz: scans lost in 60 s']['met']
+    assert targets['fused at 1 kHz: scans lost in 60 s']['met']
+    assert targets['split at 1 kHz: p99 latency, last byte -> subscriber']['note'] == \
+        '1.5 x the limit'
+    # Driver and direction node together are the split layout's hot path; the probe is not.
+    assert targets['split at 1 kHz: hot path CPU per scan']['measured'] == '490'
+    assert targets['fused at 1 kHz: hot path CPU per scan']['met']
+    assert any('0.41 x' in line for line in e2e['tradeoffs'])
+    res = dict(results, e2e=e2e, machine=dict(results['machine'], load_after=[0.0, 0.0, 0.0]))
+    res['targets'] = bench.targets(res)
+    bench.write(res, str(tmp_path))
+    text = (tmp_path / 'benchmarks.md').read_text()
+    assert '## 3. End to end through ROS: split against fused' in text
+    assert '| fused | 1000 | 60000 | 60000 | 0 | 0.75 / 1.50 / 3.00 |' in text
+    assert '### Which layout when' in text

@@ -44,13 +44,13 @@ def test_force_then_compliance_through_the_services(tmp_path):
         assert compliance.success, compliance.message
         assert compliance.compliance == pytest.approx(1.4e-3, rel=0.2)
         assert len(compliance.fitted) == len(TILTED)
-        in_force = direction._estimator.calibration
+        in_force = direction.host.estimator.calibration
         assert in_force.force_curves is not None and in_force.compliance_presses == 4
         # What the diagnostics say is what was made, and when.
         assert spin_until(executor, lambda: any(
             s.name.endswith('contact estimation') and
             {kv.key: kv.value for kv in s.values}.get('calibration made') == in_force.made_utc
-            for msg in probe.diagnostics for s in msg.status))
+            for _, s in probe.statuses))
     saved = Calibration.load_yaml(str(tmp_path / 'calibration.yaml'))
     assert saved == in_force
 
@@ -87,7 +87,7 @@ def test_bad_requests_answer_the_calibration_in_force_and_change_nothing(tmp_pat
                          CalibrateGains.Request(presses=1, timeout=0.3))
             assert not gains.success and 'timed out' in gains.message
             assert (gains.gain_min, gains.gain_max) == (1.0, 1.0)  # no gains in force
-            assert node._estimator.calibration == previous
+            assert node.host.estimator.calibration == previous
         finally:
             node.destroy_node()
     assert path.read_text() == text
@@ -101,9 +101,9 @@ def test_two_skins_in_two_namespaces_never_share_a_calibration_file(tmp_path, mo
     with ros_context() as (context, _):
         nodes = {ns: DirectionNode(context=context, namespace=ns) for ns in ('/left', '/skin')}
         try:
-            assert nodes['/left']._estimator.calibration.x_p_m == 5e-4
-            assert nodes['/skin']._estimator.calibration == Calibration()
-            assert 'skin/skin_direction.yaml' in nodes['/skin']._calibrator.note
+            assert nodes['/left'].host.estimator.calibration.x_p_m == 5e-4
+            assert nodes['/skin'].host.estimator.calibration == Calibration()
+            assert 'skin/skin_direction.yaml' in nodes['/skin'].host.calibration.note
         finally:
             for node in nodes.values():
                 node.destroy_node()

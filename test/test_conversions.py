@@ -93,3 +93,15 @@ def test_wrench_stamped_carries_the_torque_of_the_force_at_its_point():
         np.cross((0.02, 0.01, 0.0), (1.0, -2.0, -5.0)))
     assert _vec(conversions.wrench_stamped(HEADER, (0.0, 0.0, 0.0)).wrench.torque) == \
         pytest.approx(0.0)
+
+
+def test_a_reused_array_carries_each_scan_exactly_as_a_new_one_would():
+    writer = conversions.ContactArrayWriter()
+    two = [_contact(), _contact(x_m=0.01, direction_valid=False, force_n=3.0)]
+    first = writer.fill(HEADER, two, sequence=2 ** 32 + 5, device_time_us=7)
+    assert first == conversions.contacts_to_array(HEADER, two, 5, 7)
+    assert first.sequence == 5 and len(first.contacts) == 2
+    one = [_contact(y_m=0.02, azimuth_rad=-1.0)]
+    second = writer.fill(HEADER, one, sequence=6, device_time_us=8)
+    assert second == conversions.contacts_to_array(HEADER, one, 6, 8)
+    assert writer.fill(HEADER, [], 7, 9).contacts == []

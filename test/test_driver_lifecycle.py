@@ -20,7 +20,7 @@ WAIT_S = 15.0
 
 
 def _newest_link_status_after(executor, probe, predicate):
-    probe.diagnostics.clear()
+    probe.statuses.clear()
     return spin_until(executor, lambda: probe.link_status() is not None
                       and predicate(probe.link_status()), WAIT_S)
 

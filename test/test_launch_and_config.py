@@ -101,7 +101,8 @@ def test_launch_file_declares_its_arguments_and_nodes():
     description = _load_launch_file().generate_launch_description()
     assert isinstance(description, LaunchDescription)
     names = {a.name for a in description.entities if isinstance(a, DeclareLaunchArgument)}
-    assert names == {'port', 'params_file', 'namespace', 'sim', 'scene', 'sim_rate', 'rviz'}
+    assert names == {'port', 'params_file', 'namespace', 'sim', 'scene', 'sim_rate', 'rviz',
+                     'fused'}
     executables = [getattr(a, 'node_executable', None) for a in description.entities]
     assert {'driver', 'direction'} <= set(executables)
     # ExecuteProcess keeps its name as substitutions until launch performs them (nodes have

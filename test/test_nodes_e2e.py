@@ -7,12 +7,16 @@ from diagnostic_msgs.msg import DiagnosticStatus
 import numpy as np
 from pipeline import call, overrides, pipeline, scene
 import pytest
+import rclpy
 from rclpy.lifecycle import TransitionCallbackReturn
 from rosutil import ros_context, spin_until
 from skin_driver.core.estimation import calibration as calib
 from skin_driver.direction_node import DirectionNode
 from skin_driver.driver_node import SkinDriverNode
 from skin_driver.params import ParameterError
+from skin_driver.probe import Probe, values
+from skin_driver.processes import spawn, stop
+from skin_driver.sim import SimulatedSkin
 from skin_msgs.srv import Calibrate
 from std_srvs.srv import Trigger
 
@@ -20,6 +24,8 @@ pytestmark = pytest.mark.ros
 
 OK, ERROR = DiagnosticStatus.OK, DiagnosticStatus.ERROR
 NORMAL_PRESSES = [{'time_s': 0.3 + 1.2 * i} for i in range(5)]
+# Both layouts: scans through the frame topic, or estimated on the driver's reader thread.
+LAYOUTS = pytest.mark.parametrize('fused', [False, True], ids=['split', 'fused'])
 
 
 def test_every_published_frame_equals_the_simulators_ground_truth(tmp_path):
@@ -70,10 +76,11 @@ def test_unplug_and_replug_is_survived_and_reported(tmp_path):
         assert int(values['disconnects']) >= 1 and int(values['connects']) >= 2
 
 
-def test_contacts_match_the_simulated_presses(tmp_path):
+@LAYOUTS
+def test_contacts_match_the_simulated_presses(tmp_path, fused):
     presses = [{'time_s': 0.1, 'alpha_deg': 45.0, 'beta_deg': 90.0, 'duration_s': 1.5,
                 'x_m': 0.03, 'y_m': 0.045}]
-    with pipeline(tmp_path, scene(presses)) as (sim, _, __, probe, executor):
+    with pipeline(tmp_path, scene(presses), fused=fused) as (sim, _, __, probe, executor):
         def held():
             return sum(1 for m in probe.contacts if m.contacts
                        and m.contacts[0].magnitude > 4.0) >= 40
@@ -90,12 +97,21 @@ def test_contacts_match_the_simulated_presses(tmp_path):
     assert np.degrees(np.mean(errors)) < 5.0
     for c in strong:
         assert c.wrench.force.z < 0 and all(math.isfinite(v) for v in (c.azimuth, c.polar))
+    # Each contacts message names its scan: the same sequence, device time and stamp as the frame.
+    frames = {f.sequence: f for f in probe.frames}
+    named = [m for m in probe.contacts if m.sequence in frames]
+    assert len(named) >= 0.5 * len(probe.contacts)
+    for m in named:
+        frame = frames[m.sequence]
+        assert m.device_time_us == frame.device_time_us and m.header.stamp == frame.header.stamp
+        assert sim.truth(m.sequence).device_time_us == m.device_time_us
 
 
-def test_calibrate_records_normal_presses_and_the_file_is_loaded_at_start_up(tmp_path):
+@LAYOUTS
+def test_calibrate_records_normal_presses_and_the_file_is_loaded_at_start_up(tmp_path, fused):
     offset = (0.001, -0.0005)
     the_scene = scene(NORMAL_PRESSES, misalignment_m=list(offset))
-    with pipeline(tmp_path, the_scene) as (sim, _, direction, probe, executor):
+    with pipeline(tmp_path, the_scene, fused=fused) as (sim, _, direction, probe, executor):
         result = call(executor, direction, Calibrate, '/skin_direction/calibrate',
                       Calibrate.Request(presses=3, timeout=8.0))
         assert result.success, result.message
@@ -109,7 +125,7 @@ def test_calibrate_records_normal_presses_and_the_file_is_loaded_at_start_up(tmp
     with ros_context() as (context, _):
         node = DirectionNode(context=context, parameter_overrides=overrides(
             {'calibration_file': str(path)}))
-        assert node._estimator.calibration.x_p_m == result.x_p
+        assert node.host.estimator.calibration.x_p_m == result.x_p
         node.destroy_node()
 
 
@@ -123,7 +139,7 @@ def test_calibrate_times_out_without_presses_and_keeps_the_previous_calibration(
         assert not result.success
         assert 'timed out' in result.message and 'previous calibration' in result.message
         assert (result.x_p, result.y_p) == (0.0002, 0.0001)
-        assert direction._estimator.calibration == previous
+        assert direction.host.estimator.calibration == previous
     assert calib.Calibration.load_yaml(str(tmp_path / 'calibration.yaml')) == previous
 
 
@@ -150,9 +166,10 @@ def test_calibrate_refuses_too_much_spread(tmp_path):
     assert not (tmp_path / 'calibration.yaml').exists()
 
 
-def test_tare_refuses_while_loaded_and_records_an_unloaded_baseline(tmp_path):
+@LAYOUTS
+def test_tare_refuses_while_loaded_and_records_an_unloaded_baseline(tmp_path, fused):
     presses = [{'time_s': 0.0, 'duration_s': 1.2, 'ramp_s': 0.05}]
-    with pipeline(tmp_path, scene(presses)) as (sim, _, direction, probe, executor):
+    with pipeline(tmp_path, scene(presses), fused=fused) as (sim, _, direction, probe, executor):
         assert spin_until(executor, lambda: sum(1 for m in probe.contacts if m.contacts) >= 25)
         loaded = call(executor, direction, Trigger, '/skin_direction/tare', Trigger.Request())
         assert not loaded.success and 'loaded' in loaded.message
@@ -188,3 +205,49 @@ def test_driver_waits_for_a_missing_device_without_crashing(tmp_path):
         node.close()
         node.destroy_node()
     assert not os.path.exists(tmp_path / 'nothing')
+
+
+def test_fused_driver_process_offers_the_direction_nodes_topics_services_and_diagnostics(
+        tmp_path):
+    link = str(tmp_path / 'skin0')
+    ns = f'/fused_{os.getpid()}'
+    log = open(tmp_path / 'driver.log', 'w')
+    # Named as launch_ros names it: a rule for every node of the process.
+    driver = spawn(['-m', 'skin_driver.driver_node', '--ros-args', '-r', f'__ns:={ns}',
+                    '-r', '__node:=skin_driver',
+                    '-p', 'fused:=true', '-p', f'port:={link}', '-p', 'reconnect_max:=0.1',
+                    '-p', 'skin_direction:diagnostics_period:=0.2',
+                    '-p', f'skin_direction:calibration_file:={tmp_path / "cal.yaml"}'], log)
+    sim = SimulatedSkin(scene([{'time_s': 0.5, 'duration_s': 0.6, 'ramp_s': 0.1}]), rate_hz=200.0,
+                        link_path=link, seed=1)
+    try:
+        with ros_context() as (context, executor):
+            node = rclpy.create_node('probe', namespace=ns, context=context)
+            executor.add_node(node)
+            probe = Probe(node, keep_messages=True)
+            sim.start()
+            assert spin_until(executor, lambda: sum(1 for m in probe.contacts if m.contacts) >= 20,
+                              20.0), log_text(tmp_path)
+            assert spin_until(executor, lambda: probe.latest('contact estimation') is not None,
+                              20.0)
+            status = probe.latest('contact estimation')
+            assert status.name == f'{ns}/skin_direction: contact estimation'
+            assert float(values(status)['frames']) > 0
+            result = call(executor, node, Trigger, f'{ns}/skin_direction/tare', Trigger.Request())
+            # Presses are on or just over: either answer proves the service runs in the driver.
+            assert ('baseline recorded' in result.message or 'loaded' in result.message), \
+                result.message
+            sequences = [m.sequence for m in probe.contacts]
+            assert sequences == sorted(sequences) and all(sim.truth(s) for s in sequences[-5:])
+            node.destroy_node()
+    finally:
+        sim.stop()
+        # A loaded machine can take a while to wind the process down; it must still exit 0.
+        stop([driver], 20.0)
+        log.close()
+    assert driver.returncode == 0, log_text(tmp_path)
+
+
+def log_text(tmp_path):
+    """Return the driver process's output, for a failure message."""
+    return (tmp_path / 'driver.log').read_text()[-3000:]

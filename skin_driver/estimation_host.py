@@ -1,0 +1,304 @@
+"""
+The ROS side of contact estimation, shared by the direction node and the driver's fused mode.
+
+An EstimationHost lives on a node named skin_direction and gives it everything but the source of
+its scans: the estimation parameters (declared, checked, applied at run time), the publishers
+(contacts, contact, wrench; heatmaps and markers for rviz), ~/tare, the calibration services and
+file (skin_driver.calibration_services) and the diagnostics. Scans come in through
+:meth:`EstimationHost.process`, either from the direction node's subscription to frame or, fused,
+straight from the driver's serial reader thread: parameters, services and diagnostics are then
+the same whichever way the scans arrive.
+
+Threads: process() is the hot path and may run on any one thread; everything else runs on the
+executor. The hot path takes no lock: it reads the estimator once per scan, and every change
+(tare, calibration, parameters) builds a new estimator under a lock and swaps it in by one
+reference assignment. Work a lower rate does as well (heatmaps, markers, diagnostics) runs on
+timers, on the latest scan only.
+"""
+
+import collections
+import copy
+import math
+import threading
+import time
+
+import cv2
+from geometry_msgs.msg import WrenchStamped
+import numpy as np
+from rcl_interfaces.msg import SetParametersResult
+from rclpy.event_handler import PublisherEventCallbacks
+from rclpy.qos import qos_profile_sensor_data
+from sensor_msgs.msg import Image
+from skin_driver import conversions, diagnostics
+from skin_driver.calibration_services import CalibrationServices
+from skin_driver.core.estimation.heatmap import colour_map
+from skin_driver.core.estimation.pipeline import ContactEstimator, EstimatorConfig
+from skin_driver.core.estimation.shift import DEFAULT_METHOD, method_names
+from skin_driver.estimator_params import estimator_config, ESTIMATOR_PARAMETERS
+from skin_driver.params import check, declare, ParameterError
+from skin_msgs.msg import TactileContact, TactileContactArray
+from std_srvs.srv import Trigger
+from visualization_msgs.msg import MarkerArray
+
+ZERO_FORCE = (0.0, 0.0, 0.0)
+
+
+class EstimationHost:
+    """Estimation parameters, publishers, services and diagnostics of one node."""
+
+    def __init__(self, node):
+        self.node = node
+        # OpenCV's worker pool spins between calls: on 16 x 16 maps it cost a whole thread
+        # ~120 us of CPU per scan (measured) and saved nothing. One thread for the process.
+        cv2.setNumThreads(1)
+        self._declare_parameters()
+        self._lock = threading.Lock()  # serialises changes of the estimator, never the hot path
+        self.estimator = self._build_estimator(EstimatorConfig().pitch_m)
+        # The estimator holds the calibration; the services load the file into it and put every
+        # new calibration in force there, whichever estimator is in use by then.
+        self.calibration = CalibrationServices(node, lambda: self.estimator)
+        self._recent = collections.deque(maxlen=self._p('tare.frames'))
+        self._frames = self._bad_frames = self._contacts = 0
+        self._cost_sum = self._cost_max = 0.0
+        self._cost_count = 0
+        self._latest = None
+        self._writer = conversions.ContactArrayWriter()
+        self._rate = diagnostics.RateMeter(time.monotonic())
+        self._rebuilders = []
+
+        # Every QoS event handler is one more entity the Python executor walks on each wake,
+        # at up to 2 kHz; readers of these topics still get rclpy's incompatible-QoS warnings.
+        quiet = {'event_callbacks': PublisherEventCallbacks(use_default_callbacks=False)}
+        stream = qos_profile_sensor_data
+        self._pub_contacts = node.create_publisher(TactileContactArray, 'contacts', stream,
+                                                   **quiet)
+        self._pub_contact = node.create_publisher(TactileContact, 'contact', stream, **quiet)
+        self._pub_wrench = node.create_publisher(WrenchStamped, 'wrench', stream, **quiet)
+        self._pub_heat = {layer: node.create_publisher(Image, f'{layer}/heatmap', 5, **quiet)
+                          for layer in ('top', 'bottom')}
+        self._pub_markers = node.create_publisher(MarkerArray, 'markers', 5, **quiet)
+        node.create_service(Trigger, '~/tare', self._on_tare)
+        self._diag = diagnostics.DiagnosticPublisher(node)
+        node.create_timer(self._p('diagnostics_period'), self._report)
+        self._viz_timer = None
+        self._start_viz_timer()
+        node.add_on_set_parameters_callback(self._check_new_parameters)
+        node.add_post_set_parameters_callback(self._apply_new_parameters)
+        node.get_logger().info(
+            f"estimating with '{self._p('method')}'; {self.calibration.note}")
+
+    # ---- parameters -------------------------------------------------------------------------
+    def _declare_parameters(self) -> None:
+        node = self.node
+        declare(node, 'method', DEFAULT_METHOD,
+                "Shift estimator between the layers; seed is the paper's phase correlation.",
+                choices=method_names())
+        # The core's defaults are the node's: the evaluator and the node measure the same thing.
+        core = EstimatorConfig()
+        declare(node, 'threshold', core.threshold_counts,
+                'ADC counts above the baseline below which a taxel counts as untouched.',
+                low=0.0, high=4095.0)
+        declare(node, 'min_force', 0.2, 'Contacts weaker than this (newtons) are ignored.',
+                low=0.0, high=1000.0)
+        declare(node, 'min_confidence', core.min_confidence,
+                'Directions less trusted than this are reported with direction_valid false.',
+                low=0.0, high=1.0)
+        declare(node, 'min_shift', core.min_shift_m,
+                'Layer shift (metres, after calibration) below which no direction is reported.',
+                low=0.0, high=0.1)
+        declare(node, 'compliance', core.compliance_m_per_n,
+                'Layer shift per newton of tangential force (m/N); gives the polar angle alpha.',
+                low=1.0e-7, high=1.0)
+        declare(node, 'force_scale', core.force_scale,
+                'Factor on the normal force: a force calibration against a reference sensor.',
+                low=0.01, high=100.0)
+        declare(node, 'skin.fill_factor', core.fill_factor,
+                'Sensitive fraction of the pitch along each axis of a taxel.', low=0.1, high=1.0)
+        declare(node, 'tare.frames', 20, 'Scans averaged into the unloaded baseline by ~/tare.',
+                low=1, high=10000)
+        declare(node, 'viz_rate', 15.0,
+                'Heatmap images and markers per second (0 turns them off).', low=0.0, high=1000.0)
+        declare(node, 'viz_full_scale', 10.0,
+                'Force per taxel (newtons) drawn at the top of the colour scale.',
+                low=0.001, high=1000.0)
+        declare(node, 'diagnostics_period', 1.0, 'Seconds between two /diagnostics reports.',
+                low=0.1, high=60.0)
+
+    def _p(self, name):
+        return self.node.get_parameter(name).value
+
+    def _check_new_parameters(self, params) -> SetParametersResult:
+        """Refuse at run time what start-up would refuse (rclpy checks the ranges)."""
+        for param in params:
+            try:
+                if param.name == 'method':
+                    check('method', param.value, 'a shift estimator', choices=method_names())
+            except ParameterError as err:
+                return SetParametersResult(successful=False, reason=str(err))
+        return SetParametersResult(successful=True)
+
+    def _apply_new_parameters(self, params) -> None:
+        names = {param.name for param in params}
+        if names & set(ESTIMATOR_PARAMETERS):
+            # Building an estimator takes up to a millisecond: on a thread of its own it holds
+            # up neither the scans nor the executor (in the direction node they are one thread).
+            worker = threading.Thread(target=self._rebuild, args=(sorted(names),), daemon=True,
+                                      name='skin-estimator-rebuild')
+            self._rebuilders = [t for t in self._rebuilders if t.is_alive()] + [worker]
+            worker.start()
+        if 'tare.frames' in names:
+            self._recent = collections.deque(self._recent, maxlen=self._p('tare.frames'))
+        if 'viz_rate' in names:
+            self._start_viz_timer()
+
+    def _rebuild(self, names) -> None:
+        with self._lock:
+            old = self.estimator
+            self.estimator = self._build_estimator(old.config.pitch_m, old.conditioner)
+        self.node.get_logger().info(f"estimator rebuilt for {', '.join(names)}")
+
+    @property
+    def rebuilding(self) -> bool:
+        """Return whether a parameter change is still being applied to the estimator."""
+        return any(worker.is_alive() for worker in self._rebuilders)
+
+    def _build_estimator(self, pitch_m: float, conditioner=None) -> ContactEstimator:
+        """Return an estimator for the current parameters, keeping tare and calibration."""
+        config = estimator_config({n: self._p(n) for n in ESTIMATOR_PARAMETERS}, pitch_m)
+        previous = getattr(self, 'estimator', None)
+        return ContactEstimator(config, previous.calibration if previous else None,
+                                conditioner=conditioner)
+
+    # ---- hot path ---------------------------------------------------------------------------
+    def process(self, header, sequence: int, device_time_us: int, pitch_m: float,
+                top: np.ndarray, bottom: np.ndarray) -> None:
+        """Estimate the contacts of one scan and publish them; count a bad scan and go on."""
+        try:
+            estimator = self._estimator_for(pitch_m)
+            start = time.perf_counter()
+            contacts = estimator.process(top, bottom)
+            cost = time.perf_counter() - start
+            # Converting here means a non-finite value never reaches a publisher.
+            array = self._writer.fill(header, contacts, sequence, device_time_us)
+        except ValueError as err:
+            self.reject(sequence, err)
+            return
+        # A topic nobody listens to costs a serialisation (10-30 us) for nothing: skipped, as
+        # image_transport skips its unwatched topics. A late subscriber gets the next scan.
+        if self._pub_contacts.get_subscription_count():
+            self._pub_contacts.publish(array)
+        if contacts and self._pub_contact.get_subscription_count():
+            # The array already holds the strongest contact's message: no second conversion.
+            self._pub_contact.publish(array.contacts[0])
+        if self._pub_wrench.get_subscription_count():
+            self._pub_wrench.publish(conversions.wrench_stamped(
+                header, contacts[0].force_xyz_n, (contacts[0].x_m, contacts[0].y_m))
+                if contacts else conversions.wrench_stamped(header, ZERO_FORCE))
+        self._frames += 1
+        self._contacts += len(contacts)
+        self._cost_sum += cost
+        self._cost_count += 1
+        if cost > self._cost_max:
+            self._cost_max = cost
+        self._rate.add()
+        self._recent.append((top, bottom, len(contacts)))
+        self._latest = (header, pitch_m, top, bottom, contacts)
+        self.calibration.feed(top, bottom, contacts)
+
+    def reject(self, sequence: int, err: Exception) -> None:
+        """Count a scan that cannot be estimated and say why (at most every 5 s)."""
+        self._bad_frames += 1
+        self.node.get_logger().warning(f'dropping frame {sequence}: {err}',
+                                       throttle_duration_sec=5.0)
+
+    def _estimator_for(self, pitch_m: float) -> ContactEstimator:
+        """Return the estimator, rebuilt first if the frames' taxel pitch has changed."""
+        estimator = self.estimator
+        # SkinFrame carries the pitch as float32: 0.005 arrives as 0.004999999888; only a real
+        # change rebuilds the estimator (keeping the tare and the calibration).
+        if not math.isclose(pitch_m, estimator.config.pitch_m, rel_tol=1e-5):
+            if not (math.isfinite(pitch_m) and pitch_m > 0):
+                raise ValueError(f'pitch {pitch_m} is not a positive length')
+            with self._lock:
+                self.estimator = self._build_estimator(pitch_m, self.estimator.conditioner)
+                estimator = self.estimator
+        return estimator
+
+    # ---- rviz -------------------------------------------------------------------------------
+    def _start_viz_timer(self) -> None:
+        if self._viz_timer is not None:
+            self.node.destroy_timer(self._viz_timer)
+            self._viz_timer = None
+        rate = self._p('viz_rate')
+        if rate > 0:
+            self._viz_timer = self.node.create_timer(1.0 / rate, self._visualise)
+
+    def _visualise(self) -> None:
+        latest, self._latest = self._latest, None
+        if latest is None:
+            return
+        header, pitch, top, bottom, contacts = latest
+        full = self._p('viz_full_scale')
+        top_force, bottom_force = self.estimator.conditioner.condition(top, bottom)
+        self._pub_heat['top'].publish(
+            conversions.rgb_to_image(header, colour_map(top_force, full)))
+        self._pub_heat['bottom'].publish(
+            conversions.rgb_to_image(header, colour_map(bottom_force, full)))
+        self._pub_markers.publish(conversions.heatmap_markers(
+            header, top_force, float(pitch), contacts, full))
+
+    # ---- tare -------------------------------------------------------------------------------
+    def _on_tare(self, request, response):
+        wanted = self._p('tare.frames')
+        frames = list(self._recent)[-wanted:]
+        if len(frames) < wanted:
+            response.success = False
+            response.message = (f'only {len(frames)} of {wanted} scans received so far; '
+                                'is the driver running?')
+            return response
+        loaded = sum(1 for _, _, n in frames if n)
+        if loaded:
+            response.success = False
+            response.message = (f'the skin is loaded ({loaded} of the last {wanted} scans have a '
+                                'contact); lift everything off it and call again')
+            return response
+        tops = np.stack([f[0] for f in frames])
+        bottoms = np.stack([f[1] for f in frames])
+        with self._lock:
+            old = self.estimator
+            # Tared on a copy: the scan being estimated meanwhile sees the old baseline whole.
+            new = ContactEstimator(old.config, old.calibration,
+                                   conditioner=copy.deepcopy(old.conditioner))
+            try:
+                new.tare(tops, bottoms)
+            except ValueError as err:
+                response.success = False
+                response.message = f'tare failed: {err}'
+                return response
+            self.estimator = new
+        response.success = True
+        response.message = f'baseline recorded from {wanted} unloaded scans'
+        self.node.get_logger().info(response.message)
+        return response
+
+    # ---- diagnostics ------------------------------------------------------------------------
+    def _report(self) -> None:
+        rate, _ = self._rate.take(time.monotonic())
+        count, total, worst = self._cost_count, self._cost_sum, self._cost_max
+        self._cost_count, self._cost_sum, self._cost_max = 0, 0.0, 0.0
+        values = {
+            'method': self._p('method'), 'frame rate [Hz]': rate,
+            'frames': self._frames, 'bad frames': self._bad_frames,
+            'contacts': self._contacts,
+            'mean cost [us]': 1e6 * total / count if count else 0.0,
+            'max cost [us]': 1e6 * worst,
+            **self.calibration.diagnostic_values(),
+        }
+        level, message = diagnostics.OK, self.calibration.note
+        if self._frames == 0:
+            level, message = diagnostics.WARN, 'no frame received yet'
+        elif rate == 0.0:
+            level, message = diagnostics.WARN, 'no frame in the last period'
+        self._diag.publish([diagnostics.make_status(
+            f'{self.node.get_fully_qualified_name()}: contact estimation', 'skin', level,
+            message, values)])

@@ -1,0 +1,197 @@
+"""
+One probe for the benchmark, the soak, the demo and the tests: what a subscriber sees.
+
+A Probe adds subscriptions to a node someone else owns and spins. It records every contacts
+message with its receive time (host clock), its header stamp (when the driver read the scan's last
+byte), the scan's sequence number and device time; counts the scans lost by sequence; and reports
+latency percentiles. On request it also keeps the messages themselves, the raw frames and the
+diagnostics statuses of the pipeline's nodes.
+"""
+
+from __future__ import annotations
+
+import collections
+import time
+from typing import Callable, Optional
+
+from diagnostic_msgs.msg import DiagnosticArray
+import numpy as np
+from rclpy.qos import HistoryPolicy, QoSProfile, ReliabilityPolicy
+from skin_msgs.msg import SkinFrame, TactileContactArray
+
+SEQ_MODULUS = 2 ** 32
+
+
+class Record:
+    """Columns of what arrived, one row per contacts message (plain lists: appends are cheap)."""
+
+    def __init__(self):
+        self.received_s = []    # host wall-clock time at which the message arrived
+        self.stamp_s = []       # header stamp: host time of the scan's last byte at the driver
+        self.sequence = []      # the scan's sequence number
+        self.device_us = []     # the scan's device time
+        self.contacts = []      # number of contacts in the message
+
+
+def unwrap(sequence) -> np.ndarray:
+    """Return sequence numbers (in arrival order) with their 32-bit wraps undone."""
+    seq = np.asarray(sequence, dtype=np.int64)
+    if seq.size == 0:
+        return seq
+    step = np.diff(seq) % SEQ_MODULUS
+    step = np.where(step >= SEQ_MODULUS // 2, step - SEQ_MODULUS, step)
+    return np.concatenate(([seq[0]], seq[0] + np.cumsum(step)))
+
+
+def percentiles_ms(seconds, qs=(50, 99, 100)) -> dict:
+    """Return {'p50': ms, ...} of latencies in seconds ('max' for 100); None when empty."""
+    names = {q: 'max' if q == 100 else f'p{q:g}' for q in qs}
+    if len(seconds) == 0:
+        return {names[q]: None for q in qs}
+    values = np.percentile(np.asarray(seconds, dtype=np.float64) * 1e3, qs)
+    return {names[q]: float(v) for q, v in zip(qs, values)}
+
+
+class Probe:
+    """Subscriptions that record what the skin pipeline publishes."""
+
+    def __init__(self, node, *, keep_messages: bool = False, frames: bool = False,
+                 depth: Optional[int] = None, diagnostics: int = 200,
+                 on_contacts: Optional[Callable] = None, on_frame: Optional[Callable] = None,
+                 on_status: Optional[Callable] = None):
+        """
+        Subscribe on node: contacts always, frame if asked (or given on_frame), /diagnostics.
+
+        keep_messages keeps every message (tests); depth deepens the best-effort queue (the
+        default is the sensor-data QoS a controller would use); on_contacts, on_frame and
+        on_status are called with each message (status) after it is recorded.
+        """
+        self.node = node
+        self.keep = keep_messages
+        self.record = Record()
+        self.contacts = []
+        self.frames = []
+        self.frame_count = 0
+        self.statuses = collections.deque(maxlen=diagnostics)
+        self._on_contacts_hook = on_contacts
+        self._on_frame_hook = on_frame
+        self._on_status_hook = on_status
+        qos = QoSProfile(depth=depth or 5, history=HistoryPolicy.KEEP_LAST,
+                         reliability=ReliabilityPolicy.BEST_EFFORT)
+        node.create_subscription(TactileContactArray, 'contacts', self._on_contacts, qos)
+        if frames or on_frame is not None:
+            node.create_subscription(SkinFrame, 'frame', self._on_frame, qos)
+        node.create_subscription(DiagnosticArray, '/diagnostics', self._on_diagnostics, 50)
+
+    def _on_contacts(self, msg: TactileContactArray) -> None:
+        now = time.time()
+        stamp = msg.header.stamp
+        r = self.record
+        r.received_s.append(now)
+        r.stamp_s.append(stamp.sec + stamp.nanosec * 1e-9)
+        r.sequence.append(msg.sequence)
+        r.device_us.append(msg.device_time_us)
+        r.contacts.append(len(msg.contacts))
+        if self.keep:
+            self.contacts.append(msg)
+        if self._on_contacts_hook is not None:
+            self._on_contacts_hook(msg)
+
+    def _on_frame(self, msg: SkinFrame) -> None:
+        self.frame_count += 1
+        if self.keep:
+            self.frames.append(msg)
+        if self._on_frame_hook is not None:
+            self._on_frame_hook(msg)
+
+    def _on_diagnostics(self, msg: DiagnosticArray) -> None:
+        now = time.monotonic()
+        for status in msg.status:
+            self.statuses.append((now, status))
+            if self._on_status_hook is not None:
+                self._on_status_hook(status)
+
+    def reset(self) -> None:
+        """Forget everything recorded so far."""
+        self.record = Record()
+        self.contacts, self.frames, self.frame_count = [], [], 0
+        self.statuses.clear()
+
+    # ---- diagnostics ------------------------------------------------------------------------
+    def statuses_of(self, suffix: str) -> list:
+        """Return the kept statuses whose name ends with suffix, oldest first."""
+        return [status for _, status in self.statuses if status.name.endswith(suffix)]
+
+    def latest(self, suffix: str):
+        """Return the newest kept status whose name ends with suffix, or None."""
+        found = self.statuses_of(suffix)
+        return found[-1] if found else None
+
+    def link_status(self):
+        """Return the newest skin-link status of the driver, or None."""
+        return self.latest('skin link')
+
+    def saw_link_status(self, predicate) -> bool:
+        """Return whether a kept skin-link status satisfies predicate(status, values)."""
+        return any(predicate(status, values(status)) for status in self.statuses_of('skin link'))
+
+    def counters(self, suffix: str, start: float, end: float) -> dict:
+        """Return how the numeric values of a status moved between two monotonic instants."""
+        reports = [(t, values(s)) for t, s in self.statuses if s.name.endswith(suffix)]
+        first = [r for r in reports if r[0] <= start]
+        last = [r for r in reports if r[0] <= end]
+        if not first or not last or last[-1][0] <= first[-1][0]:
+            return {}
+        (t0, a), (t1, b) = first[-1], last[-1]
+        out = {'span_s': t1 - t0, 'latest': b}
+        for key, value in b.items():
+            try:
+                out[key] = float(value) - float(a[key])
+            except (KeyError, ValueError):
+                pass
+        return out
+
+    # ---- summary ----------------------------------------------------------------------------
+    def summary(self, device_window_s=None, expected: Optional[int] = None,
+                epoch_s: Optional[float] = None) -> dict:
+        """
+        Return scans received and lost, and latency percentiles (ms).
+
+        device_window_s (start, end) keeps the scans whose device time lies in it. Lost scans
+        are the gaps in the received sequence numbers, or expected less received when the
+        number of scans sent in the window is known. Latency 'from last byte' runs from the
+        header stamp (the driver's host time for the scan's last byte) to arrival here; with
+        epoch_s (host time of device time 0) also 'from device time', which adds the board's
+        own wait before it sent the scan.
+        """
+        r = self.record
+        received = np.asarray(r.received_s, dtype=np.float64)
+        stamp = np.asarray(r.stamp_s, dtype=np.float64)
+        device = np.asarray(r.device_us, dtype=np.float64) * 1e-6
+        seq = unwrap(r.sequence)
+        keep = np.ones(len(received), dtype=bool)
+        if device_window_s is not None:
+            keep = (device >= device_window_s[0]) & (device < device_window_s[1])
+        seq_kept = np.unique(seq[keep])
+        span = int(seq_kept[-1] - seq_kept[0] + 1) if seq_kept.size else 0
+        out = {
+            'received': int(keep.sum()),
+            'duplicates': int(keep.sum() - seq_kept.size),
+            'sequence_gaps': span - int(seq_kept.size),
+            'with_contact': int(np.count_nonzero(np.asarray(r.contacts)[keep])) if keep.size
+            else 0,
+        }
+        out['lost'] = (max(expected - int(seq_kept.size), 0) if expected is not None
+                       else out['sequence_gaps'])
+        out['latency_from_last_byte_ms'] = percentiles_ms(received[keep] - stamp[keep])
+        if epoch_s is not None:
+            out['latency_from_device_time_ms'] = percentiles_ms(
+                received[keep] - (epoch_s + device[keep]))
+            out['last_byte_after_device_time_ms'] = percentiles_ms(
+                stamp[keep] - (epoch_s + device[keep]))
+        return out
+
+
+def values(status) -> dict:
+    """Return a DiagnosticStatus's key/value pairs as a dict."""
+    return {kv.key: kv.value for kv in status.values}
