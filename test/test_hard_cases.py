@@ -170,3 +170,18 @@ def test_inputs_are_never_modified():
     est.process(top, bottom)
     est.measure_shifts(top, bottom)
     assert np.array_equal(top, keep[0]) and np.array_equal(bottom, keep[1])
+
+
+def test_a_press_without_bottom_load_next_to_one_with_it_has_no_direction():
+    # Two presses on the top layer; the bottom layer carries only the first one's imprint, so
+    # the mixture gives the second a vanishing share (1e-300 counts). Expected: two contacts,
+    # the second without a direction, every value finite.
+    top = np.zeros((16, 16), dtype=np.uint16)
+    bottom = np.zeros_like(top)
+    top[3:5, 3:5] = 2000
+    top[12:14, 12:14] = 2000
+    bottom[3:6, 4:7] = 1500
+    contacts = ContactEstimator().process(top, bottom)
+    assert len(contacts) == 2
+    lone = min(contacts, key=lambda c: -c.x_m)
+    assert not lone.direction_valid and all(finite(c) for c in contacts)

@@ -50,6 +50,8 @@ __all__ = ['EstimatorConfig', 'Contact', 'ContactEstimator', 'MIN_SNR']
 
 # A shift shorter than this many standard deviations of its own noise has no direction.
 MIN_SNR = 3.0
+# Less load than this (counts) on a layer gives a contact no measurable shift.
+_MIN_MASS_COUNTS = 1.0
 # Extra shift uncertainty (taxels) of an imprint cut by the edge of the map.
 _BORDER_SIGMA = 0.2
 
@@ -220,7 +222,8 @@ class ContactEstimator:
         total = 0.0
         for m, e in zip(moments, noises):
             mass = m[0]
-            if not mass > 0:
+            # A share of a few counts (a far neighbour's tail in the mixture) has no centroid.
+            if not mass > _MIN_MASS_COUNTS:
                 return math.inf
             for first, second in ((1, 3), (2, 4)):
                 centre = m[first] / mass
