@@ -15,7 +15,7 @@ pytestmark = pytest.mark.filterwarnings('ignore::DeprecationWarning')
 
 @pytest.fixture(scope='module')
 def results():
-    methods = ['centroid', 'seed', bench_core.SKIMAGE]
+    methods = ['poc', 'seed', bench_core.SKIMAGE]
     rows = bench_core.accuracy_speed([16], [1.0], [6.0], 2, methods, log=lambda s: None)
     return {
         'machine': bench.machine(), 'quick': True, 'config': bench.QUICK,
@@ -23,7 +23,7 @@ def results():
                      'frames': 2, 'methods': methods, 'skimage_upsample': 100, 'rows': rows,
                      'summary': bench_core.pareto_summary(rows, methods, [16])},
         'seed': bench_core.seed_experiment(1, 12),
-        'scaling': bench_core.scaling([16], [1, 2], ['centroid', 'seed'], 1, 1,
+        'scaling': bench_core.scaling([16], [1, 2], ['poc', 'seed'], 1, 1,
                                       log=lambda s: None),
         'family': bench_core.family({'paper': 1, 'random': 5, 'border': 5, 'multi': 6},
                                     bench_core.family_methods(False), skins=['default', 'soft'],
@@ -35,7 +35,7 @@ def results():
 
 def test_accuracy_rows_cover_every_method_and_hold_finite_figures(results):
     rows = results['accuracy']['rows']
-    assert sorted(r['method'] for r in rows) == sorted(['centroid', 'seed', bench_core.SKIMAGE])
+    assert sorted(r['method'] for r in rows) == sorted(['poc', 'seed', bench_core.SKIMAGE])
     for r in rows:
         assert r['frames'] == 2 and 0 <= r['valid'] <= 2
         assert math.isfinite(r['median_us']) and r['median_us'] > 0
@@ -61,9 +61,9 @@ def test_finer_grids_cover_the_same_patch_and_read_the_same_pressure():
 
 def test_scaling_has_a_point_per_grid_contact_count_and_method(results):
     scale = results['scaling']
-    assert {(r['grid'], r['method']) for r in scale['by_grid']} == {(16, 'centroid'), (16, 'seed')}
+    assert {(r['grid'], r['method']) for r in scale['by_grid']} == {(16, 'poc'), (16, 'seed')}
     assert {(r['contacts'], r['method']) for r in scale['by_contacts']} >= {
-        (1, 'centroid'), (2, 'centroid'), (1, 'seed'), (2, 'seed')}
+        (1, 'poc'), (2, 'poc'), (1, 'seed'), (2, 'seed')}
     assert all(r['median_us'] > 0 for r in scale['by_grid'] + scale['by_contacts'])
 
 
@@ -98,7 +98,7 @@ def test_write_produces_json_markdown_and_plots(results, tmp_path):
 
 def test_family_scores_every_skin_scene_and_method_and_names_the_worst(results):
     fam = results['family']
-    methods = ['centroid', 'seed', 'plain_centroid']
+    methods = ['poc', 'seed', 'plain_centroid']
     assert fam['methods'] == methods
     assert {(r['skin'], r['scene'], r['method']) for r in fam['rows']} == {
         (s, k, m) for s in ('default', 'soft') for k in ('paper', 'random', 'border', 'multi')
