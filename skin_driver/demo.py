@@ -28,6 +28,7 @@ from skin_driver.core.estimation.calibration import Calibration
 from skin_driver.core.estimation.heatmap import text_map
 from skin_driver.core.estimation.pipeline import ContactEstimator, EstimatorConfig
 from skin_driver.core.estimation.shift import DEFAULT_METHOD
+from skin_driver.core.sim.experiments import PAPER_SPOT
 from skin_driver.core.sim.scene import scene_from_dict
 from skin_driver.evaluate import format_table, summarise
 from skin_driver.probe import Probe
@@ -79,8 +80,12 @@ def demo_scene(repeats: int, pace: float = 1.0) -> dict:
     start-up needs, stays).
     """
     steps = _steps(pace)
+    # (x_p, y_p) is measured where the directions are pressed: the sampling of the imprints by
+    # the taxels biases the shift by where a press falls on them.
+    span = [(SKIN_MODEL[n] - 1) * SKIN_MODEL['pitch_m'] for n in ('cols', 'rows')]
+    spot = {'x_m': span[0] * PAPER_SPOT[0], 'y_m': span[1] * PAPER_SPOT[1]}
     presses = [{'time_s': steps['offset'] + i * CAL_PERIOD_S * pace, 'alpha_deg': 0.0,
-                'beta_deg': 0.0, 'duration_s': 0.8 * pace} for i in range(CAL_PRESSES)]
+                'beta_deg': 0.0, 'duration_s': 0.8 * pace, **spot} for i in range(CAL_PRESSES)]
     presses += [{'time_s': steps['force'] + i * CAL_PERIOD_S * pace, 'force_n': f,
                  'x_m': x, 'y_m': y, 'alpha_deg': 0.0, 'beta_deg': 0.0,
                  'duration_s': 0.8 * pace}
