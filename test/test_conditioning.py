@@ -109,7 +109,7 @@ def test_stacked_maps_match_the_pair_with_gain_and_dead_taxels():
     dead[7, 8] = True
     cond.set_dead(dead, np.zeros((16, 16), dtype=bool))
     top, bottom = render(model, [Press(0.04, 0.04, 10.0)], rng)
-    stacked = cond.condition_stacked(top, bottom)
+    stacked = cond.force_of(cond.touch_counts(top, bottom))
     tf, bf = cond.condition(top, bottom)
     assert stacked.shape == (2, 16, 16)
     np.testing.assert_array_equal(stacked[0], tf)

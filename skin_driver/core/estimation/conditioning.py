@@ -246,16 +246,8 @@ class Conditioner:
     def condition(self, top_counts, bottom_counts) -> tuple:
         """Return (top, bottom) per-taxel force maps in newtons (float64, new arrays)."""
         t, b = check_pair(top_counts, bottom_counts)
-        return self.condition_checked(t, b)
-
-    def condition_checked(self, t: np.ndarray, b: np.ndarray) -> tuple:
-        """Do the work of :meth:`condition` on maps already checked by ``validate``."""
-        force = self.condition_stacked(t, b)
+        force = self.force_of(self.touch_counts(t, b))
         return force[0], force[1]
-
-    def condition_stacked(self, t: np.ndarray, b: np.ndarray) -> np.ndarray:
-        """Return both force maps as one new (2, rows, cols) float64 array (maps checked)."""
-        return self.force_of(self.touch_counts(t, b))
 
     def touch_counts(self, t: np.ndarray, b: np.ndarray) -> np.ndarray:
         """
