@@ -11,13 +11,13 @@ test: setup
 	@bash tools/run-tests.sh $(ARGS)
 
 demo: setup
-	@$(RUN) python -m skin_driver.demo $(ARGS)
+	@$(RUN) python -m skin_driver.tools.demo $(ARGS)
 
 bench: setup
-	@$(RUN) python -m skin_driver.bench $(ARGS)
+	@$(RUN) python -m skin_driver.tools.bench.cli $(ARGS)
 
 soak: setup
-	@$(RUN) python -m skin_driver.soak $(ARGS)
+	@$(RUN) python -m skin_driver.tools.soak $(ARGS)
 
 lint: setup
 	@$(RUN) python -m pytest -q -m linter

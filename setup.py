@@ -26,12 +26,12 @@ setup(
     tests_require=['pytest'],
     entry_points={
         'console_scripts': [
-            'driver = skin_driver.driver_node:main',
-            'direction = skin_driver.direction_node:main',
-            'sim = skin_driver.sim:main',
-            'evaluate = skin_driver.evaluate:main',
-            'demo = skin_driver.demo:main',
-            'bench = skin_driver.bench:main',
+            'driver = skin_driver.ros.driver_node:main',
+            'direction = skin_driver.ros.direction_node:main',
+            'sim = skin_driver.tools.sim:main',
+            'evaluate = skin_driver.tools.evaluate.cli:main',
+            'demo = skin_driver.tools.demo:main',
+            'bench = skin_driver.tools.bench.cli:main',
         ],
     },
 )

@@ -13,7 +13,7 @@ from launch.conditions import IfCondition, UnlessCondition
 from launch.substitutions import LaunchConfiguration, PathJoinSubstitution
 from launch_ros.actions import LifecycleNode, Node
 from launch_ros.substitutions import FindPackagePrefix, FindPackageShare
-from skin_driver import rviz_config
+from skin_driver.ros import rviz_config
 
 
 def _require_rviz2(context):

@@ -6,10 +6,10 @@ import rclpy
 from rclpy.parameter import Parameter
 from rosutil import ros_context, spin_until
 from skin_driver.core.sim.scene import scene_from_dict
-from skin_driver.direction_node import DirectionNode
-from skin_driver.driver_node import SkinDriverNode
-from skin_driver.probe import Probe
-from skin_driver.sim import SimulatedSkin
+from skin_driver.ros.direction_node import DirectionNode
+from skin_driver.ros.driver_node import SkinDriverNode
+from skin_driver.tools.probe import Probe
+from skin_driver.tools.sim import SimulatedSkin
 
 
 def scene(presses, rows=16, cols=16, **model):

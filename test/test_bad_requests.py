@@ -19,9 +19,9 @@ import pytest
 from rclpy.parameter import Parameter
 from rosutil import ros_context
 from skin_driver.core.estimation import calibration as calib
-from skin_driver.direction_node import DirectionNode
-from skin_driver.driver_node import SkinDriverNode
-from skin_driver.params import ParameterError
+from skin_driver.ros.direction_node import DirectionNode
+from skin_driver.ros.driver_node import SkinDriverNode
+from skin_driver.ros.params import ParameterError
 from skin_msgs.srv import Calibrate
 from std_srvs.srv import Trigger
 

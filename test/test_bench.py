@@ -6,8 +6,8 @@ import os
 
 import numpy as np
 import pytest
-from skin_driver import bench, bench_core, bench_ros
 from skin_driver.core.sim.physics import SkinModel
+from skin_driver.tools.bench import cli as bench, end_to_end as bench_ros, estimators as bench_core
 
 # matplotlib's tick labels go through a deprecated pyparsing API; not this project's concern.
 pytestmark = pytest.mark.filterwarnings('ignore::DeprecationWarning')

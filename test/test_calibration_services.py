@@ -6,10 +6,10 @@ import numpy as np
 from pipeline import call, overrides, pipeline, scene
 import pytest
 from rosutil import ros_context, spin_until
-from skin_driver.calibration_services import default_calibration_file
 from skin_driver.core.estimation.calibration import Calibration
 from skin_driver.core.estimation.forcecurve import ForceCurve
-from skin_driver.direction_node import DirectionNode
+from skin_driver.ros.calibration_services import default_calibration_file
+from skin_driver.ros.direction_node import DirectionNode
 from skin_msgs.srv import CalibrateCompliance, CalibrateForce, CalibrateGains
 
 pytestmark = pytest.mark.ros

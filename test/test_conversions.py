@@ -4,8 +4,8 @@ import math
 
 import numpy as np
 import pytest
-from skin_driver import conversions
 from skin_driver.core.estimation.pipeline import Contact
+from skin_driver.ros import conversions
 from std_msgs.msg import Header
 from visualization_msgs.msg import Marker
 

@@ -27,7 +27,8 @@ def test_demo_calibrates_and_prints_table_1_next_to_the_papers():
     tag = f'SKIN_DEMO_TEST={uuid.uuid4().hex}'
     env = dict(os.environ, SKIN_DEMO_TEST=tag.split('=')[1])
     result = subprocess.run(
-        [sys.executable, '-m', 'skin_driver.demo', '--plain', '--repeats', '1', '--pace', '0.6'],
+        [sys.executable, '-m', 'skin_driver.tools.demo', '--plain', '--repeats', '1',
+         '--pace', '0.6'],
         capture_output=True, text=True, timeout=180, env=env)
     assert result.returncode == 0, result.stdout[-2000:] + result.stderr[-2000:]
     out = result.stdout

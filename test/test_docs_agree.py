@@ -3,7 +3,7 @@
 import pathlib
 import re
 
-from skin_driver.core import protocol
+from skin_driver.core.protocol import wire as protocol
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 

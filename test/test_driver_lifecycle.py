@@ -8,8 +8,8 @@ import pytest
 import rclpy
 from rclpy.parameter import Parameter
 from rosutil import spin_until
-from skin_driver import direction_node
-from skin_driver.serial_link import DISCONNECTED
+from skin_driver.core.protocol.link import DISCONNECTED
+from skin_driver.ros import direction_node
 from skin_msgs.msg import TactileContactArray
 
 pytestmark = pytest.mark.ros

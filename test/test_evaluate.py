@@ -5,12 +5,12 @@ import json
 import numpy as np
 import pytest
 
-from skin_driver import evaluate
 from skin_driver.core.estimation.dataset import save_dataset
 from skin_driver.core.estimation.fsr import FsrModel
 from skin_driver.core.sim.experiments import (add_calibration_frames, make_random_experiment,
                                               make_seed_experiment)
 from skin_driver.core.sim.physics import SkinModel
+from skin_driver.tools.evaluate import cli as evaluate
 
 
 def test_table_and_json(tmp_path, capsys):

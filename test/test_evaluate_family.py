@@ -6,12 +6,12 @@ import math
 
 import numpy as np
 import pytest
-from skin_driver import evaluate
 from skin_driver.core.estimation.calibration import Calibration
 from skin_driver.core.estimation.dataset import Dataset
 from skin_driver.core.estimation.pipeline import Contact, EstimatorConfig
 from skin_driver.core.sim.skins import skin_names
-from skin_driver.estimator_params import estimator_config, load_direction_parameters
+from skin_driver.ros.estimator_params import estimator_config, load_direction_parameters
+from skin_driver.tools.evaluate import cli as evaluate
 import yaml
 
 COLUMNS = ['frame', 'rank', 'x_m', 'y_m', 'force_n', 'azimuth_deg', 'alpha_deg',

@@ -17,7 +17,7 @@ import zlib
 from hypothesis import given, settings, strategies as st
 import numpy as np
 import pytest
-from skin_driver.core.protocol import encode_frame, frame_size, FrameDecoder, SYNC
+from skin_driver.core.protocol.wire import encode_frame, frame_size, FrameDecoder, SYNC
 import yaml
 
 CORPUS = pathlib.Path(__file__).resolve().parent / 'corpus'

@@ -6,9 +6,9 @@ import pathlib
 import pytest
 import rclpy
 from rosutil import ros_context
-from skin_driver import rviz_config
-from skin_driver.direction_node import DirectionNode
-from skin_driver.driver_node import SkinDriverNode
+from skin_driver.ros import rviz_config
+from skin_driver.ros.direction_node import DirectionNode
+from skin_driver.ros.driver_node import SkinDriverNode
 import yaml
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]

@@ -11,12 +11,12 @@ import rclpy
 from rclpy.lifecycle import TransitionCallbackReturn
 from rosutil import ros_context, spin_until
 from skin_driver.core.estimation import calibration as calib
-from skin_driver.direction_node import DirectionNode
-from skin_driver.driver_node import SkinDriverNode
-from skin_driver.params import ParameterError
-from skin_driver.probe import Probe, values
-from skin_driver.processes import spawn, stop
-from skin_driver.sim import SimulatedSkin
+from skin_driver.ros.direction_node import DirectionNode
+from skin_driver.ros.driver_node import SkinDriverNode
+from skin_driver.ros.params import ParameterError
+from skin_driver.tools.probe import Probe, values
+from skin_driver.tools.processes import spawn, stop
+from skin_driver.tools.sim import SimulatedSkin
 from skin_msgs.srv import Calibrate
 from std_srvs.srv import Trigger
 
@@ -213,7 +213,7 @@ def test_fused_driver_process_offers_the_direction_nodes_topics_services_and_dia
     ns = f'/fused_{os.getpid()}'
     log = open(tmp_path / 'driver.log', 'w')
     # Named as launch_ros names it: a rule for every node of the process.
-    driver = spawn(['-m', 'skin_driver.driver_node', '--ros-args', '-r', f'__ns:={ns}',
+    driver = spawn(['-m', 'skin_driver.ros.driver_node', '--ros-args', '-r', f'__ns:={ns}',
                     '-r', '__node:=skin_driver',
                     '-p', 'fused:=true', '-p', f'port:={link}', '-p', 'reconnect_max:=0.1',
                     '-p', 'skin_direction:diagnostics_period:=0.2',

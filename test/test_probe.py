@@ -1,7 +1,7 @@
 """The probe counts lost scans by sequence and reports latency percentiles."""
 
 import pytest
-from skin_driver.probe import percentiles_ms, Probe, Record, unwrap
+from skin_driver.tools.probe import percentiles_ms, Probe, Record, unwrap
 
 
 class _Node:

@@ -8,7 +8,7 @@ from hypothesis import given, settings, strategies as st
 import numpy as np
 import pytest
 
-from skin_driver.core.protocol import (
+from skin_driver.core.protocol.wire import (
     DecoderStats, encode_frame, Frame, frame_size, FrameDecoder, header_crc, HEADER_SIZE,
     PROTOCOL_VERSION, SYNC)
 

@@ -8,7 +8,7 @@ import pytest
 import rclpy
 from rclpy.qos import qos_profile_sensor_data
 from rosutil import ros_context, spin_until
-from skin_driver.conversions import make_header, skin_frame_layers, skin_frame_to_msg
+from skin_driver.ros.conversions import make_header, skin_frame_layers, skin_frame_to_msg
 from skin_msgs.msg import SkinFrame, TactileContact, TactileContactArray
 from skin_msgs.srv import Calibrate
 

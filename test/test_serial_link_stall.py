@@ -4,8 +4,8 @@ import threading
 import time
 
 import numpy as np
-from skin_driver.core.protocol import encode_frame, FrameDecoder
-from skin_driver.serial_link import SerialLink, STALLED
+from skin_driver.core.protocol.link import SerialLink, STALLED
+from skin_driver.core.protocol.wire import encode_frame, FrameDecoder
 
 # Generous: only bounds a hung test on a loaded machine.
 WAIT_S = 10.0

@@ -12,11 +12,11 @@ import pytest
 import serial
 
 from skin_driver.core.estimation.dataset import load_dataset
-from skin_driver.core.protocol import encode_frame, FrameDecoder, header_crc, SYNC
+from skin_driver.core.protocol.wire import encode_frame, FrameDecoder, header_crc, SYNC
 from skin_driver.core.sim.experiments import paper_presses
 from skin_driver.core.sim.scene import scene_from_dict
 from skin_driver.core.sim.skins import get_skin
-from skin_driver.sim import main, render_dataset, SimulatedSkin
+from skin_driver.tools.sim import main, render_dataset, SimulatedSkin
 
 RATE_HZ = 200.0
 # Generous deadlines only bound a hung test; no assertion depends on how fast anything runs.
@@ -227,7 +227,7 @@ def test_cli_export_writes_a_dataset_the_evaluator_loads(tmp_path, capsys):
 
 def test_cli_streams_on_a_pty_and_stops_cleanly_on_sigterm(tmp_path):
     link = str(tmp_path / 'skin')
-    proc = subprocess.Popen([sys.executable, '-m', 'skin_driver.sim', '--rate', '200',
+    proc = subprocess.Popen([sys.executable, '-m', 'skin_driver.tools.sim', '--rate', '200',
                              '--link', link, '--scene', 'seed', '--loop'],
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     try:

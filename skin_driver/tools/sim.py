@@ -1,9 +1,9 @@
 """
 Simulated skin: a virtual board that streams protocol frames on a pseudo-terminal.
 
-Run ``python -m skin_driver.sim --scene seed --rate 100 --link /tmp/skin`` and open the printed
-port (or the link) like the real board.  The first stdout line is ``SKIN_PORT <path>``; human
-messages go to stderr.  ``--export OUT.npz`` renders the scene offline into an evaluator dataset.
+Run ``python -m skin_driver.tools.sim --scene seed --rate 100 --link /tmp/skin`` and open the
+printed port (or the link) like the real board.  The first stdout line is ``SKIN_PORT <path>``;
+human messages go to stderr.  ``--export OUT.npz`` renders the scene offline into an evaluator dataset.
 
 Like a USB CDC board whose host stops reading, the simulator never blocks: frames that do not fit
 into the pty and a small output queue are dropped whole, so the clock and the sequence numbers run
@@ -36,7 +36,7 @@ import tty
 import numpy as np
 
 from skin_driver.core.estimation.dataset import Dataset, save_dataset
-from skin_driver.core.protocol import encode_frame, frame_size, MAX_SEQ
+from skin_driver.core.protocol.wire import encode_frame, frame_size, MAX_SEQ
 from skin_driver.core.sim import physics
 from skin_driver.core.sim.scene import load_scene, Scene
 

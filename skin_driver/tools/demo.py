@@ -23,16 +23,16 @@ import numpy as np
 import rclpy
 from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.node import Node
-from skin_driver import conversions
 from skin_driver.core.estimation.calibration import Calibration
 from skin_driver.core.estimation.heatmap import text_map
 from skin_driver.core.estimation.pipeline import ContactEstimator, EstimatorConfig
 from skin_driver.core.estimation.shift import DEFAULT_METHOD
 from skin_driver.core.sim.experiments import PAPER_SPOT
 from skin_driver.core.sim.scene import scene_from_dict
-from skin_driver.evaluate import format_table, summarise
-from skin_driver.probe import Probe
-from skin_driver.processes import spawn, stop
+from skin_driver.ros import conversions
+from skin_driver.tools.evaluate.cli import format_table, summarise
+from skin_driver.tools.probe import Probe
+from skin_driver.tools.processes import spawn, stop
 from skin_msgs.msg import SkinFrame, TactileContactArray
 from skin_msgs.srv import Calibrate, CalibrateCompliance, CalibrateForce
 from std_srvs.srv import Trigger
@@ -308,9 +308,9 @@ def run(args, workdir: str) -> int:
                 'method': args.method,
                 'calibration_file': os.path.join(workdir, 'calibration.yaml')}}}, f)
     ros += ['--params-file', params]
-    procs = [spawn(['-m', 'skin_driver.driver_node'] + ros, log)]
+    procs = [spawn(['-m', 'skin_driver.ros.driver_node'] + ros, log)]
     if not args.fused:
-        procs.append(spawn(['-m', 'skin_driver.direction_node'] + ros, log))
+        procs.append(spawn(['-m', 'skin_driver.ros.direction_node'] + ros, log))
     rclpy.init()
     executor = SingleThreadedExecutor()
     node = Node('skin_demo', namespace=ns)
@@ -318,7 +318,7 @@ def run(args, workdir: str) -> int:
     executor.add_node(node)
     try:
         _wait(executor, lambda: monitor.tare.service_is_ready(), 20.0, 'the direction node')
-        procs.append(spawn(['-m', 'skin_driver.sim', '--scene', scene_path, '--link', port,
+        procs.append(spawn(['-m', 'skin_driver.tools.sim', '--scene', scene_path, '--link', port,
                             '--rate', str(args.rate)], log))
         # Tare needs its scans in the direction node, which sees them after the driver does.
         _wait(executor, lambda: monitor.estimates >= 30, 20.0, 'contacts from the direction node')

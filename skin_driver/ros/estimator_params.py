@@ -10,9 +10,8 @@ from __future__ import annotations
 import os
 from typing import Any, Mapping
 
+from skin_driver.core.estimation.pipeline import EstimatorConfig
 import yaml
-
-from .core.estimation.pipeline import EstimatorConfig
 
 __all__ = ['ESTIMATOR_PARAMETERS', 'DIRECTION_NODE', 'estimator_config',
            'load_direction_parameters']

@@ -37,11 +37,11 @@ from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.lifecycle import Node, State, TransitionCallbackReturn
 from rclpy.qos import qos_profile_sensor_data
 from sensor_msgs.msg import Image
-from skin_driver import conversions, diagnostics
-from skin_driver.core.protocol import FrameDecoder
-from skin_driver.direction_node import DirectionNode
-from skin_driver.params import declare, ParameterError
-from skin_driver.serial_link import CONNECTED, DISCONNECTED, SerialLink, STALLED, STOPPED
+from skin_driver.core.protocol.link import CONNECTED, DISCONNECTED, SerialLink, STALLED, STOPPED
+from skin_driver.core.protocol.wire import FrameDecoder
+from skin_driver.ros import conversions, diagnostics
+from skin_driver.ros.direction_node import DirectionNode
+from skin_driver.ros.params import declare, ParameterError
 from skin_msgs.msg import SkinFrame
 
 # Read by configure: a change while configured would be accepted and change nothing.

@@ -12,16 +12,17 @@ import time
 
 import numpy as np
 
-from .core.estimation.fsr import FsrModel
-from .core.estimation.pipeline import ContactEstimator, EstimatorConfig
-from .core.estimation.shift import (centroid, DEFAULT_METHOD, Method, method_names, NO_SHIFT,
-                                    ShiftEstimate)
-from .core.sim.experiments import (make_random_experiment, make_scene, make_seed_experiment,
-                                   SCENE_KINDS)
-from .core.sim.physics import Press, render, SkinModel
-from .core.sim.skins import family_skin, skin_names
-from .evaluate import (calibrated_estimator, direction_errors, evaluate, format_table,
-                       MethodRun, PAPER_TABLE, score_run)
+from skin_driver.core.estimation.fsr import FsrModel
+from skin_driver.core.estimation.pipeline import ContactEstimator, EstimatorConfig
+from skin_driver.core.estimation.shift import (
+    centroid, DEFAULT_METHOD, Method, method_names, NO_SHIFT, ShiftEstimate)
+from skin_driver.core.sim.experiments import (
+    make_random_experiment, make_scene, make_seed_experiment, SCENE_KINDS)
+from skin_driver.core.sim.physics import Press, render, SkinModel
+from skin_driver.core.sim.skins import family_skin, skin_names
+from skin_driver.tools.evaluate.cli import (
+    calibrated_estimator, direction_errors, evaluate, format_table, MethodRun, PAPER_TABLE,
+    score_run)
 
 PATCH_M = 0.08
 SEED_PITCH_M = 0.005

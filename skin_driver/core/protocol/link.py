@@ -23,7 +23,7 @@ from typing import Callable, List, Optional
 
 import serial
 
-from skin_driver.core.protocol import Frame, FrameDecoder, MAX_SEQ
+from skin_driver.core.protocol.wire import Frame, FrameDecoder, MAX_SEQ
 
 CONNECTING = 'connecting'
 CONNECTED = 'connected'

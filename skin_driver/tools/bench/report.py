@@ -7,7 +7,7 @@ import warnings
 
 import numpy as np
 
-from .evaluate import PAPER_TABLE
+from skin_driver.tools.evaluate.cli import PAPER_TABLE
 
 with warnings.catch_warnings():
     # matplotlib's parsers call pyparsing APIs it deprecates; nothing this project can fix.
@@ -361,20 +361,20 @@ def _e2e_section(res, images) -> list:
     out = ['## 3. End to end through ROS: split against fused', '',
            'Two layouts, measured one after the other in the same run (at each rate they take '
            'turns, in alternating order), on the same simulated skin, scene and parameters:', '',
-           '- **split**: `python -m skin_driver.driver_node` (serial reader thread publishes '
-           '`frame`) -> `python -m skin_driver.direction_node` (subscribes to `frame`, estimates '
-           'in its executor, publishes `contacts`, `contact`, `wrench`);',
-           '- **fused**: `python -m skin_driver.driver_node --ros-args -p fused:=true` (the '
+           '- **split**: `python -m skin_driver.ros.driver_node` (serial reader thread publishes '
+           '`frame`) -> `python -m skin_driver.ros.direction_node` (subscribes to `frame`, '
+           'estimates in its executor, publishes `contacts`, `contact`, `wrench`);',
+           '- **fused**: `python -m skin_driver.ros.driver_node --ros-args -p fused:=true` (the '
            'reader thread decodes each scan, estimates it and publishes `contacts`, `contact` '
            'and `wrench`, then `frame` if anyone subscribes; the skin_direction node in the '
            'same process serves parameters, `~/tare`, `~/calibrate` and diagnostics from the '
            'executor).', '',
            'Both with `publish_images:=false` and `viz_rate:=0.0`. Simulated skin: `python -m '
-           'skin_driver.sim --rate R --loop` on a pseudo-terminal (a tilted 10 N press on the '
-           "skin ~90 % of the time; above 500 Hz it writes every 2 ms, as a USB board's "
-           'packets would come). Subscriber: `skin_driver.probe.Probe` in the bench process, '
-           'on `contacts` only, sensor-data QoS (best effort, depth 5), as a controller would '
-           "subscribe. Each contacts message carries its scan's sequence number and device "
+           'skin_driver.tools.sim --rate R --loop` on a pseudo-terminal (a tilted 10 N press on '
+           "the skin ~90 % of the time; above 500 Hz it writes every 2 ms, as a USB board's "
+           'packets would come). Subscriber: `skin_driver.tools.probe.Probe` in the bench '
+           'process, on `contacts` only, sensor-data QoS (best effort, depth 5), as a controller '
+           "would subscribe. Each contacts message carries its scan's sequence number and device "
            f'time. Per run: {e["warmup_s"]:g} s warm-up, then {e["seconds"]:g} s measured.', '',
            '- **lost**: scans of the measured window (by device time) with no contacts message '
            "at the subscriber, wherever they were lost (the simulator's pty, the driver, the "

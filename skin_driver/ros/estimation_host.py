@@ -4,7 +4,7 @@ The ROS side of contact estimation, shared by the direction node and the driver'
 An EstimationHost lives on a node named skin_direction and gives it everything but the source of
 its scans: the estimation parameters (declared, checked, applied at run time), the publishers
 (contacts, contact, wrench; heatmaps and markers for rviz), ~/tare, the calibration services and
-file (skin_driver.calibration_services) and the diagnostics. Scans come in through
+file (skin_driver.ros.calibration_services) and the diagnostics. Scans come in through
 :meth:`EstimationHost.process`, either from the direction node's subscription to frame or, fused,
 straight from the driver's serial reader thread: parameters, services and diagnostics are then
 the same whichever way the scans arrive.
@@ -29,13 +29,13 @@ from rcl_interfaces.msg import SetParametersResult
 from rclpy.event_handler import PublisherEventCallbacks
 from rclpy.qos import qos_profile_sensor_data
 from sensor_msgs.msg import Image
-from skin_driver import conversions, diagnostics
-from skin_driver.calibration_services import CalibrationServices
 from skin_driver.core.estimation.heatmap import colour_map
 from skin_driver.core.estimation.pipeline import ContactEstimator, EstimatorConfig
 from skin_driver.core.estimation.shift import DEFAULT_METHOD, method_names
-from skin_driver.estimator_params import estimator_config, ESTIMATOR_PARAMETERS
-from skin_driver.params import check, declare, ParameterError
+from skin_driver.ros import conversions, diagnostics
+from skin_driver.ros.calibration_services import CalibrationServices
+from skin_driver.ros.estimator_params import estimator_config, ESTIMATOR_PARAMETERS
+from skin_driver.ros.params import check, declare, ParameterError
 from skin_msgs.msg import TactileContact, TactileContactArray
 from std_srvs.srv import Trigger
 from visualization_msgs.msg import MarkerArray

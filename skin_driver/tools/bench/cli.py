@@ -3,7 +3,7 @@
 
 Usage::
 
-    python -m skin_driver.bench [--quick] [--out DIR] [--skip-ros] [--no-profile]
+    python -m skin_driver.tools.bench.cli [--quick] [--out DIR] [--skip-ros] [--no-profile]
 
 Writes DIR/benchmarks.md, DIR/benchmarks.json and DIR/img/*.png (DIR defaults to docs/) from
 runs made on the spot, with the machine and versions they ran on. ``--quick`` takes about a
@@ -26,10 +26,10 @@ import time
 import cv2
 import numpy as np
 
-from . import bench_core, bench_report
-from .bench_report import label
-from .core.estimation.shift import DEFAULT_METHOD
-from .evaluate import _json_safe
+from skin_driver.core.estimation.shift import DEFAULT_METHOD
+from skin_driver.tools.bench import estimators as bench_core, report as bench_report
+from skin_driver.tools.bench.report import label
+from skin_driver.tools.evaluate.cli import _json_safe
 
 DOCS = os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), 'docs')
 
@@ -336,7 +336,7 @@ def run(args) -> dict:
         log('3. end to end through ROS')
         res['e2e'] = _e2e(cfg, args, log)
     res['how'] = {
-        'command': 'python -m skin_driver.bench' + (' --quick' if args.quick else '')
+        'command': 'python -m skin_driver.tools.bench.cli' + (' --quick' if args.quick else '')
         + (' --skip-ros' if args.skip_ros else '') + ('' if args.profile else ' --no-profile'),
         'pinned_cpu': cpu,
         'repetitions': (f'{cfg["frames"]} frames per accuracy cell; scale: '
@@ -354,7 +354,7 @@ def run(args) -> dict:
 
 
 def _e2e(cfg, args, log) -> dict:
-    from . import bench_ros
+    from skin_driver.tools.bench import end_to_end as bench_ros
     workdir = tempfile.mkdtemp(prefix='skin_bench_')
     try:
         load = [round(v, 2) for v in os.getloadavg()]
@@ -405,7 +405,7 @@ def write(res, out_dir) -> None:
 
 def main(argv=None) -> int:
     """Run the benchmark from the command line."""
-    parser = argparse.ArgumentParser(prog='python -m skin_driver.bench',
+    parser = argparse.ArgumentParser(prog='python -m skin_driver.tools.bench.cli',
                                      description=__doc__.strip().split('\n')[0])
     parser.add_argument('--quick', action='store_true', help='about a minute, small samples')
     parser.add_argument('--out', default=None,

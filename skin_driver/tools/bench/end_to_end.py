@@ -24,13 +24,13 @@ from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.parameter import Parameter
 from rclpy.qos import qos_profile_sensor_data
-from skin_driver import conversions
-from skin_driver.core.protocol import encode_frame, FrameDecoder
+from skin_driver.core.protocol.wire import encode_frame, FrameDecoder
 from skin_driver.core.sim.physics import Press, render, SkinModel
-from skin_driver.direction_node import DirectionNode
-from skin_driver.estimation_host import EstimationHost
-from skin_driver.probe import Probe
-from skin_driver.processes import spawn, stop
+from skin_driver.ros import conversions
+from skin_driver.ros.direction_node import DirectionNode
+from skin_driver.ros.estimation_host import EstimationHost
+from skin_driver.tools.probe import Probe
+from skin_driver.tools.processes import spawn, stop
 from skin_msgs.msg import SkinFrame, TactileContact, TactileContactArray
 from std_srvs.srv import Trigger
 import yaml
@@ -93,16 +93,17 @@ def _start_layout(layout, ros, params, log, profile_to=None, priority=0) -> dict
     args = ros + ['--params-file', params]
     rt = realtime_prefix(priority)
     if layout == 'fused':
-        return {'driver': spawn(['-m', 'skin_driver.driver_node'] + args + ['-p', 'fused:=true'],
+        return {'driver': spawn(['-m', 'skin_driver.ros.driver_node'] + args
+                                + ['-p', 'fused:=true'],
                                 log, prefix=rt)}
-    return {'direction': spawn(['-m', 'skin_driver.direction_node'] + args, log, profile_to,
+    return {'direction': spawn(['-m', 'skin_driver.ros.direction_node'] + args, log, profile_to,
                                prefix=rt),
-            'driver': spawn(['-m', 'skin_driver.driver_node'] + args, log, prefix=rt)}
+            'driver': spawn(['-m', 'skin_driver.ros.driver_node'] + args, log, prefix=rt)}
 
 
 def _start_sim(executor, scene_path, port, rate, log, priority=0):
     """Start the simulated skin; return (process, its stderr lines, epoch in host seconds)."""
-    sim = spawn(['-m', 'skin_driver.sim', '--scene', scene_path, '--link', port, '--rate',
+    sim = spawn(['-m', 'skin_driver.tools.sim', '--scene', scene_path, '--link', port, '--rate',
                  str(rate), '--loop'], log, prefix=realtime_prefix(priority),
                 stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
     lines = []

@@ -10,16 +10,16 @@ markers (visualization_msgs/MarkerArray). Services: ~/calibrate (skin_msgs/srv/C
 
 The same node runs inside the driver's process when the driver is fused (parameter fused): it
 then has no subscription, and the driver's serial reader thread hands it every scan directly.
-Either way the estimation itself is skin_driver.estimation_host.
+Either way the estimation itself is skin_driver.ros.estimation_host.
 """
 
 import rclpy
 from rclpy.executors import ExternalShutdownException
 from rclpy.node import Node
 from rclpy.qos import qos_profile_sensor_data
-from skin_driver import conversions
-from skin_driver.estimation_host import EstimationHost
-from skin_driver.params import ParameterError
+from skin_driver.ros import conversions
+from skin_driver.ros.estimation_host import EstimationHost
+from skin_driver.ros.params import ParameterError
 from skin_msgs.msg import SkinFrame
 
 

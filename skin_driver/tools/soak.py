@@ -20,7 +20,8 @@ Frame accounting (all counts exact; "balance" lines must be 0):
   'frames dropped' (sequence gaps within a connection plus frames lost while the device was
   away, which includes the frames discarded at a reopen).
 
-``python -m skin_driver.soak --duration 300 --json soak.json`` prints a summary and writes it.
+``python -m skin_driver.tools.soak --duration 300 --json soak.json``
+prints a summary and writes it.
 """
 
 import argparse
@@ -37,9 +38,9 @@ import numpy as np
 import rclpy
 from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.node import Node
-from skin_driver.probe import Probe, values
-from skin_driver.processes import spawn, stop
-from skin_driver.sim import SimulatedSkin
+from skin_driver.tools.probe import Probe, values
+from skin_driver.tools.processes import spawn, stop
+from skin_driver.tools.sim import SimulatedSkin
 from skin_msgs.msg import SkinFrame
 import yaml
 
@@ -191,9 +192,9 @@ def run(args, workdir: str) -> dict:
             '/**/skin_direction': {'ros__parameters': {
                 'calibration_file': os.path.join(workdir, 'calibration.yaml')}}}, f)
     ros = ['--ros-args', '-r', f'__ns:={ns}', '--log-level', 'error', '--params-file', params]
-    procs = {'driver': spawn(['-m', 'skin_driver.driver_node'] + ros, log)}
+    procs = {'driver': spawn(['-m', 'skin_driver.ros.driver_node'] + ros, log)}
     if not args.fused:
-        procs['direction'] = spawn(['-m', 'skin_driver.direction_node'] + ros, log)
+        procs['direction'] = spawn(['-m', 'skin_driver.ros.direction_node'] + ros, log)
     sim = SimulatedSkin(args.scene, rate_hz=args.rate, link_path=port, seed=args.seed, loop=True,
                         truth_capacity=max(10_000, int(args.rate * 20)))
     rclpy.init()

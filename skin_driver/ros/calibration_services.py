@@ -28,7 +28,7 @@ from rclpy.callback_groups import MutuallyExclusiveCallbackGroup
 from rclpy.task import Future
 from skin_driver.core.estimation.calibration import Calibration
 from skin_driver.core.estimation.session import CalibrationRefused, CalibrationSession
-from skin_driver.params import declare
+from skin_driver.ros.params import declare
 from skin_msgs.srv import Calibrate, CalibrateCompliance, CalibrateForce, CalibrateGains
 
 MAX_CALIBRATION_PRESSES = 1000
