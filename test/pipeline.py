@@ -5,11 +5,11 @@ import contextlib
 import rclpy
 from rclpy.parameter import Parameter
 from rosutil import ros_context, spin_until
+from skin_driver.core.sim.board import SimulatedSkin
 from skin_driver.core.sim.scene import scene_from_dict
 from skin_driver.ros.direction_node import DirectionNode
 from skin_driver.ros.driver_node import SkinDriverNode
 from skin_driver.tools.probe import Probe
-from skin_driver.tools.sim import SimulatedSkin
 
 
 def scene(presses, rows=16, cols=16, **model):

@@ -14,7 +14,8 @@ import pytest
 
 CORE = pathlib.Path(__file__).resolve().parents[1] / 'skin_driver' / 'core'
 # The ROS-free tools beside the core: the evaluator and the simulator run without ROS too.
-ROS_FREE_TOOLS = ['skin_driver.tools.evaluate.cli', 'skin_driver.tools.sim']
+ROS_FREE_TOOLS = ['skin_driver.tools.evaluate.cli', 'skin_driver.tools.sim',
+                  'skin_driver.tools.bench.estimators']
 FORBIDDEN = ('rclpy', 'rosidl', 'builtin_interfaces', 'std_msgs', 'geometry_msgs', 'sensor_msgs',
              'skin_msgs', 'visualization_msgs', 'diagnostic_msgs', 'std_srvs', 'launch')
 # What each wing may not import (besides ROS).

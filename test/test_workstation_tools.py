@@ -43,6 +43,7 @@ def test_with_env_without_any_ros_environment_says_what_to_do(tmp_path):
                            'install registers its pytest plugin, and there this test runs')
 def test_pytest_collects_with_jazzys_launch_testing_plugin_installed():
     done = subprocess.run([sys.executable, '-m', 'pytest', '--collect-only', '-q', '-p',
-                           'no:xdist', 'test/test_atomic.py'], cwd=ROOT, capture_output=True,
-                          text=True, env={**os.environ, 'PYTEST_ADDOPTS': ''}, timeout=120)
+                           'no:xdist', 'test/core/estimation/test_atomic.py'], cwd=ROOT,
+                          capture_output=True, text=True, timeout=120,
+                          env={**os.environ, 'PYTEST_ADDOPTS': ''})
     assert done.returncode == 0, done.stdout[-2000:] + done.stderr[-2000:]

@@ -1,8 +1,8 @@
 """
 Calibration services for any node that estimates contacts: the ROS side of core session.py.
 
-``CalibrationServices(node, get_estimator)`` declares the calibration parameters on ``node``,
-loads the calibration file into the estimator, and offers
+``CalibrationServices(node, get_estimator, put_calibration)`` declares the calibration
+parameters on ``node``, loads the calibration file into the estimator, and offers
 
 * ``~/calibrate`` (skin_msgs/srv/Calibrate): (x_p, y_p) from normal presses;
 * ``~/calibrate_force`` (skin_msgs/srv/CalibrateForce): the counts-to-force curves from presses
@@ -14,9 +14,10 @@ loads the calibration file into the estimator, and offers
   skin or many presses spread over it.
 
 The node calls :meth:`feed` with every scan and its contacts. The calibration lives in the
-estimator alone (``get_estimator()`` returns the one in use, even after the node rebuilt it). A
-new calibration is written to the file first and put in force only once written; a refusal, a
-timeout or a failed write answers with the calibration still in force.
+estimator alone, which the node owns: ``get_estimator()`` returns the one in force and
+``put_calibration(calibration)`` asks the node to put a new one in force. A new calibration is
+written to the file first and put in force only once written; a refusal, a timeout or a failed
+write answers with the calibration still in force.
 """
 
 import math
@@ -81,10 +82,11 @@ def request_problem(presses: int, timeout: float, forces=()) -> str:
 class CalibrationServices:
     """Offer the calibration services on a node whose estimator ``get_estimator()`` returns."""
 
-    def __init__(self, node, get_estimator):
+    def __init__(self, node, get_estimator, put_calibration):
         """Declare the parameters, load the calibration file and create the services."""
         self._node = node
         self._get_estimator = get_estimator
+        self._put_calibration = put_calibration
         self._session = None
         self._future = None
         self._wrench = None
@@ -128,7 +130,7 @@ class CalibrationServices:
                 self._node.get_logger().error(f'ignoring calibration file {path}: {err}')
                 self.note = f'calibration file {path} unreadable: uncalibrated'
         self.loaded_from = path
-        self._get_estimator().calibration = cal
+        self._put_calibration(cal)
 
     def _on_parameters(self, params) -> None:
         names = {p.name for p in params}
@@ -252,7 +254,7 @@ class CalibrationServices:
         except (CalibrationRefused, OSError, ValueError) as err:
             response.message = f'{err}{KEEP}'
             return response
-        self._get_estimator().calibration = result.calibration
+        self._put_calibration(result.calibration)
         self.loaded_from = path
         self.note = f'calibration from {path}: {result.calibration.describe()}'
         answer(response, result.calibration, result)

@@ -10,14 +10,14 @@ straight from the driver's serial reader thread: parameters, services and diagno
 the same whichever way the scans arrive.
 
 Threads: process() is the hot path and may run on any one thread; everything else runs on the
-executor. The hot path takes no lock: it reads the estimator once per scan, and every change
-(tare, calibration, parameters) builds a new estimator under a lock and swaps it in by one
-reference assignment. Work a lower rate does as well (heatmaps, markers, diagnostics) runs on
-timers, on the latest scan only.
+executor. The host is the one owner of the live estimator, which never changes once built: the
+hot path takes no lock and reads it once per scan, and every change (tare, calibration,
+parameters, a new taxel pitch) builds a new estimator from the current one under a lock
+(:meth:`EstimationHost._swap`) and puts it in force by one reference assignment. Work a lower
+rate does as well (heatmaps, markers, diagnostics) runs on timers, on the latest scan only.
 """
 
-import collections
-import copy
+from dataclasses import replace
 import math
 import threading
 import time
@@ -32,6 +32,7 @@ from sensor_msgs.msg import Image
 from skin_driver.core.estimation.heatmap import colour_map
 from skin_driver.core.estimation.pipeline import ContactEstimator, EstimatorConfig
 from skin_driver.core.estimation.shift import DEFAULT_METHOD, method_names
+from skin_driver.core.estimation.tare import RecentScans
 from skin_driver.ros import conversions, diagnostics
 from skin_driver.ros.calibration_services import CalibrationServices
 from skin_driver.ros.estimator_params import estimator_config, ESTIMATOR_PARAMETERS
@@ -53,11 +54,11 @@ class EstimationHost:
         cv2.setNumThreads(1)
         self._declare_parameters()
         self._lock = threading.Lock()  # serialises changes of the estimator, never the hot path
-        self.estimator = self._build_estimator(EstimatorConfig().pitch_m)
-        # The estimator holds the calibration; the services load the file into it and put every
-        # new calibration in force there, whichever estimator is in use by then.
-        self.calibration = CalibrationServices(node, lambda: self.estimator)
-        self._recent = collections.deque(maxlen=self._p('tare.frames'))
+        self._estimator = ContactEstimator(self._config(EstimatorConfig().pitch_m))
+        # The estimator holds the calibration; the services put every new one in force here.
+        self.calibration = CalibrationServices(node, lambda: self._estimator,
+                                               self.put_calibration)
+        self._recent = RecentScans(self._p('tare.frames'))
         self._frames = self._bad_frames = self._contacts = 0
         self._cost_sum = self._cost_max = 0.0
         self._cost_count = 0
@@ -147,14 +148,12 @@ class EstimationHost:
             self._rebuilders = [t for t in self._rebuilders if t.is_alive()] + [worker]
             worker.start()
         if 'tare.frames' in names:
-            self._recent = collections.deque(self._recent, maxlen=self._p('tare.frames'))
+            self._recent.resize(self._p('tare.frames'))
         if 'viz_rate' in names:
             self._start_viz_timer()
 
     def _rebuild(self, names) -> None:
-        with self._lock:
-            old = self.estimator
-            self.estimator = self._build_estimator(old.config.pitch_m, old.conditioner)
+        self._swap(lambda old: old.with_config(self._config(old.config.pitch_m)))
         self.node.get_logger().info(f"estimator rebuilt for {', '.join(names)}")
 
     @property
@@ -162,12 +161,24 @@ class EstimationHost:
         """Return whether a parameter change is still being applied to the estimator."""
         return any(worker.is_alive() for worker in self._rebuilders)
 
-    def _build_estimator(self, pitch_m: float, conditioner=None) -> ContactEstimator:
-        """Return an estimator for the current parameters, keeping tare and calibration."""
-        config = estimator_config({n: self._p(n) for n in ESTIMATOR_PARAMETERS}, pitch_m)
-        previous = getattr(self, 'estimator', None)
-        return ContactEstimator(config, previous.calibration if previous else None,
-                                conditioner=conditioner)
+    def _config(self, pitch_m: float) -> EstimatorConfig:
+        """Return the estimator settings of the current parameters."""
+        return estimator_config({n: self._p(n) for n in ESTIMATOR_PARAMETERS}, pitch_m)
+
+    # ---- the live estimator -----------------------------------------------------------------
+    @property
+    def estimator(self) -> ContactEstimator:
+        """Return the estimator in force (immutable; a change swaps in another)."""
+        return self._estimator
+
+    def _swap(self, change) -> None:
+        """Put ``change(current estimator)`` in force; nothing changes if it raises."""
+        with self._lock:
+            self._estimator = change(self._estimator)
+
+    def put_calibration(self, calibration) -> None:
+        """Put ``calibration`` in force (with its force curves and gains)."""
+        self._swap(lambda estimator: estimator.with_calibration(calibration))
 
     # ---- hot path ---------------------------------------------------------------------------
     def process(self, header, sequence: int, device_time_us: int, pitch_m: float,
@@ -201,7 +212,7 @@ class EstimationHost:
         if cost > self._cost_max:
             self._cost_max = cost
         self._rate.add()
-        self._recent.append((top, bottom, len(contacts)))
+        self._recent.add(top, bottom, len(contacts))
         self._latest = (header, pitch_m, top, bottom, contacts)
         self.calibration.feed(top, bottom, contacts)
 
@@ -213,15 +224,14 @@ class EstimationHost:
 
     def _estimator_for(self, pitch_m: float) -> ContactEstimator:
         """Return the estimator, rebuilt first if the frames' taxel pitch has changed."""
-        estimator = self.estimator
+        estimator = self._estimator
         # SkinFrame carries the pitch as float32: 0.005 arrives as 0.004999999888; only a real
         # change rebuilds the estimator (keeping the tare and the calibration).
         if not math.isclose(pitch_m, estimator.config.pitch_m, rel_tol=1e-5):
             if not (math.isfinite(pitch_m) and pitch_m > 0):
                 raise ValueError(f'pitch {pitch_m} is not a positive length')
-            with self._lock:
-                self.estimator = self._build_estimator(pitch_m, self.estimator.conditioner)
-                estimator = self.estimator
+            self._swap(lambda old: old.with_config(replace(old.config, pitch_m=pitch_m)))
+            estimator = self._estimator
         return estimator
 
     # ---- rviz -------------------------------------------------------------------------------
@@ -239,7 +249,7 @@ class EstimationHost:
             return
         header, pitch, top, bottom, contacts = latest
         full = self._p('viz_full_scale')
-        top_force, bottom_force = self.estimator.conditioner.condition(top, bottom)
+        top_force, bottom_force = self._estimator.conditioner.condition(top, bottom)
         self._pub_heat['top'].publish(
             conversions.rgb_to_image(header, colour_map(top_force, full)))
         self._pub_heat['bottom'].publish(
@@ -249,35 +259,15 @@ class EstimationHost:
 
     # ---- tare -------------------------------------------------------------------------------
     def _on_tare(self, request, response):
-        wanted = self._p('tare.frames')
-        frames = list(self._recent)[-wanted:]
-        if len(frames) < wanted:
+        try:
+            tops, bottoms = self._recent.unloaded(self._p('tare.frames'))
+            self._swap(lambda estimator: estimator.with_tare(tops, bottoms))
+        except ValueError as err:  # TareRefused, or frames the conditioner cannot take
             response.success = False
-            response.message = (f'only {len(frames)} of {wanted} scans received so far; '
-                                'is the driver running?')
+            response.message = f'tare refused: {err}'
             return response
-        loaded = sum(1 for _, _, n in frames if n)
-        if loaded:
-            response.success = False
-            response.message = (f'the skin is loaded ({loaded} of the last {wanted} scans have a '
-                                'contact); lift everything off it and call again')
-            return response
-        tops = np.stack([f[0] for f in frames])
-        bottoms = np.stack([f[1] for f in frames])
-        with self._lock:
-            old = self.estimator
-            # Tared on a copy: the scan being estimated meanwhile sees the old baseline whole.
-            new = ContactEstimator(old.config, old.calibration,
-                                   conditioner=copy.deepcopy(old.conditioner))
-            try:
-                new.tare(tops, bottoms)
-            except ValueError as err:
-                response.success = False
-                response.message = f'tare failed: {err}'
-                return response
-            self.estimator = new
         response.success = True
-        response.message = f'baseline recorded from {wanted} unloaded scans'
+        response.message = f'baseline recorded from {len(tops)} unloaded scans'
         self.node.get_logger().info(response.message)
         return response
 

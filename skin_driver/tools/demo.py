@@ -30,7 +30,8 @@ from skin_driver.core.estimation.shift import DEFAULT_METHOD
 from skin_driver.core.sim.experiments import PAPER_SPOT
 from skin_driver.core.sim.scene import scene_from_dict
 from skin_driver.ros import conversions
-from skin_driver.tools.evaluate.cli import format_table, summarise
+from skin_driver.tools.evaluate.scoring import summarise
+from skin_driver.tools.evaluate.tables import format_table
 from skin_driver.tools.probe import Probe
 from skin_driver.tools.processes import spawn, stop
 from skin_msgs.msg import SkinFrame, TactileContactArray
@@ -184,7 +185,7 @@ class DemoMonitor:
     def set_calibration(self, path: str) -> None:
         """Give the side-by-side seed estimator the calibration the node wrote."""
         self.calibration = Calibration.load_yaml(path)
-        self.seed.calibration = self.calibration
+        self.seed = self.seed.with_calibration(self.calibration)
         self.calibrated = True
 
     @staticmethod

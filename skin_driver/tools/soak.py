@@ -38,9 +38,9 @@ import numpy as np
 import rclpy
 from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.node import Node
+from skin_driver.core.sim.board import SimulatedSkin
 from skin_driver.tools.probe import Probe, values
 from skin_driver.tools.processes import spawn, stop
-from skin_driver.tools.sim import SimulatedSkin
 from skin_msgs.msg import SkinFrame
 import yaml
 

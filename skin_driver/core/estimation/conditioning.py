@@ -125,6 +125,7 @@ class Conditioner:
         self._shape = None
         self._layers = None
         self._stack = None
+        self._tared = False
         assumed = _ForceTable(self.config.fsr.counts_to_force, self.config.fsr.full_scale)
         # One table per layer: a fitted curve (forcecurve.ForceCurve) replaces the assumed one.
         self._tables = (assumed, assumed)
@@ -136,6 +137,31 @@ class Conditioner:
     def shape(self):
         """Return the map shape this conditioner is set up for, or None."""
         return self._shape
+
+    def copy(self, config: ConditioningConfig = None) -> 'Conditioner':
+        """
+        Return an independent copy, optionally under another ``config``.
+
+        The tare (baseline, noise, dead taxels), gains and fitted force curves carry over; a new
+        config's threshold applies to the measured noise as a tare would have applied it.
+        """
+        new = Conditioner(config or self.config)
+        if config is None or config.fsr == self.config.fsr:
+            new._tables = tuple(new._assumed if t is self._assumed else t for t in self._tables)
+        if self._layers is not None:
+            new._reset(self._shape)
+            new._tared = self._tared
+            for mine, theirs in zip(self._layers, new._layers):
+                theirs.baseline = mine.baseline.copy()
+                theirs.dead = mine.dead.copy()
+                theirs.gain = None if mine.gain is None else mine.gain.copy()
+                if config is None:
+                    theirs.noise, theirs.threshold = mine.noise.copy(), mine.threshold.copy()
+                elif self._tared:
+                    theirs.noise = mine.noise.copy()
+                    theirs.threshold = np.maximum(new.config.threshold_counts,
+                                                  new.config.noise_sigmas * mine.noise)
+        return new
 
     def _reset(self, shape):
         if len(shape) != 2 or min(shape) < 1:
@@ -181,14 +207,7 @@ class Conditioner:
                                          self.config.noise_sigmas * std)
             layer.noise = std
             layer.dead = dead
-        self._stack = None
-
-    def set_baseline(self, top_baseline, bottom_baseline) -> None:
-        """Set the per-taxel baselines (counts) directly, e.g. from a calibration table."""
-        t, b = check_pair(top_baseline, bottom_baseline)
-        self._ensure(t.shape)
-        self._layers[0].baseline = t.astype(np.float64)
-        self._layers[1].baseline = b.astype(np.float64)
+        self._tared = True
         self._stack = None
 
     def set_gain(self, top_gain, bottom_gain) -> None:

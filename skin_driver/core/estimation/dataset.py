@@ -132,6 +132,26 @@ class Dataset:
         """Return (rows, cols) of one map."""
         return tuple(self.top.shape[1:])
 
+    def press_counts(self) -> np.ndarray:
+        """Return the number of presses of each frame (1 where there are no press arrays)."""
+        if self.press_x_m is None:
+            return np.ones(self.frames, dtype=int)
+        return np.isfinite(self.press_x_m).sum(axis=1)
+
+    def select(self, frames) -> 'Dataset':
+        """Return the dataset of the given frame indices (tare and pitch unchanged, no split)."""
+        keep = np.asarray(frames, dtype=int)
+        per_frame = ('top', 'bottom', 'azimuth_deg', 'alpha_deg', *_OPTIONAL, *PRESS_FIELDS)
+        fields = {k: (None if getattr(self, k) is None else getattr(self, k)[keep])
+                  for k in per_frame}
+        return Dataset(pitch_m=self.pitch_m, tare_top=self.tare_top,
+                       tare_bottom=self.tare_bottom, **fields)
+
+    def scored_frames(self) -> np.ndarray:
+        """Return the indices of the frames that are scored: all, or those with split = 0."""
+        return (np.arange(self.frames) if self.split is None
+                else np.flatnonzero(self.split == 0))
+
     def presses(self, frame: int) -> list:
         """
         Return the ground truth of every press of ``frame`` as dicts (x_m, y_m, ... keys).

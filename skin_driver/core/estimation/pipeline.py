@@ -144,16 +144,25 @@ class ContactEstimator:
     def __init__(self, config: EstimatorConfig = None, calibration: Calibration = None,
                  conditioner: Conditioner = None, shift: Method = None):
         """
-        Create the pipeline; ``conditioner`` may carry a tare, else a fresh one is made.
+        Create the pipeline; ``conditioner`` may carry a tare (it is copied, never shared).
 
         ``shift`` replaces the configured shift method by one that is not registered (the
-        benchmark's references).
+        benchmark's references). An estimator does not change once made: a tare, a calibration
+        or other settings make a new one (``with_*``), which a live host swaps in whole.
         """
         self.config = config or EstimatorConfig()
-        self.conditioner = conditioner or Conditioner(ConditioningConfig(
-            fsr=self.config.fsr, threshold_counts=self.config.threshold_counts,
-            noise_sigmas=self.config.noise_sigmas))
-        self.calibration = calibration or Calibration()
+        cond_config = ConditioningConfig(fsr=self.config.fsr,
+                                         threshold_counts=self.config.threshold_counts,
+                                         noise_sigmas=self.config.noise_sigmas)
+        self.conditioner = (Conditioner(cond_config) if conditioner is None
+                            else conditioner.copy(None if conditioner.config == cond_config
+                                                  else cond_config))
+        self._calibration = calibration or Calibration()
+        self.conditioner.set_force_curves(*(self._calibration.force_curves or (None, None)))
+        top, bottom = self._calibration.gain_maps()
+        if top is not None or self.conditioner.shape is not None:
+            self.conditioner.set_gain(top, bottom)
+        self._shift = shift
         self._method = shift or get_method(self.config.method)
 
     @property
@@ -161,23 +170,24 @@ class ContactEstimator:
         """Return the calibration in force."""
         return self._calibration
 
-    @calibration.setter
-    def calibration(self, calibration: Calibration) -> None:
-        """Put ``calibration`` in force, its force curves and gains in the conditioner too."""
-        self.conditioner.set_force_curves(*(calibration.force_curves or (None, None)))
-        top, bottom = calibration.gain_maps()
-        if top is not None or self.conditioner.shape is not None:
-            self.conditioner.set_gain(top, bottom)
-        self._calibration = calibration
+    def with_calibration(self, calibration: Calibration) -> 'ContactEstimator':
+        """Return this estimator with ``calibration`` (force curves and gains too) in force."""
+        return ContactEstimator(self.config, calibration, self.conditioner, self._shift)
+
+    def with_config(self, config: EstimatorConfig) -> 'ContactEstimator':
+        """Return an estimator with other settings, keeping the tare and the calibration."""
+        return ContactEstimator(config, self._calibration, self.conditioner, self._shift)
+
+    def with_tare(self, top_frames, bottom_frames) -> 'ContactEstimator':
+        """Return this estimator tared from no-touch frames (N x rows x cols each)."""
+        tared = self.conditioner.copy()
+        tared.tare(top_frames, bottom_frames)
+        return ContactEstimator(self.config, self._calibration, tared, self._shift)
 
     @property
     def compliance_m_per_n(self) -> float:
         """Return the compliance in use: the calibrated one, else the configured one."""
         return self.calibration.compliance_m_per_n or self.config.compliance_m_per_n
-
-    def tare(self, top_frames, bottom_frames) -> None:
-        """Tare the conditioner from no-touch frames (N x rows x cols each)."""
-        self.conditioner.tare(top_frames, bottom_frames)
 
     def _raw(self, top_counts, bottom_counts) -> list:
         """Return [(LayerPair, ShiftEstimate, sigma in taxels)] for the contacts."""

@@ -31,7 +31,7 @@ from ..estimation.dataset import Dataset
 
 __all__ = ['SCENE_KINDS', 'PAPER_ALPHA_DEG', 'PAPER_BETAS_DEG', 'paper_presses', 'make_scene',
            'make_seed_experiment', 'make_random_experiment', 'make_border_experiment',
-           'make_multi_experiment', 'add_calibration_frames']
+           'make_multi_experiment', 'add_calibration_frames', 'render_scene']
 
 PAPER_ALPHA_DEG = 45.0
 PAPER_BETAS_DEG = tuple(float(b) for b in range(0, 360, 45))
@@ -324,3 +324,24 @@ def add_calibration_frames(data: Dataset, model: SkinModel, rng: np.random.Gener
                                     [math.degrees(p.alpha_rad) for p in presses]),
         press_shift_m=press_truth('press_shift_m', [model.compliance_m_per_n
                                                     * p.tangential_force_n for p in presses]))
+
+
+def render_scene(scene, seed: int = 0, samples_per_press: int = 1) -> Dataset:
+    """
+    Render a simulator scene (:class:`scene.Scene`) offline into a dataset with ground truth.
+
+    Samples are taken during the hold phase of every press (every repetition), at full force, with
+    all presses active at that moment rendered together; the tare frames have no press.
+    """
+    if (isinstance(samples_per_press, bool) or not isinstance(samples_per_press, int)
+            or samples_per_press < 1):
+        raise ValueError(f'samples_per_press must be an integer >= 1, got {samples_per_press!r}')
+    times = []
+    for k in range(scene.repeat):
+        for p in scene.presses:
+            hold = max(p.duration_s - 2 * p.ramp_s, 0.0)
+            times += [k * scene.period_s + p.time_s + p.ramp_s
+                      + hold * (j + 0.5) / samples_per_press for j in range(samples_per_press)]
+    # A validated scene has at least one press, so there is at least one sample.
+    return _build(scene.model, [scene.presses_at(t) for t in times],
+                  np.random.default_rng(seed))

@@ -29,7 +29,7 @@ import numpy as np
 from skin_driver.core.estimation.shift import DEFAULT_METHOD
 from skin_driver.tools.bench import estimators as bench_core, report as bench_report
 from skin_driver.tools.bench.report import label
-from skin_driver.tools.evaluate.cli import _json_safe
+from skin_driver.tools.evaluate.tables import json_safe
 
 DOCS = os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), 'docs')
 
@@ -397,7 +397,7 @@ def write(res, out_dir) -> None:
         images['e2e'] = bench_report.plot_e2e(res['e2e']['runs'], out_dir)
     res['images'] = images
     with open(os.path.join(out_dir, 'benchmarks.json'), 'w') as f:
-        json.dump(_json_safe(res), f, indent=1, default=float)
+        json.dump(json_safe(res), f, indent=1, default=float)
         f.write('\n')
     with open(os.path.join(out_dir, 'benchmarks.md'), 'w') as f:
         f.write(bench_report.markdown(res, images))

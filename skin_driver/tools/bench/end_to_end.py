@@ -274,8 +274,8 @@ def stage_costs(repeats=500) -> dict:
             Parameter('calibration_file', value=os.devnull + '/none'),
             Parameter('viz_rate', value=0.0)])
         host: EstimationHost = node.host
-        est = host.estimator
-        est.tare(*[np.stack([render(model, [], rng)[k] for _ in range(10)]) for k in (0, 1)])
+        est = host.estimator.with_tare(
+            *[np.stack([render(model, [], rng)[k] for _ in range(10)]) for k in (0, 1)])
         contacts = est.process(top, bottom)
         pub_frame = node.create_publisher(SkinFrame, 'frame', qos_profile_sensor_data)
         pub_contacts = node.create_publisher(TactileContactArray, 'contacts_fresh',

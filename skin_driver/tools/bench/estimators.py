@@ -14,15 +14,16 @@ import numpy as np
 
 from skin_driver.core.estimation.fsr import FsrModel
 from skin_driver.core.estimation.pipeline import ContactEstimator, EstimatorConfig
+from skin_driver.core.estimation.recorded import prepared_estimator
 from skin_driver.core.estimation.shift import (
     centroid, DEFAULT_METHOD, Method, method_names, NO_SHIFT, ShiftEstimate)
 from skin_driver.core.sim.experiments import (
     make_random_experiment, make_scene, make_seed_experiment, SCENE_KINDS)
 from skin_driver.core.sim.physics import Press, render, SkinModel
 from skin_driver.core.sim.skins import family_skin, skin_names
-from skin_driver.tools.evaluate.cli import (
-    calibrated_estimator, direction_errors, evaluate, format_table, MethodRun, PAPER_TABLE,
-    score_run)
+from skin_driver.tools.evaluate.scoring import (
+    direction_errors, evaluate, MethodRun, PAPER_TABLE, score_run)
+from skin_driver.tools.evaluate.tables import format_table
 
 PATCH_M = 0.08
 SEED_PITCH_M = 0.005
@@ -82,11 +83,11 @@ def _angle_error(estimate_rad: float, truth_rad: float) -> float:
     return abs(math.degrees((estimate_rad - truth_rad + math.pi) % (2 * math.pi) - math.pi))
 
 
-def _tare(est_list, model, rng, frames=12) -> None:
+def _tared(ests: dict, model, rng, frames=12) -> dict:
+    """Return the estimators tared from the same no-touch frames of ``model``."""
     maps = [render(model, [], rng) for _ in range(frames)]
     tops, bottoms = np.stack([m[0] for m in maps]), np.stack([m[1] for m in maps])
-    for est in est_list:
-        est.tare(tops, bottoms)
+    return {name: est.with_tare(tops, bottoms) for name, est in ests.items()}
 
 
 def _press_for_shift(model, shift_taxels, rng) -> Press:
@@ -118,8 +119,7 @@ def accuracy_speed(grids, shifts, noises, frames, methods, seed=0, log=print) ->
     for n in grids:
         for noise in noises:
             model = skin_for_grid(n, noise)
-            ests = {m: make_estimator(m, model) for m in methods}
-            _tare(ests.values(), model, rng)
+            ests = _tared({m: make_estimator(m, model) for m in methods}, model, rng)
             warm = render(model, [_press_for_shift(model, 1.0, rng)], rng)
             for est in ests.values():
                 est.process(*warm)
@@ -169,8 +169,8 @@ def seed_experiment(repeats: int, random_frames: int, seed: int = 0) -> dict:
     shifts = {}
     tilted = np.flatnonzero(data.alpha_deg > 0)
     for name in ('seed', method_names()[0]):
-        est = ContactEstimator(EstimatorConfig(method=name, pitch_m=data.pitch_m))
-        est.tare(data.tare_top, data.tare_bottom)
+        est = ContactEstimator(EstimatorConfig(method=name, pitch_m=data.pitch_m)).with_tare(
+            data.tare_top, data.tare_bottom)
         pts = []
         for i in tilted:
             s = est.measure_shifts(data.top[i], data.bottom[i])
@@ -192,10 +192,8 @@ def _contact_slots(model, count) -> list:
     return slots[:count]
 
 
-def _calibrated(name, model, rng):
-    est = make_estimator(name, model)
-    _tare([est], model, rng)
-    return est
+def _tared_estimator(name, model, rng):
+    return _tared({name: make_estimator(name, model)}, model, rng)[name]
 
 
 def _interleaved_cost(ests, frames, rng, repeats) -> dict:
@@ -216,7 +214,7 @@ def scaling(grids, contact_counts, methods, frames, repeats, seed=0, log=print) 
     by_grid = []
     for n in grids:
         model = skin_for_grid(n)
-        ests = {m: _calibrated(m, model, rng) for m in methods}
+        ests = {m: _tared_estimator(m, model, rng) for m in methods}
         maps = [render(model, [_press_for_shift(model, 1.0, rng)], rng) for _ in range(frames)]
         cost = _interleaved_cost(ests, maps, rng, repeats)
         by_grid += [{'grid': n, 'taxels': n * n, 'method': m, **c} for m, c in cost.items()]
@@ -224,7 +222,7 @@ def scaling(grids, contact_counts, methods, frames, repeats, seed=0, log=print) 
     by_contacts = []
     for n in (grids[0], grids[-1]):
         model = skin_for_grid(n)
-        ests = {m: _calibrated(m, model, rng) for m in methods}
+        ests = {m: _tared_estimator(m, model, rng) for m in methods}
         for k in contact_counts:
             maps = []
             for _ in range(frames):
@@ -268,7 +266,7 @@ def plain_centroid_estimator(data, threshold_counts: float = 40.0) -> ContactEst
         return centroid(counts)
 
     plain = Method(PLAIN_CENTROID, shift, True, 'centroid difference of the tared count maps')
-    return calibrated_estimator(data, DEFAULT_METHOD, shift=plain)
+    return prepared_estimator(data, DEFAULT_METHOD, shift=plain)[0]
 
 
 def _family_row(skin, kind, data, run, costs) -> dict:
@@ -303,7 +301,7 @@ def family(sizes: dict, methods: list, skins: list = None, seed: int = 0, log=pr
         for kind in SCENE_KINDS:
             data = make_scene(kind, skin, rng, sizes[kind])
             ests = {m: (plain_centroid_estimator(data) if m == PLAIN_CENTROID
-                        else calibrated_estimator(data, m)) for m in methods}
+                        else prepared_estimator(data, m)[0]) for m in methods}
             contacts = {m: [] for m in methods}
             times = {m: [] for m in methods}
             for i in range(data.frames):

@@ -7,7 +7,7 @@ import warnings
 
 import numpy as np
 
-from skin_driver.tools.evaluate.cli import PAPER_TABLE
+from skin_driver.tools.evaluate.scoring import PAPER_TABLE
 
 with warnings.catch_warnings():
     # matplotlib's parsers call pyparsing APIs it deprecates; nothing this project can fix.

@@ -11,7 +11,7 @@ from skin_driver.ros.direction_node import DirectionNode
 from skin_driver.ros.driver_node import SkinDriverNode
 import yaml
 
-ROOT = pathlib.Path(__file__).resolve().parents[1]
+ROOT = pathlib.Path(__file__).resolve().parents[2]
 CONFIG = ROOT / 'config' / 'skin.yaml'
 NODES = {'skin_driver': SkinDriverNode, 'skin_direction': DirectionNode}
 

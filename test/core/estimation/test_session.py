@@ -21,7 +21,7 @@ def tared(seed=0):
     rng = np.random.default_rng(seed)
     est = ContactEstimator(EstimatorConfig())
     quiet = [render(SKIN, [], rng) for _ in range(10)]
-    est.tare(np.stack([q[0] for q in quiet]), np.stack([q[1] for q in quiet]))
+    est = est.with_tare(np.stack([q[0] for q in quiet]), np.stack([q[1] for q in quiet]))
     return est, rng
 
 
@@ -56,7 +56,7 @@ def test_force_session_makes_newtons_right_on_another_fsr_curve():
     assert session.done and len(notes) == FORCES.size
     outcome = session.finish()
     assert est.calibration == Calibration()  # finish never changes what is in force
-    est.calibration = outcome.calibration
+    est = est.with_calibration(outcome.calibration)
     assert outcome.presses_used == FORCES.size
     for f in (8.0, 20.0, 35.0):
         assert force_of(est, rng, f) == pytest.approx(f, rel=0.1)
@@ -76,7 +76,8 @@ def test_offset_session_ignores_tilted_presses_and_finds_the_misalignment():
 
 def test_compliance_session_from_known_tilted_loads():
     est, rng = tared(2)
-    est.calibration = Calibration(x_p_m=SKIN.misalignment_m[0], y_p_m=SKIN.misalignment_m[1])
+    est = est.with_calibration(Calibration(x_p_m=SKIN.misalignment_m[0],
+                                           y_p_m=SKIN.misalignment_m[1]))
     forces, alphas = [6.0, 8.0, 5.0, 7.0], np.radians([30.0, 20.0, 40.0, 25.0])
     betas = np.radians([0.0, 90.0, 200.0, 300.0])
     session = CalibrationSession(est, 'compliance', forces_n=forces, alphas_rad=alphas)
@@ -91,7 +92,8 @@ def test_compliance_session_from_known_tilted_loads():
 
 def test_compliance_from_a_reference_wrench_fed_with_the_scans():
     est, rng = tared(3)
-    est.calibration = Calibration(x_p_m=SKIN.misalignment_m[0], y_p_m=SKIN.misalignment_m[1])
+    est = est.with_calibration(Calibration(x_p_m=SKIN.misalignment_m[0],
+                                           y_p_m=SKIN.misalignment_m[1]))
     session = CalibrationSession(est, 'compliance', presses=3)
     for f, beta in ((6.0, 0.0), (8.0, 2.0), (5.0, 4.0)):
         alpha = math.radians(30.0)
@@ -114,7 +116,7 @@ def test_compliance_from_a_reference_wrench_fed_with_the_scans():
 def test_a_refused_force_session_leaves_the_calibration_in_force(forces, message):
     est, rng = tared(4)
     previous = Calibration(x_p_m=1e-4, compliance_m_per_n=1e-3, presses=3)
-    est.calibration = previous
+    est = est.with_calibration(previous)
     probe = render(SKIN, [Press(0.04, 0.04, 20.0, radius_m=0.004)], rng)
     maps = est.conditioner.condition(*probe)
     session = CalibrationSession(est, 'force', forces_n=forces)

@@ -3,9 +3,10 @@ Fuzzing of the frame decoder: mutated valid streams, random bytes and a regressi
 
 Whatever arrives, the decoder must not raise, must accept only frames that were encoded, must
 find every frame that the damage did not touch (resync within the next intact frame) and must
-keep its buffer within max_buffer_bytes.  The corpus in test/corpus/ holds small streams, each
-named for what it exercises, with the expected outcome in test/corpus/expected.yaml; rebuild it
-with ``python test/test_fuzz_decoder.py`` after a deliberate protocol change.
+keep its buffer within max_buffer_bytes.  The corpus in corpus/ beside this file holds small
+streams, each named for what it exercises, with the expected outcome in corpus/expected.yaml;
+rebuild it with ``python test/core/protocol/test_wire_fuzz.py`` after a deliberate protocol
+change.
 """
 
 import binascii
@@ -236,7 +237,7 @@ def _corpus_cases():
 
 
 def write_corpus():
-    """(Re)write test/corpus/ from _corpus_cases()."""
+    """(Re)write test/core/protocol/corpus/ from _corpus_cases()."""
     CORPUS.mkdir(exist_ok=True)
     expected = {}
     for name, (stream, outcome) in sorted(_corpus_cases().items()):
@@ -244,7 +245,7 @@ def write_corpus():
         expected[name] = outcome
     header = ('# Expected outcome of replaying each <name>.bin through FrameDecoder(max_rows=16,\n'
               '# max_cols=16): the accepted sequence numbers in order, and the decoder counters\n'
-              '# that must hold exactly (null: not checked). Written by test_fuzz_decoder.py.\n')
+              '# that must hold exactly (null: not checked). Written by test_wire_fuzz.py.\n')
     (CORPUS / 'expected.yaml').write_text(header + yaml.safe_dump(expected, sort_keys=True))
 
 

@@ -16,7 +16,7 @@ def estimator(model, method='poc', spot=None, seed=0):
     config = EstimatorConfig(method=method, pitch_m=model.pitch_m)
     est = ContactEstimator(config)
     frames = [render(model, [], rng) for _ in range(10)]
-    est.tare(np.stack([t for t, _ in frames]), np.stack([b for _, b in frames]))
+    est = est.with_tare(np.stack([t for t, _ in frames]), np.stack([b for _, b in frames]))
     if spot is not None:
         shifts = [est.measure_shifts(*render(model, [Press(*spot, 10.0)], rng))[0]
                   for _ in range(5)]

@@ -10,13 +10,13 @@ from skin_driver.core.estimation.fsr import FsrModel
 from skin_driver.core.sim.experiments import (add_calibration_frames, make_random_experiment,
                                               make_seed_experiment)
 from skin_driver.core.sim.physics import SkinModel
-from skin_driver.tools.evaluate import cli as evaluate
+from skin_driver.tools.evaluate import cli, scoring, tables
 
 
 def test_table_and_json(tmp_path, capsys):
     path = tmp_path / 'seed.npz'
     save_dataset(path, make_seed_experiment(repeats=3, rng=np.random.default_rng(0)))
-    assert evaluate.main([str(path), '--json']) == 0
+    assert cli.main([str(path), '--json']) == 0
     report = json.loads(capsys.readouterr().out)
     assert set(report['methods']) == {'poc', 'seed'}
     poc = report['methods']['poc']
@@ -32,7 +32,7 @@ def test_table_and_json(tmp_path, capsys):
     for key in ('alpha_std_error_deg', 'alpha_bias_deg', 'force_std_error_pct',
                 'force_bias_pct'):
         assert isinstance(summary[key], float)
-    assert evaluate.main([str(path), '--method', 'centroid']) == 0
+    assert cli.main([str(path), '--method', 'centroid']) == 0
     text = capsys.readouterr().out
     assert 'summary' in text and 'centroid mean' in text and 'seed mean' in text
     assert 'alpha error' in text and '|force| error' in text
@@ -40,21 +40,21 @@ def test_table_and_json(tmp_path, capsys):
 
 def test_generate_and_errors(tmp_path, capsys):
     out = tmp_path / 'r.npz'
-    assert evaluate.main(['--generate', 'random', str(out), '--size', '20']) == 0
+    assert cli.main(['--generate', 'random', str(out), '--size', '20']) == 0
     assert out.exists()
     bad = tmp_path / 'bad.npz'
     bad.write_bytes(b'x')
-    assert evaluate.main([str(bad)]) == 2
+    assert cli.main([str(bad)]) == 2
     assert 'error' in capsys.readouterr().err
 
 
 def test_the_papers_table_stands_beside_the_seed_experiment_only():
     rng = np.random.default_rng(4)
-    seed_like = evaluate.evaluate(make_seed_experiment(repeats=1, rng=rng), 'centroid')
-    random = evaluate.evaluate(make_random_experiment(frames=30, rng=rng), 'centroid')
+    seed_like = scoring.evaluate(make_seed_experiment(repeats=1, rng=rng), 'centroid')
+    random = scoring.evaluate(make_random_experiment(frames=30, rng=rng), 'centroid')
     assert seed_like['seed_experiment'] and not random['seed_experiment']
-    assert 'paper mean' in evaluate.format_table(seed_like)
-    assert 'paper mean' not in evaluate.format_table(random)
+    assert 'paper mean' in tables.format_table(seed_like)
+    assert 'paper mean' not in tables.format_table(random)
 
 
 def test_calibration_frames_make_force_and_alpha_right_on_another_skin():
@@ -64,11 +64,11 @@ def test_calibration_frames_make_force_and_alpha_right_on_another_skin():
                                   force_at_r_min_n=40.0))
     rng = np.random.default_rng(5)
     scored = make_random_experiment(skin, frames=40, rng=rng, alpha_range_deg=(15.0, 40.0))
-    plain = evaluate.evaluate_method(scored, 'poc')['summary']
+    plain = scoring.evaluate_method(scored, 'poc')['summary']
     assert plain['force_mean_error_pct'] > 30.0
     data = add_calibration_frames(scored, skin, rng)
     assert data.split.tolist() == [1] * 32 + [0] * 40
-    report = evaluate.evaluate_method(data, 'poc')
+    report = scoring.evaluate_method(data, 'poc')
     summary = report['summary']
     assert summary['frames'] == 32  # only the scored tilted frames (one in five is normal)
     assert summary['force_mean_error_pct'] < 15.0 and summary['alpha_mean_error_deg'] < 5.0

@@ -20,7 +20,7 @@ def make(model=None, method='poc', calibration=None, seed=0, calibrate=True):
     config = EstimatorConfig(method=method, pitch_m=model.pitch_m)
     est = ContactEstimator(config, calibration)
     frames = [render(model, [], rng) for _ in range(10)]
-    est.tare(np.stack([t for t, _ in frames]), np.stack([b for _, b in frames]))
+    est = est.with_tare(np.stack([t for t, _ in frames]), np.stack([b for _, b in frames]))
     if calibrate and calibration is None:
         shifts = [est.measure_shifts(*render(model, [Press(*SPOT, 10.0)], rng))[0]
                   for _ in range(5)]

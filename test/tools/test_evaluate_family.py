@@ -11,7 +11,7 @@ from skin_driver.core.estimation.dataset import Dataset
 from skin_driver.core.estimation.pipeline import Contact, EstimatorConfig
 from skin_driver.core.sim.skins import skin_names
 from skin_driver.ros.estimator_params import estimator_config, load_direction_parameters
-from skin_driver.tools.evaluate import cli as evaluate
+from skin_driver.tools.evaluate import cli, scoring
 import yaml
 
 COLUMNS = ['frame', 'rank', 'x_m', 'y_m', 'force_n', 'azimuth_deg', 'alpha_deg',
@@ -22,7 +22,7 @@ def test_skin_scene_json_and_contacts_csv(tmp_path, capsys):
     out = tmp_path / 'contacts.csv'
     argv = ['--skin', 'default', '--scene', 'multi', '--size', '10', '--json',
             '--contacts', str(out), '--method', 'centroid']
-    assert evaluate.main(argv) == 0
+    assert cli.main(argv) == 0
     report = json.loads(capsys.readouterr().out)
     assert report['dataset'].startswith('skin default, scene multi')
     assert report['multi_press_frames'] == 8  # one frame in five is a normal press
@@ -40,11 +40,11 @@ def test_skin_scene_json_and_contacts_csv(tmp_path, capsys):
 
 
 def test_list_skins_names_every_skin(capsys):
-    assert evaluate.main(['--list-skins']) == 0
+    assert cli.main(['--list-skins']) == 0
     listed = [line.split()[0] for line in capsys.readouterr().out.splitlines()]
     assert listed == skin_names() + ['held_out:N']
     with pytest.raises(SystemExit):
-        evaluate.main(['--skin', 'no_such_skin'])
+        cli.main(['--skin', 'no_such_skin'])
     assert 'the family has default' in capsys.readouterr().err
 
 
@@ -52,15 +52,15 @@ def test_params_file_configures_the_evaluator_as_the_node(tmp_path, capsys):
     params = tmp_path / 'skin.yaml'
     params.write_text(yaml.safe_dump({'/**/skin_direction': {'ros__parameters': {
         'method': 'centroid', 'min_shift': 0.1, 'skin': {'fill_factor': 0.8}}}}))
-    assert evaluate.main(['--skin', 'default', '--size', '1', '--json',
-                          '--params', str(params)]) == 0
+    assert cli.main(['--skin', 'default', '--size', '1', '--json',
+                     '--params', str(params)]) == 0
     report = json.loads(capsys.readouterr().out)
     summary = report['methods']['centroid']['summary']
     # A 100 mm no-shear floor leaves no press with a direction.
     assert summary['valid_share'] == 0.0
     bad = tmp_path / 'other.yaml'
     bad.write_text(yaml.safe_dump({'skin_driver': {'ros__parameters': {'port': 'x'}}}))
-    assert evaluate.main(['--skin', 'default', '--params', str(bad)]) == 2
+    assert cli.main(['--skin', 'default', '--params', str(bad)]) == 2
     assert "no parameters for node 'skin_direction'" in capsys.readouterr().err
 
 
@@ -95,9 +95,9 @@ def _pair_dataset():
 ])
 def test_presses_are_matched_by_location(contacts, separate, merged, errors):
     data = _pair_dataset()
-    run = evaluate.MethodRun('poc', Calibration(), [contacts], 1.0)
-    scored = evaluate.score_presses(data, run)
+    run = scoring.MethodRun('poc', Calibration(), [contacts], 1.0)
+    scored = scoring.score_presses(data, run)
     assert scored['pairs_far'] == 1 and scored['pairs_close'] == 0
     assert scored['separate_share_far'] == separate and scored['merged_share_far'] == merged
-    found = sorted(e for _, _, e, _ in evaluate.direction_errors(data, run) if e is not None)
+    found = sorted(e for _, _, e, _ in scoring.direction_errors(data, run) if e is not None)
     assert found == pytest.approx(errors)

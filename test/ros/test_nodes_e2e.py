@@ -11,12 +11,12 @@ import rclpy
 from rclpy.lifecycle import TransitionCallbackReturn
 from rosutil import ros_context, spin_until
 from skin_driver.core.estimation import calibration as calib
+from skin_driver.core.sim.board import SimulatedSkin
 from skin_driver.ros.direction_node import DirectionNode
 from skin_driver.ros.driver_node import SkinDriverNode
 from skin_driver.ros.params import ParameterError
 from skin_driver.tools.probe import Probe, values
 from skin_driver.tools.processes import spawn, stop
-from skin_driver.tools.sim import SimulatedSkin
 from skin_msgs.srv import Calibrate
 from std_srvs.srv import Trigger
 

@@ -1,0 +1,84 @@
+"""
+An estimator made ready for recorded frames: tared and calibrated from the frames themselves.
+
+The evaluator and the benchmark score an estimator on a dataset (:mod:`dataset`) as a user would
+run it on that skin: tared from the dataset's no-touch frames, then calibrated through the same
+:class:`session.CalibrationSession` that the live calibrations run. With a ``split`` (dataset
+format 2) the split = 1 frames calibrate fully: alpha = 0 frames give (x_p, y_p) and, with
+``force_n``, the force curves; tilted ones with ``force_n`` the compliance. Without a split the
+single normal presses give (x_p, y_p); with none, the layers are taken as aligned.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from .dataset import Dataset
+from .pipeline import ContactEstimator, EstimatorConfig
+from .session import CalibrationRefused, CalibrationSession
+
+__all__ = ['calibrate_from_frames', 'prepared_estimator']
+
+
+def _session(est: ContactEstimator, data: Dataset, frames: np.ndarray, kind: str,
+             **session_args) -> tuple:
+    """Calibrate ``kind`` from single frames at full load; return (estimator, note)."""
+    try:
+        session = CalibrationSession(est, kind, presses=frames.size, **session_args)
+        for i in frames:
+            top, bottom = data.top[i], data.bottom[i]
+            session.add_press(session.record(top, bottom, est.process(top, bottom)))
+        outcome = session.finish()
+    except CalibrationRefused as err:
+        return est, f'{kind}: refused: {err}'
+    return est.with_calibration(outcome.calibration), f'{kind}: {outcome.message}'
+
+
+def calibrate_from_frames(est: ContactEstimator, data: Dataset, frames: np.ndarray,
+                          full: bool = True) -> tuple:
+    """
+    Return (``est`` calibrated from the ``frames`` of ``data``, a note per part).
+
+    (x_p, y_p) from the alpha = 0 frames; with ``full`` and ``force_n``, the force curves from
+    them too and the compliance from the tilted ones. A refused part is noted and the estimator
+    keeps what it had.
+    """
+    frames = np.asarray(frames, dtype=int)
+    normal = frames[data.alpha_deg[frames] == 0]
+    est, note = _session(est, data, normal, 'offset', max_std_m=math.inf)
+    notes = [note]
+    if full and data.force_n is not None:
+        known = normal[data.force_n[normal] > 0]
+        est, note = _session(est, data, known, 'force', forces_n=data.force_n[known])
+        notes.append(note)
+        tilted = frames[(data.alpha_deg[frames] > 0) & (data.force_n[frames] > 0)]
+        est, note = _session(est, data, tilted, 'compliance', forces_n=data.force_n[tilted],
+                             alphas_rad=np.radians(data.alpha_deg[tilted]))
+        notes.append(note)
+    return est, notes
+
+
+def prepared_estimator(data: Dataset, method: str, config: EstimatorConfig = None,
+                       shift=None) -> tuple:
+    """
+    Return (estimator ``method`` ready for ``data``, calibration notes).
+
+    ``config`` gives its other settings; ``shift`` swaps in a shift method that is not registered
+    (the benchmark's references). See the module docstring for the tare and calibration.
+    """
+    base = config or EstimatorConfig(pitch_m=data.pitch_m)
+    cfg = EstimatorConfig(**{**base.__dict__, 'method': method, 'pitch_m': data.pitch_m})
+    est = ContactEstimator(cfg, shift=shift)
+    if data.tare_top is not None:
+        est = est.with_tare(data.tare_top, data.tare_bottom)
+    if data.split is not None:
+        est, notes = calibrate_from_frames(est, data, np.flatnonzero(data.split == 1))
+    else:
+        single_normal = np.flatnonzero((data.alpha_deg == 0) & (data.press_counts() == 1))
+        est, notes = calibrate_from_frames(est, data, single_normal, full=False)
+        if not single_normal.size:
+            notes = []
+    est.process(data.top[0], data.bottom[0])  # warm the per-shape caches
+    return est, notes
