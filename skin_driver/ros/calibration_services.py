@@ -30,6 +30,7 @@ from rclpy.task import Future
 from skin_driver.core.estimation.calibration import Calibration
 from skin_driver.core.estimation.session import CalibrationRefused, CalibrationSession
 from skin_driver.ros.params import declare
+from skin_driver.ros.paths import ros_home
 from skin_msgs.srv import Calibrate, CalibrateCompliance, CalibrateForce, CalibrateGains
 
 MAX_CALIBRATION_PRESSES = 1000
@@ -41,8 +42,7 @@ KEEP = '; the previous calibration stays in force'
 
 def default_calibration_file(fully_qualified_name: str) -> str:
     """Return the calibration file of the node with this name: two skins never share one."""
-    home = os.environ.get('ROS_HOME', os.path.join(os.path.expanduser('~'), '.ros'))
-    return os.path.join(home, 'skin_driver', 'calibration',
+    return os.path.join(ros_home(), 'skin_driver', 'calibration',
                         fully_qualified_name.strip('/') + '.yaml')
 
 

@@ -10,15 +10,15 @@ import math
 from typing import Iterable, Sequence, Tuple
 
 from builtin_interfaces.msg import Time
+from diagnostic_msgs.msg import DiagnosticStatus
 from geometry_msgs.msg import Point, Vector3, Wrench, WrenchStamped
 import numpy as np
 from sensor_msgs.msg import Image
 from skin_driver.core.estimation.heatmap import colour_map
+from skin_driver.core.estimation.wrench import torque_about_origin
 from skin_msgs.msg import SkinFrame, TactileContact, TactileContactArray
 from std_msgs.msg import ColorRGBA, Header
 from visualization_msgs.msg import Marker, MarkerArray
-
-ADC_MAX = 4095
 
 
 def make_header(stamp: Time, frame_id: str) -> Header:
@@ -106,9 +106,8 @@ def contact_to_msg(header: Header, contact, out: TactileContact = None) -> Tacti
     msg.shift.x, msg.shift.y = sx, sy
     force = msg.wrench.force
     force.x, force.y, force.z = fx, fy, fz
-    # A wrench's torque is about its frame's origin: r x F with r = (x, y, 0).
     torque = msg.wrench.torque
-    torque.x, torque.y, torque.z = y * fz, -x * fz, x * fy - y * fx
+    torque.x, torque.y, torque.z = torque_about_origin(x, y, (fx, fy, fz))
     msg.area = area
     msg.confidence = confidence
     msg.direction_valid = direction_valid
@@ -151,11 +150,8 @@ def contacts_to_array(header: Header, contacts: Sequence, sequence: int = 0,
 def _wrench_at(force_xyz_n: Sequence[float], x_m: float, y_m: float) -> Wrench:
     """Return the wrench of a force applied at (x, y, 0): torque r x F about the frame origin."""
     fx, fy, fz = (_finite(v, 'force') for v in force_xyz_n)
-    x, y = _finite(x_m, 'x'), _finite(y_m, 'y')
-    # A wrench's torque is about its frame's origin: without r x F a transform to another frame
-    # would move the force's line of action to skin_link's origin.
-    return Wrench(force=Vector3(x=fx, y=fy, z=fz),
-                  torque=Vector3(x=y * fz, y=-x * fz, z=x * fy - y * fx))
+    tx, ty, tz = torque_about_origin(_finite(x_m, 'x'), _finite(y_m, 'y'), (fx, fy, fz))
+    return Wrench(force=Vector3(x=fx, y=fy, z=fz), torque=Vector3(x=tx, y=ty, z=tz))
 
 
 def wrench_stamped(header: Header, force_xyz_n: Sequence[float],
@@ -202,3 +198,8 @@ def heatmap_markers(header: Header, force_map: np.ndarray, pitch_m: float, conta
             label.text += f' β {math.degrees(contact.azimuth_rad):.0f}°'
         markers += [arrow, label]
     return MarkerArray(markers=markers)
+
+
+def status_values(status: DiagnosticStatus) -> dict:
+    """Return a diagnostic status's key/value pairs as a dict of strings."""
+    return {kv.key: kv.value for kv in status.values}

@@ -12,14 +12,14 @@ from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 OK = DiagnosticStatus.OK
 WARN = DiagnosticStatus.WARN
 ERROR = DiagnosticStatus.ERROR
-STALE = DiagnosticStatus.STALE
 
 
 def make_status(name: str, hardware_id: str, level: int, message: str,
                 values: Dict[str, object]) -> DiagnosticStatus:
-    """Return one DiagnosticStatus with its key/value pairs as strings."""
+    """Return one DiagnosticStatus with its key/value pairs as strings (level: byte or int)."""
     return DiagnosticStatus(
-        level=level, name=name, message=message, hardware_id=hardware_id,
+        level=bytes([level]) if isinstance(level, int) else level, name=name, message=message,
+        hardware_id=hardware_id,
         values=[KeyValue(key=str(k), value=_fmt(v)) for k, v in values.items()])
 
 

@@ -14,12 +14,12 @@ Either way the estimation itself is skin_driver.ros.estimation_host.
 """
 
 import rclpy
-from rclpy.executors import ExternalShutdownException
 from rclpy.node import Node
 from rclpy.qos import qos_profile_sensor_data
 from skin_driver.ros import conversions
 from skin_driver.ros.estimation_host import EstimationHost
 from skin_driver.ros.params import ParameterError
+from skin_driver.ros.spin import spin_nodes
 from skin_msgs.msg import SkinFrame
 
 
@@ -52,18 +52,7 @@ def main(args=None):
         rclpy.logging.get_logger('skin_direction').fatal(str(err))
         rclpy.try_shutdown()
         raise SystemExit(1)
-    try:
-        rclpy.spin(node)
-    except (KeyboardInterrupt, ExternalShutdownException):
-        pass
-    except Exception:  # noqa: B902 - judged by the context, re-raised unless shutting down
-        # Ctrl-C shuts the context down under a callback already running: its publish fails,
-        # and that is the shutdown, not a crash.
-        if node.context.ok():
-            raise
-    finally:
-        node.destroy_node()
-        rclpy.try_shutdown()
+    spin_nodes([node])
 
 
 if __name__ == '__main__':

@@ -33,21 +33,21 @@ import time
 
 from rcl_interfaces.msg import SetParametersResult
 import rclpy
-from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.lifecycle import Node, State, TransitionCallbackReturn
 from rclpy.qos import qos_profile_sensor_data
 from sensor_msgs.msg import Image
-from skin_driver.core.protocol.link import CONNECTED, DISCONNECTED, SerialLink, STALLED, STOPPED
+from skin_driver.core.protocol.health import LinkHealth
+from skin_driver.core.protocol.link import CONNECTED, DISCONNECTED, SerialLink, STOPPED
 from skin_driver.core.protocol.wire import FrameDecoder
 from skin_driver.ros import conversions, diagnostics
 from skin_driver.ros.direction_node import DirectionNode
 from skin_driver.ros.params import declare, ParameterError
+from skin_driver.ros.spin import spin_nodes
 from skin_msgs.msg import SkinFrame
 
-# Read by configure: a change while configured would be accepted and change nothing.
-CONFIGURE_TIME_PARAMETERS = (
-    'port', 'baud', 'rows', 'cols', 'pitch', 'frame_id', 'publish_images', 'read_timeout',
-    'stall_timeout', 'reconnect_min', 'reconnect_max', 'diagnostics_period')
+# Every other parameter is read by configure: a change while configured would be accepted and
+# change nothing, so it is refused.
+START_UP_PARAMETERS = ('autostart', 'fused', 'use_sim_time')
 # Ctrl-C reaches a simulated board as well as the driver: a port lost within this long before the
 # context shuts down belongs to the shutdown, not to a fault.
 SHUTDOWN_GRACE_S = 0.25
@@ -65,7 +65,7 @@ class SkinDriverNode(Node):
         self._lifecycle = 'unconfigured'
         self._state_detail = ''
         self._burst = 0
-        self._reported = {}
+        self._health = None
         self._report_lock = threading.Lock()
         self._shutting_down = threading.Event()
         self.context.on_shutdown(self._shutting_down.set)
@@ -74,6 +74,16 @@ class SkinDriverNode(Node):
         self._diag_timer = self.create_timer(self._p('diagnostics_period'), self._report)
         self.estimation = None  # an EstimationHost fed on the reader thread when fused
         self.add_on_set_parameters_callback(self._check_new_parameters)
+
+    @property
+    def link(self):
+        """
+        Return the SerialLink of core.protocol while configured, else None.
+
+        For monitoring: its ``state``, ``stats`` and ``decoder.stats`` are what the diagnostics
+        report.
+        """
+        return self._link
 
     def _declare_parameters(self) -> None:
         self.autostart = declare(
@@ -116,7 +126,7 @@ class SkinDriverNode(Node):
     def _check_new_parameters(self, params) -> SetParametersResult:
         """Refuse at run time what start-up refuses; rclpy itself checks the ranges."""
         new = {p.name: p.value for p in params}
-        fixed = [name for name in CONFIGURE_TIME_PARAMETERS if name in new]
+        fixed = [name for name in new if name not in START_UP_PARAMETERS]
         if fixed and self._link is not None:
             return SetParametersResult(successful=False, reason=(
                 f"{', '.join(map(repr, fixed))} cannot change while the driver is "
@@ -151,7 +161,7 @@ class SkinDriverNode(Node):
             read_timeout_s=self._p('read_timeout'), stall_timeout_s=self._p('stall_timeout'),
             backoff_min_s=self._p('reconnect_min'), backoff_max_s=self._p('reconnect_max'))
         self._rate = diagnostics.RateMeter(time.monotonic())
-        self._reported = {}
+        self._health = LinkHealth((self._p('rows'), self._p('cols')))
         self.destroy_timer(self._diag_timer)
         self._diag_timer = self.create_timer(self._p('diagnostics_period'), self._report)
         self._lifecycle = 'inactive'
@@ -251,46 +261,12 @@ class SkinDriverNode(Node):
     def _report_link(self) -> None:
         rate, _ = self._rate.take(time.monotonic())
         burst, self._burst = self._burst, 0
-        link, dec = self._link.stats, self._link.decoder.stats
-        state = self._link.state
-        dropped = dec.frames_missed + link.frames_lost_reconnecting
-        totals = {'frames': dec.frames, 'dropped': dropped, 'size': dec.size_errors,
-                  'corrupt': dec.crc_errors + dec.version_errors}
-        new = {k: v - self._reported.get(k, 0) for k, v in totals.items()}
-        self._reported = totals
-        level = {CONNECTED: diagnostics.OK,
-                 STALLED: diagnostics.WARN}.get(state, diagnostics.ERROR)
-        problems = []
-        rejected = self._link.decoder.last_rejected_shape
-        shape = f'{rejected[0]}x{rejected[1]}' if rejected else ''
-        if new['size']:
-            # A board that sends nothing but another grid is misconfigured, not noisy.
-            level = max(level, diagnostics.WARN if new['frames'] else diagnostics.ERROR)
-            problems.append(f"{new['size']} frames of the wrong grid size {shape} rejected "
-                            f"(expected {self._p('rows')}x{self._p('cols')})")
-        if new['corrupt']:
-            level = max(level, diagnostics.WARN)
-            problems.append(f"{new['corrupt']} corrupt frames rejected (line noise?)")
-        if new['dropped']:
-            level = max(level, diagnostics.WARN)
-            problems.append(f"{new['dropped']} frames dropped (sequence gaps)")
-        message = '; '.join([f'{state}: {self._state_detail}'] + problems)
-        values = {
-            'port': self._p('port'), 'link state': state, 'frame rate [Hz]': rate,
-            'frames': dec.frames, 'crc errors': dec.crc_errors, 'size errors': dec.size_errors,
-            'last rejected shape': shape, 'version errors': dec.version_errors,
-            'bytes discarded': dec.bytes_discarded, 'sequence gaps': dec.seq_gaps,
-            'implausible sequence jumps': dec.seq_implausible,
-            'frames dropped': dropped,
-            'frames lost while disconnected': link.frames_lost_reconnecting,
-            'largest burst [frames]': burst,
-            'connects': link.connects, 'disconnects': link.disconnects,
-            'open failures': link.open_failures, 'publish errors': link.callback_errors,
-            'last error': link.last_error,
-        }
+        health = self._health.assess(self._link, self._state_detail)
+        values = {'port': self._p('port'), 'frame rate [Hz]': rate,
+                  'largest burst [frames]': burst, **health.values}
         self._diag.publish([diagnostics.make_status(
-            f'{self.get_fully_qualified_name()}: skin link', self._p('port'), level, message,
-            values)])
+            f'{self.get_fully_qualified_name()}: skin link', self._p('port'), health.level,
+            health.message, values)])
 
 
 def _backoff_problem(low, high) -> str:
@@ -313,29 +289,16 @@ def main(args=None):
         rclpy.logging.get_logger('skin_driver').fatal(str(err))
         rclpy.try_shutdown()
         raise SystemExit(1)
-    executor = SingleThreadedExecutor()
-    executor.add_node(node)
     if direction is not None:
         node.estimation = direction.host
-        executor.add_node(direction)
-    try:
+
+    def autostart():
         if node.autostart:
             if node.trigger_configure() != TransitionCallbackReturn.SUCCESS:
                 raise SystemExit(1)
             node.trigger_activate()
-        executor.spin()
-    except (KeyboardInterrupt, ExternalShutdownException):
-        pass
-    except Exception:  # noqa: B902 - judged by the context, re-raised unless shutting down
-        # As in the direction node: a publish failing under Ctrl-C is the shutdown.
-        if node.context.ok():
-            raise
-    finally:
-        node.close()
-        node.destroy_node()
-        if direction is not None:
-            direction.destroy_node()
-        rclpy.try_shutdown()
+
+    spin_nodes([node] + ([direction] if direction is not None else []), autostart)
 
 
 if __name__ == '__main__':

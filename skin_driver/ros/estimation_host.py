@@ -99,7 +99,8 @@ class EstimationHost:
         declare(node, 'threshold', core.threshold_counts,
                 'ADC counts above the baseline below which a taxel counts as untouched.',
                 low=0.0, high=4095.0)
-        declare(node, 'min_force', 0.2, 'Contacts weaker than this (newtons) are ignored.',
+        declare(node, 'min_force', core.min_contact_force_n,
+                'Contacts weaker than this (newtons) are ignored.',
                 low=0.0, high=1000.0)
         declare(node, 'min_confidence', core.min_confidence,
                 'Directions less trusted than this are reported with direction_valid false.',

@@ -11,6 +11,7 @@ import re
 
 from ament_index_python.packages import get_package_prefix, PackageNotFoundError
 from skin_driver.core.estimation.atomic import write_atomically
+from skin_driver.ros.paths import ros_home
 
 TEMPLATE_NAMESPACE = '/skin/'
 
@@ -27,9 +28,8 @@ def write_namespaced(template_path: str, namespace: str) -> str:
     """Write the config for namespace under $ROS_HOME/skin_driver/rviz and return its path."""
     with open(template_path, encoding='utf-8') as f:
         text = namespaced(f.read(), namespace)
-    home = os.environ.get('ROS_HOME') or os.path.join(os.path.expanduser('~'), '.ros')
     name = '_'.join(part for part in namespace.split('/') if part) or 'root'
-    path = os.path.join(home, 'skin_driver', 'rviz', f'{name}.rviz')
+    path = os.path.join(ros_home(), 'skin_driver', 'rviz', f'{name}.rviz')
     write_atomically(path, lambda out: out.write(text))
     return path
 

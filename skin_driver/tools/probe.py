@@ -17,6 +17,7 @@ from typing import Callable, Optional
 from diagnostic_msgs.msg import DiagnosticArray
 import numpy as np
 from rclpy.qos import HistoryPolicy, QoSProfile, ReliabilityPolicy
+from skin_driver.ros.conversions import status_values
 from skin_msgs.msg import SkinFrame, TactileContactArray
 
 SEQ_MODULUS = 2 ** 32
@@ -133,11 +134,12 @@ class Probe:
 
     def saw_link_status(self, predicate) -> bool:
         """Return whether a kept skin-link status satisfies predicate(status, values)."""
-        return any(predicate(status, values(status)) for status in self.statuses_of('skin link'))
+        return any(predicate(status, status_values(status))
+                   for status in self.statuses_of('skin link'))
 
     def counters(self, suffix: str, start: float, end: float) -> dict:
         """Return how the numeric values of a status moved between two monotonic instants."""
-        reports = [(t, values(s)) for t, s in self.statuses if s.name.endswith(suffix)]
+        reports = [(t, status_values(s)) for t, s in self.statuses if s.name.endswith(suffix)]
         first = [r for r in reports if r[0] <= start]
         last = [r for r in reports if r[0] <= end]
         if not first or not last or last[-1][0] <= first[-1][0]:
@@ -190,8 +192,3 @@ class Probe:
             out['last_byte_after_device_time_ms'] = percentiles_ms(
                 stamp[keep] - (epoch_s + device[keep]))
         return out
-
-
-def values(status) -> dict:
-    """Return a DiagnosticStatus's key/value pairs as a dict."""
-    return {kv.key: kv.value for kv in status.values}

@@ -39,7 +39,8 @@ import rclpy
 from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.node import Node
 from skin_driver.core.sim.board import SimulatedSkin
-from skin_driver.tools.probe import Probe, values
+from skin_driver.ros.conversions import status_values
+from skin_driver.tools.probe import Probe
 from skin_driver.tools.processes import spawn, stop
 from skin_msgs.msg import SkinFrame
 import yaml
@@ -119,7 +120,7 @@ class SoakMonitor:
         if not status.name.startswith(self._prefix) or not status.name.endswith('skin link'):
             return
         self.diag_count += 1
-        self.link = values(status)
+        self.link = status_values(status)
         self.link['level'] = int.from_bytes(status.level, 'little') \
             if isinstance(status.level, bytes) else int(status.level)
         self.link['message'] = status.message

@@ -9,6 +9,7 @@ from rosutil import ros_context, spin_until
 from skin_driver.core.estimation.calibration import Calibration
 from skin_driver.core.estimation.forcecurve import ForceCurve
 from skin_driver.ros.calibration_services import default_calibration_file
+from skin_driver.ros.conversions import status_values
 from skin_driver.ros.direction_node import DirectionNode
 from skin_msgs.srv import CalibrateCompliance, CalibrateForce, CalibrateGains
 
@@ -49,7 +50,7 @@ def test_force_then_compliance_through_the_services(tmp_path):
         # What the diagnostics say is what was made, and when.
         assert spin_until(executor, lambda: any(
             s.name.endswith('contact estimation') and
-            {kv.key: kv.value for kv in s.values}.get('calibration made') == in_force.made_utc
+            status_values(s).get('calibration made') == in_force.made_utc
             for _, s in probe.statuses))
     saved = Calibration.load_yaml(str(tmp_path / 'calibration.yaml'))
     assert saved == in_force

@@ -12,6 +12,7 @@ import numpy as np
 from pipeline import pipeline, scene
 import pytest
 from rosutil import spin_until
+from skin_driver.ros.conversions import status_values
 
 pytestmark = pytest.mark.ros
 
@@ -48,10 +49,6 @@ def link_is(probe, predicate):
     return status is not None and predicate(status)
 
 
-def values_of(status):
-    return {kv.key: kv.value for kv in status.values}
-
-
 def test_unplug_is_an_error_and_replug_reconnects_within_a_second(tmp_path):
     # The driver's own defaults for the back-off: what the one second is about.
     defaults = {'reconnect_min': 0.1, 'reconnect_max': 0.5}
@@ -66,11 +63,11 @@ def test_unplug_is_an_error_and_replug_reconnects_within_a_second(tmp_path):
             replugged = time.monotonic()
             sim.replug()
             more_frames(executor, probe, 20)
-            assert driver._link.stats.last_connect_s - replugged < 1.0
+            assert driver.link.stats.last_connect_s - replugged < 1.0
         assert spin_until(executor, lambda: link_is(probe, lambda s: s.level == OK), WAIT_S)
-        values = values_of(probe.link_status())
+        values = status_values(probe.link_status())
         assert int(values['disconnects']) == 2 and int(values['connects']) == 3, \
-            driver._link.stats
+            driver.link.stats
         # The frames the board scanned while unplugged are counted as dropped.
         assert int(values['frames lost while disconnected']) > 0
         assert int(values['frames dropped']) >= int(values['frames lost while disconnected'])
@@ -87,10 +84,10 @@ def test_stall_is_reported_as_a_warning_and_the_stream_resumes(tmp_path):
         assert probe.link_status().level == WARN
         more_frames(executor, probe, 20)
         assert spin_until(executor, lambda: link_is(probe, lambda s: s.level == OK), WAIT_S)
-        values = values_of(probe.link_status())
+        values = status_values(probe.link_status())
         # A stall loses nothing: the board carries on with the next sequence number.
         assert values['frames dropped'] == '0' and values['disconnects'] == '0'
-        assert driver._link.decoder.stats.frames_missed == 0
+        assert driver.link.decoder.stats.frames_missed == 0
         assert_in_order(probe)
         assert_published_frames_are_true(sim, probe)
 
@@ -103,11 +100,11 @@ def test_burst_is_published_whole_and_in_order(tmp_path):
         # The probe's sensor-data queue (depth 5) may miss part of a clump; the driver's own
         # counts show that it published every frame.
         assert_in_order(probe)
-        stats = driver._link.decoder.stats
+        stats = driver.link.decoder.stats
         assert (stats.frames_missed, stats.crc_errors, stats.bytes_discarded) == (0, 0, 0)
         assert spin_until(executor, lambda: probe.saw_link_status(
             lambda s, v: int(v['largest burst [frames]']) >= 2), WAIT_S)
-        assert driver._link.decoder.stats.frames_missed == 0
+        assert driver.link.decoder.stats.frames_missed == 0
         assert_published_frames_are_true(sim, probe)
 
 
@@ -121,7 +118,7 @@ def test_line_noise_is_a_warning_and_costs_only_the_damaged_frames(tmp_path):
         more_frames(executor, probe, 30)
         assert spin_until(executor, lambda: probe.saw_link_status(
             lambda s, v: s.level == WARN and 'corrupt frames rejected' in s.message), WAIT_S)
-        stats = driver._link.decoder.stats
+        stats = driver.link.decoder.stats
         assert sim.frames_damaged > 10 and stats.crc_errors > 0
         # Junk between frames costs nothing; each damaged frame costs itself and no other. On a
         # loaded machine the simulator may itself fall half a second behind and skip frames it
@@ -152,7 +149,7 @@ def test_wrong_grid_size_is_an_error_naming_the_received_shape(tmp_path):
         assert spin_until(executor, lambda: link_is(probe, lambda s: s.level == ERROR), WAIT_S)
         status = probe.link_status()
         assert 'wrong grid size 8x12' in status.message and 'expected 16x16' in status.message
-        assert values_of(status)['last rejected shape'] == '8x12'
+        assert status_values(status)['last rejected shape'] == '8x12'
         before = len(probe.frames)
         spin_until(executor, lambda: False, 0.5)
         assert all((m.rows, m.cols) == (16, 16) for m in probe.frames)
@@ -173,7 +170,7 @@ def test_all_faults_in_a_row_never_stop_the_driver(tmp_path):
                       lambda: sim.set_wire_shape((4, 4)), lambda: sim.set_wire_shape(None)):
             fault()
             spin_until(executor, lambda: False, 0.3)
-            assert driver._link._thread.is_alive()
+            assert driver.link.running
         more_frames(executor, probe, 30)
-        assert driver._link.stats.callback_errors == 0
+        assert driver.link.stats.callback_errors == 0
         assert_published_frames_are_true(sim, probe)

@@ -6,6 +6,7 @@ from diagnostic_msgs.msg import DiagnosticStatus
 from pipeline import pipeline, scene
 import pytest
 import rclpy
+from rclpy.executors import SingleThreadedExecutor
 from rclpy.parameter import Parameter
 from rosutil import spin_until
 from skin_driver.core.protocol.link import DISCONNECTED
@@ -82,16 +83,17 @@ def test_a_port_lost_while_shutting_down_is_not_reported_as_a_fault(tmp_path, ca
         sim.unplug()
         # Nothing spins a shut-down context: wait on the link's own thread.
         deadline = time.monotonic() + WAIT_S
-        while driver._link.state != DISCONNECTED and time.monotonic() < deadline:
+        while driver.link.state != DISCONNECTED and time.monotonic() < deadline:
             time.sleep(0.02)
-        assert driver._link.state == DISCONNECTED
+        assert driver.link.state == DISCONNECTED
         driver.close()
         err = capfd.readouterr().err
         assert 'disconnected' not in err and 'Failed to publish' not in err, err
 
 
 def _spin_into(shutdown_first):
-    def spin(node):
+    def spin(executor):
+        node = executor.get_nodes()[0]
         publisher = node.create_publisher(TactileContactArray, 'contacts', 5)
         if shutdown_first:
             rclpy.shutdown(context=node.context)  # what Ctrl-C does under a running callback
@@ -101,12 +103,12 @@ def _spin_into(shutdown_first):
 
 
 def test_direction_node_ends_quietly_when_ctrl_c_lands_inside_a_callback(tmp_path, monkeypatch):
-    monkeypatch.setattr(rclpy, 'spin', _spin_into(shutdown_first=True))
+    monkeypatch.setattr(SingleThreadedExecutor, 'spin', _spin_into(shutdown_first=True))
     direction_node.main(args=['--ros-args', '-p', f'calibration_file:={tmp_path / "cal.yaml"}'])
 
 
 def test_direction_node_still_fails_on_a_callback_error_while_running(tmp_path, monkeypatch):
-    monkeypatch.setattr(rclpy, 'spin', _spin_into(shutdown_first=False))
+    monkeypatch.setattr(SingleThreadedExecutor, 'spin', _spin_into(shutdown_first=False))
     with pytest.raises(RuntimeError, match='a callback failed'):
         direction_node.main(args=['--ros-args', '-p',
                                   f'calibration_file:={tmp_path / "cal.yaml"}'])

@@ -12,10 +12,11 @@ from rclpy.lifecycle import TransitionCallbackReturn
 from rosutil import ros_context, spin_until
 from skin_driver.core.estimation import calibration as calib
 from skin_driver.core.sim.board import SimulatedSkin
+from skin_driver.ros.conversions import status_values
 from skin_driver.ros.direction_node import DirectionNode
 from skin_driver.ros.driver_node import SkinDriverNode
 from skin_driver.ros.params import ParameterError
-from skin_driver.tools.probe import Probe, values
+from skin_driver.tools.probe import Probe
 from skin_driver.tools.processes import spawn, stop
 from skin_msgs.srv import Calibrate
 from std_srvs.srv import Trigger
@@ -54,7 +55,7 @@ def test_garbage_between_frames_costs_at_most_the_damaged_frame(tmp_path):
             sim.inject_garbage(data)
             start = len(probe.frames)
             assert spin_until(executor, lambda: len(probe.frames) >= start + 10)
-        stats = driver._link.decoder.stats
+        stats = driver.link.decoder.stats
         # Frames the simulator itself dropped (a loaded machine) are not the garbage's doing.
         assert stats.frames_missed - sim.frames_dropped <= len(junk)
         assert stats.bytes_discarded > 0
@@ -72,7 +73,7 @@ def test_unplug_and_replug_is_survived_and_reported(tmp_path):
         sim.replug()
         assert spin_until(executor, lambda: len(probe.frames) >= before + 20)
         assert spin_until(executor, lambda: probe.link_status().level == OK)
-        values = {kv.key: kv.value for kv in probe.link_status().values}
+        values = status_values(probe.link_status())
         assert int(values['disconnects']) >= 1 and int(values['connects']) >= 2
 
 
@@ -200,8 +201,8 @@ def test_driver_waits_for_a_missing_device_without_crashing(tmp_path):
         executor.add_node(node)
         node.trigger_configure()
         node.trigger_activate()
-        assert spin_until(executor, lambda: node._link.stats.open_failures >= 3)
-        assert node._link.state == 'connecting'
+        assert spin_until(executor, lambda: node.link.stats.open_failures >= 3)
+        assert node.link.state == 'connecting'
         node.close()
         node.destroy_node()
     assert not os.path.exists(tmp_path / 'nothing')
@@ -232,7 +233,7 @@ def test_fused_driver_process_offers_the_direction_nodes_topics_services_and_dia
                               20.0)
             status = probe.latest('contact estimation')
             assert status.name == f'{ns}/skin_direction: contact estimation'
-            assert float(values(status)['frames']) > 0
+            assert float(status_values(status)['frames']) > 0
             result = call(executor, node, Trigger, f'{ns}/skin_direction/tare', Trigger.Request())
             # Presses are on or just over: either answer proves the service runs in the driver.
             assert ('baseline recorded' in result.message or 'loaded' in result.message), \

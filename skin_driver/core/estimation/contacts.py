@@ -22,9 +22,7 @@ from functools import lru_cache
 import cv2
 import numpy as np
 
-from .validate import check_number, check_stack
-
-__all__ = ['LayerPair', 'find_contacts', 'pair_layers']
+__all__ = ['LayerPair', 'pair_layers']
 
 # A second peak of one connected top group is another contact only if the load between them
 # drops below this share of the lower peak, and the peaks are at least MIN_PEAK_DISTANCE apart.
@@ -58,32 +56,14 @@ class LayerPair:
     at_border: bool
 
 
-def find_contacts(maps, pitch_m: float = 0.005, min_force_n: float = 0.0,
-                  max_contacts: int = 32, dead=None) -> list:
+def pair_layers(maps: np.ndarray, max_contacts: int = 32, dead: np.ndarray = None,
+                force: np.ndarray = None) -> list:
     """
-    Return the contacts in a (2, rows, cols) stack of top and bottom force maps, as LayerPairs.
+    Return the contacts in a (2, rows, cols) float64 stack of top and bottom maps, as LayerPairs.
 
-    ``dead`` marks top taxels whose reading was filled in from their neighbours (see
+    The maps are the tared counts, non-negative and finite (the conditioner's output). ``dead``
+    marks top taxels whose reading was filled in from their neighbours (see
     :meth:`conditioning.Conditioner.dead_masks`): a dip there does not separate two peaks.
-    Checks its input (finite, non-negative) and does the work of :func:`pair_layers`.
-    """
-    stack = check_stack(maps, 'maps')
-    if stack.shape[0] != 2:
-        raise ValueError(f'maps must stack the top and the bottom layer, got {stack.shape[0]}')
-    check_number(pitch_m, 'pitch_m', positive=True)
-    check_number(min_force_n, 'min_force_n', non_negative=True)
-    if dead is not None:
-        dead = np.asarray(dead, dtype=bool)
-        if dead.shape != stack.shape[1:]:
-            raise ValueError(f'dead has shape {dead.shape}, the maps {stack.shape[1:]}')
-    return pair_layers(stack.astype(np.float64), float(min_force_n), int(max_contacts), dead)
-
-
-def pair_layers(maps: np.ndarray, min_force_n: float, max_contacts: int,
-                dead: np.ndarray = None, force: np.ndarray = None) -> list:
-    """
-    Do the work of :func:`find_contacts` on a checked float64 stack.
-
     ``force`` (same shape, loaded on the same taxels) gives the forces; ``maps`` by default.
     """
     if force is None:
@@ -108,12 +88,7 @@ def pair_layers(maps: np.ndarray, min_force_n: float, max_contacts: int,
         tops, top_forces = top * own, force[0] * own
         fraction = _share_bottom(tops, bottom)
         shares, bottom_forces = fraction * bottom, fraction * force[1]
-    pairs = []
-    for t, b, tf, bf in zip(tops, shares, top_forces, bottom_forces):
-        pair = _pair(t, b, tf, bf)
-        if max(pair.top_force_n, pair.bottom_force_n) >= min_force_n:
-            pairs.append(pair)
-    return pairs
+    return [_pair(t, b, tf, bf) for t, b, tf, bf in zip(tops, shares, top_forces, bottom_forces)]
 
 
 def _split_peaks(top: np.ndarray, labels: np.ndarray, n: int, dead) -> tuple:

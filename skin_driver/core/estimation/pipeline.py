@@ -74,7 +74,7 @@ class EstimatorConfig:
     compliance_m_per_n: float = 7.0e-4
     threshold_counts: float = 40.0
     noise_sigmas: float = 5.0
-    min_contact_force_n: float = 0.05
+    min_contact_force_n: float = 0.2
     min_confidence: float = 0.3
     min_shift_m: float = 2.5e-4
     max_contacts: int = 32
@@ -134,7 +134,7 @@ def _axis_basis(shape: tuple) -> np.ndarray:
     return basis
 
 
-def _finite(v: float) -> float:
+def _or_zero(v: float) -> float:
     return float(v) if math.isfinite(v) else 0.0
 
 
@@ -196,7 +196,7 @@ class ContactEstimator:
         conditioner = self.conditioner
         maps = conditioner.touch_counts(t, b)
         dead = conditioner.dead_masks()[0]
-        pairs = pair_layers(maps, 0.0, cfg.max_contacts,
+        pairs = pair_layers(maps, cfg.max_contacts,
                             dead if dead is not None and dead.any() else None,
                             conditioner.force_of(maps))
         if not pairs:
@@ -289,7 +289,7 @@ class ContactEstimator:
             sx, sy = raw_x - cal.x_p_m, raw_y - cal.y_p_m
             magnitude = math.hypot(sx, sy)
             snr = magnitude / (sigma * pitch) if sigma > 0 else math.inf
-            method_conf = min(max(_finite(est.confidence), 0.0), 1.0)
+            method_conf = min(max(_or_zero(est.confidence), 0.0), 1.0)
             conf = method_conf * (snr * snr / (snr * snr + MIN_SNR * MIN_SNR)
                                   if math.isfinite(snr) else 1.0)
             valid = (snr >= MIN_SNR and conf >= cfg.min_confidence
@@ -306,7 +306,7 @@ class ContactEstimator:
             contacts.append(Contact(
                 x_m=pair.col * pitch, y_m=pair.row * pitch, force_n=normal,
                 area_m2=pair.taxels * pitch * pitch,
-                shift_m=(_finite(sx), _finite(sy)), azimuth_rad=azimuth,
+                shift_m=(_or_zero(sx), _or_zero(sy)), azimuth_rad=azimuth,
                 azimuth_sigma_rad=azimuth_sigma, alpha_rad=alpha,
                 force_xyz_n=(fx, fy, -normal), confidence=conf, direction_valid=bool(valid)))
         contacts.sort(key=lambda c: -c.force_n)

@@ -86,6 +86,11 @@ class SerialLink:
     def _default_open(self) -> serial.SerialBase:
         return serial.serial_for_url(self.port, baudrate=self.baud, timeout=self._read_timeout)
 
+    @property
+    def running(self) -> bool:
+        """Return whether the reader thread is alive."""
+        return self._thread is not None and self._thread.is_alive()
+
     def start(self) -> None:
         """Start reading in a daemon thread (idempotent)."""
         if self._thread is not None and self._thread.is_alive():

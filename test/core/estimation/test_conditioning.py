@@ -93,13 +93,17 @@ def test_inputs_are_not_modified_and_errors_are_clear():
         cond.set_dead(np.zeros((4, 4)), np.zeros((4, 4)))
 
 
-def test_force_lookup_equals_interpolation_of_the_table_bit_for_bit():
-    cond = Conditioner()
-    table = cond._tables[0]
+def test_force_lookup_equals_interpolation_of_the_fsr_model_at_every_count_bit_for_bit():
     counts = np.concatenate([[0.0, 0.25, 1.0, 1.5, 39.99, 40.0, 4094.0, 4094.5, 4095.0, 5000.0],
                              np.random.default_rng(3).uniform(0.0, 4095.0, 500)])
-    np.testing.assert_array_equal(table(counts), np.interp(counts, table.counts, table.force))
-    assert table.force[0] == 0.0  # untouched taxels are left at 0 N
+    cond = Conditioner(shape=(1, counts.size))
+    fsr = cond.config.fsr
+    grid = np.arange(fsr.full_scale + 1, dtype=np.float64)
+    expected = np.interp(counts, grid, fsr.counts_to_force(grid))
+    force = cond.force_of(np.stack((counts, counts))[:, None, :])
+    np.testing.assert_array_equal(force[0, 0], expected)
+    np.testing.assert_array_equal(force[1, 0], expected)
+    assert force[0, 0, 0] == 0.0  # untouched taxels are left at 0 N
 
 
 def test_stacked_maps_match_the_pair_with_gain_and_dead_taxels():

@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from skin_driver.core.estimation.contacts import find_contacts, LayerPair
+from skin_driver.core.estimation.contacts import LayerPair, pair_layers
 from skin_driver.core.estimation.shift import centroid
 
 
@@ -27,7 +27,7 @@ def _shift(pair: LayerPair):
 def test_single_contact_location_forces_and_window():
     top = _blob((16, 16), 6, 9)
     bottom = _blob((16, 16), 6, 10, 0.5)
-    pairs = find_contacts(np.stack((top, bottom)))
+    pairs = pair_layers(np.stack((top, bottom)))
     assert len(pairs) == 1
     p = pairs[0]
     assert (p.row, p.col) == pytest.approx((6.0, 9.0))
@@ -44,7 +44,7 @@ def test_bottom_imprint_far_from_the_top_one_is_still_its_own():
     top = _blob((16, 16), 7, 4)
     bottom = _gauss((16, 16), 7, 9, 1.0) * (top > 0).sum() / 4.0
     bottom[bottom < 0.01] = 0.0
-    pairs = find_contacts(np.stack((top, bottom)))
+    pairs = pair_layers(np.stack((top, bottom)))
     assert len(pairs) == 1
     assert _shift(pairs[0]) == pytest.approx((0.0, 5.0), abs=0.01)
 
@@ -56,7 +56,7 @@ def test_two_presses_joined_by_a_shallow_saddle_are_two_contacts():
     top[top < 0.05] = 0.0
     bottom = _gauss((16, 16), 9, 5, 1.2, 4.0) + _gauss((16, 16), 7, 8, 1.2, 3.0)
     bottom[bottom < 0.05] = 0.0
-    pairs = find_contacts(np.stack((top, bottom)))
+    pairs = pair_layers(np.stack((top, bottom)))
     assert len(pairs) == 2
     first, second = pairs
     assert (round(first.row), round(first.col)) == (8, 5)
@@ -72,34 +72,24 @@ def test_a_flat_topped_imprint_with_two_close_maxima_is_one_contact():
     top = np.zeros((16, 16))
     top[6:9, 6:10] = 2.0
     top[7, 6], top[7, 9] = 2.1, 2.05
-    pairs = find_contacts(np.stack((top, top)))
+    pairs = pair_layers(np.stack((top, top)))
     assert len(pairs) == 1 and pairs[0].taxels == 12
 
 
 def test_two_separate_contacts_and_the_border_flag():
     top = _blob((16, 16), 3, 3, 1.0) + _blob((16, 16), 11, 12, 2.0)
     top[0, 15] = 0.5
-    pairs = find_contacts(np.stack((top, top)))
+    pairs = pair_layers(np.stack((top, top)))
     assert len(pairs) == 3
     assert [p.at_border for p in pairs] == [False, False, True]
     assert pairs[0].top_force_n == pytest.approx(6.0)
     assert sum(p.bottom_force_n for p in pairs) == pytest.approx(top.sum(), rel=1e-6)
 
 
-def test_weak_contacts_and_the_contact_limit():
+def test_the_contact_limit_keeps_the_strongest_and_no_load_has_no_contact():
     top = _blob((16, 16), 3, 3, 1.0) + _blob((16, 16), 11, 12, 2.0)
     maps = np.stack((top, top))
-    assert len(find_contacts(maps, min_force_n=4.0)) == 1
-    assert len(find_contacts(maps, max_contacts=1)) == 1
-    assert find_contacts(np.zeros((2, 8, 8))) == []
-
-
-def test_bad_input():
-    with pytest.raises(ValueError, match='pitch_m must be positive'):
-        find_contacts(np.zeros((2, 4, 4)), 0.0)
-    with pytest.raises(ValueError, match='inf'):
-        find_contacts(np.full((2, 4, 4), np.inf))
-    with pytest.raises(ValueError, match='negative values'):
-        find_contacts(-np.ones((2, 4, 4)))
-    with pytest.raises(ValueError, match='top and the bottom'):
-        find_contacts(np.zeros((3, 4, 4)))
+    assert len(pair_layers(maps)) == 2
+    (only,) = pair_layers(maps, max_contacts=1)
+    assert only.top_force_n == pytest.approx(2.0 * 3.0)
+    assert pair_layers(np.zeros((2, 8, 8))) == []

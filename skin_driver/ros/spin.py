@@ -1,0 +1,33 @@
+"""Run nodes until shutdown, the one way every executable of this package does."""
+
+import rclpy
+from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
+
+
+def spin_nodes(nodes, before_spin=None) -> None:
+    """
+    Spin ``nodes`` on one executor until Ctrl-C or shutdown, then destroy them and shut down.
+
+    ``before_spin()`` runs once the nodes are on the executor (a lifecycle node's autostart).
+    A node with a ``close()`` method has it called before it is destroyed.
+    """
+    executor = SingleThreadedExecutor()
+    for node in nodes:
+        executor.add_node(node)
+    try:
+        if before_spin is not None:
+            before_spin()
+        executor.spin()
+    except (KeyboardInterrupt, ExternalShutdownException):
+        pass
+    except Exception:  # noqa: B902 - judged by the context, re-raised unless shutting down
+        # Ctrl-C shuts the context down under a callback already running: its publish fails,
+        # and that is the shutdown, not a crash.
+        if nodes[0].context.ok():
+            raise
+    finally:
+        for node in nodes:
+            if hasattr(node, 'close'):
+                node.close()
+            node.destroy_node()
+        rclpy.try_shutdown()
