@@ -44,7 +44,7 @@ from .conditioning import Conditioner, ConditioningConfig
 from .contacts import LayerPair, pair_layers
 from .fsr import FsrModel
 from .shift import DEFAULT_METHOD, get_method, Method, NO_SHIFT
-from .validate import check_number, check_pair
+from .validate import check_int, check_number, check_pair
 
 __all__ = ['EstimatorConfig', 'Contact', 'ContactEstimator', 'MIN_SNR']
 
@@ -94,10 +94,7 @@ class EstimatorConfig:
         check_number(self.min_shift_m, 'min_shift_m', non_negative=True)
         check_number(self.force_scale, 'force_scale', positive=True)
         check_number(self.fill_factor, 'fill_factor', low=0.05, high=1.0)
-        for name in ('max_contacts',):
-            v = getattr(self, name)
-            if isinstance(v, bool) or int(v) != v or v < 0:
-                raise ValueError(f'{name} must be a non-negative integer, got {v!r}')
+        check_int(self.max_contacts, 'max_contacts', low=0)
 
 
 @dataclass(frozen=True)

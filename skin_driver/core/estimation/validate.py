@@ -6,7 +6,7 @@ import math
 
 import numpy as np
 
-__all__ = ['check_map', 'check_pair', 'check_stack', 'check_number']
+__all__ = ['check_map', 'check_pair', 'check_stack', 'check_number', 'check_int']
 
 _NUMERIC_KINDS = 'uif'
 
@@ -92,3 +92,14 @@ def check_number(value, name: str, *, positive: bool = False, non_negative: bool
     if high is not None and v > high:
         raise ValueError(f'{name} must be <= {high}, got {v}')
     return v
+
+
+def check_int(value, name: str, *, low: int = None, high: int = None) -> int:
+    """Check an integer (not a bool, not a float) with optional bounds and return it."""
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, np.integer)):
+        raise ValueError(f'{name} must be an integer, got {value!r}')
+    if low is not None and value < low:
+        raise ValueError(f'{name} must be >= {low}, got {value}')
+    if high is not None and value > high:
+        raise ValueError(f'{name} must be <= {high}, got {value}')
+    return int(value)

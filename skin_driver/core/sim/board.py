@@ -30,6 +30,7 @@ import numpy as np
 
 from . import physics
 from .scene import load_scene, Scene
+from ..estimation.validate import check_int, check_number
 from ..protocol.wire import encode_frame, frame_size, MAX_SEQ
 
 # Below this period frames are written in batches: one wake-up per BATCH_S instead of per frame.
@@ -72,13 +73,8 @@ class SimulatedSkin:
                  seed: int = 0, loop: bool = False, truth_capacity: int = 10_000):
         """Prepare a board for a Scene (or a bundled scene name or YAML path); start() runs it."""
         self.scene = _as_scene(scene)
-        if isinstance(rate_hz, bool) or not isinstance(rate_hz, (int, float)) or not (
-                math.isfinite(rate_hz) and 0 < rate_hz <= 20_000):
-            raise ValueError(f'rate_hz must be in (0, 20000], got {rate_hz!r}')
-        if isinstance(truth_capacity, bool) or not isinstance(truth_capacity, int) \
-                or truth_capacity < 1:
-            raise ValueError(f'truth_capacity must be a positive integer, got {truth_capacity!r}')
-        self.rate_hz = float(rate_hz)
+        self.rate_hz = check_number(rate_hz, 'rate_hz', positive=True, high=20_000)
+        check_int(truth_capacity, 'truth_capacity', low=1)
         self.link_path = os.path.abspath(link_path) if link_path else None
         self.loop = bool(loop)
         self._rng = np.random.default_rng(seed)
@@ -202,15 +198,11 @@ class SimulatedSkin:
         A damaged frame has a bit flipped, a byte dropped or duplicated, bytes inserted or its
         tail cut off; as often again, random bytes fall between two frames.
         """
-        if isinstance(probability, bool) or not isinstance(probability, (int, float)) or not (
-                0.0 <= probability <= 1.0):
-            raise ValueError(f'probability must be in [0, 1], got {probability!r}')
-        self._noise = float(probability)
+        self._noise = check_number(probability, 'probability', low=0.0, high=1.0)
 
     def skip_sequence(self, count: int) -> None:
         """Make the next sequence number jump forward by count, as a firmware losing scans."""
-        if isinstance(count, bool) or not isinstance(count, int) or not 1 <= count <= 1_000_000:
-            raise ValueError(f'count must be an integer in 1..1000000, got {count!r}')
+        check_int(count, 'count', low=1, high=1_000_000)
         with self._lock:
             self._seq_offset += count
             self.seq_skipped += count
@@ -398,9 +390,7 @@ class SimulatedSkin:
 
 
 def _check_duration(seconds: float) -> None:
-    if isinstance(seconds, bool) or not isinstance(seconds, (int, float)) or not (
-            0.0 <= seconds <= 3600.0):
-        raise ValueError(f'seconds must be in [0, 3600], got {seconds!r}')
+    check_number(seconds, 'seconds', low=0.0, high=3600.0)
 
 
 def _reshape(layer: np.ndarray, shape: tuple) -> np.ndarray:

@@ -28,6 +28,7 @@ import numpy as np
 from .physics import layer_shift_m, Press, render, SkinModel
 from .skins import family_skin, FamilySkin
 from ..estimation.dataset import Dataset
+from ..estimation.validate import check_int
 
 __all__ = ['SCENE_KINDS', 'PAPER_ALPHA_DEG', 'PAPER_BETAS_DEG', 'paper_presses', 'make_scene',
            'make_seed_experiment', 'make_random_experiment', 'make_border_experiment',
@@ -333,9 +334,7 @@ def render_scene(scene, seed: int = 0, samples_per_press: int = 1) -> Dataset:
     Samples are taken during the hold phase of every press (every repetition), at full force, with
     all presses active at that moment rendered together; the tare frames have no press.
     """
-    if (isinstance(samples_per_press, bool) or not isinstance(samples_per_press, int)
-            or samples_per_press < 1):
-        raise ValueError(f'samples_per_press must be an integer >= 1, got {samples_per_press!r}')
+    check_int(samples_per_press, 'samples_per_press', low=1)
     times = []
     for k in range(scene.repeat):
         for p in scene.presses:
