@@ -20,8 +20,7 @@ import tempfile
 import time
 
 import numpy as np
-import rclpy
-from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
+from rclpy.executors import ExternalShutdownException
 from rclpy.node import Node
 from skin_driver.core.estimation.calibration import Calibration
 from skin_driver.core.estimation.heatmap import text_map
@@ -32,12 +31,13 @@ from skin_driver.core.sim.scene import scene_from_dict
 from skin_driver.ros import conversions
 from skin_driver.tools.evaluate.scoring import summarise
 from skin_driver.tools.evaluate.tables import format_table
+from skin_driver.tools.harness import (
+    call_service, ros_args, ros_session, start_nodes, start_sim, stop, wait_for, write_params,
+    write_scene)
 from skin_driver.tools.probe import Probe
-from skin_driver.tools.processes import spawn, stop
 from skin_msgs.msg import SkinFrame, TactileContactArray
 from skin_msgs.srv import Calibrate, CalibrateCompliance, CalibrateForce
 from std_srvs.srv import Trigger
-import yaml
 
 LEAD_IN_S = 4.0
 CAL_PRESSES = 6
@@ -230,31 +230,13 @@ class DemoMonitor:
         sys.stdout.flush()
 
 
-def _call(executor, client, request, timeout_s):
-    if not client.wait_for_service(timeout_sec=10.0):
-        raise RuntimeError(f'service {client.srv_name} did not come up')
-    future = client.call_async(request)
-    executor.spin_until_future_complete(future, timeout_sec=timeout_s)
-    if not future.done():
-        raise RuntimeError(f'service {client.srv_name} did not answer in {timeout_s:.0f} s')
-    return future.result()
-
-
-def _wait(executor, condition, timeout_s, what):
-    deadline = time.monotonic() + timeout_s
-    while not condition():
-        if time.monotonic() > deadline:
-            raise RuntimeError(f'gave up waiting for {what} after {timeout_s:.0f} s')
-        executor.spin_once(timeout_sec=0.05)
-
-
 def _step(executor, monitor, client, request, status: str, start_s: float, pace: float):
     """Call one calibration service in the quiet gap before ``start_s``; return its answer."""
     # Not earlier: the presses of the step before must not count for this one.
-    _wait(executor, lambda: monitor.now() >= start_s - 0.5 * STEP_GAP_S * pace, 120.0,
-          f'the scene to reach {start_s:.1f} s')
+    wait_for(executor, lambda: monitor.now() >= start_s - 0.5 * STEP_GAP_S * pace, 120.0,
+             f'the scene to reach {start_s:.1f} s')
     monitor.status = status
-    response = _call(executor, client, request, 120.0)
+    response = call_service(executor, client, request, 120.0)
     if not response.success:
         raise RuntimeError(f'{status.split(":")[0]} failed: {response.message}')
     return response
@@ -292,50 +274,37 @@ def run(args, workdir: str) -> int:
     """Run the demo in workdir; return the exit status."""
     scene_dict = demo_scene(args.repeats, args.pace)
     scene = scene_from_dict(scene_dict, name='demo')
-    scene_path = os.path.join(workdir, 'demo.yaml')
-    with open(scene_path, 'w') as f:
-        yaml.safe_dump(scene_dict, f)
+    scene_path = write_scene(workdir, scene_dict, 'demo.yaml')
     port = os.path.join(workdir, 'skin0')
     ns = '/skin_demo'
     log = open(os.path.join(workdir, 'nodes.log'), 'w')
-    ros = ['--ros-args', '-r', f'__ns:={ns}', '--log-level', 'warn']
-    params = os.path.join(workdir, 'params.yaml')
-    with open(params, 'w') as f:
-        yaml.safe_dump({
-            '/**/skin_driver': {'ros__parameters': {
-                'port': port, 'reconnect_max': 0.2, 'publish_images': False,
-                'fused': args.fused}},
-            '/**/skin_direction': {'ros__parameters': {
-                'method': args.method,
-                'calibration_file': os.path.join(workdir, 'calibration.yaml')}}}, f)
-    ros += ['--params-file', params]
-    procs = [spawn(['-m', 'skin_driver.ros.driver_node'] + ros, log)]
-    if not args.fused:
-        procs.append(spawn(['-m', 'skin_driver.ros.direction_node'] + ros, log))
-    rclpy.init()
-    executor = SingleThreadedExecutor()
-    node = Node('skin_demo', namespace=ns)
-    monitor = DemoMonitor(node, scene, args.method, live=args.live)
-    executor.add_node(node)
+    params = write_params(workdir, driver={'reconnect_max': 0.2, 'publish_images': False},
+                          direction={'method': args.method})
+    procs = list(start_nodes(args.fused, ros_args(ns, params), log).values())
     try:
-        _wait(executor, lambda: monitor.tare.service_is_ready(), 20.0, 'the direction node')
-        procs.append(spawn(['-m', 'skin_driver.tools.sim', '--scene', scene_path, '--link', port,
-                            '--rate', str(args.rate)], log))
-        # Tare needs its scans in the direction node, which sees them after the driver does.
-        _wait(executor, lambda: monitor.estimates >= 30, 20.0, 'contacts from the direction node')
-        monitor.status = 'taring the unloaded skin'
-        result = _call(executor, monitor.tare, Trigger.Request(), 10.0)
-        if not result.success:
-            raise RuntimeError(f'tare refused: {result.message}')
-        calibrate(executor, monitor, scene_dict, args.pace,
-                  os.path.join(workdir, 'calibration.yaml'))
-        _wait(executor, lambda: monitor.device_time_us * 1e-6 > scene.duration_s + 0.3,
-              scene.duration_s + 30.0, 'the scene')
-        monitor.draw(force=True)
+        with ros_session() as executor:
+            node = Node('skin_demo', namespace=ns)
+            monitor = DemoMonitor(node, scene, args.method, live=args.live)
+            executor.add_node(node)
+            try:
+                wait_for(executor, monitor.tare.service_is_ready, 20.0, 'the direction node',
+                         procs)
+                procs.append(start_sim(executor, scene_path, port, args.rate, log).process)
+                # Tare needs its scans in the direction node, which sees them after the driver.
+                wait_for(executor, lambda: monitor.estimates >= 30, 20.0,
+                         'contacts from the direction node', procs)
+                monitor.status = 'taring the unloaded skin'
+                result = call_service(executor, monitor.tare, Trigger.Request(), 10.0)
+                if not result.success:
+                    raise RuntimeError(f'tare refused: {result.message}')
+                calibrate(executor, monitor, scene_dict, args.pace,
+                          os.path.join(workdir, 'calibration.yaml'))
+                wait_for(executor, lambda: monitor.now() > scene.duration_s + 0.3,
+                         scene.duration_s + 30.0, 'the scene')
+                monitor.draw(force=True)
+            finally:
+                node.destroy_node()
     finally:
-        executor.shutdown()
-        node.destroy_node()
-        rclpy.try_shutdown()
         stop(procs)
         log.close()
     report = {'methods': {name: summarise([r[0] for r in rows], [r[1] for r in rows])

@@ -16,8 +16,8 @@ from skin_driver.ros.conversions import status_values
 from skin_driver.ros.direction_node import DirectionNode
 from skin_driver.ros.driver_node import SkinDriverNode
 from skin_driver.ros.params import ParameterError
+from skin_driver.tools.harness import spawn, stop
 from skin_driver.tools.probe import Probe
-from skin_driver.tools.processes import spawn, stop
 from skin_msgs.srv import Calibrate
 from std_srvs.srv import Trigger
 
