@@ -6,8 +6,8 @@ import os
 
 import numpy as np
 import pytest
-from skin_driver.core.sim.physics import SkinModel
-from skin_driver.tools.bench import cli as bench, end_to_end as bench_ros, estimators as bench_core
+from skin_driver.tools.bench import (
+    cli as bench, end_to_end as bench_ros, estimators as bench_core, scoring)
 
 # matplotlib's tick labels go through a deprecated pyparsing API; not this project's concern.
 pytestmark = pytest.mark.filterwarnings('ignore::DeprecationWarning')
@@ -52,13 +52,6 @@ def test_skimage_reference_reports_the_displacement_of_the_bottom_map():
     assert bench_core.skimage_shift(np.stack((top, np.zeros_like(top)))).confidence == 0.0
 
 
-def test_finer_grids_cover_the_same_patch_and_read_the_same_pressure():
-    coarse, fine = bench_core.skin_for_grid(16), bench_core.skin_for_grid(32)
-    assert coarse.cols * coarse.pitch_m == pytest.approx(fine.cols * fine.pitch_m)
-    assert fine.fsr.force_at_r_max_n == pytest.approx(coarse.fsr.force_at_r_max_n / 4)
-    assert coarse == SkinModel(noise_counts=coarse.noise_counts)
-
-
 def test_scaling_has_a_point_per_grid_contact_count_and_method(results):
     scale = results['scaling']
     assert {(r['grid'], r['method']) for r in scale['by_grid']} == {(16, 'poc'), (16, 'seed')}
@@ -68,19 +61,19 @@ def test_scaling_has_a_point_per_grid_contact_count_and_method(results):
 
 
 def test_targets_name_each_figure_with_its_limit(results):
-    names = [t['name'] for t in bench.targets(results)]
+    names = [t['name'] for t in scoring.targets(results)]
     assert any('seed-like mean azimuth error' in n for n in names)
     assert any('random presses valid share' in n for n in names)
     assert any('16x16' in n and 'cost' in n for n in names)
     assert any(n.startswith('family') and 'centroid' in n for n in names)
     assert any(n.startswith('family') and 'apart' in n for n in names)
-    assert all({'measured', 'limit', 'met', 'note'} <= set(t) for t in bench.targets(results))
+    assert all({'measured', 'limit', 'met', 'note'} <= set(t) for t in scoring.targets(results))
 
 
 def test_write_produces_json_markdown_and_plots(results, tmp_path):
     res = dict(results)
     res['machine'] = dict(res['machine'], load_after=[0.0, 0.0, 0.0])
-    res['targets'] = bench.targets(res)
+    res['targets'] = scoring.targets(res)
     bench.write(res, str(tmp_path))
     data = json.loads((tmp_path / 'benchmarks.json').read_text())
     assert {'machine', 'accuracy', 'seed', 'scaling', 'targets', 'images'} <= set(data)
@@ -137,9 +130,9 @@ def test_end_to_end_targets_and_report_cover_both_layouts_at_each_rate(results, 
            'runs': [_e2e_run('split', 1000.0, 12, 3.0,
                              {'sim': 150, 'driver': 90, 'direction': 400, 'probe': 120}),
                     _e2e_run('fused', 1000.0, 0, 1.5, {'sim': 150, 'driver': 200, 'probe': 120})]}
-    e2e['why'] = bench.why_e2e(e2e)
-    e2e['tradeoffs'] = bench.tradeoffs(e2e)
-    targets = {t['name']: t for t in bench.e2e_targets(e2e)}
+    e2e['why'] = scoring.why_e2e(e2e)
+    e2e['tradeoffs'] = scoring.tradeoffs(e2e)
+    targets = {t['name']: t for t in scoring.e2e_targets(e2e)}
     assert not targets['split at 1 kHz: scans lost in 60 s']['met']
     assert targets['fused at 1 kHz: scans lost in 60 s']['met']
     assert targets['split at 1 kHz: p99 latency, last byte -> subscriber']['note'] == \
@@ -149,7 +142,7 @@ def test_end_to_end_targets_and_report_cover_both_layouts_at_each_rate(results, 
     assert targets['fused at 1 kHz: hot path CPU per scan']['met']
     assert any('0.41 x' in line for line in e2e['tradeoffs'])
     res = dict(results, e2e=e2e, machine=dict(results['machine'], load_after=[0.0, 0.0, 0.0]))
-    res['targets'] = bench.targets(res)
+    res['targets'] = scoring.targets(res)
     bench.write(res, str(tmp_path))
     text = (tmp_path / 'benchmarks.md').read_text()
     assert '## 3. End to end through ROS: split against fused' in text
