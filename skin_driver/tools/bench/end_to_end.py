@@ -17,9 +17,7 @@ import time
 
 from geometry_msgs.msg import WrenchStamped
 import numpy as np
-import rclpy
 from rclpy.node import Node
-from rclpy.parameter import Parameter
 from rclpy.qos import qos_profile_sensor_data
 from skin_driver.core.protocol.wire import encode_frame, FrameDecoder
 from skin_driver.core.sim.physics import Press, render, SkinModel
@@ -27,7 +25,7 @@ from skin_driver.ros import conversions
 from skin_driver.ros.direction_node import DirectionNode
 from skin_driver.ros.estimation_host import EstimationHost
 from skin_driver.tools.harness import (
-    ros_args, ros_session, spin_for, start_nodes, start_sim, stop, wait_for,
+    overrides, ros_args, ros_session, spin_for, start_nodes, start_sim, stop, wait_for,
     write_params)
 from skin_driver.tools.probe import Probe
 from skin_msgs.msg import SkinFrame, TactileContact, TactileContactArray
@@ -192,12 +190,10 @@ def stage_costs(repeats=500) -> dict:
     top, bottom = render(model, press, rng)
     raw = encode_frame(1, 1000, top, bottom)
     decoder = FrameDecoder(expected_shape=(16, 16))
-    rclpy.init()
-    try:
+    with ros_session():
         ns = f'/skin_bench_stages_{os.getpid()}'
-        node = DirectionNode(subscribe=False, namespace=ns, parameter_overrides=[
-            Parameter('calibration_file', value=os.devnull + '/none'),
-            Parameter('viz_rate', value=0.0)])
+        node = DirectionNode(subscribe=False, namespace=ns, parameter_overrides=overrides(
+            {'calibration_file': os.devnull + '/none', 'viz_rate': 0.0}))
         host: EstimationHost = node.host
         est = host.estimator.with_tare(
             *[np.stack([render(model, [], rng)[k] for _ in range(10)]) for k in (0, 1)])
@@ -236,6 +232,4 @@ def stage_costs(repeats=500) -> dict:
                 lambda: host.process(header, 1, 1000, 0.005, top, bottom), repeats),
         }
         node.destroy_node()
-    finally:
-        rclpy.try_shutdown()
     return {k: v for k, v in out.items() if math.isfinite(v)}
