@@ -1,15 +1,15 @@
-"""A whole pipeline in one test process: simulated skin on a pty, driver, direction node, probe."""
+"""A whole pipeline in one test process, started by the tools' harness with fast timings."""
 
 import contextlib
 
-import rclpy
-from rclpy.parameter import Parameter
-from rosutil import ros_context, spin_until
-from skin_driver.core.sim.board import SimulatedSkin
 from skin_driver.core.sim.scene import scene_from_dict
-from skin_driver.ros.direction_node import DirectionNode
-from skin_driver.ros.driver_node import SkinDriverNode
-from skin_driver.tools.probe import Probe
+from skin_driver.tools import harness
+from skin_driver.tools.harness import overrides  # noqa: F401 - the tests' one import place
+
+# Short timings, so that faults show within a test's patience.
+FAST_DRIVER = {'reconnect_min': 0.05, 'reconnect_max': 0.2, 'stall_timeout': 0.3,
+               'diagnostics_period': 0.2}
+FAST_DIRECTION = {'diagnostics_period': 0.2}
 
 
 def scene(presses, rows=16, cols=16, **model):
@@ -23,54 +23,20 @@ def scene(presses, rows=16, cols=16, **model):
         'presses': presses}, name='test')
 
 
-def overrides(values):
-    """Turn a dict into parameter overrides."""
-    return [Parameter(name, value=value) for name, value in values.items()]
-
-
 @contextlib.contextmanager
 def pipeline(tmp_path, the_scene, rate_hz=200.0, driver=None, direction=None, loop=False,
              fused=False):
-    """
-    Yield (sim, driver node, direction node, probe, executor) wired on a fresh context.
-
-    fused: the direction node takes its scans from the driver's reader thread, as in the
-    driver's fused mode, instead of from the frame topic.
-    """
-    link = str(tmp_path / 'skin0')
-    sim = SimulatedSkin(the_scene, rate_hz=rate_hz, link_path=link, seed=1, loop=loop)
-    driver_params = {'port': link, 'rows': the_scene.model.rows, 'cols': the_scene.model.cols,
-                     'reconnect_min': 0.05, 'reconnect_max': 0.2, 'stall_timeout': 0.3,
-                     'diagnostics_period': 0.2, **(driver or {})}
-    direction_params = {'calibration_file': str(tmp_path / 'calibration.yaml'),
-                        'diagnostics_period': 0.2, **(direction or {})}
-    with ros_context() as (context, executor):
-        direction_node = DirectionNode(subscribe=not fused, context=context,
-                                       parameter_overrides=overrides(direction_params))
-        driver_node = SkinDriverNode(context=context, parameter_overrides=overrides(driver_params))
-        if fused:
-            driver_node.estimation = direction_node.host
-        probe_node = rclpy.create_node('probe', context=context)
-        probe = Probe(probe_node, keep_messages=True, frames=True)
-        for node in (direction_node, driver_node, probe_node):
-            executor.add_node(node)
-        sim.start()
-        try:
-            driver_node.trigger_configure()
-            driver_node.trigger_activate()
-            yield sim, driver_node, direction_node, probe, executor
-        finally:
-            driver_node.close()
-            sim.stop()
-            for node in (direction_node, driver_node, probe_node):
-                node.destroy_node()
+    """Yield (sim, driver node, direction node, probe, executor): harness.in_process."""
+    with harness.in_process(str(tmp_path), the_scene, rate_hz,
+                            {**FAST_DRIVER, **(driver or {})},
+                            {**FAST_DIRECTION, **(direction or {})}, loop, fused) as started:
+        yield started
 
 
 def call(executor, node, srv_type, name, request, timeout_s=20.0):
     """Call a service from a helper client and spin until it answers."""
     client = node.create_client(srv_type, name)
-    assert client.wait_for_service(timeout_sec=5.0), f'{name} is not offered'
-    future = client.call_async(request)
-    assert spin_until(executor, future.done, timeout_s), f'{name} did not answer'
-    node.destroy_client(client)
-    return future.result()
+    try:
+        return harness.call_service(executor, client, request, timeout_s, ready_s=5.0)
+    finally:
+        node.destroy_client(client)

@@ -276,6 +276,13 @@ def _backoff_problem(low, high) -> str:
     return ''
 
 
+def fuse(driver: SkinDriverNode, **direction_kwargs) -> DirectionNode:
+    """Create the skin_direction node that estimates on the driver's reader thread; return it."""
+    direction = DirectionNode(subscribe=False, **direction_kwargs)
+    driver.estimation = direction.host
+    return direction
+
+
 def main(args=None):
     """Run the driver node until shut down."""
     rclpy.init(args=args)
@@ -283,14 +290,12 @@ def main(args=None):
         node = SkinDriverNode()
         # launch_ros names a node with a process-wide rule (-r __node:=skin_driver); a rule of
         # the node's own takes precedence and keeps this one skin_direction.
-        direction = DirectionNode(subscribe=False, cli_args=[
+        direction = fuse(node, cli_args=[
             '--ros-args', '-r', '__node:=skin_direction']) if node.fused else None
     except ParameterError as err:
         rclpy.logging.get_logger('skin_driver').fatal(str(err))
         rclpy.try_shutdown()
         raise SystemExit(1)
-    if direction is not None:
-        node.estimation = direction.host
 
     def autostart():
         if node.autostart:

@@ -20,91 +20,47 @@ import tempfile
 import time
 
 import numpy as np
-import rclpy
-from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
+from rclpy.executors import ExternalShutdownException
 from rclpy.node import Node
 from skin_driver.core.estimation.calibration import Calibration
 from skin_driver.core.estimation.heatmap import text_map
 from skin_driver.core.estimation.pipeline import ContactEstimator, EstimatorConfig
 from skin_driver.core.estimation.shift import DEFAULT_METHOD
-from skin_driver.core.sim.experiments import PAPER_SPOT
-from skin_driver.core.sim.scene import scene_from_dict
+from skin_driver.core.sim.scene import find_scene, scene_from_dict
 from skin_driver.ros import conversions
 from skin_driver.tools.evaluate.scoring import summarise
 from skin_driver.tools.evaluate.tables import format_table
+from skin_driver.tools.harness import (
+    call_service, ros_args, ros_session, start_nodes, start_sim, stop, wait_for, write_params,
+    write_scene)
 from skin_driver.tools.probe import Probe
-from skin_driver.tools.processes import spawn, stop
 from skin_msgs.msg import SkinFrame, TactileContactArray
 from skin_msgs.srv import Calibrate, CalibrateCompliance, CalibrateForce
 from std_srvs.srv import Trigger
 import yaml
 
-LEAD_IN_S = 4.0
-CAL_PRESSES = 6
-CAL_PERIOD_S = 1.2
-DIR_PERIOD_S = 1.5
-# Presses of known normal force (a force gauge or a robot would make them), newtons, each at
-# another place (x, y) in metres: places differ in how a press falls on the taxels, which pins
-# the curve down between the forces.
-FORCE_PRESSES = (5.0, 20.0, 10.0, 35.0, 15.0, 30.0, 8.0, 25.0)
-FORCE_PLACES = ((0.030, 0.045), (0.046, 0.031), (0.038, 0.039), (0.027, 0.028),
-                (0.049, 0.047), (0.034, 0.050), (0.044, 0.024), (0.025, 0.041))
-# Presses of known tilted load: (force N, alpha deg, beta deg).
-TILTED_PRESSES = ((8.0, 30.0, 45.0), (6.0, 40.0, 135.0), (10.0, 20.0, 225.0), (7.0, 35.0, 315.0))
-# Before each calibration step the service call needs a moment: a pause without presses.
-STEP_GAP_S = 1.5
-# The simulated skin is not the one the driver assumes: another FSR film and divider, and an
-# elastic layer 1.5 times as soft. Without force calibration |F| comes out several times too
-# high.
-SKIN_MODEL = {'rows': 16, 'cols': 16, 'pitch_m': 0.005, 'compliance_m_per_n': 1.05e-3,
-              'fsr': {'r_series_ohm': 2000.0, 'r_min_ohm': 150.0, 'r_max_ohm': 6000.0,
-                      'force_at_r_min_n': 40.0}}
-
-
-def _steps(pace: float) -> dict:
-    """Return the scene times (s) at which each calibration step and the directions start."""
-    offset = LEAD_IN_S
-    force = offset + (CAL_PRESSES * CAL_PERIOD_S + STEP_GAP_S) * pace
-    compliance = force + (len(FORCE_PRESSES) * CAL_PERIOD_S + STEP_GAP_S) * pace
-    directions = compliance + (len(TILTED_PRESSES) * CAL_PERIOD_S + STEP_GAP_S) * pace
-    return {'offset': offset, 'force': force, 'compliance': compliance,
-            'directions': directions}
-
 
 def demo_scene(repeats: int, pace: float = 1.0) -> dict:
     """
-    Return the demo's scene: a quiet lead-in, the calibration presses, then the eight directions.
+    Return the demo's scene (skin_driver/scenes/demo.yaml) with its rounds and pace.
 
-    The calibration presses (offset, known forces, known tilted loads), then the paper's
-    protocol as the evaluator and the `seed` scene define it, on a skin whose FSR curve and
-    compliance are not the driver's assumed ones. pace < 1 plays them faster (the lead-in, which
-    start-up needs, stays).
+    ``repeats`` rounds of the eight directions; pace < 1 plays everything after the lead-in
+    faster (the lead-in, before the first press, is what start-up needs and stays).
     """
-    steps = _steps(pace)
-    # (x_p, y_p) is measured where the directions are pressed: the sampling of the imprints by
-    # the taxels biases the shift by where a press falls on them.
-    span = [(SKIN_MODEL[n] - 1) * SKIN_MODEL['pitch_m'] for n in ('cols', 'rows')]
-    spot = {'x_m': span[0] * PAPER_SPOT[0], 'y_m': span[1] * PAPER_SPOT[1]}
-    presses = [{'time_s': steps['offset'] + i * CAL_PERIOD_S * pace, 'alpha_deg': 0.0,
-                'beta_deg': 0.0, 'duration_s': 0.8 * pace, **spot} for i in range(CAL_PRESSES)]
-    presses += [{'time_s': steps['force'] + i * CAL_PERIOD_S * pace, 'force_n': f,
-                 'x_m': x, 'y_m': y, 'alpha_deg': 0.0, 'beta_deg': 0.0,
-                 'duration_s': 0.8 * pace}
-                for i, (f, (x, y)) in enumerate(zip(FORCE_PRESSES, FORCE_PLACES))]
-    presses += [{'time_s': steps['compliance'] + i * CAL_PERIOD_S * pace, 'force_n': f,
-                 'alpha_deg': a, 'beta_deg': b, 'duration_s': 0.8 * pace}
-                for i, (f, a, b) in enumerate(TILTED_PRESSES)]
-    return {
-        'name': 'demo', 'description': 'seed experiment for make demo, after a calibration',
-        'model': SKIN_MODEL,
-        'defaults': {'x_m': 0.0375, 'y_m': 0.0375, 'force_n': 10.0, 'radius_m': 0.004,
-                     'ramp_s': 0.3 * pace},
-        'presses': presses,
-        'generator': {'kind': 'paper', 'leading_normal': 0, 'normal_per_repeat': 0,
-                      'repeats': repeats, 'start_s': steps['directions'],
-                      'interval_s': DIR_PERIOD_S * pace, 'duration_s': 1.2 * pace,
-                      'ramp_s': 0.3 * pace},
-    }
+    data = yaml.safe_load(find_scene('demo').read_text())
+    lead_in = min(p['time_s'] for p in data['presses'])
+    for entry in [data['defaults']] + data['presses']:
+        for key in ('duration_s', 'ramp_s'):
+            if key in entry:
+                entry[key] *= pace
+        if 'time_s' in entry:
+            entry['time_s'] = lead_in + (entry['time_s'] - lead_in) * pace
+    generator = data['generator']
+    generator['start_s'] = lead_in + (generator['start_s'] - lead_in) * pace
+    for key in ('interval_s', 'duration_s', 'ramp_s'):
+        generator[key] *= pace
+    generator['repeats'] = repeats
+    return data
 
 
 class DemoMonitor:
@@ -230,60 +186,49 @@ class DemoMonitor:
         sys.stdout.flush()
 
 
-def _call(executor, client, request, timeout_s):
-    if not client.wait_for_service(timeout_sec=10.0):
-        raise RuntimeError(f'service {client.srv_name} did not come up')
-    future = client.call_async(request)
-    executor.spin_until_future_complete(future, timeout_sec=timeout_s)
-    if not future.done():
-        raise RuntimeError(f'service {client.srv_name} did not answer in {timeout_s:.0f} s')
-    return future.result()
-
-
-def _wait(executor, condition, timeout_s, what):
-    deadline = time.monotonic() + timeout_s
-    while not condition():
-        if time.monotonic() > deadline:
-            raise RuntimeError(f'gave up waiting for {what} after {timeout_s:.0f} s')
-        executor.spin_once(timeout_sec=0.05)
-
-
-def _step(executor, monitor, client, request, status: str, start_s: float, pace: float):
-    """Call one calibration service in the quiet gap before ``start_s``; return its answer."""
-    # Not earlier: the presses of the step before must not count for this one.
-    _wait(executor, lambda: monitor.now() >= start_s - 0.5 * STEP_GAP_S * pace, 120.0,
-          f'the scene to reach {start_s:.1f} s')
+def _step(executor, monitor, client, request, status: str, label: str = None):
+    """Call one calibration service before the presses labelled ``label``; return its answer."""
+    if label is not None:
+        # In the middle of the quiet gap before them: the presses of the step before must not
+        # count for this one.
+        scene = monitor.scene
+        first = scene.labelled(label)[0]
+        before = max((p.end_s for p in scene.presses if p.end_s <= first.time_s), default=0.0)
+        start_s = (before + first.time_s) / 2.0
+        wait_for(executor, lambda: monitor.now() >= start_s, 120.0,
+                 f'the scene to reach {start_s:.1f} s')
     monitor.status = status
-    response = _call(executor, client, request, 120.0)
+    response = call_service(executor, client, request, 120.0)
     if not response.success:
         raise RuntimeError(f'{status.split(":")[0]} failed: {response.message}')
     return response
 
 
-def calibrate(executor, monitor, scene_dict, pace: float, path: str) -> None:
+def calibrate(executor, monitor, path: str) -> None:
     """Calibrate the offset, the force curve and the compliance through the services."""
-    steps = _steps(pace)
+    scene = monitor.scene
     timeout = 60.0
+    normal = len(scene.labelled('offset'))
     offset = _step(executor, monitor, monitor.calibrate,
-                   Calibrate.Request(presses=CAL_PRESSES - 1, timeout=timeout),
-                   f'calibrating (x_p, y_p): the scene makes {CAL_PRESSES} normal presses',
-                   0.0, pace)
+                   Calibrate.Request(presses=normal - 1, timeout=timeout),
+                   f'calibrating (x_p, y_p): the scene makes {normal} normal presses')
     print(f'calibrated (x_p {offset.x_p * 1e3:.2f} mm, y_p {offset.y_p * 1e3:.2f} mm)')
+    forces = [p.force_n for p in scene.labelled('force')]
     force = _step(executor, monitor, monitor.calibrate_force,
-                  CalibrateForce.Request(forces=list(FORCE_PRESSES), timeout=timeout),
+                  CalibrateForce.Request(forces=forces, timeout=timeout),
                   f'calibrating the force curve: presses of known force '
-                  f'{", ".join(f"{f:g}" for f in FORCE_PRESSES)} N', steps['force'], pace)
+                  f'{", ".join(f"{f:g}" for f in forces)} N', 'force')
     print('force calibrated from {} presses; fitted/known: {}'.format(
-        force.presses_used, ', '.join(f'{a:.1f}/{k:g} N'
-                                      for a, k in zip(force.fitted, FORCE_PRESSES))))
+        force.presses_used, ', '.join(f'{a:.1f}/{k:g} N' for a, k in zip(force.fitted, forces))))
+    tilted = scene.labelled('compliance')
     compliance = _step(
         executor, monitor, monitor.calibrate_compliance,
-        CalibrateCompliance.Request(forces=[t[0] for t in TILTED_PRESSES],
-                                    alphas=[math.radians(t[1]) for t in TILTED_PRESSES],
+        CalibrateCompliance.Request(forces=[p.force_n for p in tilted],
+                                    alphas=[math.radians(p.alpha_deg) for p in tilted],
                                     timeout=timeout),
-        'calibrating the compliance: presses of known tilted load', steps['compliance'], pace)
+        'calibrating the compliance: presses of known tilted load', 'compliance')
     print(f'compliance calibrated: {compliance.compliance:.3e} m/N '
-          f'(the simulated skin has {scene_dict["model"]["compliance_m_per_n"]:.3e})')
+          f'(the simulated skin has {scene.model.compliance_m_per_n:.3e})')
     monitor.set_calibration(path)
     monitor.status = 'calibrated; alpha = 45 deg presses at 8 azimuths'
 
@@ -292,50 +237,36 @@ def run(args, workdir: str) -> int:
     """Run the demo in workdir; return the exit status."""
     scene_dict = demo_scene(args.repeats, args.pace)
     scene = scene_from_dict(scene_dict, name='demo')
-    scene_path = os.path.join(workdir, 'demo.yaml')
-    with open(scene_path, 'w') as f:
-        yaml.safe_dump(scene_dict, f)
+    scene_path = write_scene(workdir, scene_dict, 'demo.yaml')
     port = os.path.join(workdir, 'skin0')
     ns = '/skin_demo'
     log = open(os.path.join(workdir, 'nodes.log'), 'w')
-    ros = ['--ros-args', '-r', f'__ns:={ns}', '--log-level', 'warn']
-    params = os.path.join(workdir, 'params.yaml')
-    with open(params, 'w') as f:
-        yaml.safe_dump({
-            '/**/skin_driver': {'ros__parameters': {
-                'port': port, 'reconnect_max': 0.2, 'publish_images': False,
-                'fused': args.fused}},
-            '/**/skin_direction': {'ros__parameters': {
-                'method': args.method,
-                'calibration_file': os.path.join(workdir, 'calibration.yaml')}}}, f)
-    ros += ['--params-file', params]
-    procs = [spawn(['-m', 'skin_driver.ros.driver_node'] + ros, log)]
-    if not args.fused:
-        procs.append(spawn(['-m', 'skin_driver.ros.direction_node'] + ros, log))
-    rclpy.init()
-    executor = SingleThreadedExecutor()
-    node = Node('skin_demo', namespace=ns)
-    monitor = DemoMonitor(node, scene, args.method, live=args.live)
-    executor.add_node(node)
+    params = write_params(workdir, driver={'reconnect_max': 0.2, 'publish_images': False},
+                          direction={'method': args.method})
+    procs = list(start_nodes(args.fused, ros_args(ns, params), log).values())
     try:
-        _wait(executor, lambda: monitor.tare.service_is_ready(), 20.0, 'the direction node')
-        procs.append(spawn(['-m', 'skin_driver.tools.sim', '--scene', scene_path, '--link', port,
-                            '--rate', str(args.rate)], log))
-        # Tare needs its scans in the direction node, which sees them after the driver does.
-        _wait(executor, lambda: monitor.estimates >= 30, 20.0, 'contacts from the direction node')
-        monitor.status = 'taring the unloaded skin'
-        result = _call(executor, monitor.tare, Trigger.Request(), 10.0)
-        if not result.success:
-            raise RuntimeError(f'tare refused: {result.message}')
-        calibrate(executor, monitor, scene_dict, args.pace,
-                  os.path.join(workdir, 'calibration.yaml'))
-        _wait(executor, lambda: monitor.device_time_us * 1e-6 > scene.duration_s + 0.3,
-              scene.duration_s + 30.0, 'the scene')
-        monitor.draw(force=True)
+        with ros_session() as executor:
+            node = Node('skin_demo', namespace=ns)
+            monitor = DemoMonitor(node, scene, args.method, live=args.live)
+            executor.add_node(node)
+            try:
+                wait_for(executor, monitor.tare.service_is_ready, 20.0, 'the direction node',
+                         procs)
+                procs.append(start_sim(executor, scene_path, port, args.rate, log).process)
+                # Tare needs its scans in the direction node, which sees them after the driver.
+                wait_for(executor, lambda: monitor.estimates >= 30, 20.0,
+                         'contacts from the direction node', procs)
+                monitor.status = 'taring the unloaded skin'
+                result = call_service(executor, monitor.tare, Trigger.Request(), 10.0)
+                if not result.success:
+                    raise RuntimeError(f'tare refused: {result.message}')
+                calibrate(executor, monitor, os.path.join(workdir, 'calibration.yaml'))
+                wait_for(executor, lambda: monitor.now() > scene.duration_s + 0.3,
+                         scene.duration_s + 30.0, 'the scene')
+                monitor.draw(force=True)
+            finally:
+                node.destroy_node()
     finally:
-        executor.shutdown()
-        node.destroy_node()
-        rclpy.try_shutdown()
         stop(procs)
         log.close()
     report = {'methods': {name: summarise([r[0] for r in rows], [r[1] for r in rows])

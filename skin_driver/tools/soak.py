@@ -35,15 +35,14 @@ import tempfile
 import time
 
 import numpy as np
-import rclpy
-from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
+from rclpy.executors import ExternalShutdownException
 from rclpy.node import Node
 from skin_driver.core.sim.board import SimulatedSkin
-from skin_driver.ros.conversions import status_values
+from skin_driver.ros.conversions import skin_frame_layers, status_values
+from skin_driver.tools.harness import (
+    ros_args, ros_session, start_nodes, stop, wait_for, write_params)
 from skin_driver.tools.probe import Probe
-from skin_driver.tools.processes import spawn, stop
 from skin_msgs.msg import SkinFrame
-import yaml
 
 FAULT_PERIOD_S = 4.0      # one fault starts every this many seconds
 MEMORY_PERIOD_S = 2.0     # resident memory sampled this often
@@ -109,11 +108,13 @@ class SoakMonitor:
         if truth is None:
             self.unknown += 1
             return
-        top = np.frombuffer(msg.top, dtype=np.uint16)
-        bottom = np.frombuffer(msg.bottom, dtype=np.uint16)
-        if (msg.device_time_us != truth.device_time_us or top.size != truth.top.size
-                or not np.array_equal(top, truth.top.ravel())
-                or not np.array_equal(bottom, truth.bottom.ravel())):
+        try:
+            top, bottom = skin_frame_layers(msg)
+        except ValueError:
+            self.mismatched += 1
+            return
+        if (msg.device_time_us != truth.device_time_us or not np.array_equal(top, truth.top)
+                or not np.array_equal(bottom, truth.bottom)):
             self.mismatched += 1
 
     def _on_status(self, status) -> None:
@@ -183,74 +184,66 @@ class FaultCycle:
 
 def run(args, workdir: str) -> dict:
     """Run the soak in workdir and return its summary."""
-    port = os.path.join(workdir, 'skin0')
     ns = f'/skin_soak_{os.getpid()}'
     log = open(os.path.join(workdir, 'nodes.log'), 'w')
-    params = os.path.join(workdir, 'params.yaml')
-    with open(params, 'w') as f:
-        yaml.safe_dump({
-            '/**/skin_driver': {'ros__parameters': {'port': port, 'fused': args.fused}},
-            '/**/skin_direction': {'ros__parameters': {
-                'calibration_file': os.path.join(workdir, 'calibration.yaml')}}}, f)
-    ros = ['--ros-args', '-r', f'__ns:={ns}', '--log-level', 'error', '--params-file', params]
-    procs = {'driver': spawn(['-m', 'skin_driver.ros.driver_node'] + ros, log)}
-    if not args.fused:
-        procs['direction'] = spawn(['-m', 'skin_driver.ros.direction_node'] + ros, log)
-    sim = SimulatedSkin(args.scene, rate_hz=args.rate, link_path=port, seed=args.seed, loop=True,
-                        truth_capacity=max(10_000, int(args.rate * 20)))
-    rclpy.init()
-    executor = SingleThreadedExecutor()
-    node = Node('skin_soak', namespace=ns)
-    monitor = SoakMonitor(node, sim)
-    executor.add_node(node)
-    memory = {name: [] for name in procs}
-    faults = FaultCycle(sim, args.seed)
+    sim = SimulatedSkin(args.scene, rate_hz=args.rate, link_path=os.path.join(workdir, 'skin0'),
+                        seed=args.seed, loop=True, truth_capacity=max(10_000, int(args.rate * 20)))
+    params = write_params(workdir)
+    procs = start_nodes(args.fused, ros_args(ns, params, 'error'), log)
     try:
-        deadline = time.monotonic() + 30.0
-        while monitor.link is None:
-            executor.spin_once(timeout_sec=0.1)
-            if time.monotonic() > deadline or any(p.poll() is not None for p in procs.values()):
-                raise RuntimeError('the driver did not come up')
-        sim.start()
-        start = time.monotonic()
-        next_fault, next_sample, next_print = start + FAULT_PERIOD_S, start, start + 30.0
-        while (now := time.monotonic()) < start + args.duration:
-            executor.spin_once(timeout_sec=0.01)
-            faults.step(now, monitor)
-            if now >= next_fault and now < start + args.duration - FAULT_PERIOD_S:
-                faults.start_next(now)
-                next_fault += FAULT_PERIOD_S
-            if now >= next_sample:
-                for name, proc in procs.items():
-                    memory[name].append((now - start, rss_mb(proc.pid)))
-                next_sample += MEMORY_PERIOD_S
-            if now >= next_print:
-                print(f'soak: {now - start:5.0f} s, {monitor.received} frames received, '
-                      f'{dict(faults.injected)}', flush=True)
-                next_print += 30.0
-            for name, proc in procs.items():
-                if proc.poll() is not None:
-                    raise RuntimeError(f'the {name} node died (exit {proc.returncode})')
-        # Stop the board (the pty stays open) and let the pipeline drain.
-        sim.set_line_noise(0.0)
-        faults.step(float('inf'), monitor)
-        sim.stall(3600.0)
-        end = time.monotonic() + DRAIN_S
-        diag_before = monitor.diag_count
-        while time.monotonic() < end or monitor.diag_count < diag_before + 2:
-            executor.spin_once(timeout_sec=0.05)
-            faults.step(time.monotonic(), monitor)
-            if time.monotonic() > end + 10.0:
-                break
-        alive = {name: proc.poll() is None for name, proc in procs.items()}
-        return summarise(args, sim, monitor, faults, memory, alive)
+        with ros_session() as executor:
+            node = Node('skin_soak', namespace=ns)
+            executor.add_node(node)
+            try:
+                return _soak(args, executor, node, sim, procs)
+            finally:
+                node.destroy_node()
     finally:
-        executor.shutdown()
-        node.destroy_node()
-        rclpy.try_shutdown()
         stop(procs.values())
         sim.stop()
         log.close()
+
+
+def _soak(args, executor, node, sim, procs) -> dict:
+    """Play the faults for the duration, let the pipeline drain; return the summary."""
+    monitor = SoakMonitor(node, sim)
+    memory = {name: [] for name in procs}
+    faults = FaultCycle(sim, args.seed)
+    wait_for(executor, lambda: monitor.link is not None, 30.0, 'the driver to come up',
+             procs.values())
+    sim.start()
+    start = time.monotonic()
+    next_fault, next_sample, next_print = start + FAULT_PERIOD_S, start, start + 30.0
+    while (now := time.monotonic()) < start + args.duration:
+        executor.spin_once(timeout_sec=0.01)
+        faults.step(now, monitor)
+        if now >= next_fault and now < start + args.duration - FAULT_PERIOD_S:
+            faults.start_next(now)
+            next_fault += FAULT_PERIOD_S
+        if now >= next_sample:
+            for name, proc in procs.items():
+                memory[name].append((now - start, rss_mb(proc.pid)))
+            next_sample += MEMORY_PERIOD_S
+        if now >= next_print:
+            print(f'soak: {now - start:5.0f} s, {monitor.received} frames received, '
+                  f'{dict(faults.injected)}', flush=True)
+            next_print += 30.0
+        for name, proc in procs.items():
+            if proc.poll() is not None:
+                raise RuntimeError(f'the {name} node died (exit {proc.returncode})')
+    # Stop the board (the pty stays open) and let the pipeline drain.
+    sim.set_line_noise(0.0)
+    faults.step(float('inf'), monitor)
+    sim.stall(3600.0)
+    end = time.monotonic() + DRAIN_S
+    diag_before = monitor.diag_count
+    while time.monotonic() < end or monitor.diag_count < diag_before + 2:
+        executor.spin_once(timeout_sec=0.05)
+        faults.step(time.monotonic(), monitor)
+        if time.monotonic() > end + 10.0:
+            break
+    alive = {name: proc.poll() is None for name, proc in procs.items()}
+    return summarise(args, sim, monitor, faults, memory, alive)
 
 
 def summarise(args, sim, monitor, faults, memory, alive) -> dict:

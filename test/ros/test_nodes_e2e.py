@@ -16,8 +16,8 @@ from skin_driver.ros.conversions import status_values
 from skin_driver.ros.direction_node import DirectionNode
 from skin_driver.ros.driver_node import SkinDriverNode
 from skin_driver.ros.params import ParameterError
+from skin_driver.tools.harness import spawn, stop
 from skin_driver.tools.probe import Probe
-from skin_driver.tools.processes import spawn, stop
 from skin_msgs.srv import Calibrate
 from std_srvs.srv import Trigger
 
@@ -219,8 +219,9 @@ def test_fused_driver_process_offers_the_direction_nodes_topics_services_and_dia
                     '-p', 'fused:=true', '-p', f'port:={link}', '-p', 'reconnect_max:=0.1',
                     '-p', 'skin_direction:diagnostics_period:=0.2',
                     '-p', f'skin_direction:calibration_file:={tmp_path / "cal.yaml"}'], log)
+    # Looped: a driver process that starts slowly on a loaded machine still sees the press.
     sim = SimulatedSkin(scene([{'time_s': 0.5, 'duration_s': 0.6, 'ramp_s': 0.1}]), rate_hz=200.0,
-                        link_path=link, seed=1)
+                        link_path=link, seed=1, loop=True)
     try:
         with ros_context() as (context, executor):
             node = rclpy.create_node('probe', namespace=ns, context=context)

@@ -7,6 +7,8 @@ import sys
 import uuid
 
 import pytest
+from skin_driver.core.sim.scene import scene_from_dict
+from skin_driver.tools.demo import demo_scene
 
 pytestmark = pytest.mark.ros
 
@@ -43,3 +45,28 @@ def test_demo_calibrates_and_prints_table_1_next_to_the_papers():
     # The driver's estimator beats the paper's method on the very same scans.
     assert default_mean < seed_mean
     assert _processes_with(tag) == []
+
+
+def test_demo_scene_presses_the_offset_where_the_directions_are_pressed():
+    scene = scene_from_dict(demo_scene(repeats=2), name='demo')
+    directions = [p for p in scene.presses if p.alpha_deg == 45.0]
+    assert len(directions) == 2 * 8
+    spots = {(round(p.x_m, 9), round(p.y_m, 9)) for p in scene.labelled('offset') + directions}
+    assert len(spots) == 1
+    # Known forces: at least six, the largest at least three times the smallest (the service's
+    # rule), and each at another place.
+    forces = [p.force_n for p in scene.labelled('force')]
+    assert len(forces) >= 6 and max(forces) >= 3 * min(forces)
+    assert len({(p.x_m, p.y_m) for p in scene.labelled('force')}) == len(forces)
+    assert all(p.alpha_deg > 0 for p in scene.labelled('compliance'))
+
+
+def test_demo_pace_scales_the_scene_after_the_lead_in():
+    slow = scene_from_dict(demo_scene(repeats=1, pace=1.0), name='demo')
+    fast = scene_from_dict(demo_scene(repeats=1, pace=0.5), name='demo')
+    lead_in = slow.presses[0].time_s
+    assert fast.presses[0].time_s == lead_in
+    for a, b in zip(slow.presses, fast.presses):
+        assert b.time_s - lead_in == pytest.approx((a.time_s - lead_in) / 2)
+        assert b.duration_s == pytest.approx(a.duration_s / 2)
+    assert [p.label for p in slow.presses] == [p.label for p in fast.presses]

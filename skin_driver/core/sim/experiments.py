@@ -32,7 +32,8 @@ from ..estimation.validate import check_int
 
 __all__ = ['SCENE_KINDS', 'PAPER_ALPHA_DEG', 'PAPER_BETAS_DEG', 'paper_presses', 'make_scene',
            'make_seed_experiment', 'make_random_experiment', 'make_border_experiment',
-           'make_multi_experiment', 'add_calibration_frames', 'render_scene']
+           'make_multi_experiment', 'add_calibration_frames', 'render_scene',
+           'press_for_shift']
 
 PAPER_ALPHA_DEG = 45.0
 PAPER_BETAS_DEG = tuple(float(b) for b in range(0, 360, 45))
@@ -135,6 +136,21 @@ def _interior_spot(model: SkinModel, rng, margin_m: float) -> tuple:
     width, height = _span(model)
     return (rng.uniform(margin_m, max(width - margin_m, margin_m)),
             rng.uniform(margin_m, max(height - margin_m, margin_m)))
+
+
+def press_for_shift(model: SkinModel, shift_taxels: float, rng: np.random.Generator,
+                    margin_m: float = 0.015) -> Press:
+    """
+    Return a press at a random interior spot whose layer shift is ``shift_taxels`` taxels.
+
+    Random beta, normal force 5..15 N, indenter radius 1.5..3.5 mm; the tilt is what the
+    skin's compliance needs for the wanted shift.
+    """
+    x, y = _interior_spot(model, rng, margin_m)
+    normal = rng.uniform(5.0, 15.0)
+    tangential = shift_taxels * model.pitch_m / model.compliance_m_per_n
+    return Press(x, y, math.hypot(normal, tangential), math.atan2(tangential, normal),
+                 rng.uniform(-math.pi, math.pi), rng.uniform(0.0015, 0.0035))
 
 
 def make_seed_experiment(model: SkinModel = None, repeats: int = 20,

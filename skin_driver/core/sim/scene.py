@@ -12,7 +12,8 @@ A scene file is a mapping::
     period_s: 20.0             # length of one repetition (default: end of the last press)
     defaults: {x_m: 0.0375, y_m: 0.0375, radius_m: 0.004}   # merged into every press
     presses:
-      - {time_s: 0.5, force_n: 10, alpha_deg: 45, beta_deg: 90, duration_s: 1.0, ramp_s: 0.2}
+      - {time_s: 0.5, force_n: 10, alpha_deg: 45, beta_deg: 90, duration_s: 1.0, ramp_s: 0.2,
+         label: tilted}       # label: optional, a name for a group of presses
     generator: {kind: random, seed: 1, count: 20, ...}     # optional, adds generated presses
 
 Generators: ``kind: random`` (presses at random spots, ranges given per field) and ``kind: paper``
@@ -64,6 +65,7 @@ class ScenePress:
     radius_m: float
     duration_s: float
     ramp_s: float = DEFAULT_RAMP_S
+    label: str = ''
 
     @property
     def end_s(self) -> float:
@@ -120,6 +122,10 @@ class Scene:
         """Return the physics presses acting at scene time t."""
         return [p for _, p in self.active_at(t)]
 
+    def labelled(self, label: str) -> list:
+        """Return the presses of one label (one repetition), in the order of the script."""
+        return [p for p in self.presses if p.label == label]
+
     def hold_times(self) -> list:
         """Return (scene time, press index) at the middle of every press, all repetitions."""
         return [(k * self.period_s + p.time_s + p.duration_s / 2.0, i)
@@ -140,7 +146,10 @@ def _press(index: int, entry: Any, defaults: Mapping) -> ScenePress:
     if not isinstance(entry, Mapping):
         raise ValueError(f'{where}: must be a mapping of fields, got {entry!r}')
     merged = {**defaults, **entry}
-    allowed = PRESS_FIELDS + ('ramp_s',)
+    label = merged.pop('label', '')
+    if not isinstance(label, str):
+        raise ValueError(f"{where}: field 'label' must be a string, got {label!r}")
+    allowed = PRESS_FIELDS + ('ramp_s', 'label')
     for key in merged:
         if key not in allowed:
             raise ValueError(f'{where}: unknown field {key!r}; fields are {", ".join(allowed)}')
@@ -160,7 +169,7 @@ def _press(index: int, entry: Any, defaults: Mapping) -> ScenePress:
     for field, ok, rule in checks:
         if not ok:
             raise ValueError(f'{where}: field {field!r} {rule}, got {v[field]}')
-    return ScenePress(**v)
+    return ScenePress(**v, label=label)
 
 
 def _model(data: Any) -> SkinModel:

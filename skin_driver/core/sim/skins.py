@@ -23,9 +23,13 @@ import numpy as np
 from .physics import SkinModel
 from ..estimation.fsr import FsrModel
 
-__all__ = ['FamilySkin', 'HELD_OUT', 'skin_names', 'get_skin', 'family_skin', 'held_out_skin']
+__all__ = ['FamilySkin', 'HELD_OUT', 'skin_names', 'get_skin', 'family_skin', 'held_out_skin',
+           'skin_for_grid', 'PATCH_M']
 
 HELD_OUT = 'held_out:'
+# The seed's 16 x 16 patch at 5 mm pitch: finer grids (skin_for_grid) cover the same area.
+PATCH_M = 0.08
+SEED_PITCH_M = 0.005
 
 
 @dataclass(frozen=True)
@@ -143,3 +147,19 @@ def family_skin(name: str) -> FamilySkin:
 def get_skin(name: str) -> SkinModel:
     """Return the physics model of the family's skin ``name``."""
     return family_skin(name).model
+
+
+def skin_for_grid(n: int, noise_counts: float = 6.0) -> SkinModel:
+    """
+    Return an n x n skin over the seed's 80 mm patch: finer pitch, same materials.
+
+    A smaller FSR carries a smaller share of the load; made of the same material, it reads the
+    same counts at the same pressure, so its force range scales with its area.
+    """
+    pitch = PATCH_M / n
+    area = (pitch / SEED_PITCH_M) ** 2
+    base = FsrModel()
+    fsr = FsrModel(force_at_r_max_n=base.force_at_r_max_n * area,
+                   force_at_r_min_n=base.force_at_r_min_n * area,
+                   activation_n=base.activation_n * area)
+    return SkinModel(rows=n, cols=n, pitch_m=pitch, noise_counts=noise_counts, fsr=fsr)

@@ -13,27 +13,23 @@ from __future__ import annotations
 import math
 import os
 import pstats
-import subprocess
-import threading
 import time
 
 from geometry_msgs.msg import WrenchStamped
 import numpy as np
-import rclpy
-from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
-from rclpy.parameter import Parameter
 from rclpy.qos import qos_profile_sensor_data
 from skin_driver.core.protocol.wire import encode_frame, FrameDecoder
 from skin_driver.core.sim.physics import Press, render, SkinModel
 from skin_driver.ros import conversions
 from skin_driver.ros.direction_node import DirectionNode
 from skin_driver.ros.estimation_host import EstimationHost
+from skin_driver.tools.harness import (
+    overrides, ros_args, ros_session, spin_for, start_nodes, start_sim, stop, wait_for,
+    write_params)
 from skin_driver.tools.probe import Probe
-from skin_driver.tools.processes import spawn, stop
 from skin_msgs.msg import SkinFrame, TactileContact, TactileContactArray
 from std_srvs.srv import Trigger
-import yaml
 
 _TICK = os.sysconf('SC_CLK_TCK')
 
@@ -48,39 +44,9 @@ def cpu_seconds(pid: int) -> float:
     return (int(fields[11]) + int(fields[12])) / _TICK
 
 
-def bench_scene(seconds: float) -> dict:
-    """Return a scene that keeps a tilted press on the skin almost all the time."""
-    presses = [{'time_s': 0.05 + 0.5 * i, 'beta_deg': float((45 * i) % 360)}
-               for i in range(int(seconds / 0.5) + 2)]
-    return {'name': 'bench', 'description': 'a press every 0.5 s, held 0.45 s, alpha 45 deg',
-            'model': {'rows': 16, 'cols': 16, 'pitch_m': 0.005},
-            'defaults': {'x_m': 0.0375, 'y_m': 0.0375, 'force_n': 10.0, 'radius_m': 0.004,
-                         'alpha_deg': 45.0, 'duration_s': 0.45, 'ramp_s': 0.05},
-            'presses': presses}
-
-
+# The scene the board plays, looped (skin_driver/scenes/bench.yaml).
+SCENE = 'bench'
 LAYOUTS = ('split', 'fused')
-
-
-def _spin_for(executor, seconds) -> None:
-    deadline = time.monotonic() + seconds
-    while time.monotonic() < deadline:
-        executor.spin_once(timeout_sec=0.005)
-
-
-def _params_file(workdir) -> str:
-    """Write the parameters of both layouts (the same estimation settings); return the path."""
-    path = os.path.join(workdir, 'bench_params.yaml')
-    with open(path, 'w') as f:
-        yaml.safe_dump({
-            '/**/skin_driver': {'ros__parameters': {
-                'port': os.path.join(workdir, 'skin0'), 'reconnect_min': 0.02,
-                'reconnect_max': 0.1, 'publish_images': False}},
-            # Heatmaps and markers off: they are rviz's, at 15 Hz, and off the hot path anyway.
-            '/**/skin_direction': {'ros__parameters': {
-                'viz_rate': 0.0, 'calibration_file': os.path.join(workdir, 'calibration.yaml')}},
-        }, f)
-    return path
 
 
 def realtime_prefix(priority: int) -> list:
@@ -88,66 +54,24 @@ def realtime_prefix(priority: int) -> list:
     return ['chrt', '-f', str(priority)] if priority else []
 
 
-def _start_layout(layout, ros, params, log, profile_to=None, priority=0) -> dict:
-    """Start the nodes of one layout; return {process name: Popen}."""
-    args = ros + ['--params-file', params]
-    rt = realtime_prefix(priority)
-    if layout == 'fused':
-        return {'driver': spawn(['-m', 'skin_driver.ros.driver_node'] + args
-                                + ['-p', 'fused:=true'],
-                                log, prefix=rt)}
-    return {'direction': spawn(['-m', 'skin_driver.ros.direction_node'] + args, log, profile_to,
-                               prefix=rt),
-            'driver': spawn(['-m', 'skin_driver.ros.driver_node'] + args, log, prefix=rt)}
-
-
-def _start_sim(executor, scene_path, port, rate, log, priority=0):
-    """Start the simulated skin; return (process, its stderr lines, epoch in host seconds)."""
-    sim = spawn(['-m', 'skin_driver.tools.sim', '--scene', scene_path, '--link', port, '--rate',
-                 str(rate), '--loop'], log, prefix=realtime_prefix(priority),
-                stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
-    lines = []
-    reader = threading.Thread(target=lambda: lines.extend(sim.stderr), daemon=True)
-    reader.start()
-    deadline = time.monotonic() + 20.0
-    while not any(s.startswith('SKIN_EPOCH') for s in lines):
-        if time.monotonic() > deadline or sim.poll() is not None:
-            stop([sim], 10.0)
-            raise RuntimeError(f'the simulator did not start: {"".join(lines)}')
-        executor.spin_once(timeout_sec=0.01)
-    epoch = float(next(s for s in lines if s.startswith('SKIN_EPOCH')).split()[1])
-    return sim, lines, reader, epoch
-
-
-def _sim_counts(lines):
-    """Return (frames sent, frames dropped) from the simulator's last words, or (None, None)."""
-    for s in lines:
-        if 'stopped after' in s:
-            words = s.split()
-            return int(words[words.index('sent,') - 2]), int(words[-2])
-    return None, None
-
-
-def _run(executor, probe, layout, nodes, rate, seconds, warmup, scene_path, port, log,
-         priority=0):
+def _run(executor, probe, layout, nodes, rate, seconds, warmup, port, log, priority=0):
     """Measure one layout at one rate; return its figures."""
-    sim, lines, reader, epoch = _start_sim(executor, scene_path, port, rate, log, priority)
+    sim = start_sim(executor, SCENE, port, rate, log, loop=True,
+                    prefix=realtime_prefix(priority))
     probe.reset()
-    _spin_for(executor, warmup)
-    pids = {'sim': sim.pid, **{k: p.pid for k, p in nodes.items()}, 'probe': os.getpid()}
+    spin_for(executor, warmup)
+    pids = {'sim': sim.process.pid, **{k: p.pid for k, p in nodes.items()}, 'probe': os.getpid()}
     cpu0 = {k: cpu_seconds(p) for k, p in pids.items()}
     wall0 = time.monotonic()
-    _spin_for(executor, seconds)
+    spin_for(executor, seconds)
     wall = time.monotonic() - wall0
     cpu = {k: cpu_seconds(p) - cpu0[k] for k, p in pids.items()}
     driver = probe.counters('skin link', wall0, wall0 + wall)
     direction = probe.counters('contact estimation', wall0, wall0 + wall)
-    _spin_for(executor, 0.3)
-    stop([sim], 10.0)
-    reader.join(2.0)
-    sent, dropped = _sim_counts(lines)
+    spin_for(executor, 0.3)
+    sent, dropped = sim.stop()
     expected = int(round(seconds * rate))
-    seen = probe.summary((warmup, warmup + seconds), expected=expected, epoch_s=epoch)
+    seen = probe.summary((warmup, warmup + seconds), expected=expected, epoch_s=sim.epoch)
     decoded_hz = driver.get('frames', 0) / driver['span_s'] if driver else None
     estimated_hz = direction.get('frames', 0) / direction['span_s'] if direction else None
     # CPU per scan each process handled: the scans it never saw cost it nothing.
@@ -184,57 +108,56 @@ def end_to_end(rates, seconds, warmup, workdir, layouts=LAYOUTS, profile=False, 
     priority, the simulated board, the nodes and this subscriber run SCHED_FIFO at it, as a
     force-control deployment runs its loop (the board is hardware: it never waits for a core).
     """
-    scene = bench_scene(seconds + warmup + 2.0)
-    scene_path = os.path.join(workdir, 'bench_scene.yaml')
-    with open(scene_path, 'w') as f:
-        yaml.safe_dump(scene, f)
     port = os.path.join(workdir, 'skin0')
-    params = _params_file(workdir)
+    # Heatmaps and markers off: they are rviz's, at 15 Hz, and off the hot path anyway.
+    params = write_params(workdir, driver={'reconnect_min': 0.02, 'reconnect_max': 0.1,
+                                           'publish_images': False},
+                          direction={'viz_rate': 0.0}, name='bench_params.yaml')
     node_log = open(os.path.join(workdir, 'nodes.log'), 'w')
     if priority:
         # Before rclpy.init: the middleware's threads inherit the policy.
         os.sched_setscheduler(0, os.SCHED_FIFO, os.sched_param(priority))
-    rclpy.init()
-    executor = SingleThreadedExecutor()
     results, profiles = [], {}
     try:
-        for i, rate in enumerate(rates):
-            order = layouts if i % 2 == 0 else tuple(reversed(layouts))
-            for layout in order:
-                ns = f'/skin_bench_{os.getpid()}_{layout}_{int(rate)}_{priority}'
-                ros = ['--ros-args', '-r', f'__ns:={ns}', '--log-level', 'warn']
-                prof = os.path.join(workdir, f'{layout}.prof') if profile else None
-                nodes = _start_layout(layout, ros, params, node_log, prof, priority)
-                node = Node('skin_bench_probe', namespace=ns)
-                executor.add_node(node)
-                probe = Probe(node)
-                tare = node.create_client(Trigger, 'skin_direction/tare')
-                try:
-                    deadline = time.monotonic() + 30.0
-                    while not tare.service_is_ready():
-                        if time.monotonic() > deadline:
-                            raise RuntimeError(f'the {layout} layout did not come up')
-                        executor.spin_once(timeout_sec=0.05)
-                    results.append(_run(executor, probe, layout, nodes, rate, seconds, warmup,
-                                        scene_path, port, node_log, priority))
-                finally:
-                    executor.remove_node(node)
-                    node.destroy_node()
-                    stop(nodes.values(), 10.0)
-                r = results[-1]
-                log(f'  {layout} (priority {priority}) {rate:g} Hz: '
-                    f'{r["received_rate_hz"]:.0f} Hz received, '
-                    f'{r["lost"]} lost, p99 {r["latency_ms"]["p99"]} ms, CPU/scan '
-                    + ', '.join(f'{k} {v:.0f} us' for k, v in r['cpu_us_per_scan'].items()))
-                if prof and os.path.exists(prof):
-                    profiles[f'{layout} direction node at {rate:g} Hz'] = top_functions(prof)
+        with ros_session() as executor:
+            for i, rate in enumerate(rates):
+                order = layouts if i % 2 == 0 else tuple(reversed(layouts))
+                for layout in order:
+                    prof = os.path.join(workdir, f'{layout}.prof') if profile else None
+                    results.append(_layout_run(executor, layout, rate, seconds, warmup, params,
+                                               port, node_log, prof, priority))
+                    r = results[-1]
+                    log(f'  {layout} (priority {priority}) {rate:g} Hz: '
+                        f'{r["received_rate_hz"]:.0f} Hz received, '
+                        f'{r["lost"]} lost, p99 {r["latency_ms"]["p99"]} ms, CPU/scan '
+                        + ', '.join(f'{k} {v:.0f} us' for k, v in r['cpu_us_per_scan'].items()))
+                    if prof and os.path.exists(prof):
+                        profiles[f'{layout} direction node at {rate:g} Hz'] = top_functions(prof)
     finally:
-        executor.shutdown()
-        rclpy.try_shutdown()
         node_log.close()
         if priority:
             os.sched_setscheduler(0, os.SCHED_OTHER, os.sched_param(0))
     return results, profiles
+
+
+def _layout_run(executor, layout, rate, seconds, warmup, params, port, log, profile_to,
+                priority) -> dict:
+    """Start one layout's nodes, measure them at one rate, stop them; return the figures."""
+    ns = f'/skin_bench_{os.getpid()}_{layout}_{int(rate)}_{priority}'
+    nodes = start_nodes(layout == 'fused', ros_args(ns, params), log, profile_to,
+                        realtime_prefix(priority))
+    node = Node('skin_bench_probe', namespace=ns)
+    executor.add_node(node)
+    probe = Probe(node)
+    tare = node.create_client(Trigger, 'skin_direction/tare')
+    try:
+        wait_for(executor, tare.service_is_ready, 30.0, f'the {layout} layout to come up',
+                 nodes.values())
+        return _run(executor, probe, layout, nodes, rate, seconds, warmup, port, log, priority)
+    finally:
+        executor.remove_node(node)
+        node.destroy_node()
+        stop(nodes.values(), 10.0)
 
 
 def top_functions(path, count=12) -> list:
@@ -267,12 +190,10 @@ def stage_costs(repeats=500) -> dict:
     top, bottom = render(model, press, rng)
     raw = encode_frame(1, 1000, top, bottom)
     decoder = FrameDecoder(expected_shape=(16, 16))
-    rclpy.init()
-    try:
+    with ros_session():
         ns = f'/skin_bench_stages_{os.getpid()}'
-        node = DirectionNode(subscribe=False, namespace=ns, parameter_overrides=[
-            Parameter('calibration_file', value=os.devnull + '/none'),
-            Parameter('viz_rate', value=0.0)])
+        node = DirectionNode(subscribe=False, namespace=ns, parameter_overrides=overrides(
+            {'calibration_file': os.devnull + '/none', 'viz_rate': 0.0}))
         host: EstimationHost = node.host
         est = host.estimator.with_tare(
             *[np.stack([render(model, [], rng)[k] for _ in range(10)]) for k in (0, 1)])
@@ -311,6 +232,4 @@ def stage_costs(repeats=500) -> dict:
                 lambda: host.process(header, 1, 1000, 0.005, top, bottom), repeats),
         }
         node.destroy_node()
-    finally:
-        rclpy.try_shutdown()
     return {k: v for k, v in out.items() if math.isfinite(v)}

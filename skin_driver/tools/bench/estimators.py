@@ -12,21 +12,18 @@ import time
 
 import numpy as np
 
-from skin_driver.core.estimation.fsr import FsrModel
 from skin_driver.core.estimation.pipeline import ContactEstimator, EstimatorConfig
 from skin_driver.core.estimation.recorded import prepared_estimator
 from skin_driver.core.estimation.shift import (
     centroid, DEFAULT_METHOD, Method, method_names, NO_SHIFT, ShiftEstimate)
 from skin_driver.core.sim.experiments import (
-    make_random_experiment, make_scene, make_seed_experiment, SCENE_KINDS)
+    make_random_experiment, make_scene, make_seed_experiment, press_for_shift, SCENE_KINDS)
 from skin_driver.core.sim.physics import Press, render, SkinModel
-from skin_driver.core.sim.skins import family_skin, skin_names
+from skin_driver.core.sim.skins import family_skin, PATCH_M, skin_for_grid, skin_names
 from skin_driver.tools.evaluate.scoring import (
-    direction_errors, evaluate, MethodRun, PAPER_TABLE, score_run)
+    angle_error_deg, direction_errors, evaluate, MethodRun, PAPER_TABLE, score_run)
 from skin_driver.tools.evaluate.tables import format_table
 
-PATCH_M = 0.08
-SEED_PITCH_M = 0.005
 SKIMAGE = 'skimage_pcc'
 SKIMAGE_UPSAMPLE = 100
 
@@ -63,43 +60,11 @@ def make_estimator(name: str, model: SkinModel, calibration=None) -> ContactEsti
     return ContactEstimator(config, calibration, shift=reference)
 
 
-def skin_for_grid(n: int, noise_counts: float = 6.0) -> SkinModel:
-    """
-    Return an n x n skin over the seed's 80 mm patch: finer pitch, same materials.
-
-    A smaller FSR carries a smaller share of the load; made of the same material, it reads the
-    same counts at the same pressure, so its force range scales with its area.
-    """
-    pitch = PATCH_M / n
-    area = (pitch / SEED_PITCH_M) ** 2
-    base = FsrModel()
-    fsr = FsrModel(force_at_r_max_n=base.force_at_r_max_n * area,
-                   force_at_r_min_n=base.force_at_r_min_n * area,
-                   activation_n=base.activation_n * area)
-    return SkinModel(rows=n, cols=n, pitch_m=pitch, noise_counts=noise_counts, fsr=fsr)
-
-
-def _angle_error(estimate_rad: float, truth_rad: float) -> float:
-    return abs(math.degrees((estimate_rad - truth_rad + math.pi) % (2 * math.pi) - math.pi))
-
-
 def _tared(ests: dict, model, rng, frames=12) -> dict:
     """Return the estimators tared from the same no-touch frames of ``model``."""
     maps = [render(model, [], rng) for _ in range(frames)]
     tops, bottoms = np.stack([m[0] for m in maps]), np.stack([m[1] for m in maps])
     return {name: est.with_tare(tops, bottoms) for name, est in ests.items()}
-
-
-def _press_for_shift(model, shift_taxels, rng) -> Press:
-    """Return a random press whose layer shift is ``shift_taxels`` taxels along a random beta."""
-    margin = 0.015
-    x = rng.uniform(margin, PATCH_M - margin)
-    y = rng.uniform(margin, PATCH_M - margin)
-    normal = rng.uniform(5.0, 15.0)
-    tangential = shift_taxels * model.pitch_m / model.compliance_m_per_n
-    alpha = math.atan2(tangential, normal)
-    return Press(x, y, math.hypot(normal, tangential), alpha, rng.uniform(-math.pi, math.pi),
-                 rng.uniform(0.0015, 0.0035))
 
 
 def _timed(est, top, bottom) -> tuple:
@@ -120,21 +85,21 @@ def accuracy_speed(grids, shifts, noises, frames, methods, seed=0, log=print) ->
         for noise in noises:
             model = skin_for_grid(n, noise)
             ests = _tared({m: make_estimator(m, model) for m in methods}, model, rng)
-            warm = render(model, [_press_for_shift(model, 1.0, rng)], rng)
+            warm = render(model, [press_for_shift(model, 1.0, rng)], rng)
             for est in ests.values():
                 est.process(*warm)
             for shift in shifts:
                 errors = {m: [] for m in methods}
                 costs = {m: [] for m in methods}
                 for _ in range(frames):
-                    press = _press_for_shift(model, shift, rng)
+                    press = press_for_shift(model, shift, rng)
                     top, bottom = render(model, [press], rng)
                     for m in rng.permutation(methods):
                         elapsed, contacts = _timed(ests[m], top, bottom)
                         costs[m].append(elapsed)
                         if contacts and contacts[0].direction_valid:
-                            errors[m].append(_angle_error(contacts[0].azimuth_rad,
-                                                          press.beta_rad))
+                            errors[m].append(angle_error_deg(
+                                contacts[0].azimuth_rad, math.degrees(press.beta_rad)))
                 for m in methods:
                     e = errors[m]
                     rows.append({'grid': n, 'noise_counts': noise, 'shift_taxels': shift,
@@ -185,7 +150,7 @@ def seed_experiment(repeats: int, random_frames: int, seed: int = 0) -> dict:
             'raw_shifts_taxels': shifts, 'paper': {str(k): v for k, v in PAPER_TABLE.items()}}
 
 
-def _contact_slots(model, count) -> list:
+def _contact_slots(count) -> list:
     """Return ``count`` well separated press positions (3 x 3 lattice over the patch)."""
     ticks = [0.2 * PATCH_M, 0.5 * PATCH_M, 0.8 * PATCH_M]
     slots = [(x, y) for y in ticks for x in ticks]
@@ -215,7 +180,7 @@ def scaling(grids, contact_counts, methods, frames, repeats, seed=0, log=print) 
     for n in grids:
         model = skin_for_grid(n)
         ests = {m: _tared_estimator(m, model, rng) for m in methods}
-        maps = [render(model, [_press_for_shift(model, 1.0, rng)], rng) for _ in range(frames)]
+        maps = [render(model, [press_for_shift(model, 1.0, rng)], rng) for _ in range(frames)]
         cost = _interleaved_cost(ests, maps, rng, repeats)
         by_grid += [{'grid': n, 'taxels': n * n, 'method': m, **c} for m, c in cost.items()]
         log(f'  scaling: {n}x{n} done')
@@ -228,7 +193,7 @@ def scaling(grids, contact_counts, methods, frames, repeats, seed=0, log=print) 
             for _ in range(frames):
                 presses = [Press(x, y, rng.uniform(5, 15), math.radians(40),
                                  rng.uniform(-math.pi, math.pi), 0.003)
-                           for x, y in _contact_slots(model, k)]
+                           for x, y in _contact_slots(k)]
                 maps.append(render(model, presses, rng))
             found = float(np.mean([len(ests[methods[0]].process(*m)) for m in maps]))
             cost = _interleaved_cost(ests, maps, rng, repeats)

@@ -104,6 +104,14 @@ def test_defaults_and_model_overrides():
     assert (p.x_m, p.radius_m, p.duration_s, p.ramp_s) == (0.01, 0.003, 0.5, 0.1)
 
 
+def test_labels_name_groups_of_presses_in_script_order():
+    scene = scene_from_dict({'defaults': {'label': 'tap'}, 'presses': [
+        press(time_s=0.0), press(time_s=2.0, label='push'), press(time_s=4.0)]})
+    assert [p.time_s for p in scene.labelled('tap')] == [0.0, 4.0]
+    assert [p.time_s for p in scene.labelled('push')] == [2.0]
+    assert scene.labelled('other') == []
+
+
 @pytest.mark.parametrize('bad, message', [
     (press(force_n=-1.0), "press 1: field 'force_n' must be > 0"),
     (press(alpha_deg=90.0), "press 1: field 'alpha_deg' must be in"),
@@ -116,6 +124,7 @@ def test_defaults_and_model_overrides():
     (press(forse_n=1.0), "press 1: unknown field 'forse_n'"),
     ({k: v for k, v in press().items() if k != 'beta_deg'}, "press 1: missing field 'beta_deg'"),
     ('not a mapping', 'press 1: must be a mapping'),
+    (press(label=3), "press 1: field 'label' must be a string"),
 ])
 def test_bad_press_names_index_and_field(bad, message):
     with pytest.raises(ValueError, match=message):

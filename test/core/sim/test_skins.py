@@ -6,9 +6,11 @@ import numpy as np
 import pytest
 
 from skin_driver.core.estimation.dataset import Dataset, load_dataset, save_dataset
-from skin_driver.core.sim.experiments import make_scene, PAPER_BETAS_DEG, SCENE_KINDS
-from skin_driver.core.sim.physics import Press, render, render_force, SkinModel, taxel_spread
-from skin_driver.core.sim.skins import family_skin, get_skin, skin_names
+from skin_driver.core.sim.experiments import (
+    make_scene, PAPER_BETAS_DEG, press_for_shift, SCENE_KINDS)
+from skin_driver.core.sim.physics import (
+    layer_shift_m, Press, render, render_force, SkinModel, taxel_spread)
+from skin_driver.core.sim.skins import family_skin, get_skin, skin_for_grid, skin_names
 
 
 def test_family_names_at_least_eight_seeded_skins_with_a_description():
@@ -181,3 +183,25 @@ def test_bad_per_press_arrays_are_refused_by_name(over, problem):
     assert len(_two_presses().presses(0)) == 2
     with pytest.raises(ValueError, match=problem):
         _two_presses(**over)
+
+
+def test_finer_grids_cover_the_same_patch_and_read_the_same_pressure():
+    coarse, fine = skin_for_grid(16), skin_for_grid(32)
+    assert coarse.cols * coarse.pitch_m == pytest.approx(fine.cols * fine.pitch_m)
+    assert fine.fsr.force_at_r_max_n == pytest.approx(coarse.fsr.force_at_r_max_n / 4)
+    assert coarse == SkinModel(noise_counts=coarse.noise_counts)
+
+
+@pytest.mark.parametrize('grid, shift_taxels', [(16, 0.5), (16, 2.0), (64, 1.0)])
+def test_a_press_for_a_shift_shifts_the_layers_by_that_many_taxels_inside_the_skin(
+        grid, shift_taxels):
+    model = skin_for_grid(grid)
+    rng = np.random.default_rng(3)
+    span = (model.cols - 1) * model.pitch_m
+    for _ in range(20):
+        press = press_for_shift(model, shift_taxels, rng)
+        aligned = SkinModel(**{**model.__dict__, 'misalignment_m': (0.0, 0.0)})
+        assert math.hypot(*layer_shift_m(aligned, press)) == pytest.approx(
+            shift_taxels * model.pitch_m, rel=1e-9)
+        assert 0.015 <= press.x_m <= span - 0.015 and 0.015 <= press.y_m <= span - 0.015
+        assert 5.0 - 1e-9 <= press.normal_force_n <= 15.0 + 1e-9

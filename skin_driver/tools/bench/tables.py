@@ -1,163 +1,8 @@
-"""Plots and the Markdown report of the benchmark, from the results dictionary alone."""
+"""The Markdown report of the benchmark, from the results dictionary alone."""
 
 from __future__ import annotations
 
-import os
-import warnings
-
-import numpy as np
-
-from skin_driver.tools.evaluate.scoring import PAPER_TABLE
-
-with warnings.catch_warnings():
-    # matplotlib's parsers call pyparsing APIs it deprecates; nothing this project can fix.
-    warnings.simplefilter('ignore', DeprecationWarning)
-    import matplotlib
-    matplotlib.use('Agg')
-    import matplotlib.pyplot as plt
-
-
-def label(run) -> str:
-    """Return a run's layout, with its scheduling when it was not the default."""
-    priority = run.get('priority', 0)
-    return run['layout'] + (f', SCHED_FIFO {priority}' if priority else '')
-
-
-def _save(fig, out_dir, name) -> str:
-    os.makedirs(os.path.join(out_dir, 'img'), exist_ok=True)
-    path = os.path.join('img', name)
-    fig.savefig(os.path.join(out_dir, path), dpi=110, bbox_inches='tight')
-    plt.close(fig)
-    return path
-
-
-def _pareto_front(points) -> set:
-    """Return the indices of points not beaten on both cost and error by another point."""
-    front = set()
-    for i, (c, e) in enumerate(points):
-        if not any((c2 <= c and e2 <= e) and (c2 < c or e2 < e)
-                   for j, (c2, e2) in enumerate(points) if j != i):
-            front.add(i)
-    return front
-
-
-def plot_pareto(summary, out_dir) -> str:
-    """Plot mean azimuth error against us per frame, one panel per grid size."""
-    grids = sorted({r['grid'] for r in summary})
-    fig, axes = plt.subplots(1, len(grids), figsize=(4.2 * len(grids), 4), squeeze=False,
-                             constrained_layout=True)
-    methods = list(dict.fromkeys(r['method'] for r in summary))
-    colours = {m: plt.cm.tab10(i % 10) for i, m in enumerate(methods)}
-    for ax, n in zip(axes[0], grids):
-        rows = [r for r in summary if r['grid'] == n and r['mean_error_deg'] is not None]
-        front = _pareto_front([(r['median_us'], r['mean_error_deg']) for r in rows])
-        for i, r in enumerate(rows):
-            ax.scatter(r['median_us'], r['mean_error_deg'], color=colours[r['method']],
-                       s=60 if i in front else 25, edgecolors='k' if i in front else 'none',
-                       label=r['method'])
-            ax.annotate(r['method'], (r['median_us'], r['mean_error_deg']), fontsize=7,
-                        xytext=(3, 3), textcoords='offset points')
-        pts = sorted((rows[i]['median_us'], rows[i]['mean_error_deg']) for i in front)
-        if pts:
-            ax.plot(*zip(*pts), 'k--', lw=0.8)
-        ax.set_xscale('log')
-        ax.set_yscale('log')
-        ax.set_title(f'{n} x {n} taxels')
-        ax.set_xlabel('us per frame (pipeline, median)')
-        ax.grid(True, which='both', alpha=0.3)
-    axes[0][0].set_ylabel('mean azimuth error [deg]')
-    fig.suptitle('Accuracy against speed (all shifts and noise levels; dashed: Pareto front)')
-    return _save(fig, out_dir, 'pareto.png')
-
-
-def plot_seed_shifts(shifts, out_dir) -> str:
-    """Scatter the measured raw shifts coloured by true azimuth (the seed's Figure 10)."""
-    fig, axes = plt.subplots(1, len(shifts), figsize=(4.8 * len(shifts), 4.3), squeeze=False,
-                             constrained_layout=True)
-    for ax, (name, pts) in zip(axes[0], shifts.items()):
-        if pts:
-            arr = np.array(pts)
-            sc = ax.scatter(arr[:, 0], arr[:, 1], c=arr[:, 2], cmap='hsv', vmin=0, vmax=360,
-                            s=14)
-            fig.colorbar(sc, ax=ax, label='true beta [deg]')
-        ax.set_title(f'{name}: raw layer shift')
-        ax.set_xlabel('dx [taxels]')
-        ax.set_ylabel('dy [taxels]')
-        ax.set_aspect('equal', adjustable='datalim')
-        ax.grid(True, alpha=0.3)
-    return _save(fig, out_dir, 'seed_shifts.png')
-
-
-def plot_scaling(scale, out_dir) -> str:
-    """Plot pipeline cost against taxel count and against the number of contacts."""
-    fig, (a, b) = plt.subplots(1, 2, figsize=(10, 4), constrained_layout=True)
-    for m in dict.fromkeys(r['method'] for r in scale['by_grid']):
-        rows = [r for r in scale['by_grid'] if r['method'] == m]
-        a.plot([r['taxels'] for r in rows], [r['median_us'] for r in rows], 'o-', label=m)
-    a.axhline(100, color='g', ls=':', label='target 16x16 (100 us)')
-    a.axhline(1000, color='r', ls=':', label='target 128x128 (1 ms)')
-    a.set_xscale('log')
-    a.set_yscale('log')
-    a.set_xlabel('taxels per layer')
-    a.set_ylabel('us per frame, 1 contact (median)')
-    a.legend(fontsize=8)
-    a.grid(True, which='both', alpha=0.3)
-    for (m, n) in dict.fromkeys((r['method'], r['grid']) for r in scale['by_contacts']):
-        rows = [r for r in scale['by_contacts'] if r['method'] == m and r['grid'] == n]
-        b.plot([r['contacts'] for r in rows], [r['median_us'] for r in rows], 'o-',
-               label=f'{m} {n}x{n}')
-    b.set_yscale('log')
-    b.set_xlabel('simultaneous presses')
-    b.set_ylabel('us per frame (median)')
-    b.legend(fontsize=8)
-    b.grid(True, which='both', alpha=0.3)
-    return _save(fig, out_dir, 'scaling.png')
-
-
-def plot_e2e(e2e, out_dir) -> str:
-    """Plot the latency percentiles of every layout at every rate."""
-    fig, ax = plt.subplots(figsize=(7, 4))
-    labels = [f'{label(r)}\n{r["rate_hz"] / 1000:g} kHz'.replace(', ', '\n') for r in e2e]
-    x = np.arange(len(e2e))
-    for k, key in enumerate(('p50', 'p99', 'max')):
-        ax.bar(x + 0.27 * k, [r['latency_ms'][key] or 0 for r in e2e], 0.27, label=key)
-    ax.axhline(2.0, color='r', ls=':', label='target p99 (2 ms)')
-    ax.set_xticks(x + 0.27, labels)
-    ax.set_yscale('log')
-    ax.set_ylabel("scan's last byte -> contacts at subscriber [ms]")
-    ax.legend()
-    return _save(fig, out_dir, 'e2e_latency.png')
-
-
-def plot_sigma(pairs, out_dir) -> str:
-    """Scatter the default's reported azimuth sigma against its measured error, per scene."""
-    fig, ax = plt.subplots(figsize=(5.5, 4.5), constrained_layout=True)
-    kinds = list(dict.fromkeys(p[3] for p in pairs))
-    for i, kind in enumerate(kinds):
-        pts = np.array([(s, max(e, 1e-3)) for s, e, _, k in pairs if k == kind])
-        ax.scatter(pts[:, 0], pts[:, 1], s=8, alpha=0.5, color=plt.cm.tab10(i), label=kind)
-    if pairs:
-        sig = np.array([p[0] for p in pairs])
-        err = np.array([p[1] for p in pairs])
-        # Binned RMS error: where it follows the diagonal, the reported sigma is honest.
-        edges = np.geomspace(max(sig.min(), 1e-3), max(sig.max(), 1e-2), 9)
-        centres, rms = [], []
-        for lo, hi in zip(edges[:-1], edges[1:]):
-            sel = (sig >= lo) & (sig <= hi)
-            if sel.sum() >= 3:
-                centres.append(np.sqrt(lo * hi))
-                rms.append(np.sqrt(np.mean(err[sel] ** 2)))
-        ax.plot(centres, rms, 'k-o', lw=1.2, ms=4, label='RMS error per sigma bin')
-        lim = [min(sig.min(), 0.01), max(sig.max(), err.max(), 1.0)]
-        ax.plot(lim, lim, 'k--', lw=0.8, label='error = sigma')
-    ax.set_xscale('log')
-    ax.set_yscale('log')
-    ax.set_xlabel('reported azimuth_sigma [deg]')
-    ax.set_ylabel('measured azimuth error [deg]')
-    ax.set_title('Default estimator over the family: reported sigma vs error')
-    ax.grid(True, which='both', alpha=0.3)
-    ax.legend(fontsize=7)
-    return _save(fig, out_dir, 'sigma_vs_error.png')
+from skin_driver.tools.bench.scoring import label
 
 
 def _f(v, spec='.1f') -> str:
@@ -199,7 +44,8 @@ def markdown(res, images) -> str:
                     t['note']) for t in res['targets']])
     out += ['']
     if 'family' in res:
-        out += FAMILY_MISSES
+        out += ['Why a family target falls short, from an earlier run of this benchmark: '
+                'docs/estimation.md, "Where the family targets fall short".', '']
     if 'accuracy' in res:
         acc = res['accuracy']
         out += ['## 1. Accuracy against speed', '',
@@ -257,38 +103,6 @@ def _worst_cell(w: dict) -> str:
     """Return 'error on skin, valid share on skin' of one scene's worst case."""
     return (f'{_f(w["mean_error_deg"], ".2f")} deg ({w["error_skin"]}); valid '
             f'{_pct(w["valid_share"])} ({w["valid_skin"]})')
-
-
-# Why the family's targets can be missed: what limits each one (docs/estimation.md has the how).
-FAMILY_MISSES = [
-    '### Where the family targets fall short, and why', '',
-    '- **Valid share for shifts >= 1 taxel**: the worst case is the `border` scene. A press '
-    'within a taxel of the edge has part of its imprint, and more of the wider bottom '
-    'imprint, off the map: the measured shift is cut short (often to half) and the reported '
-    'sigma grows by a fifth of a taxel, so such directions are reported invalid rather than '
-    'wrong. Away from the border (paper, random) the share is 100 %.',
-    '- **Error no worse than the plain centroid difference**: met by the default in the '
-    "paper's protocol, random spots and multiple presses on every skin; missed at the border, "
-    'where the imprints are cut and the default is off by 6-15 deg.',
-    "- **Paper's protocol, default / seed <= 0.2**: missed on the `sharp` skin only (0.2 mm "
-    'cover and 0.6 mm layer spread, 80 % fill): both imprints are narrower than a taxel, '
-    'every estimator is pixel-locked (3.6 deg) and seed happens to be pixel-locked little '
-    'worse; on the other nine skins the ratio is under 0.1.',
-    '- **Presses >= 3 taxels apart found apart**: two presses 3 taxels apart on the '
-    '`saturating` skin load flat-topped imprints whose saddle stays above 0.85 of the peaks, '
-    'so they are one contact; lowering the ratio splits single large presses instead.',
-    '- **Cost <= 100 us per frame pair**: the pipeline is a few dozen numpy and OpenCV calls '
-    'of about 1 us each per contact (conditioning, line-leak removal on crosstalk skins, the '
-    'mixture, the window, the shift, the uncertainty): a median of 99-130 us on nine skins. On '
-    '`harsh` weak spurious top imprints (single taxels over the threshold) are each paired, '
-    'shared a part of the bottom load and given a shift before the force filter drops them: '
-    'more pairs than reported contacts, hence its 300 us. Dropping weak top '
-    'imprints before pairing, and batching the per-contact work, are the next steps.',
-    "- **Random presses mean error <= 2 deg** (the first version's target, on the project's own "
-    'skin): the first version reached 1.2 deg with a sampling-bias table rendered from that very '
-    'skin model; the estimation may not assume a skin, so the table is gone and the error is '
-    'the pixel locking of imprints narrower than a taxel (sigma reports it). Learning the bias '
-    'from normal presses the user records at many spots would bring it back; not done yet.', '']
 
 
 def _family_headline(fam) -> list:
@@ -417,7 +231,9 @@ def _e2e_section(res, images) -> list:
     if e.get('why'):
         out += ['### Where the time goes', ''] + [f'- {w}' for w in e['why']] + ['']
     if e.get('tradeoffs'):
-        out += ['### Which layout when', ''] + [f'- {w}' for w in e['tradeoffs']] + ['']
+        out += ['### Which layout when', ''] + [f'- {w}' for w in e['tradeoffs']] + [
+            '', 'What each layout costs and buys beyond these figures: README.md, '
+            '"Split or fused: which to use when".', '']
     for name, rows in e.get('profiles', {}).items():
         out += [f'cProfile of the {name} (separate profiled run, whole process including '
                 'start-up; own time; cProfile slows it, so compare shares only):', '']
@@ -426,8 +242,3 @@ def _e2e_section(res, images) -> list:
                         _f(100 * r['own_share']) + ' %') for r in rows])
         out += ['']
     return out
-
-
-def paper_summary() -> str:
-    """Return the paper's Table 1 summary as text."""
-    return f'{PAPER_TABLE["summary"][0]:.2f} +- {PAPER_TABLE["summary"][1]:.2f} deg'

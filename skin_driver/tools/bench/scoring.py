@@ -1,0 +1,194 @@
+"""
+The benchmark's verdicts, from the results dictionary alone.
+
+Each target with the figure measured for it, and where the end-to-end time goes.
+"""
+
+from __future__ import annotations
+
+from skin_driver.core.estimation.shift import DEFAULT_METHOD
+
+
+def label(run) -> str:
+    """Return a run's layout, with its scheduling when it was not the default."""
+    priority = run.get('priority', 0)
+    return run['layout'] + (f', SCHED_FIFO {priority}' if priority else '')
+
+
+def _target(name, measured, limit, met, note='', spec='.2f') -> dict:
+    shown = '-' if measured is None else format(measured, spec)
+    return {'name': name, 'measured': shown, 'limit': limit, 'met': bool(met), 'note': note}
+
+
+def _by(rows, **keys):
+    return next((r for r in rows if all(r[k] == v for k, v in keys.items())), None)
+
+
+def targets(res) -> list:
+    """Return the issue's targets with the measured figure and whether each was met."""
+    out = []
+    if 'seed' in res:
+        methods = res['seed']['seed_like']['methods']
+        d = methods[DEFAULT_METHOD]['summary']['mean_error_deg']
+        s = methods['seed']['summary']['mean_error_deg']
+        out.append(_target('seed-like mean azimuth error (default)', d, '<= 0.5 deg',
+                           d is not None and d <= 0.5,
+                           f'{d / 0.5:.2f} x the limit' if d and d > 0.5 else ''))
+        ratio = d / s if d is not None and s else None
+        out.append(_target('seed-like error, default / seed (same frames)', ratio, '<= 0.20',
+                           ratio is not None and ratio <= 0.2, f'seed {s:.2f} deg'))
+        r = res['seed']['random']['methods'][DEFAULT_METHOD]['summary']
+        out.append(_target('random presses mean error (default)', r['mean_error_deg'],
+                           '<= 2 deg', (r['mean_error_deg'] or 99) <= 2.0))
+        out.append(_target('random presses valid share (default)',
+                           100 * (r['valid_share'] or 0), '>= 95 %',
+                           (r['valid_share'] or 0) >= 0.95, spec='.1f'))
+    if 'family' in res:
+        out += family_targets(res['family']['worst'])
+    if 'scaling' in res:
+        rows = res['scaling']['by_grid']
+        for n, limit in ((16, 100.0), (128, 1000.0)):
+            row = _by(rows, grid=n, method=DEFAULT_METHOD)
+            if row:
+                v = row['median_us']
+                out.append(_target(f'cost of the default at {n}x{n}, 1 contact, one core', v,
+                                   f'<= {limit:g} us', v <= limit,
+                                   f'{v / limit:.2f} x the limit' if v > limit else '', '.0f'))
+        d16, s16 = _by(rows, grid=16, method=DEFAULT_METHOD), _by(rows, grid=16, method='seed')
+        if d16 and s16:
+            out.append(_target('cost ratio default / seed at 16x16 (side by side)',
+                               d16['median_us'] / s16['median_us'], '<= 1 (no greater cost)',
+                               d16['median_us'] <= s16['median_us']))
+    if 'e2e' in res:
+        out += e2e_targets(res['e2e'])
+    return out
+
+
+def _share_target(name, share, skin, limit) -> dict:
+    note = f'worst on {skin}' if skin else ''
+    if share is not None and share < limit:
+        note += f', {100 * (limit - share):.1f} points short'
+    return _target(name, None if share is None else 100 * share, f'>= {100 * limit:g} %',
+                   share is not None and share >= limit, note, '.1f')
+
+
+def family_targets(worst) -> list:
+    """Return the issue's targets over the whole family, each at its worst skin."""
+    d = worst[DEFAULT_METHOD]
+    out = [_share_target('family: valid share for shifts >= 1 taxel (default, worst skin)',
+                         d['large_shift_valid_share'], d['large_shift_skin'], 0.95)]
+    for kind in ('paper', 'random', 'border', 'multi'):
+        r = d[kind]['ratio_to_centroid']
+        out.append(_target(f'family {kind}: error default / plain centroid (worst skin)', r,
+                           '<= 1',
+                           r is not None and r <= 1.0,
+                           f'worst on {d[kind]["ratio_to_centroid_skin"]}' if r else ''))
+    r = d['paper']['ratio_to_seed']
+    out.append(_target("family paper's protocol: error default / seed (worst skin)", r, '<= 0.20',
+                       r is not None and r <= 0.2,
+                       f'worst on {d["paper"]["ratio_to_seed_skin"]}' if r else ''))
+    out.append(_share_target('family: presses >= 3 taxels apart found apart (default, worst)',
+                             d['separate_share_far'], d['separate_skin'], 0.98))
+    v = d['median_us']
+    out.append(_target("family: cost of the default per 16x16 frame pair (worst skin's median)",
+                       v, '<= 100 us', v is not None and v <= 100.0,
+                       f'worst on {d["cost_skin"]}' + (f', {v / 100:.2f} x the limit'
+                                                       if v and v > 100 else ''), '.0f'))
+    return out
+
+
+# CPU per scan allowed to the hot path at 16 x 16 with one press, and the latency limit.
+HOT_PATH_US = 250.0
+P99_MS = 2.0
+
+
+def e2e_targets(e2e) -> list:
+    """Return the real-time targets per layout and rate: nothing lost, p99, hot-path CPU."""
+    out = []
+    for r in e2e['runs']:
+        name = f'{label(r)} at {r["rate_hz"] / 1000:g} kHz'
+        lost = r['lost']
+        out.append(_target(f'{name}: scans lost in {r["seconds"]:g} s', lost, '0', lost == 0,
+                           f'of {r["expected_scans"]} ({100 * lost / r["expected_scans"]:.2f} %)'
+                           if lost else '', '.0f'))
+        p99 = r['latency_ms']['p99']
+        out.append(_target(f'{name}: p99 latency, last byte -> subscriber', p99,
+                           f'<= {P99_MS:g} ms', p99 is not None and p99 <= P99_MS,
+                           f'{p99 / P99_MS:.1f} x the limit' if p99 and p99 > P99_MS else '',
+                           '.2f'))
+        cpu = hot_path_us(r)
+        out.append(_target(f'{name}: hot path CPU per scan', cpu, f'<= {HOT_PATH_US:g} us',
+                           cpu <= HOT_PATH_US, f'{cpu / HOT_PATH_US:.2f} x the limit'
+                           if cpu > HOT_PATH_US else 'whole process', '.0f'))
+    return out
+
+
+def hot_path_us(run) -> float:
+    """Return the CPU per scan of the processes a scan passes through on its way to contacts."""
+    return sum(v for k, v in run['cpu_us_per_scan'].items() if k in ('driver', 'direction'))
+
+
+def why_e2e(e2e) -> list:
+    """Return where the time goes, from the measured figures, for every missed target."""
+    stage = e2e['stage_costs_us']
+    estimator = stage.get('estimator.process (1 contact)', 0.0)
+    host = stage.get('EstimationHost.process (estimate + publish all three, reused messages)',
+                     0.0)
+    frame = stage.get('driver: skin_frame_to_msg + publish SkinFrame', 0.0)
+    decode = stage.get('driver: decode', 0.0) + stage.get('driver: stamp + header', 0.0)
+    lines = [
+        f'In process, one core, least of five rounds: the estimator takes {estimator:.0f} us per '
+        f'scan; EstimationHost.process (estimator, three messages filled and published) '
+        f'{host:.0f} us; decoding and stamping {decode:.0f} us; building and publishing the '
+        f'SkinFrame {frame:.0f} us. That is {decode + host + frame:.0f} us of work per scan in '
+        "the fused driver before the kernel (pty reads) and the interpreter's thread switches.",
+    ]
+    for r in e2e['runs']:
+        cpu = r['cpu_us_per_scan']
+        total = sum(cpu.values())
+        lines.append(
+            f'{label(r)} at {r["rate_hz"]:g} Hz: CPU per scan '
+            + ', '.join(f'{k} {v:.0f} us' for k, v in cpu.items())
+            + f'; together {total * r["rate_hz"] / 1e4:.0f} % of one core of the '
+            f'{e2e["cores"] * 100} % the machine has (load average {e2e["load"]}, other jobs '
+            'included). ' + _losses(r))
+    return lines
+
+
+def tradeoffs(e2e) -> list:
+    """Return the two layouts side by side at each rate and scheduling, from this run."""
+    runs = {(r['layout'], r['rate_hz'], r.get('priority', 0)): r for r in e2e['runs']}
+    lines = []
+    for rate, priority in sorted({(r['rate_hz'], r.get('priority', 0)) for r in e2e['runs']}):
+        split, fused = runs.get(('split', rate, priority)), runs.get(('fused', rate, priority))
+        if not (split and fused):
+            continue
+        how = f' (SCHED_FIFO {priority})' if priority else ''
+        lines.append(
+            f'At {rate:g} Hz{how} the fused driver used {hot_path_us(fused):.0f} us of CPU per '
+            f'scan against {hot_path_us(split):.0f} us for driver + direction node split '
+            f'({hot_path_us(fused) / max(hot_path_us(split), 1e-9):.2f} x); p99 '
+            f'{_f(fused["latency_ms"]["p99"])} ms against {_f(split["latency_ms"]["p99"])} ms; '
+            f'lost {fused["lost"]} against {split["lost"]} scans.')
+    return lines
+
+
+def _f(v, spec='.2f') -> str:
+    return '-' if v is None else format(v, spec)
+
+
+def _losses(r) -> str:
+    """Return where the lost scans of one run went, from the nodes' own counters."""
+    if not r['lost']:
+        return 'Nothing lost.'
+    parts = [f'{r["lost"]} scans lost']
+    if r['sim_frames_dropped']:
+        parts.append(f'the simulator could not write {r["sim_frames_dropped"]} (pty full: the '
+                     'driver did not read in time)')
+    if r['driver_decoded_hz'] is not None:
+        parts.append(f'the driver decoded {r["driver_decoded_hz"]:.0f} Hz')
+    if r['estimated_hz'] is not None:
+        parts.append(f'the estimation ran at {r["estimated_hz"]:.0f} Hz')
+    parts.append(f'the subscriber received {r["received_rate_hz"]:.0f} Hz (its sensor-data '
+                 'queue keeps 5: a subscriber not scheduled for 5 scan periods loses the oldest)')
+    return '; '.join(parts) + '.'

@@ -1,0 +1,79 @@
+"""The benchmark's command line: what it writes, and that it fails when the pipeline does."""
+
+import json
+import os
+
+import numpy as np
+import pytest
+from skin_driver.tools.bench import cli as bench, end_to_end as bench_ros, scoring
+
+# matplotlib's tick labels go through a deprecated pyparsing API; not this project's concern.
+pytestmark = pytest.mark.filterwarnings('ignore::DeprecationWarning')
+
+
+def test_write_produces_json_markdown_and_plots(results, tmp_path):
+    res = dict(results)
+    res['machine'] = dict(res['machine'], load_after=[0.0, 0.0, 0.0])
+    res['targets'] = scoring.targets(res)
+    bench.write(res, str(tmp_path))
+    data = json.loads((tmp_path / 'benchmarks.json').read_text())
+    assert {'machine', 'accuracy', 'seed', 'scaling', 'targets', 'images'} <= set(data)
+    assert data['machine']['cpu_model'] and data['machine']['numpy'] == np.__version__
+    text = (tmp_path / 'benchmarks.md').read_text()
+    for heading in ('## Machine and method', '## Targets', '## 1. Accuracy against speed',
+                    "## 2. The seed's experiment", '## 4. Scale', '## Headline: worst case',
+                    '## 5. The skin family'):
+        assert heading in text
+    assert 'paper mean' in text
+    for path in data['images'].values():
+        assert path in text
+        assert os.path.getsize(tmp_path / path) > 1000
+
+
+def test_end_to_end_section_shows_both_layouts_and_where_the_prose_lives(results, e2e,
+                                                                         tmp_path):
+    e2e['why'] = scoring.why_e2e(e2e)
+    e2e['tradeoffs'] = scoring.tradeoffs(e2e)
+    res = dict(results, e2e=e2e, machine=dict(results['machine'], load_after=[0.0, 0.0, 0.0]))
+    res['targets'] = scoring.targets(res)
+    bench.write(res, str(tmp_path))
+    text = (tmp_path / 'benchmarks.md').read_text()
+    assert '## 3. End to end through ROS: split against fused' in text
+    assert '| fused | 1000 | 60000 | 60000 | 0 | 0.75 / 1.50 / 3.00 |' in text
+    assert '### Which layout when' in text and '"Split or fused: which to use when"' in text
+    assert 'docs/estimation.md, "Where the family targets fall short"' in text
+
+
+def test_a_layout_that_does_not_come_up_fails_the_benchmark(monkeypatch, tmp_path, capsys):
+    def not_up(args):
+        raise RuntimeError('gave up waiting for the fused layout to come up after 30 s')
+
+    monkeypatch.setattr(bench, 'run', not_up)
+    assert bench.main(['--quick', '--out', str(tmp_path)]) == 1
+    assert 'fused layout to come up' in capsys.readouterr().err
+    assert not (tmp_path / 'benchmarks.md').exists()
+
+
+def test_a_layout_that_delivers_nothing_fails_the_benchmark(
+        results, e2e, monkeypatch, tmp_path, capsys):
+    e2e['runs'][1].update(received=0, lost=60000)
+    e2e['why'], e2e['tradeoffs'] = scoring.why_e2e(e2e), scoring.tradeoffs(e2e)
+    res = dict(results, e2e=e2e, machine=dict(results['machine'], load_after=[0.0, 0.0, 0.0]))
+    res['targets'] = scoring.targets(res)
+    monkeypatch.setattr(bench, 'run', lambda args: res)
+    assert bench.main(['--quick', '--out', str(tmp_path)]) == 1
+    assert 'fused at 1000 Hz delivered no contacts' in capsys.readouterr().err
+    # What was measured is still written, for the post-mortem.
+    assert (tmp_path / 'benchmarks.md').exists()
+    e2e['runs'][1].update(received=60000, lost=0)
+    assert bench.main(['--quick', '--out', str(tmp_path)]) == 0
+
+
+def test_the_default_report_goes_to_the_repositorys_docs():
+    assert os.path.isfile(os.path.join(bench.DOCS, 'benchmarks.md'))
+    assert os.path.isfile(os.path.join(bench.DOCS, '..', 'Makefile'))
+
+
+def test_cpu_seconds_of_this_process_and_of_a_missing_one():
+    assert bench_ros.cpu_seconds(os.getpid()) > 0
+    assert bench_ros.cpu_seconds(2 ** 22 + 12345) == 0.0

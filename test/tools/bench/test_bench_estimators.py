@@ -1,0 +1,52 @@
+"""The benchmark's ROS-free measurements on tiny inputs: rows for every method and point."""
+
+import math
+
+import numpy as np
+import pytest
+from skin_driver.tools.bench import estimators as bench_core
+
+
+def test_accuracy_rows_cover_every_method_and_hold_finite_figures(results):
+    rows = results['accuracy']['rows']
+    assert sorted(r['method'] for r in rows) == sorted(['poc', 'seed', bench_core.SKIMAGE])
+    for r in rows:
+        assert r['frames'] == 2 and 0 <= r['valid'] <= 2
+        assert math.isfinite(r['median_us']) and r['median_us'] > 0
+        assert r['mean_error_deg'] is None or 0 <= r['mean_error_deg'] <= 180
+
+
+def test_skimage_reference_reports_the_displacement_of_the_bottom_map():
+    top = np.zeros((16, 16))
+    top[6:9, 5:9] = 1.0
+    top[7, 6] = 3.0
+    bottom = np.roll(top, (1, 2), axis=(0, 1))
+    dx, dy, conf = bench_core.skimage_shift(np.stack((top, bottom)))
+    assert (dx, dy, conf) == pytest.approx((2.0, 1.0, 1.0), abs=0.02)
+    assert bench_core.skimage_shift(np.stack((top, np.zeros_like(top)))).confidence == 0.0
+
+
+def test_scaling_has_a_point_per_grid_contact_count_and_method(results):
+    scale = results['scaling']
+    assert {(r['grid'], r['method']) for r in scale['by_grid']} == {(16, 'poc'), (16, 'seed')}
+    assert {(r['contacts'], r['method']) for r in scale['by_contacts']} >= {
+        (1, 'poc'), (2, 'poc'), (1, 'seed'), (2, 'seed')}
+    assert all(r['median_us'] > 0 for r in scale['by_grid'] + scale['by_contacts'])
+
+
+def test_family_scores_every_skin_scene_and_method_and_names_the_worst(results):
+    fam = results['family']
+    methods = ['poc', 'seed', 'plain_centroid']
+    assert fam['methods'] == methods
+    assert {(r['skin'], r['scene'], r['method']) for r in fam['rows']} == {
+        (s, k, m) for s in ('default', 'soft') for k in ('paper', 'random', 'border', 'multi')
+        for m in methods}
+    assert {(c['skin'], c['method']) for c in fam['costs']} == {
+        (s, m) for s in ('default', 'soft') for m in methods}
+    for m in methods:
+        worst = fam['worst'][m]['random']
+        errors = {r['skin']: r['mean_error_deg'] for r in fam['rows']
+                  if r['method'] == m and r['scene'] == 'random'}
+        assert worst['mean_error_deg'] == max(errors.values())
+        assert errors[worst['error_skin']] == worst['mean_error_deg']
+    assert all(s > 0 and 0 <= e <= 180 for s, e, _, _ in fam['sigma_vs_error'])

@@ -1,0 +1,26 @@
+"""The benchmark's verdicts: each target named with its figure and limit, met or not."""
+
+from skin_driver.tools.bench import scoring
+
+
+def test_targets_name_each_figure_with_its_limit(results):
+    names = [t['name'] for t in scoring.targets(results)]
+    assert any('seed-like mean azimuth error' in n for n in names)
+    assert any('random presses valid share' in n for n in names)
+    assert any('16x16' in n and 'cost' in n for n in names)
+    assert any(n.startswith('family') and 'centroid' in n for n in names)
+    assert any(n.startswith('family') and 'apart' in n for n in names)
+    assert all({'measured', 'limit', 'met', 'note'} <= set(t) for t in scoring.targets(results))
+
+
+def test_end_to_end_targets_judge_each_layout_at_each_rate(e2e):
+    targets = {t['name']: t for t in scoring.e2e_targets(e2e)}
+    assert not targets['split at 1 kHz: scans lost in 60 s']['met']
+    assert targets['fused at 1 kHz: scans lost in 60 s']['met']
+    assert targets['split at 1 kHz: p99 latency, last byte -> subscriber']['note'] == \
+        '1.5 x the limit'
+    # Driver and direction node together are the split layout's hot path; the probe is not.
+    assert targets['split at 1 kHz: hot path CPU per scan']['measured'] == '490'
+    assert targets['fused at 1 kHz: hot path CPU per scan']['met']
+    assert any('0.41 x' in line for line in scoring.tradeoffs(e2e))
+    assert any('12 scans lost' in line for line in scoring.why_e2e(e2e))
