@@ -11,14 +11,20 @@ the pieces, come from non-negative least squares, so no fit can decrease. The fi
 assumed curve: where the presses say little, at the rim of a contact, the assumed shape stays,
 and a skin that matches the assumption keeps it.
 
-The fit covers the counts the presses reached: the knots sit at quantiles of the presses' peak
-and taxel forces, and the curve is stored as knots in counts up to the highest count pressed;
-past it the last slope goes on. It is refused, with a reason in newtons, when there are too few
-presses, when their forces do not span a range (the curve would be a guess outside one point),
-when a heavier press read fewer counts than a lighter one (the presses disagree with any
-increasing curve: a force was wrong or a press missed the skin) or when the fit leaves large
-residuals. A flat first piece is merged into the next; other flat pieces keep a negligible
-slope.
+Every taxel is evidence. A taxel whose film saturated (its counts at the layer's ceiling, which
+the heaviest presses pile up at) is censored: it tells a lower bound on its force, and the
+imprint's unsaturated rim tells the rest (:mod:`imprint`: a bump fitted to the rim, whose width
+the fit chooses with the curve). The sum of a press stays linear in the slopes, so censored and
+free taxels are fitted together. Whether the layer is censored at all, and with which bump, is
+chosen by the presses: the choice that fits them best.
+
+The curve is stored as knots in counts up to the highest count pressed, with the censoring
+ceiling and the bump's width; past the knots the last slope goes on. The fit is refused, with
+a reason in newtons, when there are too few presses, when their forces do not span a range (the
+curve would be a guess outside one point), when a press loaded no taxel, or when no curve fits
+the presses within ``MAX_RELATIVE_RESIDUAL`` (the refusal names the press furthest off: a
+wrong known force, or a press that missed the skin). A flat first piece is merged into the
+next; other flat pieces keep a negligible slope.
 """
 
 from __future__ import annotations
@@ -29,6 +35,7 @@ from typing import Sequence
 import numpy as np
 
 from .fsr import FsrModel
+from .imprint import bump, censored_force
 
 __all__ = ['ForceCurve', 'CurveFit', 'fit_force_curve', 'MIN_PRESSES', 'MIN_FORCE_SPAN']
 
@@ -36,25 +43,34 @@ MIN_PRESSES = 6
 # The largest known force must be this many times the smallest: a range, not a point.
 MIN_FORCE_SPAN = 3.0
 MAX_RELATIVE_RESIDUAL = 0.25
-# A press this many times heavier than another must read more counts.
-MONOTONE_MARGIN = 1.5
-# Presses whose peak counts reach this share of the highest peak may be saturated.
-SATURATION_SHARE = 0.99
+# Readings within this share of full scale of the highest one are at the ceiling (noise).
+CENSOR_BAND = 0.02
+_SPREADS = 16
+# A censored fit is taken over an uncensored one when its relative misfit is this much smaller.
+CENSOR_GAIN = 0.8
 _PEAK_QUANTILES = (0.0, 0.5, 1.0)
 _POOLED_QUANTILES = (0.05, 0.1, 0.2, 0.35, 0.5, 0.75, 0.9)
 FLAT_SLOPE = 1e-6
 _GRID = 129
+_KEYS = ('counts', 'force_n', 'censor_counts', 'spread_taxels')
 
 
 @dataclass(frozen=True)
 class ForceCurve:
-    """Sensed taxel force (N) at the knots (counts above baseline): from (0, 0), never falling."""
+    """
+    Sensed taxel force (N) at the knots (counts above baseline): from (0, 0), never falling.
+
+    ``censor_counts`` > 0: taxels reading that many counts or more saturated; their force is
+    filled in by a bump of ``spread_taxels`` (:func:`imprint.censored_force`). 0: none.
+    """
 
     counts: tuple
     force_n: tuple
+    censor_counts: float = 0.0
+    spread_taxels: float = 0.0
 
     def __post_init__(self):
-        """Reject curves that fall or do not start at (0, 0)."""
+        """Reject curves that fall or do not start at (0, 0), and a censoring without bump."""
         c = np.asarray(self.counts, dtype=np.float64)
         f = np.asarray(self.force_n, dtype=np.float64)
         if c.ndim != 1 or c.shape != f.shape or c.size < 2:
@@ -67,8 +83,16 @@ class ForceCurve:
             raise ValueError('force curve counts must increase')
         if (np.diff(f) < 0).any() or f[-1] <= 0:
             raise ValueError('force curve forces must not decrease (the curve must be monotone)')
+        for name in ('censor_counts', 'spread_taxels'):
+            v = getattr(self, name)
+            if isinstance(v, bool) or not (np.isfinite(v) and v >= 0):
+                raise ValueError(f'force curve {name} must be a non-negative number, got {v!r}')
+        if (self.censor_counts > 0) != (self.spread_taxels > 0):
+            raise ValueError('a censored force curve needs both censor_counts and spread_taxels')
         object.__setattr__(self, 'counts', tuple(float(v) for v in c))
         object.__setattr__(self, 'force_n', tuple(float(v) for v in f))
+        object.__setattr__(self, 'censor_counts', float(self.censor_counts))
+        object.__setattr__(self, 'spread_taxels', float(self.spread_taxels))
 
     def counts_to_force(self, counts) -> np.ndarray:
         """Return the sensed force of ``counts`` above baseline; the last slope goes on."""
@@ -78,21 +102,33 @@ class ForceCurve:
         return np.where(c <= knots[-1], np.interp(c, knots, force),
                         force[-1] + slope * (c - knots[-1]))
 
+    def imprint_force(self, counts: np.ndarray, force: np.ndarray) -> float:
+        """Return one imprint's summed force (2-D maps of counts and taxel forces), censored."""
+        return censored_force(counts, force, self.censor_counts, self.spread_taxels)
+
     def to_dict(self) -> dict:
-        """Return the knots as plain lists (for YAML)."""
-        return {'counts': list(self.counts), 'force_n': list(self.force_n)}
+        """Return the knots (and any censoring) as plain values (for YAML)."""
+        out = {'counts': list(self.counts), 'force_n': list(self.force_n)}
+        if self.censor_counts:
+            out.update(censor_counts=self.censor_counts, spread_taxels=self.spread_taxels)
+        return out
 
     @classmethod
     def from_dict(cls, doc) -> 'ForceCurve':
         """Build a curve from :meth:`to_dict` output."""
-        if not isinstance(doc, dict) or set(doc) != {'counts', 'force_n'}:
-            raise ValueError('a force curve is a mapping with counts and force_n lists')
+        if not isinstance(doc, dict) or not {'counts', 'force_n'} <= set(doc) <= set(_KEYS):
+            raise ValueError('a force curve is a mapping with counts and force_n lists '
+                             '(and censor_counts, spread_taxels)')
         for key in ('counts', 'force_n'):
             values = doc[key]
             if not isinstance(values, list) or not all(
                     isinstance(v, (int, float)) and not isinstance(v, bool) for v in values):
                 raise ValueError(f'force curve {key} must be a list of numbers')
-        return cls(tuple(doc['counts']), tuple(doc['force_n']))
+        extra = {k: doc[k] for k in ('censor_counts', 'spread_taxels') if k in doc}
+        for k, v in extra.items():
+            if isinstance(v, bool) or not isinstance(v, (int, float)):
+                raise ValueError(f'force curve {k} must be a number, got {v!r}')
+        return cls(tuple(doc['counts']), tuple(doc['force_n']), **extra)
 
 
 @dataclass(frozen=True)
@@ -100,27 +136,13 @@ class CurveFit:
     """
     A fitted curve and, per press, the force it gives back and its residual (N).
 
-    ``used`` presses shaped the curve; the others saturated the layer.
+    ``censored`` presses had saturated taxels, filled in from their rims.
     """
 
     curve: ForceCurve
     fitted_n: tuple
     residuals_n: tuple
-    used: int
-
-
-def _check_monotone(press_counts, press_gains, known: np.ndarray) -> None:
-    """Refuse presses where clearly more force read fewer counts."""
-    total = np.array([float(np.dot(g, c)) for c, g in zip(press_counts, press_gains)])
-    # Near saturation the counts hardly grow, and places differ a little: only a clear
-    # difference in force must show.
-    clash = (known[None, :] > MONOTONE_MARGIN * known[:, None]) & (total[None, :] < total[:, None])
-    if clash.any():
-        i, j = (int(v[0]) for v in np.nonzero(clash))
-        raise ValueError(
-            f'the presses disagree with an increasing force curve: {known[j]:.2f} N read '
-            f'fewer counts than {known[i]:.2f} N; check the known forces and their order, '
-            'and press squarely on the skin')
+    censored: int
 
 
 def _nnls(a: np.ndarray, b: np.ndarray, max_rounds: int = 100) -> np.ndarray:
@@ -157,18 +179,126 @@ def _basis(u: np.ndarray, knots: np.ndarray) -> np.ndarray:
     return ramps
 
 
+@dataclass(frozen=True)
+class _Press:
+    """One press on one layer: its loaded taxels' counts, gains, assumed force and bump."""
+
+    counts: np.ndarray
+    gains: np.ndarray
+    assumed_n: np.ndarray
+    map_counts: np.ndarray
+
+    def bump(self, spread: float) -> np.ndarray:
+        return bump(self.map_counts, spread)[self.map_counts > 0]
+
+
+def _presses(press_counts, press_gains, assumed: FsrModel) -> list:
+    out = []
+    for k, (c, g) in enumerate(zip(press_counts, press_gains)):
+        c = np.atleast_2d(np.asarray(c, dtype=np.float64))
+        g = np.atleast_2d(np.asarray(g, dtype=np.float64))
+        if c.shape != g.shape:
+            raise ValueError(f'press {k + 1}: counts {c.shape} and gains {g.shape} differ')
+        loaded = c > 0
+        out.append(_Press(c[loaded], g[loaded],
+                          assumed.counts_to_force(c[loaded], saturate=False), c))
+    return out
+
+
+def _row(press: _Press, knots: np.ndarray, censor: float, spread: float,
+         slopes: np.ndarray = None) -> np.ndarray:
+    """
+    Return what each piece's slope adds to the press's sensed sum (linear in the slopes).
+
+    A censored taxel adds the bump fitted to the free taxels, or its own reading where that is
+    larger under ``slopes`` (all take the bump when no slopes are given yet).
+    """
+    taxels = press.gains[:, None] * _basis(press.assumed_n, knots)
+    censored = press.counts >= censor if censor > 0 else np.zeros(press.counts.size, bool)
+    if not censored.any():
+        return taxels.sum(axis=0)
+    free = ~censored
+    phi = press.bump(spread)
+    weight = float(phi[free] @ phi[free])
+    if not weight > 0:
+        return taxels.sum(axis=0)
+    height = phi[free] @ taxels[free] / weight
+    filled = phi[censored][:, None] * height[None, :]
+    own = taxels[censored]
+    if slopes is not None:
+        filled = np.where((filled @ slopes > own @ slopes)[:, None], filled, own)
+    return taxels[free].sum(axis=0) + filled.sum(axis=0)
+
+
+def _knots(presses: list, censor: float, n: int) -> np.ndarray:
+    """Return knots at quantiles of the free taxels' assumed forces and the presses' peaks."""
+    forces = [p.assumed_n[p.counts < censor] if censor > 0 else p.assumed_n for p in presses]
+    forces = [f for f in forces if f.size] or [p.assumed_n for p in presses]
+    peaks = np.array([float(np.max(f)) for f in forces])
+    inner = np.unique(np.concatenate((np.quantile(peaks, _PEAK_QUANTILES),
+                                      np.quantile(np.concatenate(forces), _POOLED_QUANTILES))))
+    inner = inner[inner > 0]
+    # Fewer pieces than presses: the presses pin every piece down.
+    pieces = max(3, n - 2)
+    if inner.size > pieces:
+        inner = inner[np.round(np.linspace(0, inner.size - 1, pieces)).astype(int)]
+    return np.concatenate(([0.0], inner))
+
+
+def _fit(presses: list, target: np.ndarray, censor: float, spread: float):
+    """Return (knots, slopes, fitted sensed sums) of one censoring choice, or None."""
+    knots = _knots(presses, censor, len(presses))
+    # Relative errors: a light press counts as much as a heavy one.
+    row_weight = 1.0 / target
+    while True:
+        slopes = None
+        for _ in range(3):  # the censored taxels that take the bump depend on the slopes
+            design = np.stack([_row(p, knots, censor, spread, slopes) for p in presses])
+            # Scale the columns so that NNLS weighs every piece alike.
+            scale = np.maximum(design.max(axis=0), 1e-12)
+            slopes = _nnls(design / scale * row_weight[:, None], target * row_weight) / scale
+        # A flat first piece would zero the rim of every imprint, which the shift between the
+        # layers is measured on: merge it into the next until the curve rises from 0.
+        if slopes[0] > FLAT_SLOPE * slopes.max() or knots.size <= 2:
+            break
+        knots = np.delete(knots, 1)
+    if not (slopes > 0).any():
+        return None
+    # A flat piece (an FSR that barely conducts reads counts but little force) keeps a slope
+    # too small to matter, so that the curve still rises strictly and can be stored.
+    slopes = np.maximum(slopes, FLAT_SLOPE * slopes.max())
+    design = np.stack([_row(p, knots, censor, spread, slopes) for p in presses])
+    return knots, slopes, design @ slopes
+
+
+def _censoring_choices(presses: list, full_scale: int, shape: tuple) -> list:
+    """
+    Return (censor counts, bump spread) choices: none, and a ceiling the presses pile up at.
+
+    The ceiling is the highest count read less a band for noise; it is a saturation only when
+    two or more presses reach it (one press's peak is just the highest reading).
+    """
+    choices = [(0.0, 0.0)]
+    ceiling = max(float(p.counts.max()) for p in presses) - CENSOR_BAND * full_scale
+    if sum(bool((p.counts >= ceiling).any()) for p in presses) >= 2:
+        widest = max(1.0, 0.25 * max(shape))
+        choices += [(ceiling, float(s)) for s in np.geomspace(0.3, widest, _SPREADS)]
+    return choices
+
+
 def fit_force_curve(press_counts: Sequence[np.ndarray], press_gains: Sequence[np.ndarray],
                     sensed_n: Sequence[float], known_n: Sequence[float],
                     assumed: FsrModel = None, full_scale: int = None) -> CurveFit:
     """
     Fit one layer's curve; raise ValueError with the reason when it must be refused.
 
-    ``press_counts[k]`` holds the counts above baseline of the taxels press k loaded (above
-    threshold), ``press_gains[k]`` their gains, ``sensed_n[k]`` the force those taxels must
-    sum to (known force times fill_factor**2) and ``known_n[k]`` the known force for messages.
-    The curve corrects ``assumed`` (default :class:`FsrModel`): it is a monotone piecewise
-    linear function of the assumed force, which keeps the assumed shape where the presses say
-    little (a contact's rim) and is the identity on a skin that matches the assumption.
+    ``press_counts[k]`` is press k's map of counts above baseline on the layer (0 where
+    untouched; a 1-D array of loaded taxels has no geometry and is never censored),
+    ``press_gains[k]`` the gains there, ``sensed_n[k]`` the force those taxels must sum to
+    (known force times fill_factor**2) and ``known_n[k]`` the known force for messages. The
+    curve corrects ``assumed`` (default :class:`FsrModel`): it is a monotone piecewise linear
+    function of the assumed force, which keeps the assumed shape where the presses say little
+    (a contact's rim) and is the identity on a skin that matches the assumption.
     """
     assumed = assumed or FsrModel()
     full_scale = assumed.full_scale if full_scale is None else int(full_scale)
@@ -184,59 +314,25 @@ def fit_force_curve(press_counts: Sequence[np.ndarray], press_gains: Sequence[np
         raise ValueError(f'the presses span only {known.min():.2f} to {known.max():.2f} N; '
                          f'press over a range, the largest at least {MIN_FORCE_SPAN:g} times '
                          'the smallest')
-    empty = [k for k, c in enumerate(press_counts) if len(c) == 0]
+    presses = _presses(press_counts, press_gains, assumed)
+    empty = [k for k, p in enumerate(presses) if p.counts.size == 0]
     if empty:
         raise ValueError(f'press {empty[0] + 1} ({known[empty[0]]:.2f} N) loaded no taxel')
-    peaks = np.array([float(np.max(c)) for c in press_counts])
-    # A saturated layer reads the same peak under more force: those presses say nothing about
-    # the curve, which is then fitted over the presses below saturation.
-    capped = peaks >= SATURATION_SHARE * peaks.max()
-    if capped.sum() >= 2 and known[capped].max() > 1.2 * known[capped].min():
-        keep = ~capped
-        if keep.sum() < MIN_PRESSES or known[keep].max() < MIN_FORCE_SPAN * known[keep].min():
-            raise ValueError(f'the layer saturates from {known[capped].min():.2f} N on; press '
-                             f'more lightly, {MIN_PRESSES} or more presses below that, the '
-                             f'largest at least {MIN_FORCE_SPAN:g} times the smallest')
-        curve = fit_force_curve([c for c, k in zip(press_counts, keep) if k],
-                                [g for g, k in zip(press_gains, keep) if k],
-                                target[keep], known[keep], assumed, full_scale).curve
-        fitted = np.array([float(np.dot(g, curve.counts_to_force(c)))
-                           for c, g in zip(press_counts, press_gains)]) * known / target
-        return CurveFit(curve, tuple(fitted.tolist()), tuple((fitted - known).tolist()),
-                        int(keep.sum()))
-    _check_monotone(press_counts, press_gains, known)
-    forces = [assumed.counts_to_force(np.asarray(c, dtype=np.float64), saturate=False)
-              for c in press_counts]
-    peaks_f = np.array([float(np.max(f)) for f in forces])
-    pooled = np.concatenate(forces)
-    inner = np.unique(np.concatenate((np.quantile(peaks_f, _PEAK_QUANTILES),
-                                      np.quantile(pooled, _POOLED_QUANTILES))))
-    inner = inner[inner > 0]
-    # Fewer pieces than presses: the presses pin every piece down.
-    pieces = max(3, n - 2)
-    if inner.size > pieces:
-        inner = inner[np.round(np.linspace(0, inner.size - 1, pieces)).astype(int)]
-    knots = np.concatenate(([0.0], inner))
-    # Relative errors: a light press counts as much as a heavy one.
-    row_weight = 1.0 / target
-    while True:
-        design = np.stack([
-            (np.asarray(g, dtype=np.float64)[:, None] * _basis(f, knots)).sum(axis=0)
-            for f, g in zip(forces, press_gains)])
-        # Scale the columns so that NNLS weighs every piece alike.
-        scale = np.maximum(design.max(axis=0), 1e-12)
-        slopes = _nnls(design / scale * row_weight[:, None], target * row_weight) / scale
-        # A flat first piece would zero the rim of every imprint, which the shift between the
-        # layers is measured on: merge it into the next until the curve rises from 0.
-        if slopes[0] > FLAT_SLOPE * slopes.max() or knots.size <= 2:
-            break
-        knots = np.delete(knots, 1)
-    if not (slopes > 0).any():
+    shape = presses[0].map_counts.shape
+    best = None
+    for censor, spread in _censoring_choices(presses, full_scale, shape):
+        fit = _fit(presses, target, censor, spread)
+        if fit is None:
+            continue
+        misfit = float(np.sqrt(np.mean((fit[2] / target - 1.0) ** 2)))
+        # Censoring adds a parameter (the bump): it must earn its keep.
+        if censor:
+            misfit /= CENSOR_GAIN
+        if best is None or misfit < best[0]:
+            best = (misfit, censor, spread, fit)
+    if best is None:
         raise ValueError('no increasing force curve fits the presses; check the known forces')
-    # A flat piece (an FSR that barely conducts reads counts but little force) keeps a slope
-    # too small to matter, so that the curve still rises strictly and can be stored.
-    slopes = np.maximum(slopes, FLAT_SLOPE * slopes.max())
-    fitted_sensed = design @ slopes
+    _, censor, spread, (knots, slopes, fitted_sensed) = best
     fitted = fitted_sensed * known / target
     residuals = fitted - known
     worst = int(np.argmax(np.abs(residuals) / known))
@@ -246,8 +342,10 @@ def fit_force_curve(press_counts: Sequence[np.ndarray], press_gains: Sequence[np
                          '(a wrong known force, or two things touching?)')
     # Stored in counts: the correction of the assumed force, sampled over the counts pressed;
     # past them the curve goes on with its last slope.
-    grid = np.linspace(0.0, min(float(peaks.max()), full_scale), _GRID)
+    top = max(float(p.counts.max()) for p in presses)
+    grid = np.linspace(0.0, min(top, full_scale), _GRID)
     corrected = _basis(assumed.counts_to_force(grid, saturate=False), knots) @ slopes
-    curve = ForceCurve(tuple(grid), tuple(np.maximum.accumulate(corrected)))
+    curve = ForceCurve(tuple(grid), tuple(np.maximum.accumulate(corrected)), censor, spread)
+    censored = sum(bool((p.counts >= censor).any()) for p in presses) if censor else 0
     return CurveFit(curve, tuple(float(v) for v in fitted),
-                    tuple(float(v) for v in residuals), n)
+                    tuple(float(v) for v in residuals), censored)

@@ -33,7 +33,7 @@ tangential components point along the azimuth, the direction in which the top la
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from functools import lru_cache
 import math
 
@@ -193,11 +193,14 @@ class ContactEstimator:
         conditioner = self.conditioner
         maps = conditioner.touch_counts(t, b)
         dead = conditioner.dead_masks()[0]
+        force = conditioner.force_of(maps)
         pairs = pair_layers(maps, cfg.max_contacts,
-                            dead if dead is not None and dead.any() else None,
-                            conditioner.force_of(maps))
+                            dead if dead is not None and dead.any() else None, force)
         if not pairs:
             return []
+        curves = self.calibration.force_curves
+        if curves and any(c.censor_counts for c in curves):
+            pairs = [self._censored(pair, maps, force, curves) for pair in pairs]
         method = self._method
         noise = conditioner.count_noise()
         whole = None
@@ -210,6 +213,23 @@ class ContactEstimator:
                 est = NO_SHIFT
             out.append((pair, est, self._sigma(pair, maps, noise, len(pairs) == 1)))
         return out
+
+    @staticmethod
+    def _censored(pair: LayerPair, maps: np.ndarray, force: np.ndarray, curves) -> LayerPair:
+        """Return ``pair`` with its saturated taxels' force filled in from the rims (imprint)."""
+        r0, c0 = pair.origin
+        h, w = pair.maps.shape[1:]
+        sums = []
+        for layer, curve in enumerate(curves):
+            own = pair.maps[layer]
+            if not (curve.censor_counts and own.max() >= curve.censor_counts):
+                sums.append((pair.top_force_n, pair.bottom_force_n)[layer])
+                continue
+            full = maps[layer, r0:r0 + h, c0:c0 + w]
+            # A contact's share of a layer's counts carries the same share of its force.
+            share = np.divide(own, full, out=np.zeros_like(own), where=full > 0)
+            sums.append(curve.imprint_force(own, share * force[layer, r0:r0 + h, c0:c0 + w]))
+        return replace(pair, top_force_n=sums[0], bottom_force_n=sums[1])
 
     def _sigma(self, pair: LayerPair, maps: np.ndarray, noise: np.ndarray,
                alone: bool) -> float:

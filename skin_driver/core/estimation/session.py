@@ -227,14 +227,10 @@ class CalibrationSession:
         # The normal force is the bottom layer's sum: its curve must fit. The top layer (the
         # same film) may borrow it when its own presses do not make a curve.
         for layer, name in ((1, 'bottom'), (0, 'top')):
-            counts, weights = [], []
-            for r in self.accepted:
-                mask = r.counts[layer] > 0
-                counts.append(r.counts[layer][mask])
-                weights.append(gains[layer][mask])
+            counts = [r.counts[layer] for r in self.accepted]
             try:
-                fits[name] = fit_force_curve(counts, weights, known * fill * fill, known,
-                                             self.estimator.conditioner.config.fsr)
+                fits[name] = fit_force_curve(counts, [gains[layer]] * n, known * fill * fill,
+                                             known, self.estimator.conditioner.config.fsr)
             except ValueError as err:
                 if name == 'bottom':
                     raise CalibrationRefused(f'{name} layer: {err}') from None
@@ -245,9 +241,9 @@ class CalibrationSession:
         # The pipeline's normal force is the bottom layer's sum: report that layer's fit.
         bottom = fits['bottom']
         rms = math.sqrt(float(np.mean(np.square(bottom.residuals_n))))
-        saturated = ''.join(f'; the {name} layer saturated in {n - fit.used} presses, '
-                            'left out of its curve'
-                            for name, fit in fits.items() if fit.used < n)
+        saturated = ''.join(f'; the {name} layer saturated in {fit.censored} presses '
+                            f'(from {fit.curve.censor_counts:.0f} counts on), filled in from '
+                            'their rims' for name, fit in fits.items() if fit.censored)
         return Outcome(new, n, bottom.fitted_n, bottom.residuals_n,
                        f'force curves from {n} presses over {known.min():.2f} to '
                        f'{known.max():.2f} N; residual rms {rms:.3f} N{saturated}{notes}')

@@ -10,12 +10,13 @@ for random presses. Everything is fixed by the skin's ``seed``: the same name al
 same skin.
 
 ``held_out:N`` names a skin drawn at random (seed N) within the family's ranges: once an
-estimator has been tuned on the named skins, these are data it has never seen.
+estimator has been tuned on the named skins, these are data it has never seen. ``NAME@N`` is
+skin NAME with N x N taxels over the same patch (:func:`on_grid`).
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 import math
 
 import numpy as np
@@ -23,13 +24,13 @@ import numpy as np
 from .physics import SkinModel
 from ..estimation.fsr import FsrModel
 
-__all__ = ['FamilySkin', 'HELD_OUT', 'skin_names', 'get_skin', 'family_skin', 'held_out_skin',
-           'skin_for_grid', 'PATCH_M']
+__all__ = ['FamilySkin', 'HELD_OUT', 'GRID', 'skin_names', 'get_skin', 'family_skin',
+           'held_out_skin', 'on_grid', 'model_on_grid', 'skin_for_grid', 'PATCH_M']
 
 HELD_OUT = 'held_out:'
+GRID = '@'
 # The seed's 16 x 16 patch at 5 mm pitch: finer grids (skin_for_grid) cover the same area.
 PATCH_M = 0.08
-SEED_PITCH_M = 0.005
 
 
 @dataclass(frozen=True)
@@ -133,8 +134,39 @@ def held_out_skin(seed: int) -> FamilySkin:
                       model, force, (0.5 * force, 1.5 * force))
 
 
+def model_on_grid(model: SkinModel, n: int) -> SkinModel:
+    """
+    Return ``model`` with n x n taxels over the same patch: finer pitch, same materials.
+
+    A smaller FSR carries a smaller share of the load; made of the same film, it reads the same
+    counts at the same pressure, so its forces scale with its area. Spreads and compliance are
+    the skin's own (metres and newtons do not change with the grid).
+    """
+    if not 1 <= int(n) <= 128:
+        raise ValueError(f'a grid of {n} x {n} taxels is not in 1..128')
+    pitch = model.pitch_m * model.cols / int(n)
+    area = (pitch / model.pitch_m) ** 2
+    fsr = model.fsr
+    fsr = replace(fsr, force_at_r_max_n=fsr.force_at_r_max_n * area,
+                  force_at_r_min_n=fsr.force_at_r_min_n * area,
+                  activation_n=fsr.activation_n * area)
+    return replace(model, rows=int(n), cols=int(n), pitch_m=pitch, fsr=fsr)
+
+
+def on_grid(member: FamilySkin, n: int) -> FamilySkin:
+    """Return the family member on an n x n grid over the same patch (:func:`model_on_grid`)."""
+    return replace(member, name=f'{member.name}{GRID}{int(n)}',
+                   description=f'{member.description}; {int(n)} x {int(n)} taxels',
+                   model=model_on_grid(member.model, n))
+
+
 def family_skin(name: str) -> FamilySkin:
     """Return the family member ``name`` (model, description, forces); ValueError if unknown."""
+    base, grid, size = name.partition(GRID)
+    if grid:
+        if not size.isdigit():
+            raise ValueError(f'{name!r}: a grid is NAME{GRID}N with N taxels a side')
+        return on_grid(family_skin(base), int(size))
     if name.startswith(HELD_OUT) and name[len(HELD_OUT):].isdigit():
         return held_out_skin(int(name[len(HELD_OUT):]))
     try:
@@ -150,16 +182,5 @@ def get_skin(name: str) -> SkinModel:
 
 
 def skin_for_grid(n: int, noise_counts: float = 6.0) -> SkinModel:
-    """
-    Return an n x n skin over the seed's 80 mm patch: finer pitch, same materials.
-
-    A smaller FSR carries a smaller share of the load; made of the same material, it reads the
-    same counts at the same pressure, so its force range scales with its area.
-    """
-    pitch = PATCH_M / n
-    area = (pitch / SEED_PITCH_M) ** 2
-    base = FsrModel()
-    fsr = FsrModel(force_at_r_max_n=base.force_at_r_max_n * area,
-                   force_at_r_min_n=base.force_at_r_min_n * area,
-                   activation_n=base.activation_n * area)
-    return SkinModel(rows=n, cols=n, pitch_m=pitch, noise_counts=noise_counts, fsr=fsr)
+    """Return the project's simulated skin as n x n taxels over the seed's 80 mm patch."""
+    return model_on_grid(SkinModel(noise_counts=noise_counts), n)

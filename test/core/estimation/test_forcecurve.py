@@ -25,7 +25,7 @@ def test_the_fit_recovers_another_skins_curve_over_the_range_pressed():
                          SKIN.force_to_counts(60.0 * 0.81 * SHARES.max()), 20)
     np.testing.assert_allclose(fit.curve.counts_to_force(counts), SKIN.counts_to_force(counts),
                                rtol=0.10)
-    assert fit.used == 16
+    assert fit.censored == 0 and fit.curve.censor_counts == 0
     assert (np.diff(fit.curve.counts_to_force(np.arange(0, 4096, 7.0))) >= 0).all()
 
 
@@ -45,12 +45,36 @@ def test_forces_that_fall_as_the_counts_rise_are_refused():
         fit_force_curve(counts, gains, sensed[::-1], known[::-1])
 
 
-def test_presses_that_saturate_the_layer_are_left_out_of_the_curve():
-    soft = FsrModel(force_at_r_min_n=5.0)
-    fit = fit_force_curve(*presses(np.linspace(5.0, 60.0, 16), skin=soft))
-    assert 6 <= fit.used < 16
-    with pytest.raises(ValueError, match='saturates from'):
-        fit_force_curve(*presses(np.linspace(20.0, 60.0, 16), skin=soft))
+def bumps(forces, skin, spread=1.2, size=9, fill=0.9):
+    """Return (maps of counts, gain maps, sensed, known): Gaussian imprints of each force."""
+    rows, cols = np.indices((size, size))
+    shape = np.exp(-((rows - 4.3) ** 2 + (cols - 3.8) ** 2) / (2 * spread ** 2))
+    shape /= shape.sum()
+    forces = np.asarray(forces, dtype=np.float64)
+    counts = []
+    for f in forces:
+        c = skin.force_to_counts(f * fill * fill * shape)
+        counts.append(np.where(c > 40, c, 0.0))
+    return counts, [np.ones((size, size))] * len(forces), forces * fill * fill, forces
+
+
+def test_saturated_taxels_are_censored_and_the_rims_carry_the_force():
+    # This film saturates at 3 N a taxel: the centre of every press above ~15 N reads its
+    # ceiling, but the rims still grow with the force.
+    soft = FsrModel(r_min_ohm=200.0, r_max_ohm=6000.0, force_at_r_max_n=0.1,
+                    force_at_r_min_n=3.0)
+    fit = fit_force_curve(*bumps(np.linspace(5.0, 60.0, 16), soft))
+    assert fit.curve.censor_counts > 0 and fit.censored >= 8
+    assert max(abs(r) / f for r, f in zip(fit.residuals_n, np.linspace(5.0, 60.0, 16))) < 0.05
+
+
+def test_a_press_off_the_curve_is_refused_by_name():
+    counts, gains, sensed, known = bumps(np.linspace(5.0, 60.0, 16), SKIN)
+    known, sensed = known.copy(), sensed.copy()
+    known[6] *= 3.0  # press 7: a known force typed wrong
+    sensed[6] *= 3.0
+    with pytest.raises(ValueError, match='press 7 of 81.00 N is fitted as'):
+        fit_force_curve(counts, gains, sensed, known)
 
 
 def test_a_curve_must_rise_from_zero():
@@ -61,3 +85,7 @@ def test_a_curve_must_rise_from_zero():
     curve = ForceCurve((0.0, 100.0), (0.0, 2.0))
     assert curve.counts_to_force([50.0, 200.0]).tolist() == [1.0, 4.0]  # the last slope goes on
     assert ForceCurve.from_dict(curve.to_dict()) == curve
+    censored = ForceCurve((0.0, 100.0), (0.0, 2.0), 90.0, 1.5)
+    assert ForceCurve.from_dict(censored.to_dict()) == censored
+    with pytest.raises(ValueError, match='both'):
+        ForceCurve((0.0, 100.0), (0.0, 2.0), 90.0, 0.0)
