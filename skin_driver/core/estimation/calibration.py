@@ -12,8 +12,14 @@ a tangential force and hence the polar angle. Calibrate it by pressing with know
 
 ``force_curves`` (top, bottom) replace the assumed FSR model once a force calibration has run
 (:mod:`forcecurve`); ``gains`` (top, bottom maps) even out taxels that read more or less than
-their neighbours (:mod:`gains`). The file is versioned YAML: version 2 adds the curves, the gains
-and ``made_utc``; version 1 files still load.
+their neighbours (:mod:`gains`).
+
+A calibration knows its skin (:class:`SkinIdentity`: grid, pitch and, where there is one, the
+board's identity) and when each part was made (offset, force, compliance, gains). Loaded for
+another skin, it is refused (:class:`CalibrationMismatch`): applying a calibration to the wrong
+skin gives wrong forces and directions without a word. The file is versioned YAML: version 3
+adds the skin and the time of each part, version 2 the curves, the gains and ``made_utc``;
+versions 1 and 2 still load (they name no skin, so nothing is checked).
 """
 
 from __future__ import annotations
@@ -30,11 +36,19 @@ from .atomic import write_atomically
 from .forcecurve import ForceCurve
 from .validate import check_map, check_number
 
-__all__ = ['Calibration', 'calibrate_from_shifts', 'compliance_from_presses', 'utc_now']
+__all__ = ['Calibration', 'CalibrationMismatch', 'SkinIdentity', 'PARTS', 'calibrate_from_shifts',
+           'compliance_from_presses', 'utc_now']
 
 _FORMAT = 'skin_driver/calibration'
-_VERSION = 2
-_VERSIONS = (1, 2)
+_VERSION = 3
+_VERSIONS = (1, 2, 3)
+# The parts of a calibration, each made by its own session, and the fields each one sets.
+PARTS = {'offset': ('x_p_m', 'y_p_m', 'std_x_m', 'std_y_m', 'presses'),
+         'force': ('force_curves', 'force_presses'),
+         'compliance': ('compliance_m_per_n', 'compliance_presses'),
+         'gains': ('gains',)}
+# Pitches that differ by less than this share are the same.
+_PITCH_TOLERANCE = 1e-6
 _FIELDS = ('x_p_m', 'y_p_m', 'std_x_m', 'std_y_m', 'presses', 'compliance_m_per_n')
 _COUNTS = ('presses', 'force_presses', 'compliance_presses')
 
@@ -42,6 +56,57 @@ _COUNTS = ('presses', 'force_presses', 'compliance_presses')
 def utc_now() -> str:
     """Return the time now as ISO 8601 UTC, to the second (when a calibration was made)."""
     return datetime.datetime.now(datetime.timezone.utc).strftime('%Y-%m-%dT%H:%M:%SZ')
+
+
+class CalibrationMismatch(ValueError):
+    """A calibration file made for another skin (grid, pitch or board)."""
+
+
+@dataclass(frozen=True)
+class SkinIdentity:
+    """
+    The skin a calibration belongs to: grid, pitch and the board's identity.
+
+    The wire protocol (version 1) carries no board identity, so ``board_id`` is what the user
+    names the skin ('' when unnamed: then only the grid and pitch are checked).
+    """
+
+    rows: int
+    cols: int
+    pitch_m: float
+    board_id: str = ''
+
+    def __post_init__(self):
+        """Reject a grid, pitch or board identity that cannot be a skin's."""
+        for name in ('rows', 'cols'):
+            v = getattr(self, name)
+            if isinstance(v, bool) or int(v) != v or not 1 <= v <= 1024:
+                raise ValueError(f'skin {name} must be an integer in 1..1024, got {v!r}')
+        check_number(self.pitch_m, 'skin pitch_m', positive=True)
+        if not isinstance(self.board_id, str):
+            raise ValueError(f'skin board_id must be a string, got {self.board_id!r}')
+        object.__setattr__(self, 'rows', int(self.rows))
+        object.__setattr__(self, 'cols', int(self.cols))
+        object.__setattr__(self, 'pitch_m', float(self.pitch_m))
+
+    def describe(self) -> str:
+        """Return e.g. '16 x 16 taxels at 5.000 mm pitch, board skin-A'."""
+        board = f', board {self.board_id}' if self.board_id else ''
+        return f'{self.rows} x {self.cols} taxels at {1000 * self.pitch_m:.3f} mm pitch{board}'
+
+    def mismatch(self, other: 'SkinIdentity') -> str:
+        """Return how ``other`` differs from this skin ('' when it is the same one)."""
+        same = ((self.rows, self.cols) == (other.rows, other.cols)
+                and abs(self.pitch_m - other.pitch_m) <= _PITCH_TOLERANCE * self.pitch_m
+                and (not self.board_id or not other.board_id or self.board_id == other.board_id))
+        return '' if same else f'made for {self.describe()}, this skin is {other.describe()}'
+
+    @classmethod
+    def from_dict(cls, doc) -> 'SkinIdentity':
+        """Build the identity from its YAML mapping."""
+        if not isinstance(doc, dict) or not {'rows', 'cols', 'pitch_m'} <= set(doc):
+            raise ValueError('skin must be a mapping with rows, cols and pitch_m')
+        return cls(doc['rows'], doc['cols'], doc['pitch_m'], str(doc.get('board_id') or ''))
 
 
 def _curves(value):
@@ -75,7 +140,8 @@ class Calibration:
     ``compliance_m_per_n`` = 0: the estimator uses its configured compliance. ``force_curves``
     None: the assumed FSR model. ``gains`` None: every taxel at 1. ``presses``,
     ``force_presses`` and ``compliance_presses`` count the presses behind each part;
-    ``made_utc`` is when the newest part was made (ISO 8601, '' when unknown).
+    ``made_utc`` is when the newest part was made and ``part_utc`` when each part was (ISO
+    8601, '' when unknown or never); ``skin`` the skin it belongs to (None: unknown).
     """
 
     x_p_m: float = 0.0
@@ -89,6 +155,8 @@ class Calibration:
     force_presses: int = 0
     compliance_presses: int = 0
     made_utc: str = ''
+    skin: SkinIdentity = None
+    part_utc: tuple = ('', '', '', '')
 
     def __post_init__(self):
         """Reject non-finite or negative values and malformed curves or gains."""
@@ -103,6 +171,12 @@ class Calibration:
                 raise ValueError(f'{name} must be a non-negative integer, got {v!r}')
         if not isinstance(self.made_utc, str):
             raise ValueError(f'made_utc must be a string, got {self.made_utc!r}')
+        if self.skin is not None and not isinstance(self.skin, SkinIdentity):
+            raise ValueError(f'skin must be a SkinIdentity, got {self.skin!r}')
+        stamps = self.part_utc
+        if len(stamps) != len(PARTS) or not all(isinstance(t, str) for t in stamps):
+            raise ValueError(f'part_utc must be {len(PARTS)} strings ({", ".join(PARTS)})')
+        object.__setattr__(self, 'part_utc', tuple(self.part_utc))
         object.__setattr__(self, 'force_curves', _curves(self.force_curves))
         object.__setattr__(self, 'gains', _gains(self.gains))
 
@@ -113,8 +187,27 @@ class Calibration:
         return tuple(np.array(g, dtype=np.float64) for g in self.gains)
 
     def updated(self, **changes) -> 'Calibration':
-        """Return a copy with ``changes`` applied and ``made_utc`` set to now."""
-        return replace(self, **{'made_utc': utc_now(), **changes})
+        """Return a copy with ``changes`` applied; the parts they touch are stamped now."""
+        now = utc_now()
+        touched = [any(f in changes for f in fields) for fields in PARTS.values()]
+        stamps = tuple(now if t else old for t, old in zip(touched, self.part_utc))
+        return replace(self, **{'made_utc': now, 'part_utc': stamps, **changes})
+
+    def made(self, part: str) -> str:
+        """Return when ``part`` (one of PARTS) was made, '' when never or unknown."""
+        return self.part_utc[list(PARTS).index(part)]
+
+    def check_skin(self, skin: SkinIdentity) -> str:
+        """Return why this calibration does not belong to ``skin`` ('' when it may)."""
+        if self.skin is not None:
+            problem = self.skin.mismatch(skin)
+            if problem:
+                return problem
+        if self.gains is not None and (len(self.gains[0]), len(self.gains[0][0])) != (
+                skin.rows, skin.cols):
+            return (f'its gains are {len(self.gains[0])} x {len(self.gains[0][0])}, this skin '
+                    f'is {skin.describe()}')
+        return ''
 
     def describe(self) -> str:
         """Return one line saying what is calibrated, for logs and diagnostics (SI units)."""
@@ -127,15 +220,19 @@ class Calibration:
                          f'({self.force_presses} presses)')
         if self.gains:
             parts.append('taxel gains')
+        if self.skin:
+            parts.append(f'for {self.skin.describe()}')
         return '; '.join(parts) + (f'; made {self.made_utc}' if self.made_utc else '')
 
     def to_dict(self) -> dict:
         """Return the fields as plain Python values (numbers, strings, lists)."""
-        d = asdict(self)
-        out = {k: (int(d[k]) if k in _COUNTS else float(d[k])) for k in _FIELDS}
+        out = {k: (int(getattr(self, k)) if k in _COUNTS else float(getattr(self, k)))
+               for k in _FIELDS}
         out['force_presses'] = int(self.force_presses)
         out['compliance_presses'] = int(self.compliance_presses)
         out['made_utc'] = self.made_utc
+        out['made'] = dict(zip(PARTS, self.part_utc))
+        out['skin'] = None if self.skin is None else asdict(self.skin)
         out['force_curves'] = (None if self.force_curves is None else
                                {layer: c.to_dict() for layer, c in
                                 zip(('top', 'bottom'), self.force_curves)})
@@ -150,8 +247,12 @@ class Calibration:
         write_atomically(path, lambda f: yaml.safe_dump(doc, f, sort_keys=False))
 
     @classmethod
-    def load_yaml(cls, path) -> 'Calibration':
-        """Read and validate a calibration written by :meth:`save_yaml` (version 1 or 2)."""
+    def load_yaml(cls, path, skin: SkinIdentity = None) -> 'Calibration':
+        """
+        Read and validate a calibration written by :meth:`save_yaml` (version 1, 2 or 3).
+
+        With ``skin``, a calibration made for another skin raises :class:`CalibrationMismatch`.
+        """
         path = os.fspath(path)
         try:
             with open(path, 'r', encoding='utf-8') as f:
@@ -177,6 +278,12 @@ class Calibration:
             values[k] = v
         try:
             values['made_utc'] = str(doc.get('made_utc') or '')
+            made = doc.get('made') or {}
+            if not isinstance(made, dict):
+                raise ValueError('made must map each part to a time')
+            values['part_utc'] = tuple(str(made.get(part) or '') for part in PARTS)
+            if doc.get('skin') is not None:
+                values['skin'] = SkinIdentity.from_dict(doc['skin'])
             curves = doc.get('force_curves')
             if curves is not None:
                 values['force_curves'] = tuple(ForceCurve.from_dict(curves[layer])
@@ -185,9 +292,14 @@ class Calibration:
             if gains is not None:
                 values['gains'] = tuple(np.array(gains[layer], dtype=np.float64)
                                         for layer in ('top', 'bottom'))
-            return cls(**values)
+            cal = cls(**values)
         except (KeyError, TypeError, ValueError) as exc:
             raise ValueError(f'{path}: {exc}') from None
+        problem = cal.check_skin(skin) if skin is not None else ''
+        if problem:
+            raise CalibrationMismatch(f'{path}: {problem}; calibrate this skin or reset the '
+                                      'calibration')
+        return cal
 
 
 def calibrate_from_shifts(shifts_m, max_std_m: float = 0.001,

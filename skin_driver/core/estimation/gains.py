@@ -8,7 +8,14 @@ the top and bottom imprints deform differently, so location and direction are bi
 What the user does, either way:
 
 * **Uniform load**: lay a flat rigid plate over the whole skin and put a weight on it (or press
-  it with a robot); one press, held for a second, is enough.
+  it with a robot); one press, held for a second, is enough. The plate must cover every taxel
+  with a margin (for the seed's 16 x 16 skin at 5 mm, 80 x 80 mm: a plate of 90 x 90 mm or
+  more, rigid, e.g. 5 mm aluminium) and the load must put each taxel in the middle of its range,
+  not near its threshold nor its saturation: about 1 N per taxel with the assumed FSR, so
+  ``1 N x rows x cols / fill_factor**2`` in all: 1 x 256 / 0.81 = 316 N (a 32 kg weight, plate
+  included) on that skin. A plate that does not cover the skin leaves its edge taxels with
+  little load next to fully loaded ones: their gains come out at the limit (``GAIN_RANGE``) and
+  the fit says where (:func:`limits_note`); move or enlarge the plate and repeat.
 * **Presses spread over the skin**: press with a fingertip or an indenter at many places, evenly
   over the whole skin, until every taxel has been under a press several times (about ten
   presses per taxel: 100 or more on a 16 x 16 skin).
@@ -23,7 +30,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ['gains_from_force_sums', 'MIN_COVERED_SHARE', 'GAIN_RANGE']
+__all__ = ['gains_from_force_sums', 'limits_note', 'MIN_COVERED_SHARE', 'GAIN_RANGE']
 
 MIN_COVERED_SHARE = 0.5
 GAIN_RANGE = (0.2, 5.0)
@@ -68,3 +75,30 @@ def gains_from_force_sums(sums: np.ndarray, presses: int) -> tuple:
         ok = covered[layer] & (local > 0)
         gains[layer][ok] = np.clip(local[ok] / sums[layer][ok], *GAIN_RANGE)
     return gains, covered
+
+
+def _span(indices: np.ndarray) -> str:
+    lo, hi = int(indices.min()), int(indices.max())
+    return str(lo) if lo == hi else f'{lo}-{hi}'
+
+
+def limits_note(gains: np.ndarray, covered: np.ndarray) -> str:
+    """
+    Return where the gains (2 x rows x cols) reached ``GAIN_RANGE``, or '' when nowhere.
+
+    A gain at its limit is a taxel the load did not reach as evenly as its neighbours: the edge
+    of a plate smaller than the skin, or a taxel pressed far less often than the others.
+    """
+    parts = []
+    for layer, name in enumerate(('top', 'bottom')):
+        for limit, side in zip(GAIN_RANGE, ('low', 'high')):
+            at = covered[layer] & np.isclose(gains[layer], limit)
+            if at.any():
+                rows, cols = np.nonzero(at)
+                parts.append(f'{name} layer: {int(at.sum())} taxels at the {side} limit '
+                             f'{limit:g} (rows {_span(rows)}, cols {_span(cols)})')
+    if not parts:
+        return ''
+    return ('gains at their limits, ' + '; '.join(parts) + ': the load did not cover those '
+            'taxels evenly (a plate smaller than the skin, or too few presses there); cover '
+            'the whole skin and repeat')

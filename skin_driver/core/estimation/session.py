@@ -27,9 +27,10 @@ from typing import Optional, Sequence
 
 import numpy as np
 
-from .calibration import calibrate_from_shifts, Calibration, compliance_from_presses
+from .calibration import (calibrate_from_shifts, Calibration, compliance_from_presses,
+                          SkinIdentity)
 from .forcecurve import fit_force_curve
-from .gains import gains_from_force_sums
+from .gains import gains_from_force_sums, limits_note
 from .presses import PressSegmenter
 
 __all__ = ['KINDS', 'PressRecord', 'Outcome', 'CalibrationRefused', 'CalibrationSession']
@@ -68,7 +69,8 @@ class Outcome:
     ``fitted`` and ``residuals`` are per press, in newtons (force: the force the new curve gives
     back) or metres (offset: shift from the mean; compliance: shift minus compliance times
     tangential force); for gains ``fitted`` is (smallest, largest) gain and ``covered`` the share
-    of the taxels the presses reached.
+    of the taxels the presses reached. ``warnings`` are what a front end should warn of (the
+    calibration is made, but something in it needs a look); the message says them too.
     """
 
     calibration: Calibration
@@ -77,6 +79,7 @@ class Outcome:
     residuals: tuple
     message: str
     covered: float = 1.0
+    warnings: tuple = ()
 
 
 class CalibrationSession:
@@ -85,14 +88,17 @@ class CalibrationSession:
     def __init__(self, estimator, kind: str, presses: int = 0,
                  forces_n: Sequence[float] = (), alphas_rad: Sequence[float] = (),
                  max_std_m: float = 0.0005, normal_tolerance_m: float = 0.0005,
-                 start_force_n: float = 0.5, release_scans: int = 5):
+                 start_force_n: float = 0.5, release_scans: int = 5,
+                 skin: SkinIdentity = None):
         """
         Start a session on ``estimator`` (a pipeline.ContactEstimator, read, never changed).
 
         ``presses`` is how many to collect; for force and compliance with known loads it is
         the number of known forces. A press ends after ``release_scans`` scans without touch:
-        more than a lost scan or two, so that a press is never counted twice. Raises
-        CalibrationRefused on inconsistent arguments.
+        more than a lost scan or two, so that a press is never counted twice. ``skin`` is the
+        skin the result is stamped for (default: the grid pressed, the estimator's pitch and
+        the board of the calibration in force). Raises CalibrationRefused on inconsistent
+        arguments.
         """
         if kind not in KINDS:
             raise CalibrationRefused(f'calibration kind {kind!r} is not one of {KINDS}')
@@ -118,6 +124,7 @@ class CalibrationSession:
         self.forces_n = forces
         self.alphas_rad = alphas
         self.max_std_m = max_std_m
+        self.skin = skin
         self.accepted = []
         self.ignored = 0
         self.last_ignored = ''
@@ -202,13 +209,22 @@ class CalibrationSession:
         except ValueError as err:
             raise CalibrationRefused(str(err)) from None
 
+    def _updated(self, **changes) -> Calibration:
+        """Return the calibration in force with ``changes``, stamped now and for this skin."""
+        previous = self.estimator.calibration
+        skin = self.skin
+        if skin is None:
+            rows, cols = self.accepted[0].counts.shape[1:]
+            board = previous.skin.board_id if previous.skin else ''
+            skin = SkinIdentity(rows, cols, self.estimator.config.pitch_m, board)
+        return previous.updated(skin=skin, **changes)
+
     # ---- one fit per kind --------------------------------------------------------------------
     def _fit_offset(self) -> Outcome:
-        previous = self.estimator.calibration
         shifts = np.array([r.shift_m for r in self.accepted])
         fit = calibrate_from_shifts(shifts, max_std_m=self.max_std_m)
-        new = previous.updated(x_p_m=fit.x_p_m, y_p_m=fit.y_p_m, std_x_m=fit.std_x_m,
-                               std_y_m=fit.std_y_m, presses=fit.presses)
+        new = self._updated(x_p_m=fit.x_p_m, y_p_m=fit.y_p_m, std_x_m=fit.std_x_m,
+                            std_y_m=fit.std_y_m, presses=fit.presses)
         residuals = tuple(float(math.hypot(x - fit.x_p_m, y - fit.y_p_m)) for x, y in shifts)
         return Outcome(new, fit.presses, tuple(map(tuple, shifts.tolist())), residuals,
                        f'offset from {fit.presses} normal presses: x_p = {fit.x_p_m:.6f} m, '
@@ -236,7 +252,7 @@ class CalibrationSession:
                     raise CalibrationRefused(f'{name} layer: {err}') from None
                 fits[name] = fits['bottom']
                 notes += f'; the top layer takes the bottom curve ({err})'
-        new = self.estimator.calibration.updated(
+        new = self._updated(
             force_curves=(fits['top'].curve, fits['bottom'].curve), force_presses=n)
         # The pipeline's normal force is the bottom layer's sum: report that layer's fit.
         bottom = fits['bottom']
@@ -272,7 +288,7 @@ class CalibrationSession:
                                      'press at alpha > 0 with a known load')
         magnitude = np.hypot(shifts[:, 0] - offset[0], shifts[:, 1] - offset[1])
         residuals = magnitude - compliance * tangential
-        new = previous.updated(compliance_m_per_n=compliance, compliance_presses=n)
+        new = self._updated(compliance_m_per_n=compliance, compliance_presses=n)
         return Outcome(new, n, tuple(float(v) for v in compliance * tangential),
                        tuple(float(v) for v in residuals),
                        f'compliance {compliance:.4e} m/N from {n} presses with '
@@ -285,9 +301,11 @@ class CalibrationSession:
         # What each taxel sensed, without the gains in force: those are being replaced.
         sums = sum(conditioner.force_of(r.counts) for r in self.accepted) / conditioner.gain_maps()
         gains, covered = gains_from_force_sums(sums, n)
-        new = self.estimator.calibration.updated(gains=(gains[0], gains[1]))
+        new = self._updated(gains=(gains[0], gains[1]))
         share = float(covered.mean())
+        warning = limits_note(gains, covered)
         return Outcome(new, n, (float(gains.min()), float(gains.max())), (),
                        f'taxel gains from {n} press{"es" if n != 1 else ""} covering '
                        f'{100 * share:.0f} % of the taxels: {gains.min():.2f} to '
-                       f'{gains.max():.2f}', covered=share)
+                       f'{gains.max():.2f}' + (f'; {warning}' if warning else ''),
+                       covered=share, warnings=(warning,) if warning else ())

@@ -5,7 +5,8 @@ import os
 import numpy as np
 import pytest
 from skin_driver.core.estimation.calibration import calibrate_from_shifts, Calibration
-from skin_driver.core.estimation.calibration import compliance_from_presses
+from skin_driver.core.estimation.calibration import CalibrationMismatch, compliance_from_presses
+from skin_driver.core.estimation.calibration import SkinIdentity
 from skin_driver.core.estimation.forcecurve import ForceCurve
 
 
@@ -64,24 +65,59 @@ def test_yaml_validation(tmp_path, text, message):
         Calibration.load_yaml(path)
 
 
-def test_version_2_round_trip_with_curves_and_gains_and_version_1_still_loads(tmp_path):
+def test_round_trip_with_curves_gains_skin_and_part_times_and_older_versions_still_load(
+        tmp_path):
     curves = (ForceCurve((0.0, 500.0, 3000.0), (0.0, 0.5, 9.0)),
-              ForceCurve((0.0, 800.0, 3500.0), (0.0, 0.7, 12.0)))
+              ForceCurve((0.0, 800.0, 3500.0), (0.0, 0.7, 12.0), 3300.0, 1.2))
     gains = (np.full((2, 3), 1.1), np.full((2, 3), 0.9))
     cal = Calibration(1e-4, -2e-4, 1e-5, 2e-5, 12, 7e-4, force_curves=curves, gains=gains,
-                      force_presses=16, compliance_presses=16, made_utc='2026-11-22T05:00:00Z')
+                      force_presses=16, compliance_presses=16, made_utc='2026-11-22T05:00:00Z',
+                      skin=SkinIdentity(2, 3, 0.005, 'left palm'),
+                      part_utc=('2026-11-20T01:00:00Z', '2026-11-22T05:00:00Z', '', ''))
     path = tmp_path / 'cal.yaml'
     cal.save_yaml(path)
-    assert 'version: 2' in path.read_text()
-    back = Calibration.load_yaml(path)
+    assert 'version: 3' in path.read_text()
+    back = Calibration.load_yaml(path, SkinIdentity(2, 3, 0.005, 'left palm'))
     assert back == cal
+    assert back.made('offset') == '2026-11-20T01:00:00Z' and back.made('gains') == ''
     np.testing.assert_array_equal(back.gain_maps()[0], gains[0])
     assert 'made 2026-11-22T05:00:00Z' in back.describe()
+    assert 'for 2 x 3 taxels at 5.000 mm pitch, board left palm' in back.describe()
     old = tmp_path / 'v1.yaml'
     old.write_text('format: skin_driver/calibration\nversion: 1\nx_p_m: 0.0003\n'
                    'y_p_m: -0.0001\nstd_x_m: 0.0\nstd_y_m: 0.0\npresses: 5\n'
                    'compliance_m_per_n: 0.0\n')
-    assert Calibration.load_yaml(old) == Calibration(x_p_m=0.0003, y_p_m=-0.0001, presses=5)
-    old.write_text(old.read_text().replace('version: 1', 'version: 3'))
-    with pytest.raises(ValueError, match='unsupported calibration version 3'):
+    # An old file names no skin: it loads on any.
+    assert Calibration.load_yaml(old, SkinIdentity(16, 16, 0.005)) == Calibration(
+        x_p_m=0.0003, y_p_m=-0.0001, presses=5)
+    old.write_text(old.read_text().replace('version: 1', 'version: 4'))
+    with pytest.raises(ValueError, match='unsupported calibration version 4'):
         Calibration.load_yaml(old)
+
+
+@pytest.mark.parametrize('skin, message', [
+    (SkinIdentity(64, 64, 0.00125), 'made for 16 x 16 taxels at 5.000 mm pitch, board left '
+                                    'palm, this skin is 64 x 64 taxels at 1.250 mm pitch'),
+    (SkinIdentity(16, 16, 0.004), 'this skin is 16 x 16 taxels at 4.000 mm pitch'),
+    (SkinIdentity(16, 16, 0.005, 'right palm'), 'board left palm, this skin is 16 x 16 '
+                                                'taxels at 5.000 mm pitch, board right palm'),
+])
+def test_a_calibration_for_another_skin_is_refused_on_load(tmp_path, skin, message):
+    path = tmp_path / 'cal.yaml'
+    mine = SkinIdentity(16, 16, 0.005, 'left palm')
+    Calibration(x_p_m=1e-4, presses=3, skin=mine).save_yaml(path)
+    with pytest.raises(CalibrationMismatch, match=message):
+        Calibration.load_yaml(path, skin)
+    # The same grid and pitch with no board named is the same skin.
+    assert Calibration.load_yaml(path, SkinIdentity(16, 16, 0.005)).x_p_m == 1e-4
+
+
+def test_gains_of_another_grid_are_refused_even_without_a_skin():
+    cal = Calibration(gains=(np.ones((2, 3)), np.ones((2, 3))))
+    assert 'gains are 2 x 3' in cal.check_skin(SkinIdentity(16, 16, 0.005))
+
+
+def test_an_update_stamps_only_the_parts_it_changes():
+    cal = Calibration(part_utc=('a', 'b', 'c', 'd')).updated(compliance_m_per_n=1e-3)
+    assert cal.part_utc[:2] == ('a', 'b') and cal.part_utc[3] == 'd'
+    assert cal.made('compliance') == cal.made_utc != 'c'

@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 from skin_driver.core.estimation.fsr import FsrModel
-from skin_driver.core.estimation.gains import gains_from_force_sums
+from skin_driver.core.estimation.gains import gains_from_force_sums, limits_note
 from skin_driver.core.estimation.pipeline import ContactEstimator, EstimatorConfig
 from skin_driver.core.estimation.session import CalibrationRefused, CalibrationSession
 
@@ -53,3 +53,23 @@ def test_too_little_coverage_is_refused():
     session.add_press(session.record(top, top, est.process(top, top)))
     with pytest.raises(CalibrationRefused, match='press evenly over the whole skin'):
         session.finish()
+
+
+def test_a_plate_smaller_than_the_skin_makes_gains_at_their_limits_and_says_where():
+    rng = np.random.default_rng(1)
+    est = ContactEstimator(EstimatorConfig())
+    session = CalibrationSession(est, 'gains', presses=1)
+    # A plate over rows 0-12 only: the load falls off past its edge.
+    plate = np.full((2, 16, 16), 3.0)
+    plate[:, 12:, :] = np.array([1.0, 0.3, 0.05, 0.02])[None, :, None]
+    top, bottom = counts_of(plate, rng)
+    session.add_press(session.record(top, bottom, est.process(top, bottom)))
+    outcome = session.finish()
+    assert outcome.warnings and 'at the high limit 5' in outcome.warnings[0]
+    assert 'rows 14-15, cols 0-15' in outcome.warnings[0]
+    assert outcome.warnings[0] in outcome.message
+
+
+def test_an_even_load_warns_of_nothing():
+    gains = np.ones((2, 16, 16))
+    assert limits_note(gains, gains > 0) == ''

@@ -4,7 +4,7 @@ import math
 
 import numpy as np
 import pytest
-from skin_driver.core.estimation.calibration import Calibration
+from skin_driver.core.estimation.calibration import Calibration, SkinIdentity
 from skin_driver.core.estimation.fsr import FsrModel
 from skin_driver.core.estimation.pipeline import ContactEstimator, EstimatorConfig
 from skin_driver.core.estimation.session import CalibrationRefused, CalibrationSession
@@ -71,7 +71,9 @@ def test_offset_session_ignores_tilted_presses_and_finds_the_misalignment():
     assert 'did not look normal' in notes[0] and session.ignored == 1
     cal = session.finish().calibration
     assert (cal.x_p_m, cal.y_p_m) == pytest.approx(SKIN.misalignment_m, abs=2e-4)
-    assert cal.made_utc
+    # Stamped for the skin pressed, the offset part alone made now.
+    assert cal.skin == SkinIdentity(SKIN.rows, SKIN.cols, SKIN.pitch_m)
+    assert cal.made('offset') == cal.made_utc != '' and cal.made('force') == ''
 
 
 def test_compliance_session_from_known_tilted_loads():
