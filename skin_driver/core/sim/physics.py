@@ -191,8 +191,11 @@ def _support(coords: np.ndarray, centre: float, radius: float) -> tuple:
     return int(inside[0]), int(inside[-1]) + 1
 
 
+# A press held at full force is the same press frame after frame: rendered once (a plate over
+# the whole skin takes milliseconds, more than a frame's share of a loaded machine).
+@lru_cache(maxsize=32)
 def _press_maps(model: SkinModel, press: Press) -> tuple:
-    """Return per-taxel force maps (top, bottom) of one press, before the FSR."""
+    """Return per-taxel force maps (top, bottom) of one press, before the FSR (read-only)."""
     pitch = model.pitch_m
     top = np.zeros((model.rows, model.cols))
     bottom = np.zeros_like(top)
@@ -217,13 +220,23 @@ def _press_maps(model: SkinModel, press: Press) -> tuple:
         r1 = int(math.floor((cy + reach) / pitch + 0.5)) + 1
         if c1 <= 0 or r1 <= 0 or c0 >= model.cols or r0 >= model.rows:
             continue
+        # Pressure further off the skin than the blur reaches loads no taxel: a plate larger
+        # than the skin is evaluated over the skin and that margin only (in time for every
+        # frame), its total force taken from the whole disc.
+        margin = int(math.ceil(4.0 * blur / pitch)) + 1
+        clipped = (c0 < -margin or r0 < -margin or c1 > model.cols + margin
+                   or r1 > model.rows + margin)
+        c0, r0 = max(c0, -margin), max(r0, -margin)
+        c1, r1 = min(c1, model.cols + margin), min(r1, model.rows + margin)
         xs = (c0 - 0.5) * pitch + (np.arange((c1 - c0) * sub) + 0.5) * h
         ys = (r0 - 0.5) * pitch + (np.arange((r1 - r0) * sub) + 0.5) * h
         # The Hertz profile is zero outside the disc: evaluate it on the disc's bounding box only.
         x0, x1 = _support(xs, cx, a)
         y0, y1 = _support(ys, cy, a)
         fine = _hertz(xs[x0:x1], ys[y0:y1], cx, cy, press)
-        total = fine.sum()
+        # The integral of the Hertz profile over its ellipse is 2/3 pi a b (in samples of h^2).
+        total = (2.0 / 3.0 * math.pi * press.radius_m ** 2 * press.aspect / (h * h)
+                 if clipped else fine.sum())
         if total <= 0:
             # The disc fell between fine samples; put the whole force on the nearest sample.
             y0 = int(np.argmin(np.abs(ys - cy)))
@@ -238,6 +251,8 @@ def _press_maps(model: SkinModel, press: Press) -> tuple:
         rr0, cc0 = max(r0, 0), max(c0, 0)
         rr1, cc1 = min(r1, model.rows), min(c1, model.cols)
         layer[rr0:rr1, cc0:cc1] += cells[rr0 - r0:rr1 - r0, cc0 - c0:cc1 - c0]
+    top.flags.writeable = False
+    bottom.flags.writeable = False
     return top, bottom
 
 

@@ -206,6 +206,9 @@ def _model(data: Any) -> SkinModel:
             if isinstance(value, bool) or not isinstance(value, int) or not 1 <= value <= 128:
                 raise ValueError(f'model: field {key!r} must be an integer in 1..128, got '
                                  f'{value!r}')
+        elif key == 'seed':
+            if isinstance(value, bool) or not isinstance(value, int) or value < 0:
+                raise ValueError(f'model: field seed must be an integer >= 0, got {value!r}')
         else:
             value = _number('model', key, value)
         kwargs[key] = value

@@ -102,3 +102,15 @@ def test_press_validation():
         Press(float('nan'), 0.0, 1.0)
     with pytest.raises(ValueError, match='non-negative'):
         Press(0.0, 0.0, -1.0)
+
+
+def test_a_plate_larger_than_the_skin_loads_it_as_on_a_larger_skin():
+    # The pressure past the blur's reach off the skin is not evaluated (a plate renders in
+    # time for every frame); what the skin feels is the same as where the skin goes on.
+    small = SkinModel(noise_counts=0.0)
+    large = SkinModel(rows=64, cols=64, noise_counts=0.0)
+    offset = 24 * small.pitch_m  # the small skin sits at taxels 24..39 of the large one
+    plate = Press(0.0375, 0.0375, 1200.0, 0.0, 0.0, 0.1)
+    shifted = Press(0.0375 + offset, 0.0375 + offset, 1200.0, 0.0, 0.0, 0.1)
+    for on_small, on_large in zip(render_force(small, [plate]), render_force(large, [shifted])):
+        np.testing.assert_allclose(on_small, on_large[24:40, 24:40], rtol=1e-3)
