@@ -32,9 +32,9 @@ def test_the_calibrate_scene_calibrates_offset_force_compliance_and_gains_in_tur
     scene = load_scene('calibrate')
     header = find_scene('calibrate').read_text()
     rng = np.random.default_rng(0)
-    est = ContactEstimator(EstimatorConfig())
     quiet = [render(scene.model, [], rng) for _ in range(20)]
-    est.tare(np.stack([t for t, _ in quiet]), np.stack([b for _, b in quiet]))
+    est = ContactEstimator(EstimatorConfig()).with_tare(np.stack([t for t, _ in quiet]),
+                                                        np.stack([b for _, b in quiet]))
     steps = (('offset', 4.0, 20.0, {'presses': 8}),
              ('force', 22.0, 52.0, {'forces_n': listed(header, 'forces')[0]}),
              ('compliance', 57.0, 87.0, {'forces_n': listed(header, 'forces')[1],
@@ -46,7 +46,7 @@ def test_the_calibrate_scene_calibrates_offset_force_compliance_and_gains_in_tur
         play(scene, est, session, start, end, rng)
         assert session.done, f'{kind}: {len(session.accepted)} of {session.wanted} presses'
         outcomes[kind] = session.finish()
-        est.calibration = outcomes[kind].calibration
+        est = est.with_calibration(outcomes[kind].calibration)
     cal = est.calibration
     assert (cal.x_p_m, cal.y_p_m) == pytest.approx(scene.model.misalignment_m, abs=1e-4)
     assert abs(cal.compliance_m_per_n / scene.model.compliance_m_per_n - 1.0) < 0.1
