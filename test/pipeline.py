@@ -2,6 +2,7 @@
 
 import contextlib
 
+from rclpy.action import ActionClient
 from skin_driver.core.sim.scene import scene_from_dict
 from skin_driver.tools import harness
 from skin_driver.tools.harness import overrides  # noqa: F401 - the tests' one import place
@@ -40,3 +41,12 @@ def call(executor, node, srv_type, name, request, timeout_s=20.0):
         return harness.call_service(executor, client, request, timeout_s, ready_s=5.0)
     finally:
         node.destroy_client(client)
+
+
+def send_goal(executor, node, action_type, name, goal, timeout_s=20.0, feedback=None):
+    """Send an action goal from a helper client: (status, result), (None, None) if rejected."""
+    client = ActionClient(node, action_type, name)
+    try:
+        return harness.send_goal(executor, client, goal, timeout_s, feedback, ready_s=5.0)
+    finally:
+        client.destroy()

@@ -88,7 +88,7 @@ fi
 
 # --- the colcon build -------------------------------------------------------------------------
 build_inputs=$(find package.xml setup.py setup.cfg resource skin_msgs launch config skin_driver \
-  -type f \( -name '*.py' -o -name '*.xml' -o -name '*.txt' -o -name '*.msg' -o -name '*.srv' \
+  -type f \( -name '*.py' -o -name '*.xml' -o -name '*.txt' -o -name '*.msg' -o -name '*.srv' -o -name '*.action' \
   -o -name '*.yaml' -o -name '*.rviz' -o -name '*.cfg' -o -name 'skin_driver' \) -not -path '*/__pycache__/*' | sort)
 bwant=$(hash_of $build_inputs; echo "$want")
 if [ "$(cat install/.build-stamp 2>/dev/null)" != "$bwant" ]; then

@@ -1,42 +1,59 @@
 """
-Calibration services for any node that estimates contacts: the ROS side of core session.py.
+Calibration actions for any node that estimates contacts: the ROS side of core session.py.
 
 ``CalibrationServices(node, get_estimator, put_calibration)`` declares the calibration
 parameters on ``node``, loads the calibration file into the estimator, and offers
 
-* ``~/calibrate`` (skin_msgs/srv/Calibrate): (x_p, y_p) from normal presses;
-* ``~/calibrate_force`` (skin_msgs/srv/CalibrateForce): the counts-to-force curves from presses
-  of known normal force;
-* ``~/calibrate_compliance`` (skin_msgs/srv/CalibrateCompliance): the compliance from presses of
-  known tilted load, given in the request or read from the WrenchStamped topic named by
+* ``~/calibrate`` (skin_msgs/action/Calibrate): (x_p, y_p) from normal presses;
+* ``~/calibrate_force`` (skin_msgs/action/CalibrateForce): the counts-to-force curves from
+  presses of known normal force;
+* ``~/calibrate_compliance`` (skin_msgs/action/CalibrateCompliance): the compliance from presses
+  of known tilted load, given in the goal or read from the WrenchStamped topic named by
   ``calibration.wrench_topic``;
-* ``~/calibrate_gains`` (skin_msgs/srv/CalibrateGains): per-taxel gains from a plate over the
-  skin or many presses spread over it.
+* ``~/calibrate_gains`` (skin_msgs/action/CalibrateGains): per-taxel gains from a plate over the
+  skin or many presses spread over it;
+* ``~/reset_calibration`` (std_srvs/Trigger): the defaults, in force and in the file.
 
-The node calls :meth:`feed` with every scan and its contacts. The calibration lives in the
-estimator alone, which the node owns: ``get_estimator()`` returns the one in force and
-``put_calibration(calibration)`` asks the node to put a new one in force. A new calibration is
-written to the file first and put in force only once written; a refusal, a timeout or a failed
-write answers with the calibration still in force.
+A calibration takes seconds to minutes of presses, so each is an action: feedback after every
+press, cancel (Ctrl-C on ``ros2 action send_goal``) ends it. One runs at a time: a goal that
+arrives while one runs is rejected at once (the reason is logged). A goal is checked before any
+press is awaited: one no presses could satisfy ends at once, aborted with the reason. The node
+calls :meth:`feed` with every scan and its contacts, and :meth:`check_skin` when the frames show
+the skin's grid and pitch. The calibration lives in the estimator alone, which the node owns:
+``get_estimator()`` returns the one in force and ``put_calibration(calibration)`` asks the node
+to put a new one in force. A new calibration is written to the file first and put in force only
+once written; a refusal, a timeout, a cancel or a failed write leaves the calibration in force.
+
+A calibration file belongs to one skin (grid, pitch, ``calibration.skin_id``): one made for
+another skin is refused when the frames show the skin, with a WARN in the log and in the
+diagnostics, and the defaults are put in force.
 """
 
 import math
 import os
+import threading
 import time
 
 from geometry_msgs.msg import WrenchStamped
+from rcl_interfaces.msg import SetParametersResult
+from rclpy.action import ActionServer, CancelResponse, GoalResponse
 from rclpy.callback_groups import MutuallyExclusiveCallbackGroup
+from rclpy.qos import qos_profile_sensor_data
 from rclpy.task import Future
-from skin_driver.core.estimation.calibration import Calibration
+from skin_driver.core.estimation.calibration import (Calibration, CalibrationMismatch, PARTS,
+                                                     SkinIdentity)
 from skin_driver.core.estimation.session import CalibrationRefused, CalibrationSession
 from skin_driver.ros.params import declare
 from skin_driver.ros.paths import ros_home
-from skin_msgs.srv import Calibrate, CalibrateCompliance, CalibrateForce, CalibrateGains
+from skin_msgs.action import Calibrate, CalibrateCompliance, CalibrateForce, CalibrateGains
+from std_srvs.srv import Trigger
 
 MAX_CALIBRATION_PRESSES = 1000
 MAX_CALIBRATION_S = 3600.0
 # A reference wrench older than this when a scan arrives is not taken as that scan's load.
 MAX_WRENCH_AGE_S = 0.5
+# How often a running calibration looks for a cancel or its timeout.
+POLL_S = 0.1
 KEEP = '; the previous calibration stays in force'
 
 
@@ -50,12 +67,16 @@ def declare_calibration_parameters(node) -> None:
     """Declare the calibration parameters on ``node``."""
     declare(node, 'calibration_file', '',
             'YAML file of the calibration, loaded at start-up and written by the calibration '
-            'services; empty: ~/.ros/skin_driver/calibration/<node namespace and name>.yaml.')
+            'actions; empty: ~/.ros/skin_driver/calibration/<node namespace and name>.yaml. Set '
+            'at run time, it must name an existing file.')
+    declare(node, 'calibration.skin_id', '',
+            'Name of this skin, stored with its calibration: a file made under another name is '
+            'refused (the wire protocol carries no board identity). Empty: grid and pitch only.')
     declare(node, 'calibration.presses', 8,
-            'Normal presses ~/calibrate records when the request asks for 0.',
+            'Normal presses ~/calibrate records when the goal asks for 0.',
             low=1, high=MAX_CALIBRATION_PRESSES)
     declare(node, 'calibration.timeout', 60.0,
-            'Seconds a calibration service waits when the request asks for 0.',
+            'Seconds a calibration waits for its presses when the goal asks for 0.',
             low=0.1, high=MAX_CALIBRATION_S)
     declare(node, 'calibration.max_std', 0.0005,
             "Largest spread (metres, standard deviation) of the presses' shifts accepted.",
@@ -64,12 +85,13 @@ def declare_calibration_parameters(node) -> None:
             "How far a press's shift may grow with its force (metres) and look normal.",
             low=1.0e-6, high=0.1)
     declare(node, 'calibration.wrench_topic', '',
-            'geometry_msgs/WrenchStamped topic of a force/torque sensor in the skin frame that '
-            '~/calibrate_compliance reads the load from; empty: loads come in the request.')
+            'geometry_msgs/WrenchStamped topic (best effort: any publisher) of a force/torque '
+            'sensor in the skin frame that ~/calibrate_compliance reads the load from; empty: '
+            'loads come in the goal.')
 
 
 def request_problem(presses: int, timeout: float, forces=()) -> str:
-    """Return why a request's counts or timeout cannot be served, or ''."""
+    """Return why a goal's counts or timeout cannot be served, or ''."""
     if presses > MAX_CALIBRATION_PRESSES or len(forces) > MAX_CALIBRATION_PRESSES:
         return (f'presses {max(presses, len(forces))} is more than {MAX_CALIBRATION_PRESSES}; '
                 'ask for 0 (the default) or a number up to that')
@@ -80,74 +102,130 @@ def request_problem(presses: int, timeout: float, forces=()) -> str:
 
 
 class CalibrationServices:
-    """Offer the calibration services on a node whose estimator ``get_estimator()`` returns."""
+    """Offer the calibration actions on a node whose estimator ``get_estimator()`` returns."""
 
     def __init__(self, node, get_estimator, put_calibration):
-        """Declare the parameters, load the calibration file and create the services."""
+        """Declare the parameters, load the calibration file and create the actions."""
         self._node = node
         self._get_estimator = get_estimator
         self._put_calibration = put_calibration
-        self._session = None
-        self._future = None
+        self._session = self._future = self._goal = None
+        self._running = threading.Lock()  # held from a goal's acceptance to its end
         self._wrench = None
         self._wrench_sub = None
+        self._skin = None
         declare_calibration_parameters(node)
         self.note = ''
+        self.warning = ''
         self.loaded_from = ''
         self.load()
         self._follow_wrench_topic()
-        for srv, name, handler in ((Calibrate, '~/calibrate', self._on_calibrate),
-                                   (CalibrateForce, '~/calibrate_force', self._on_force),
-                                   (CalibrateCompliance, '~/calibrate_compliance',
-                                    self._on_compliance),
-                                   (CalibrateGains, '~/calibrate_gains', self._on_gains)):
-            # A call waits for presses: in a group of its own it cannot hold up the frames it
-            # waits for, which run in the node's default group.
-            node.create_service(srv, name, handler,
-                                callback_group=MutuallyExclusiveCallbackGroup())
+        for action, name, kind, goal_args, answer in (
+                (Calibrate, '~/calibrate', 'offset', self._offset_args, _answer_offset),
+                (CalibrateForce, '~/calibrate_force', 'force', self._force_args, _answer_force),
+                (CalibrateCompliance, '~/calibrate_compliance', 'compliance',
+                 self._compliance_args, _answer_compliance),
+                (CalibrateGains, '~/calibrate_gains', 'gains', self._gains_args,
+                 _answer_gains)):
+            ActionServer(
+                node, action, name,
+                execute_callback=self._executor(action, kind, goal_args, answer),
+                goal_callback=self._on_goal(kind), cancel_callback=self._on_cancel,
+                # A goal waits for presses: in a group of its own it cannot hold up the frames
+                # it waits for, which run in the node's default group.
+                callback_group=MutuallyExclusiveCallbackGroup())
+        node.create_service(Trigger, '~/reset_calibration', self._on_reset)
+        node.add_on_set_parameters_callback(self._check_parameters)
         node.add_post_set_parameters_callback(self._on_parameters)
 
     # ---- file --------------------------------------------------------------------------------
     @property
     def path(self) -> str:
         """Return the calibration file in use."""
-        given = self._node.get_parameter('calibration_file').value
+        return self._path_of(self._node.get_parameter('calibration_file').value)
+
+    def _path_of(self, given) -> str:
         if not str(given).strip():
             return default_calibration_file(self._node.get_fully_qualified_name())
         return os.path.expanduser(given)
 
     def load(self) -> None:
-        """Load the calibration file into the estimator (the default one if there is none)."""
+        """Load the calibration file (the defaults if there is none, or it is another skin's)."""
         path = self.path
         cal = Calibration()
+        self.warning = ''
         if not os.path.exists(path):
             self.note = f'no calibration file at {path} yet: uncalibrated'
+            if str(self._node.get_parameter('calibration_file').value).strip():
+                self.warning = f'calibration_file {path} does not exist: uncalibrated'
+                self._node.get_logger().warning(self.warning)
         else:
             try:
-                cal = Calibration.load_yaml(path)
+                cal = Calibration.load_yaml(path, self._skin)
                 self.note = f'calibration from {path}: {cal.describe()}'
+            except CalibrationMismatch as err:
+                self._refuse(str(err))
             except (OSError, ValueError) as err:
                 self._node.get_logger().error(f'ignoring calibration file {path}: {err}')
-                self.note = f'calibration file {path} unreadable: uncalibrated'
+                self.warning = f'calibration file {path} unreadable: uncalibrated'
+                self.note = self.warning
         self.loaded_from = path
         self._put_calibration(cal)
 
+    def _refuse(self, problem: str) -> None:
+        self.warning = f'calibration refused, running uncalibrated: {problem}'
+        self.note = self.warning
+        self._node.get_logger().warning(self.warning)
+
+    def check_skin(self, rows: int, cols: int, pitch_m: float) -> None:
+        """Refuse the calibration in force if it belongs to another skin than the frames'."""
+        # SkinFrame carries the pitch as float32: 7 digits are all it knows (0.005, not
+        # 0.004999999888).
+        skin = SkinIdentity(rows, cols, float(f'{pitch_m:.7g}'),
+                            self._param('calibration.skin_id'))
+        if skin == self._skin:
+            return
+        self._skin = skin
+        problem = self._get_estimator().calibration.check_skin(skin)
+        if problem:
+            self._refuse(f'{self.loaded_from}: {problem}; calibrate this skin or reset the '
+                         'calibration')
+            self._put_calibration(Calibration())
+
+    def _check_parameters(self, params) -> SetParametersResult:
+        for p in params:
+            if p.name == 'calibration_file' and str(p.value).strip():
+                path = self._path_of(p.value)
+                if not os.path.isfile(path):
+                    return SetParametersResult(
+                        successful=False,
+                        reason=f'no calibration file at {path}; name an existing file (or '
+                               'empty for the default); the calibration in force stays')
+        return SetParametersResult(successful=True)
+
     def _on_parameters(self, params) -> None:
         names = {p.name for p in params}
-        if 'calibration_file' in names:
+        if 'calibration.skin_id' in names and self._skin is not None:
+            self._skin = None  # checked again with the new name on the next frame
+        if names & {'calibration_file', 'calibration.skin_id'}:
             self.load()
         if 'calibration.wrench_topic' in names:
             self._follow_wrench_topic()
 
     def diagnostic_values(self) -> dict:
-        """Return what is calibrated, where it came from and when it was made."""
+        """Return what is calibrated, for which skin, where it came from and when made."""
         cal = self._get_estimator().calibration
+        session = self._session
         return {'calibration file': self.loaded_from, 'calibration made': cal.made_utc or '-',
+                **{f'{part} made': cal.made(part) or '-' for part in PARTS},
+                'calibration skin': cal.skin.describe() if cal.skin else '-',
+                'calibration warning': self.warning or '-',
                 'x_p [m]': cal.x_p_m, 'y_p [m]': cal.y_p_m,
                 'compliance [m/N]': cal.compliance_m_per_n or '- (parameter compliance)',
                 'force curve': (f'{cal.force_presses} presses' if cal.force_curves
                                 else '- (assumed FSR model)'),
-                'calibrating': self._session.kind if self._session else 'no'}
+                'calibrating': (f'{session.kind}: {len(session.accepted)} of {session.wanted} '
+                                'presses' if session else 'no')}
 
     # ---- data --------------------------------------------------------------------------------
     def _follow_wrench_topic(self) -> None:
@@ -156,8 +234,9 @@ class CalibrationServices:
             self._wrench_sub = None
         topic = self._node.get_parameter('calibration.wrench_topic').value
         if topic:
+            # Best effort takes a sensor's samples from a reliable or a best-effort publisher.
             self._wrench_sub = self._node.create_subscription(
-                WrenchStamped, topic, self._on_wrench, 10)
+                WrenchStamped, topic, self._on_wrench, qos_profile_sensor_data)
 
     def _on_wrench(self, msg: WrenchStamped) -> None:
         f = msg.wrench.force
@@ -165,7 +244,7 @@ class CalibrationServices:
 
     def feed(self, top, bottom, contacts) -> None:
         """Give the running session, if any, one scan and its contacts (strongest first)."""
-        session = self._session
+        session, goal, future = self._session, self._goal, self._future
         if session is None:
             return
         wrench = None
@@ -174,123 +253,195 @@ class CalibrationServices:
         note = session.add_scan(top, bottom, contacts, wrench)
         if note:
             self._node.get_logger().info(f'calibration ({session.kind}): {note}')
-        if session.done and not self._future.done():
-            self._future.set_result('done')
+            goal.publish_feedback(_feedback(type(goal.request), session, note))
+        if session.done and not future.done():
+            future.set_result('done')
 
-    # ---- services ----------------------------------------------------------------------------
+    # ---- actions -----------------------------------------------------------------------------
     def _param(self, name: str):
         return self._node.get_parameter(name).value
 
-    async def _on_calibrate(self, request, response):
-        problem = request_problem(request.presses, request.timeout)
-        args = {'presses': request.presses or self._param('calibration.presses'),
-                'max_std_m': self._param('calibration.max_std')}
-        return await self._run(response, problem, 'offset', request.timeout, args,
-                               _answer_offset)
+    def _on_goal(self, kind: str):
+        def accept(request):
+            if not self._running.acquire(blocking=False):
+                running = self._session.kind if self._session else 'another'
+                self._node.get_logger().warning(
+                    f'{kind} calibration goal rejected: a {running} calibration is already '
+                    'running; wait for it to end or cancel it')
+                return GoalResponse.REJECT
+            return GoalResponse.ACCEPT
+        return accept
 
-    async def _on_force(self, request, response):
-        forces = list(request.forces)
-        problem = request_problem(0, request.timeout, forces)
-        return await self._run(response, problem, 'force', request.timeout,
-                               {'forces_n': forces}, _answer_force)
+    @staticmethod
+    def _on_cancel(goal_handle) -> CancelResponse:
+        return CancelResponse.ACCEPT
 
-    async def _on_compliance(self, request, response):
-        forces, alphas = list(request.forces), list(request.alphas)
-        problem = request_problem(request.presses, request.timeout, forces)
+    def _offset_args(self, goal) -> tuple:
+        return (request_problem(goal.presses, goal.timeout),
+                {'presses': goal.presses or self._param('calibration.presses'),
+                 'max_std_m': self._param('calibration.max_std')})
+
+    def _force_args(self, goal) -> tuple:
+        forces = list(goal.forces)
+        return request_problem(0, goal.timeout, forces), {'forces_n': forces}
+
+    def _compliance_args(self, goal) -> tuple:
+        forces, alphas = list(goal.forces), list(goal.alphas)
+        problem = request_problem(goal.presses, goal.timeout, forces)
         if not problem and not forces and self._wrench_sub is None:
-            problem = ('no forces in the request and no calibration.wrench_topic to read them '
+            problem = ('no forces in the goal and no calibration.wrench_topic to read them '
                        'from; give forces and alphas, or name the force sensor topic')
-        args = {'forces_n': forces, 'alphas_rad': alphas,
-                'presses': request.presses or self._param('calibration.presses')}
-        return await self._run(response, problem, 'compliance', request.timeout, args,
-                               _answer_compliance)
+        return problem, {'forces_n': forces, 'alphas_rad': alphas,
+                         'presses': 0 if forces else (goal.presses
+                                                      or self._param('calibration.presses'))}
 
-    async def _on_gains(self, request, response):
-        problem = request_problem(request.presses, request.timeout)
-        return await self._run(response, problem, 'gains', request.timeout,
-                               {'presses': request.presses or 1}, _answer_gains)
+    def _gains_args(self, goal) -> tuple:
+        return request_problem(goal.presses, goal.timeout), {'presses': goal.presses or 1}
 
-    async def _run(self, response, problem: str, kind: str, timeout: float, args: dict,
-                   answer):
-        """Run one session and answer; every failure answers with the calibration in force."""
-        answer(response, self._get_estimator().calibration, None)
-        response.success = False
-        if self._session is not None:
-            response.message = (f'a {self._session.kind} calibration is already running; wait '
-                                'for it to finish')
-            return response
+    def _executor(self, action, kind: str, goal_args, answer):
+        async def execute(goal_handle):
+            try:
+                return await self._run(goal_handle, action.Result(), kind, goal_args, answer)
+            finally:
+                self._running.release()
+        return execute
+
+    async def _run(self, goal_handle, result, kind: str, goal_args, answer):
+        """Run one session; every way but success leaves the calibration in force."""
+        answer(result, self._get_estimator().calibration, None)
+        result.success = False
         try:
+            problem, args = goal_args(goal_handle.request)
             if problem:
                 raise CalibrationRefused(problem)
             session = CalibrationSession(
-                self._get_estimator(), kind,
+                self._get_estimator(), kind, skin=self._skin,
                 normal_tolerance_m=self._param('calibration.normal_tolerance'), **args)
         except CalibrationRefused as err:
-            response.message = f'{err}{KEEP}'
-            return response
-        timeout = timeout or self._param('calibration.timeout')
+            result.message = f'{err}{KEEP}'
+            goal_handle.abort()
+            return result
+        timeout = goal_handle.request.timeout or self._param('calibration.timeout')
+        deadline = time.monotonic() + timeout
         future = Future()
-        self._session, self._future = session, future
-        timer = self._node.create_timer(
-            timeout, lambda: future.done() or future.set_result('timeout'))
+
+        def watch():
+            if future.done():
+                return
+            if goal_handle.is_cancel_requested:
+                future.set_result('cancel')
+            elif time.monotonic() > deadline:
+                future.set_result('timeout')
+        self._session, self._future, self._goal = session, future, goal_handle
+        timer = self._node.create_timer(POLL_S, watch)
         self._node.get_logger().info(
             f'calibration ({kind}): make {session.wanted} presses within {timeout:.0f} s')
         try:
             outcome = await future
         finally:
             self._node.destroy_timer(timer)
-            self._session = self._future = None
-        response.presses_used = len(session.accepted)
+            self._session = self._future = self._goal = None
+        result.presses_used = len(session.accepted)
+        made = f'{len(session.accepted)} of {session.wanted} presses'
+        if outcome == 'cancel':
+            result.message = f'cancelled with {made}{KEEP}'
+            goal_handle.canceled()
+            return result
         if outcome == 'timeout':
             ignored = (f'; {session.ignored} ignored, the last one because {session.last_ignored}'
                        if session.ignored else '')
-            response.message = (f'timed out after {timeout:.0f} s with {len(session.accepted)} '
-                                f'of {session.wanted} presses{ignored}{KEEP}')
-            return response
+            result.message = f'timed out after {timeout:.0f} s with {made}{ignored}{KEEP}'
+            goal_handle.abort()
+            return result
         path = self.path
         try:
-            result = session.finish()
-            result.calibration.save_yaml(path)
+            outcome = session.finish()
+            outcome.calibration.save_yaml(path)
         except (CalibrationRefused, OSError, ValueError) as err:
+            result.message = f'{err}{KEEP}'
+            goal_handle.abort()
+            return result
+        self._put_calibration(outcome.calibration)
+        self.loaded_from = path
+        self.warning = ''
+        self.note = f'calibration from {path}: {outcome.calibration.describe()}'
+        answer(result, outcome.calibration, outcome)
+        result.success = True
+        result.presses_used = outcome.presses_used
+        result.message = f'{outcome.message}; written to {path}'
+        logger = self._node.get_logger()
+        logger.info(f'calibration ({kind}): {result.message}')
+        for warning in outcome.warnings:
+            logger.warning(f'calibration ({kind}): {warning}')
+        goal_handle.succeed()
+        return result
+
+    # ---- reset -------------------------------------------------------------------------------
+    def _on_reset(self, request, response):
+        if self._session is not None:
+            response.success = False
+            response.message = (f'a {self._session.kind} calibration is running; cancel it '
+                                'first' + KEEP)
+            return response
+        path = self.path
+        defaults = Calibration(skin=self._skin)
+        try:
+            defaults.save_yaml(path)
+        except OSError as err:
+            response.success = False
             response.message = f'{err}{KEEP}'
             return response
-        self._put_calibration(result.calibration)
-        self.loaded_from = path
-        self.note = f'calibration from {path}: {result.calibration.describe()}'
-        answer(response, result.calibration, result)
+        self._put_calibration(defaults)
+        self.loaded_from, self.warning = path, ''
+        self.note = f'calibration reset to the defaults in {path}'
         response.success = True
-        response.presses_used = result.presses_used
-        response.message = f'{result.message}; written to {path}'
-        self._node.get_logger().info(f'calibration ({kind}): {response.message}')
+        response.message = self.note
+        self._node.get_logger().info(self.note)
         return response
 
 
-def _answer_offset(response, cal: Calibration, outcome) -> None:
-    response.x_p, response.y_p = cal.x_p_m, cal.y_p_m
-    response.std_x, response.std_y = cal.std_x_m, cal.std_y_m
+def _feedback(action_goal, session, note: str):
+    """Return the feedback after a press: counts, and what the last accepted press read."""
+    feedback = _ACTIONS[action_goal].Feedback()
+    feedback.presses_done = len(session.accepted)
+    feedback.presses_wanted = session.wanted
+    if session.accepted:
+        last = session.accepted[-1]
+        feedback.last_force = float(last.peak_force_n)
+        shift = [float(v) if math.isfinite(v) else 0.0 for v in last.shift_m]
+        feedback.last_shift_x, feedback.last_shift_y = shift
+    feedback.note = note
+    return feedback
 
 
-def _answer_force(response, cal: Calibration, outcome) -> None:
+_ACTIONS = {a.Goal: a for a in (Calibrate, CalibrateForce, CalibrateCompliance, CalibrateGains)}
+
+
+def _answer_offset(result, cal: Calibration, outcome) -> None:
+    result.x_p, result.y_p = cal.x_p_m, cal.y_p_m
+    result.std_x, result.std_y = cal.std_x_m, cal.std_y_m
+
+
+def _answer_force(result, cal: Calibration, outcome) -> None:
     curve = cal.force_curves[1] if cal.force_curves else None
-    response.curve_counts = list(curve.counts) if curve else []
-    response.curve_forces = list(curve.force_n) if curve else []
-    response.fitted = list(outcome.fitted) if outcome else []
-    response.residuals = list(outcome.residuals) if outcome else []
+    result.curve_counts = list(curve.counts) if curve else []
+    result.curve_forces = list(curve.force_n) if curve else []
+    result.fitted = list(outcome.fitted) if outcome else []
+    result.residuals = list(outcome.residuals) if outcome else []
 
 
-def _answer_compliance(response, cal: Calibration, outcome) -> None:
-    response.compliance = cal.compliance_m_per_n
-    response.fitted = list(outcome.fitted) if outcome else []
-    response.residuals = list(outcome.residuals) if outcome else []
+def _answer_compliance(result, cal: Calibration, outcome) -> None:
+    result.compliance = cal.compliance_m_per_n
+    result.fitted = list(outcome.fitted) if outcome else []
+    result.residuals = list(outcome.residuals) if outcome else []
 
 
-def _answer_gains(response, cal: Calibration, outcome) -> None:
+def _answer_gains(result, cal: Calibration, outcome) -> None:
     top, bottom = cal.gain_maps()
     if top is None:
-        response.gain_min = response.gain_max = 1.0
+        result.gain_min = result.gain_max = 1.0
     else:
-        response.gain_min = float(min(top.min(), bottom.min()))
-        response.gain_max = float(max(top.max(), bottom.max()))
-    response.covered = 0.0
-    if outcome is not None:
-        response.covered = outcome.covered
+        result.gain_min = float(min(top.min(), bottom.min()))
+        result.gain_max = float(max(top.max(), bottom.max()))
+    result.covered = outcome.covered if outcome is not None else 0.0
+    result.warning = '; '.join(outcome.warnings) if outcome is not None else ''

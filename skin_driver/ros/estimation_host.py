@@ -3,7 +3,7 @@ The ROS side of contact estimation, shared by the direction node and the driver'
 
 An EstimationHost lives on a node named skin_direction and gives it everything but the source of
 its scans: the estimation parameters (declared, checked, applied at run time), the publishers
-(contacts, contact, wrench; heatmaps and markers for rviz), ~/tare, the calibration services and
+(contacts, contact, wrench; heatmaps and markers for rviz), ~/tare, the calibration actions and
 file (skin_driver.ros.calibration_services) and the diagnostics. Scans come in through
 :meth:`EstimationHost.process`, either from the direction node's subscription to frame or, fused,
 straight from the driver's serial reader thread: parameters, services and diagnostics are then
@@ -63,6 +63,7 @@ class EstimationHost:
         self._cost_sum = self._cost_max = 0.0
         self._cost_count = 0
         self._latest = None
+        self._skin_seen = None
         self._writer = conversions.ContactArrayWriter()
         self._rate = diagnostics.RateMeter(time.monotonic())
         self._rebuilders = []
@@ -186,6 +187,10 @@ class EstimationHost:
                 top: np.ndarray, bottom: np.ndarray) -> None:
         """Estimate the contacts of one scan and publish them; count a bad scan and go on."""
         try:
+            if (top.shape, pitch_m) != self._skin_seen:
+                # A calibration made for another skin is refused before it is used.
+                self.calibration.check_skin(top.shape[0], top.shape[1], pitch_m)
+                self._skin_seen = (top.shape, pitch_m)
             estimator = self._estimator_for(pitch_m)
             start = time.perf_counter()
             contacts = estimator.process(top, bottom)
@@ -286,6 +291,8 @@ class EstimationHost:
             **self.calibration.diagnostic_values(),
         }
         level, message = diagnostics.OK, self.calibration.note
+        if self.calibration.warning:
+            level, message = diagnostics.WARN, self.calibration.warning
         if self._frames == 0:
             level, message = diagnostics.WARN, 'no frame received yet'
         elif rate == 0.0:

@@ -222,6 +222,28 @@ def call_service(executor, client, request, timeout_s: float, ready_s: float = 1
     return future.result()
 
 
+def send_goal(executor, client, goal, timeout_s: float, feedback=None, ready_s: float = 10.0):
+    """
+    Send an action goal and spin until it ends: (status, result), or (None, None) if rejected.
+
+    ``feedback`` receives each feedback message. Raises RuntimeError when the server does not
+    come up, answer or end in time.
+    """
+    what = type(goal).__name__.split('_')[0]
+    if not client.wait_for_server(timeout_sec=ready_s):
+        raise RuntimeError(f'action {what} did not come up')
+    sent = client.send_goal_async(
+        goal, feedback_callback=(lambda msg: feedback(msg.feedback)) if feedback else None)
+    if not spin_until(executor, sent.done, ready_s):
+        raise RuntimeError(f'action {what} did not answer the goal in {ready_s:.0f} s')
+    if not sent.result().accepted:
+        return None, None
+    done = sent.result().get_result_async()
+    if not spin_until(executor, done.done, timeout_s):
+        raise RuntimeError(f'action {what} did not end in {timeout_s:.0f} s')
+    return done.result().status, done.result().result
+
+
 # ---- the whole pipeline in this process -------------------------------------------------------
 
 def overrides(values: dict) -> list:

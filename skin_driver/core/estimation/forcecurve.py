@@ -37,7 +37,8 @@ import numpy as np
 from .fsr import FsrModel
 from .imprint import bump, censored_force
 
-__all__ = ['ForceCurve', 'CurveFit', 'fit_force_curve', 'MIN_PRESSES', 'MIN_FORCE_SPAN']
+__all__ = ['ForceCurve', 'CurveFit', 'check_known_forces', 'fit_force_curve', 'MIN_PRESSES',
+           'MIN_FORCE_SPAN']
 
 MIN_PRESSES = 6
 # The largest known force must be this many times the smallest: a range, not a point.
@@ -286,6 +287,21 @@ def _censoring_choices(presses: list, full_scale: int, shape: tuple) -> list:
     return choices
 
 
+def check_known_forces(known_n) -> None:
+    """Raise ValueError when these known forces cannot make a curve, whatever the presses."""
+    known = np.asarray(known_n, dtype=np.float64).ravel()
+    n = known.size
+    if n < MIN_PRESSES:
+        raise ValueError(f'{n} press{"es" if n != 1 else ""} of known force; the force curve '
+                         f'needs at least {MIN_PRESSES}')
+    if not (np.isfinite(known).all() and (known > 0).all()):
+        raise ValueError('every known force must be a positive number of newtons')
+    if known.max() < MIN_FORCE_SPAN * known.min():
+        raise ValueError(f'the presses span only {known.min():.2f} to {known.max():.2f} N; '
+                         f'press over a range, the largest at least {MIN_FORCE_SPAN:g} times '
+                         'the smallest')
+
+
 def fit_force_curve(press_counts: Sequence[np.ndarray], press_gains: Sequence[np.ndarray],
                     sensed_n: Sequence[float], known_n: Sequence[float],
                     assumed: FsrModel = None, full_scale: int = None) -> CurveFit:
@@ -304,16 +320,7 @@ def fit_force_curve(press_counts: Sequence[np.ndarray], press_gains: Sequence[np
     full_scale = assumed.full_scale if full_scale is None else int(full_scale)
     known = np.asarray(known_n, dtype=np.float64)
     target = np.asarray(sensed_n, dtype=np.float64)
-    n = len(press_counts)
-    if n < MIN_PRESSES:
-        raise ValueError(f'{n} press{"es" if n != 1 else ""} of known force; the force curve '
-                         f'needs at least {MIN_PRESSES}')
-    if not (np.isfinite(known).all() and (known > 0).all()):
-        raise ValueError('every known force must be a positive number of newtons')
-    if known.max() < MIN_FORCE_SPAN * known.min():
-        raise ValueError(f'the presses span only {known.min():.2f} to {known.max():.2f} N; '
-                         f'press over a range, the largest at least {MIN_FORCE_SPAN:g} times '
-                         'the smallest')
+    check_known_forces(known)
     presses = _presses(press_counts, press_gains, assumed)
     empty = [k for k, p in enumerate(presses) if p.counts.size == 0]
     if empty:

@@ -29,7 +29,7 @@ import numpy as np
 
 from .calibration import (calibrate_from_shifts, Calibration, compliance_from_presses,
                           SkinIdentity)
-from .forcecurve import fit_force_curve
+from .forcecurve import check_known_forces, fit_force_curve
 from .gains import gains_from_force_sums, limits_note
 from .presses import PressSegmenter
 
@@ -110,6 +110,16 @@ class CalibrationSession:
             raise CalibrationRefused('every alpha must be in [0, pi/2) radians')
         if kind == 'force' and forces.size == 0:
             raise CalibrationRefused('a force calibration needs the known force of each press')
+        # What a fit would refuse after every press was made is refused before the first.
+        if kind == 'force':
+            try:
+                check_known_forces(forces)
+            except ValueError as err:
+                raise CalibrationRefused(str(err)) from None
+        if kind == 'compliance' and 0 < max(forces.size, int(presses)) < MIN_COMPLIANCE_PRESSES:
+            n = max(forces.size, int(presses))
+            raise CalibrationRefused(f'{n} tilted press{"es" if n != 1 else ""} asked for; the '
+                                     f'compliance needs at least {MIN_COMPLIANCE_PRESSES}')
         if kind == 'compliance' and alphas.size != forces.size:
             raise CalibrationRefused(f'{forces.size} forces but {alphas.size} alphas; give one '
                                      'alpha per force (or neither, with a reference wrench)')

@@ -111,19 +111,17 @@ def test_compliance_from_a_reference_wrench_fed_with_the_scans():
         SKIN.compliance_m_per_n, rel=0.15)
 
 
-@pytest.mark.parametrize('forces, message', [
-    ([10.0, 11.0, 12.0, 10.5, 11.5, 12.5], 'span only'),
-    ([5.0, 10.0, 20.0], 'needs at least 6'),
-])
-def test_a_refused_force_session_leaves_the_calibration_in_force(forces, message):
+def test_a_refused_force_session_leaves_the_calibration_in_force():
     est, rng = tared(4)
     previous = Calibration(x_p_m=1e-4, compliance_m_per_n=1e-3, presses=3)
     est = est.with_calibration(previous)
     probe = render(SKIN, [Press(0.04, 0.04, 20.0, radius_m=0.004)], rng)
     maps = est.conditioner.condition(*probe)
-    session = CalibrationSession(est, 'force', forces_n=forces)
-    feed(session, est, rng, [Press(0.04, 0.04, f, radius_m=0.004) for f in forces])
-    with pytest.raises(CalibrationRefused, match=message):
+    known = [5.0, 10.0, 20.0, 30.0, 45.0, 60.0]
+    session = CalibrationSession(est, 'force', forces_n=known)
+    # The presses made in the reverse order of the forces given: no curve fits them.
+    feed(session, est, rng, [Press(0.04, 0.04, f, radius_m=0.004) for f in known[::-1]])
+    with pytest.raises(CalibrationRefused, match='disagree with one curve'):
         session.finish()
     assert est.calibration is previous
     np.testing.assert_array_equal(est.conditioner.condition(*probe), maps)
@@ -139,3 +137,15 @@ def test_a_refused_force_session_leaves_the_calibration_in_force(forces, message
 def test_inconsistent_requests_are_refused_at_once(kind, args, message):
     with pytest.raises(CalibrationRefused, match=message):
         CalibrationSession(ContactEstimator(), kind, presses=3, **args)
+
+
+@pytest.mark.parametrize('kind, args, message', [
+    ('force', {'forces_n': [5.0, 10.0]}, '2 presses of known force; the force curve needs at '
+                                         'least 6'),
+    ('force', {'forces_n': [10.0, 12.0, 14.0, 16.0, 18.0, 20.0]}, 'span only 10.00 to 20.00 N'),
+    ('compliance', {'forces_n': [5.0, 6.0], 'alphas_rad': [0.3, 0.4]}, 'needs at least 3'),
+    ('compliance', {'presses': 2}, '2 tilted presses asked for'),
+])
+def test_requests_no_presses_could_satisfy_are_refused_before_any_press(kind, args, message):
+    with pytest.raises(CalibrationRefused, match=message):
+        CalibrationSession(ContactEstimator(), kind, **args)
