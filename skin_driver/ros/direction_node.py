@@ -5,8 +5,9 @@ Subscribes to frame (skin_msgs/SkinFrame). Publishes contacts (TactileContactArr
 empty when nothing touches), contact (the strongest TactileContact, when there is one) and wrench
 (its force as geometry_msgs/WrenchStamped; zero when nothing touches, so a controller sees the
 release). For rviz, at most viz_rate times a second: top/heatmap and bottom/heatmap (rgb8) and
-markers (visualization_msgs/MarkerArray). Services: ~/calibrate (skin_msgs/srv/Calibrate) and
-~/tare (std_srvs/srv/Trigger). Diagnostics on /diagnostics.
+markers (visualization_msgs/MarkerArray). Actions: ~/calibrate, ~/calibrate_force,
+~/calibrate_compliance, ~/calibrate_gains (skin_msgs/action). Services: ~/tare and
+~/reset_calibration (std_srvs/srv/Trigger). Diagnostics on /diagnostics.
 
 The same node runs inside the driver's process when the driver is fused (parameter fused): it
 then has no subscription, and the driver's serial reader thread hands it every scan directly.

@@ -5,9 +5,9 @@ Starts the direction node and the serial driver, then the simulated skin on a ps
 playing the seed paper's experiment (normal presses, then alpha = 45 deg at the eight azimuths) on
 a skin whose FSR curve and compliance are not the driver's assumed ones. It tares, calibrates
 (x_p, y_p), the force curve (presses of known force) and the compliance (presses of known tilted
-load) through the services, shows what the skin feels, and ends with Table 1 of the paper next
-to the same table for this driver's estimator and the paper's method, measured on the same
-scans, and the force and alpha errors. Ctrl-C stops it; every process it started is stopped
+load) through the calibration actions, shows what the skin feels, and ends with Table 1 of the
+paper next to the same table for this driver's estimator and the paper's method, measured on the
+same scans, and the force and alpha errors. Ctrl-C stops it; every process it started is stopped
 with it.
 """
 
@@ -20,6 +20,7 @@ import tempfile
 import time
 
 import numpy as np
+from rclpy.action import ActionClient
 from rclpy.executors import ExternalShutdownException
 from rclpy.node import Node
 from skin_driver.core.estimation.calibration import Calibration
@@ -31,11 +32,11 @@ from skin_driver.ros import conversions
 from skin_driver.tools.evaluate.scoring import summarise
 from skin_driver.tools.evaluate.tables import format_table
 from skin_driver.tools.harness import (
-    call_service, ros_args, ros_session, start_nodes, start_sim, stop, wait_for, write_params,
-    write_scene)
+    call_service, ros_args, ros_session, send_goal, start_nodes, start_sim, stop, wait_for,
+    write_params, write_scene)
 from skin_driver.tools.probe import Probe
+from skin_msgs.action import Calibrate, CalibrateCompliance, CalibrateForce
 from skin_msgs.msg import SkinFrame, TactileContactArray
-from skin_msgs.srv import Calibrate, CalibrateCompliance, CalibrateForce
 from std_srvs.srv import Trigger
 import yaml
 
@@ -87,11 +88,11 @@ class DemoMonitor:
         self.status = 'waiting for the skin'
         self.probe = Probe(node, on_frame=self._on_frame, on_contacts=self._on_contacts)
         self.tare = node.create_client(Trigger, 'skin_direction/tare')
-        self.calibrate = node.create_client(Calibrate, 'skin_direction/calibrate')
-        self.calibrate_force = node.create_client(CalibrateForce,
-                                                  'skin_direction/calibrate_force')
-        self.calibrate_compliance = node.create_client(CalibrateCompliance,
-                                                       'skin_direction/calibrate_compliance')
+        self.calibrate = ActionClient(node, Calibrate, 'skin_direction/calibrate')
+        self.calibrate_force = ActionClient(node, CalibrateForce,
+                                            'skin_direction/calibrate_force')
+        self.calibrate_compliance = ActionClient(node, CalibrateCompliance,
+                                                 'skin_direction/calibrate_compliance')
         self._last_draw = 0.0
 
     def truth(self, t: float):
@@ -187,7 +188,7 @@ class DemoMonitor:
 
 
 def _step(executor, monitor, client, request, status: str, label: str = None):
-    """Call one calibration service before the presses labelled ``label``; return its answer."""
+    """Send one calibration goal before the presses labelled ``label``; return its result."""
     if label is not None:
         # In the middle of the quiet gap before them: the presses of the step before must not
         # count for this one.
@@ -198,24 +199,30 @@ def _step(executor, monitor, client, request, status: str, label: str = None):
         wait_for(executor, lambda: monitor.now() >= start_s, 120.0,
                  f'the scene to reach {start_s:.1f} s')
     monitor.status = status
-    response = call_service(executor, client, request, 120.0)
+
+    def on_press(feedback):
+        monitor.status = (f'{status} ({feedback.presses_done}/{feedback.presses_wanted}, last '
+                          f'{feedback.last_force:.1f} N)')
+    _, response = send_goal(executor, client, request, 120.0, on_press)
+    if response is None:
+        raise RuntimeError(f'{status.split(":")[0]}: the goal was rejected')
     if not response.success:
         raise RuntimeError(f'{status.split(":")[0]} failed: {response.message}')
     return response
 
 
 def calibrate(executor, monitor, path: str) -> None:
-    """Calibrate the offset, the force curve and the compliance through the services."""
+    """Calibrate the offset, the force curve and the compliance through the actions."""
     scene = monitor.scene
     timeout = 60.0
     normal = len(scene.labelled('offset'))
     offset = _step(executor, monitor, monitor.calibrate,
-                   Calibrate.Request(presses=normal - 1, timeout=timeout),
+                   Calibrate.Goal(presses=normal - 1, timeout=timeout),
                    f'calibrating (x_p, y_p): the scene makes {normal} normal presses')
     print(f'calibrated (x_p {offset.x_p * 1e3:.2f} mm, y_p {offset.y_p * 1e3:.2f} mm)')
     forces = [p.force_n for p in scene.labelled('force')]
     force = _step(executor, monitor, monitor.calibrate_force,
-                  CalibrateForce.Request(forces=forces, timeout=timeout),
+                  CalibrateForce.Goal(forces=forces, timeout=timeout),
                   f'calibrating the force curve: presses of known force '
                   f'{", ".join(f"{f:g}" for f in forces)} N', 'force')
     print('force calibrated from {} presses; fitted/known: {}'.format(
@@ -223,9 +230,9 @@ def calibrate(executor, monitor, path: str) -> None:
     tilted = scene.labelled('compliance')
     compliance = _step(
         executor, monitor, monitor.calibrate_compliance,
-        CalibrateCompliance.Request(forces=[p.force_n for p in tilted],
-                                    alphas=[math.radians(p.alpha_deg) for p in tilted],
-                                    timeout=timeout),
+        CalibrateCompliance.Goal(forces=[p.force_n for p in tilted],
+                                 alphas=[math.radians(p.alpha_deg) for p in tilted],
+                                 timeout=timeout),
         'calibrating the compliance: presses of known tilted load', 'compliance')
     print(f'compliance calibrated: {compliance.compliance:.3e} m/N '
           f'(the simulated skin has {scene.model.compliance_m_per_n:.3e})')

@@ -14,7 +14,7 @@ import sys
 import textwrap
 import time
 
-from pipeline import call, overrides, pipeline, scene
+from pipeline import call, overrides, pipeline, scene, send_goal
 import pytest
 from rclpy.parameter import Parameter
 from rosutil import ros_context
@@ -22,7 +22,7 @@ from skin_driver.core.estimation import calibration as calib
 from skin_driver.ros.direction_node import DirectionNode
 from skin_driver.ros.driver_node import SkinDriverNode
 from skin_driver.ros.params import ParameterError
-from skin_msgs.srv import Calibrate
+from skin_msgs.action import Calibrate
 from std_srvs.srv import Trigger
 
 NODES = {'driver': SkinDriverNode, 'direction': DirectionNode}
@@ -132,8 +132,8 @@ def test_calibrate_refuses_a_huge_timeout_and_tare_refuses_without_frames(tmp_pa
             {'calibration_file': str(tmp_path / 'cal.yaml')}))
         executor.add_node(node)
         for timeout in (1e9, math.inf):
-            result = call(executor, node, Calibrate, '/skin_direction/calibrate',
-                          Calibrate.Request(presses=2, timeout=timeout))
+            result = send_goal(executor, node, Calibrate, '/skin_direction/calibrate',
+                               Calibrate.Goal(presses=2, timeout=timeout))[1]
             assert not result.success and 'is not in (0, 3600]' in result.message
         result = call(executor, node, Trigger, '/skin_direction/tare', Trigger.Request())
         assert not result.success and 'only 0 of 20 scans' in result.message
@@ -149,8 +149,8 @@ def test_calibrate_refuses_a_nan_or_negative_timeout(tmp_path, timeout):
             {'calibration_file': str(tmp_path / 'cal.yaml'), 'calibration.timeout': 0.3}))
         executor.add_node(node)
         try:
-            result = call(executor, node, Calibrate, '/skin_direction/calibrate',
-                          Calibrate.Request(presses=2, timeout=timeout))
+            result = send_goal(executor, node, Calibrate, '/skin_direction/calibrate',
+                               Calibrate.Goal(presses=2, timeout=timeout))[1]
             assert not result.success and 'timeout' in result.message
             assert 'timed out' not in result.message  # refused, not waited for
         finally:
@@ -164,8 +164,8 @@ def test_calibrate_refuses_absurdly_many_presses(tmp_path):
             {'calibration_file': str(tmp_path / 'cal.yaml')}))
         executor.add_node(node)
         try:
-            result = call(executor, node, Calibrate, '/skin_direction/calibrate',
-                          Calibrate.Request(presses=2 ** 32 - 1, timeout=0.3))
+            result = send_goal(executor, node, Calibrate, '/skin_direction/calibrate',
+                               Calibrate.Goal(presses=2 ** 32 - 1, timeout=0.3))[1]
             assert not result.success and 'presses' in result.message
             assert 'timed out' not in result.message
         finally:
@@ -177,8 +177,8 @@ def test_calibrate_with_absurdly_many_presses_fails_clearly_and_keeps_the_file(t
     previous = calib.Calibration(x_p_m=0.0003, y_p_m=-0.0001, presses=5)
     previous.save_yaml(str(tmp_path / 'calibration.yaml'))
     with pipeline(tmp_path, scene([])) as (sim, _, direction, probe, executor):
-        result = call(executor, direction, Calibrate, '/skin_direction/calibrate',
-                      Calibrate.Request(presses=2 ** 32 - 1, timeout=0.3))
+        result = send_goal(executor, direction, Calibrate, '/skin_direction/calibrate',
+                           Calibrate.Goal(presses=2 ** 32 - 1, timeout=0.3))[1]
         assert not result.success
         assert 'presses 4294967295 is more than 1000' in result.message
         assert 'previous calibration stays in force' in result.message
@@ -197,8 +197,8 @@ def test_failed_write_of_a_new_calibration_keeps_the_previous_one(tmp_path):
     with pipeline(tmp_path, the_scene, direction={'calibration_file': str(path)}) as (
             sim, _, direction, __, executor):
         before = direction.host.estimator.calibration
-        result = call(executor, direction, Calibrate, '/skin_direction/calibrate',
-                      Calibrate.Request(presses=2, timeout=8.0))
+        result = send_goal(executor, direction, Calibrate, '/skin_direction/calibrate',
+                           Calibrate.Goal(presses=2, timeout=8.0))[1]
         assert not result.success, result.message
         assert 'previous calibration stays in force' in result.message
         assert direction.host.estimator.calibration == before

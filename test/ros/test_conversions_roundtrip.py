@@ -1,16 +1,19 @@
-"""Every skin_msgs message survives a publish/subscribe round trip; Calibrate answers a call."""
+"""Every skin_msgs message survives a publish/subscribe round trip; Calibrate answers a goal."""
 
 import math
 
+from action_msgs.msg import GoalStatus
 from geometry_msgs.msg import Point, Vector3, Wrench
 import numpy as np
 import pytest
+from pipeline import send_goal
 import rclpy
+from rclpy.action import ActionServer
 from rclpy.qos import qos_profile_sensor_data
 from rosutil import ros_context, spin_until
 from skin_driver.ros.conversions import make_header, skin_frame_layers, skin_frame_to_msg
 from skin_msgs.msg import SkinFrame, TactileContact, TactileContactArray
-from skin_msgs.srv import Calibrate
+from skin_msgs.action import Calibrate
 
 pytestmark = pytest.mark.ros
 
@@ -57,24 +60,32 @@ def test_message_round_trip(msg_type, make):
             assert top.shape == (16, 16) and np.array_equal(bottom, top[::-1, ::-1])
 
 
-def test_calibrate_service_round_trip():
+def test_calibrate_action_round_trip():
     with ros_context() as (context, executor):
         node = rclpy.create_node('calibrate_probe', context=context)
         executor.add_node(node)
 
-        def answer(request, response):
-            response.success = request.presses == 3
-            response.message = f'recorded {request.presses} presses in {request.timeout:.1f} s'
-            response.x_p, response.y_p, response.std_x, response.std_y = 1e-4, -2e-4, 1e-5, 2e-5
-            response.presses_used = request.presses
-            return response
+        def execute(goal_handle):
+            goal = goal_handle.request
+            goal_handle.publish_feedback(Calibrate.Feedback(
+                presses_done=1, presses_wanted=goal.presses, last_force=9.5,
+                last_shift_x=1e-4, last_shift_y=-2e-4, note='press 1/3 recorded'))
+            goal_handle.succeed()
+            return Calibrate.Result(
+                success=goal.presses == 3, presses_used=goal.presses,
+                message=f'recorded {goal.presses} presses in {goal.timeout:.1f} s',
+                x_p=1e-4, y_p=-2e-4, std_x=1e-5, std_y=2e-5)
 
-        node.create_service(Calibrate, 'calibrate', answer)
-        client = node.create_client(Calibrate, 'calibrate')
-        assert client.wait_for_service(timeout_sec=5.0)
-        future = client.call_async(Calibrate.Request(presses=3, timeout=7.5))
-        assert spin_until(executor, future.done)
-        result = future.result()
+        server = ActionServer(node, Calibrate, 'calibrate', execute)
+        feedback = []
+        status, result = send_goal(executor, node, Calibrate, 'calibrate',
+                                   Calibrate.Goal(presses=3, timeout=7.5),
+                                   feedback=feedback.append)
+        assert status == GoalStatus.STATUS_SUCCEEDED
         assert result.success and result.presses_used == 3
         assert result.message == 'recorded 3 presses in 7.5 s'
         assert (result.x_p, result.y_p) == (1e-4, -2e-4)
+        assert [(f.presses_done, f.presses_wanted, f.note) for f in feedback] == [
+            (1, 3, 'press 1/3 recorded')]
+        server.destroy()
+        node.destroy_node()

@@ -5,7 +5,7 @@ import os
 
 from diagnostic_msgs.msg import DiagnosticStatus
 import numpy as np
-from pipeline import call, overrides, pipeline, scene
+from pipeline import call, overrides, pipeline, scene, send_goal
 import pytest
 import rclpy
 from rclpy.lifecycle import TransitionCallbackReturn
@@ -18,7 +18,7 @@ from skin_driver.ros.driver_node import SkinDriverNode
 from skin_driver.ros.params import ParameterError
 from skin_driver.tools.harness import spawn, stop
 from skin_driver.tools.probe import Probe
-from skin_msgs.srv import Calibrate
+from skin_msgs.action import Calibrate
 from std_srvs.srv import Trigger
 
 pytestmark = pytest.mark.ros
@@ -113,8 +113,8 @@ def test_calibrate_records_normal_presses_and_the_file_is_loaded_at_start_up(tmp
     offset = (0.001, -0.0005)
     the_scene = scene(NORMAL_PRESSES, misalignment_m=list(offset))
     with pipeline(tmp_path, the_scene, fused=fused) as (sim, _, direction, probe, executor):
-        result = call(executor, direction, Calibrate, '/skin_direction/calibrate',
-                      Calibrate.Request(presses=3, timeout=8.0))
+        result = send_goal(executor, direction, Calibrate, '/skin_direction/calibrate',
+                           Calibrate.Goal(presses=3, timeout=8.0))[1]
         assert result.success, result.message
         assert result.presses_used == 3
         assert result.x_p == pytest.approx(offset[0], abs=0.0004)
@@ -135,8 +135,8 @@ def test_calibrate_times_out_without_presses_and_keeps_the_previous_calibration(
                                  presses=4)
     previous.save_yaml(str(tmp_path / 'calibration.yaml'))
     with pipeline(tmp_path, scene([])) as (sim, _, direction, probe, executor):
-        result = call(executor, direction, Calibrate, '/skin_direction/calibrate',
-                      Calibrate.Request(presses=2, timeout=0.5))
+        result = send_goal(executor, direction, Calibrate, '/skin_direction/calibrate',
+                           Calibrate.Goal(presses=2, timeout=0.5))[1]
         assert not result.success
         assert 'timed out' in result.message and 'previous calibration' in result.message
         assert (result.x_p, result.y_p) == (0.0002, 0.0001)
@@ -147,8 +147,8 @@ def test_calibrate_times_out_without_presses_and_keeps_the_previous_calibration(
 def test_calibrate_ignores_tilted_presses(tmp_path):
     tilted = [{'time_s': 0.2 + 1.2 * i, 'alpha_deg': 45.0, 'beta_deg': 0.0} for i in range(3)]
     with pipeline(tmp_path, scene(tilted)) as (sim, _, direction, probe, executor):
-        result = call(executor, direction, Calibrate, '/skin_direction/calibrate',
-                      Calibrate.Request(presses=2, timeout=3.5))
+        result = send_goal(executor, direction, Calibrate, '/skin_direction/calibrate',
+                           Calibrate.Goal(presses=2, timeout=3.5))[1]
     assert not result.success
     assert 'did not look normal' in result.message
     assert not (tmp_path / 'calibration.yaml').exists()
@@ -160,8 +160,8 @@ def test_calibrate_refuses_too_much_spread(tmp_path):
     spots = [dict(p, x_m=0.03 + 0.0011 * i) for i, p in enumerate(NORMAL_PRESSES)]
     with pipeline(tmp_path, scene(spots),
                   direction={'calibration.max_std': 1e-6}) as (sim, _, direction, __, executor):
-        result = call(executor, direction, Calibrate, '/skin_direction/calibrate',
-                      Calibrate.Request(presses=3, timeout=8.0))
+        result = send_goal(executor, direction, Calibrate, '/skin_direction/calibrate',
+                           Calibrate.Goal(presses=3, timeout=8.0))[1]
     assert not result.success
     assert 'spread' in result.message and 'previous calibration' in result.message
     assert not (tmp_path / 'calibration.yaml').exists()
