@@ -5,15 +5,15 @@ import math
 from action_msgs.msg import GoalStatus
 from geometry_msgs.msg import Point, Vector3, Wrench
 import numpy as np
-import pytest
 from pipeline import send_goal
+import pytest
 import rclpy
 from rclpy.action import ActionServer
 from rclpy.qos import qos_profile_sensor_data
 from rosutil import ros_context, spin_until
 from skin_driver.ros.conversions import make_header, skin_frame_layers, skin_frame_to_msg
-from skin_msgs.msg import SkinFrame, TactileContact, TactileContactArray
 from skin_msgs.action import Calibrate
+from skin_msgs.msg import SkinFrame, TactileContact, TactileContactArray
 
 pytestmark = pytest.mark.ros
 

@@ -42,7 +42,7 @@ def test_skin_scene_json_and_contacts_csv(tmp_path, capsys):
 def test_list_skins_names_every_skin(capsys):
     assert cli.main(['--list-skins']) == 0
     listed = [line.split()[0] for line in capsys.readouterr().out.splitlines()]
-    assert listed == skin_names() + ['held_out:N']
+    assert listed == skin_names() + ['held_out:N', 'NAME@N']
     with pytest.raises(SystemExit):
         cli.main(['--skin', 'no_such_skin'])
     assert 'the family has default' in capsys.readouterr().err

@@ -53,7 +53,8 @@ _PEAK_QUANTILES = (0.0, 0.5, 1.0)
 _POOLED_QUANTILES = (0.05, 0.1, 0.2, 0.35, 0.5, 0.75, 0.9)
 FLAT_SLOPE = 1e-6
 _GRID = 129
-_KEYS = ('counts', 'force_n', 'censor_counts', 'spread_taxels')
+_KEYS = ('counts', 'force_n', 'censor_counts', 'spread_taxels', 'bump_power')
+_POWERS = (2.0, 3.0, 4.0, 6.0)
 
 
 @dataclass(frozen=True)
@@ -62,13 +63,15 @@ class ForceCurve:
     Sensed taxel force (N) at the knots (counts above baseline): from (0, 0), never falling.
 
     ``censor_counts`` > 0: taxels reading that many counts or more saturated; their force is
-    filled in by a bump of ``spread_taxels`` (:func:`imprint.censored_force`). 0: none.
+    filled in by a bump of ``spread_taxels`` and ``bump_power`` (:func:`imprint.censored_force`).
+    0: none.
     """
 
     counts: tuple
     force_n: tuple
     censor_counts: float = 0.0
     spread_taxels: float = 0.0
+    bump_power: float = 2.0
 
     def __post_init__(self):
         """Reject curves that fall or do not start at (0, 0), and a censoring without bump."""
@@ -88,12 +91,15 @@ class ForceCurve:
             v = getattr(self, name)
             if isinstance(v, bool) or not (np.isfinite(v) and v >= 0):
                 raise ValueError(f'force curve {name} must be a non-negative number, got {v!r}')
+        if not (isinstance(self.bump_power, (int, float)) and 1.0 <= self.bump_power <= 16.0):
+            raise ValueError(f'force curve bump_power must be in [1, 16], got {self.bump_power!r}')
         if (self.censor_counts > 0) != (self.spread_taxels > 0):
             raise ValueError('a censored force curve needs both censor_counts and spread_taxels')
         object.__setattr__(self, 'counts', tuple(float(v) for v in c))
         object.__setattr__(self, 'force_n', tuple(float(v) for v in f))
         object.__setattr__(self, 'censor_counts', float(self.censor_counts))
         object.__setattr__(self, 'spread_taxels', float(self.spread_taxels))
+        object.__setattr__(self, 'bump_power', float(self.bump_power))
 
     def counts_to_force(self, counts) -> np.ndarray:
         """Return the sensed force of ``counts`` above baseline; the last slope goes on."""
@@ -105,13 +111,15 @@ class ForceCurve:
 
     def imprint_force(self, counts: np.ndarray, force: np.ndarray) -> float:
         """Return one imprint's summed force (2-D maps of counts and taxel forces), censored."""
-        return censored_force(counts, force, self.censor_counts, self.spread_taxels)
+        return censored_force(counts, force, self.censor_counts, self.spread_taxels,
+                              self.bump_power)
 
     def to_dict(self) -> dict:
         """Return the knots (and any censoring) as plain values (for YAML)."""
         out = {'counts': list(self.counts), 'force_n': list(self.force_n)}
         if self.censor_counts:
-            out.update(censor_counts=self.censor_counts, spread_taxels=self.spread_taxels)
+            out.update(censor_counts=self.censor_counts, spread_taxels=self.spread_taxels,
+                       bump_power=self.bump_power)
         return out
 
     @classmethod
@@ -119,13 +127,13 @@ class ForceCurve:
         """Build a curve from :meth:`to_dict` output."""
         if not isinstance(doc, dict) or not {'counts', 'force_n'} <= set(doc) <= set(_KEYS):
             raise ValueError('a force curve is a mapping with counts and force_n lists '
-                             '(and censor_counts, spread_taxels)')
+                             '(and censor_counts, spread_taxels, bump_power)')
         for key in ('counts', 'force_n'):
             values = doc[key]
             if not isinstance(values, list) or not all(
                     isinstance(v, (int, float)) and not isinstance(v, bool) for v in values):
                 raise ValueError(f'force curve {key} must be a list of numbers')
-        extra = {k: doc[k] for k in ('censor_counts', 'spread_taxels') if k in doc}
+        extra = {k: doc[k] for k in _KEYS[2:] if k in doc}
         for k, v in extra.items():
             if isinstance(v, bool) or not isinstance(v, (int, float)):
                 raise ValueError(f'force curve {k} must be a number, got {v!r}')
@@ -189,8 +197,8 @@ class _Press:
     assumed_n: np.ndarray
     map_counts: np.ndarray
 
-    def bump(self, spread: float) -> np.ndarray:
-        return bump(self.map_counts, spread)[self.map_counts > 0]
+    def bump(self, shape: tuple) -> np.ndarray:
+        return bump(self.map_counts, *shape)[self.map_counts > 0]
 
 
 def _presses(press_counts, press_gains, assumed: FsrModel) -> list:
@@ -206,7 +214,7 @@ def _presses(press_counts, press_gains, assumed: FsrModel) -> list:
     return out
 
 
-def _row(press: _Press, knots: np.ndarray, censor: float, spread: float,
+def _row(press: _Press, knots: np.ndarray, censor: float, shape: tuple,
          slopes: np.ndarray = None) -> np.ndarray:
     """
     Return what each piece's slope adds to the press's sensed sum (linear in the slopes).
@@ -219,7 +227,7 @@ def _row(press: _Press, knots: np.ndarray, censor: float, spread: float,
     if not censored.any():
         return taxels.sum(axis=0)
     free = ~censored
-    phi = press.bump(spread)
+    phi = press.bump(shape)
     weight = float(phi[free] @ phi[free])
     if not weight > 0:
         return taxels.sum(axis=0)
@@ -246,7 +254,7 @@ def _knots(presses: list, censor: float, n: int) -> np.ndarray:
     return np.concatenate(([0.0], inner))
 
 
-def _fit(presses: list, target: np.ndarray, censor: float, spread: float):
+def _fit(presses: list, target: np.ndarray, censor: float, shape: tuple):
     """Return (knots, slopes, fitted sensed sums) of one censoring choice, or None."""
     knots = _knots(presses, censor, len(presses))
     # Relative errors: a light press counts as much as a heavy one.
@@ -254,7 +262,7 @@ def _fit(presses: list, target: np.ndarray, censor: float, spread: float):
     while True:
         slopes = None
         for _ in range(3):  # the censored taxels that take the bump depend on the slopes
-            design = np.stack([_row(p, knots, censor, spread, slopes) for p in presses])
+            design = np.stack([_row(p, knots, censor, shape, slopes) for p in presses])
             # Scale the columns so that NNLS weighs every piece alike.
             scale = np.maximum(design.max(axis=0), 1e-12)
             slopes = _nnls(design / scale * row_weight[:, None], target * row_weight) / scale
@@ -268,22 +276,23 @@ def _fit(presses: list, target: np.ndarray, censor: float, spread: float):
     # A flat piece (an FSR that barely conducts reads counts but little force) keeps a slope
     # too small to matter, so that the curve still rises strictly and can be stored.
     slopes = np.maximum(slopes, FLAT_SLOPE * slopes.max())
-    design = np.stack([_row(p, knots, censor, spread, slopes) for p in presses])
+    design = np.stack([_row(p, knots, censor, shape, slopes) for p in presses])
     return knots, slopes, design @ slopes
 
 
 def _censoring_choices(presses: list, full_scale: int, shape: tuple) -> list:
     """
-    Return (censor counts, bump spread) choices: none, and a ceiling the presses pile up at.
+    Return (censor counts, (bump spread, power)) choices: none, and a ceiling presses pile up at.
 
     The ceiling is the highest count read less a band for noise; it is a saturation only when
     two or more presses reach it (one press's peak is just the highest reading).
     """
-    choices = [(0.0, 0.0)]
+    choices = [(0.0, (0.0, 2.0))]
     ceiling = max(float(p.counts.max()) for p in presses) - CENSOR_BAND * full_scale
     if sum(bool((p.counts >= ceiling).any()) for p in presses) >= 2:
         widest = max(1.0, 0.25 * max(shape))
-        choices += [(ceiling, float(s)) for s in np.geomspace(0.3, widest, _SPREADS)]
+        choices += [(ceiling, (float(s), p)) for p in _POWERS
+                    for s in np.geomspace(0.3, widest, _SPREADS)]
     return choices
 
 
@@ -327,8 +336,8 @@ def fit_force_curve(press_counts: Sequence[np.ndarray], press_gains: Sequence[np
         raise ValueError(f'press {empty[0] + 1} ({known[empty[0]]:.2f} N) loaded no taxel')
     shape = presses[0].map_counts.shape
     best = None
-    for censor, spread in _censoring_choices(presses, full_scale, shape):
-        fit = _fit(presses, target, censor, spread)
+    for censor, bump_shape in _censoring_choices(presses, full_scale, shape):
+        fit = _fit(presses, target, censor, bump_shape)
         if fit is None:
             continue
         misfit = float(np.sqrt(np.mean((fit[2] / target - 1.0) ** 2)))
@@ -336,10 +345,10 @@ def fit_force_curve(press_counts: Sequence[np.ndarray], press_gains: Sequence[np
         if censor:
             misfit /= CENSOR_GAIN
         if best is None or misfit < best[0]:
-            best = (misfit, censor, spread, fit)
+            best = (misfit, censor, bump_shape, fit)
     if best is None:
         raise ValueError('no increasing force curve fits the presses; check the known forces')
-    _, censor, spread, (knots, slopes, fitted_sensed) = best
+    _, censor, bump_shape, (knots, slopes, fitted_sensed) = best
     fitted = fitted_sensed * known / target
     residuals = fitted - known
     worst = int(np.argmax(np.abs(residuals) / known))
@@ -352,7 +361,8 @@ def fit_force_curve(press_counts: Sequence[np.ndarray], press_gains: Sequence[np
     top = max(float(p.counts.max()) for p in presses)
     grid = np.linspace(0.0, min(top, full_scale), _GRID)
     corrected = _basis(assumed.counts_to_force(grid, saturate=False), knots) @ slopes
-    curve = ForceCurve(tuple(grid), tuple(np.maximum.accumulate(corrected)), censor, spread)
+    curve = ForceCurve(tuple(grid), tuple(np.maximum.accumulate(corrected)), censor,
+                       *bump_shape)
     censored = sum(bool((p.counts >= censor).any()) for p in presses) if censor else 0
     return CurveFit(curve, tuple(float(v) for v in fitted),
                     tuple(float(v) for v in residuals), censored)

@@ -29,7 +29,7 @@ from skin_driver.core.estimation.dataset import load_dataset, save_dataset
 from skin_driver.core.estimation.pipeline import EstimatorConfig
 from skin_driver.core.estimation.shift import DEFAULT_METHOD, method_names
 from skin_driver.core.sim.experiments import add_calibration_frames, make_scene, SCENE_KINDS
-from skin_driver.core.sim.skins import family_skin, HELD_OUT, skin_names
+from skin_driver.core.sim.skins import family_skin, GRID, HELD_OUT, skin_names
 from skin_driver.ros.estimator_params import estimator_config, load_direction_parameters
 from skin_driver.tools.evaluate.scoring import evaluate
 from skin_driver.tools.evaluate.tables import format_table, json_safe, write_contacts
@@ -51,7 +51,8 @@ def _parser() -> argparse.ArgumentParser:
     parser.add_argument('--json', action='store_true', help='print one JSON object')
     parser.add_argument('--skin', metavar='NAME',
                         help='generate the data from this skin of the family (see --list-skins; '
-                             'held_out:N for one drawn at random, seed N)')
+                             'held_out:N for one drawn at random, seed N; NAME@N on an N x N '
+                             'grid over the same patch)')
     parser.add_argument('--scene', default='paper', choices=SCENE_KINDS,
                         help='scene kind rendered with --skin (default paper)')
     parser.add_argument('--size', type=int, default=None,
@@ -87,6 +88,7 @@ def main(argv=None) -> int:
         for name in skin_names():
             print(f'{name:12s} {family_skin(name).description}')
         print(f'{HELD_OUT + "N":12s} a skin drawn at random within these ranges (seed N)')
+        print(f'{"NAME" + GRID + "N":12s} skin NAME with N x N taxels over the same patch')
         return 0
     if args.list_methods:
         print('\n'.join(method_names()))

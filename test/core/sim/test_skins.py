@@ -205,3 +205,16 @@ def test_a_press_for_a_shift_shifts_the_layers_by_that_many_taxels_inside_the_sk
             shift_taxels * model.pitch_m, rel=1e-9)
         assert 0.015 <= press.x_m <= span - 0.015 and 0.015 <= press.y_m <= span - 0.015
         assert 5.0 - 1e-9 <= press.normal_force_n <= 15.0 + 1e-9
+
+
+def test_a_skin_on_a_finer_grid_covers_the_same_patch_with_the_same_film():
+    coarse = family_skin('saturating')
+    fine = family_skin('saturating@64')
+    assert (fine.model.rows, fine.model.cols) == (64, 64)
+    assert fine.model.pitch_m * 64 == pytest.approx(coarse.model.pitch_m * 16)
+    # A taxel a sixteenth the area saturates at a sixteenth the force: the same pressure.
+    assert fine.model.fsr.force_at_r_min_n == pytest.approx(
+        coarse.model.fsr.force_at_r_min_n / 16)
+    assert fine.force_range_n == coarse.force_range_n
+    with pytest.raises(ValueError, match='NAME@N'):
+        family_skin('saturating@x')

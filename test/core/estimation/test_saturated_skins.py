@@ -1,0 +1,26 @@
+"""Skins whose films saturate calibrate from presses of known force, at any grid size."""
+
+import numpy as np
+import pytest
+from skin_driver.core.estimation.recorded import prepared_estimator
+from skin_driver.core.sim.experiments import add_calibration_frames, make_scene
+from skin_driver.core.sim.physics import Press, render
+from skin_driver.core.sim.skins import family_skin
+
+
+@pytest.mark.parametrize('skin', ['saturating', 'saturating@64'])
+def test_a_saturating_skin_is_calibrated_and_reads_heavy_presses(skin):
+    # 3 N a taxel saturates this film (3/16 N on the 64 x 64 grid): the centre of every press
+    # over ~12 N reads the ceiling, yet 16 presses of 5-60 N make a calibration, not a refusal.
+    member = family_skin(skin)
+    rng = np.random.default_rng(3)
+    data = add_calibration_frames(make_scene('random', member, rng, 5), member.model, rng)
+    est, notes = prepared_estimator(data, 'poc')
+    force_note = next(n for n in notes if n.startswith('force'))
+    assert 'refused' not in force_note and 'filled in from their rims' in force_note
+    centre = 0.5 * (member.model.cols - 1) * member.model.pitch_m
+    for force in (15.0, 30.0, 50.0):
+        # The calibration's own indenter (4 mm), at a place it never pressed.
+        press = Press(centre + 0.0031, centre - 0.0047, force, radius_m=0.004)
+        contact = est.process(*render(member.model, [press], rng))[0]
+        assert contact.force_n == pytest.approx(force, rel=0.06)
