@@ -19,6 +19,17 @@ def listed(text: str, name: str) -> list:
             for found in re.findall(rf'{name} \[([^\]]*)\]', text)]
 
 
+def test_the_scene_header_lists_the_loads_of_its_labelled_presses():
+    # What the recipe tells a person to send is what the scene presses.
+    scene = load_scene('calibrate')
+    header = find_scene('calibrate').read_text()
+    force, tilted = scene.labelled('force'), scene.labelled('compliance')
+    assert listed(header, 'forces') == [[p.force_n for p in force], [p.force_n for p in tilted]]
+    assert listed(header, 'alphas')[0] == pytest.approx(
+        [math.radians(p.alpha_deg) for p in tilted], abs=1e-4)
+    assert len(scene.labelled('offset')) == 8 and len(scene.labelled('gains')) == 1
+
+
 def play(scene, est, session, start_s, end_s, rng):
     """Feed the session every scan from start_s to end_s, as the node does."""
     for t in np.arange(start_s, end_s, SCAN_S):
