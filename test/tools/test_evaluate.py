@@ -18,8 +18,8 @@ def test_table_and_json(tmp_path, capsys):
     save_dataset(path, make_seed_experiment(repeats=3, rng=np.random.default_rng(0)))
     assert cli.main([str(path), '--json']) == 0
     report = json.loads(capsys.readouterr().out)
-    assert set(report['methods']) == {'poc', 'seed'}
-    poc = report['methods']['poc']
+    assert set(report['methods']) == {'taxel_fit', 'seed'}
+    poc = report['methods']['taxel_fit']
     assert [r['beta_deg'] for r in poc['per_beta']] == [float(b) for b in range(0, 360, 45)]
     assert all(r['frames'] == 3 for r in poc['per_beta'])
     summary = poc['summary']

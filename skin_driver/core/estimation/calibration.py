@@ -2,7 +2,11 @@
 Skin calibration: layer offset, compliance, force curves and taxel gains, and their YAML file.
 
 ``(x_p, y_p)`` is the mean shift between the layers under presses along the normal (alpha = 0),
-the seed's calibration point; the azimuth is measured from it.
+the seed's calibration point; the azimuth is measured from it. When those presses span a range
+of normal forces and their shift follows the force measurably (a layer that shears under a
+normal load), the zero moves with it: ``zero_slope_m_per_n`` (x, y) per newton of normal force
+around ``zero_ref_n``, the presses' mean force (:func:`calibrate_zero`,
+:meth:`Calibration.zero_m`).
 
 The compliance (metres of layer shift per newton of tangential force) turns the shear shift into
 a tangential force and hence the polar angle. Calibrate it by pressing with known tilted forces
@@ -37,13 +41,14 @@ from .forcecurve import ForceCurve
 from .validate import check_map, check_number
 
 __all__ = ['Calibration', 'CalibrationMismatch', 'SkinIdentity', 'PARTS', 'calibrate_from_shifts',
-           'compliance_from_presses', 'utc_now']
+           'calibrate_zero', 'compliance_from_presses', 'utc_now']
 
 _FORMAT = 'skin_driver/calibration'
 _VERSION = 3
 _VERSIONS = (1, 2, 3)
 # The parts of a calibration, each made by its own session, and the fields each one sets.
-PARTS = {'offset': ('x_p_m', 'y_p_m', 'std_x_m', 'std_y_m', 'presses'),
+PARTS = {'offset': ('x_p_m', 'y_p_m', 'std_x_m', 'std_y_m', 'presses', 'zero_slope_m_per_n',
+                    'zero_ref_n'),
          'force': ('force_curves', 'force_presses'),
          'compliance': ('compliance_m_per_n', 'compliance_presses'),
          'gains': ('gains',)}
@@ -157,6 +162,8 @@ class Calibration:
     made_utc: str = ''
     skin: SkinIdentity = None
     part_utc: tuple = ('', '', '', '')
+    zero_slope_m_per_n: tuple = (0.0, 0.0)
+    zero_ref_n: float = 0.0
 
     def __post_init__(self):
         """Reject non-finite or negative values and malformed curves or gains."""
@@ -165,6 +172,11 @@ class Calibration:
         check_number(self.std_x_m, 'std_x_m', non_negative=True)
         check_number(self.std_y_m, 'std_y_m', non_negative=True)
         check_number(self.compliance_m_per_n, 'compliance_m_per_n', non_negative=True)
+        check_number(self.zero_ref_n, 'zero_ref_n', non_negative=True)
+        if len(self.zero_slope_m_per_n) != 2:
+            raise ValueError('zero_slope_m_per_n must be (x, y) metres per newton')
+        object.__setattr__(self, 'zero_slope_m_per_n', tuple(
+            check_number(float(v), 'zero_slope_m_per_n') for v in self.zero_slope_m_per_n))
         for name in _COUNTS:
             v = getattr(self, name)
             if isinstance(v, bool) or int(v) != v or v < 0:
@@ -179,6 +191,12 @@ class Calibration:
         object.__setattr__(self, 'part_utc', tuple(self.part_utc))
         object.__setattr__(self, 'force_curves', _curves(self.force_curves))
         object.__setattr__(self, 'gains', _gains(self.gains))
+
+    def zero_m(self, normal_force_n: float) -> tuple:
+        """Return the raw shift (x, y) of a normal press of this force: where beta is 0 from."""
+        load = normal_force_n - self.zero_ref_n
+        return (self.x_p_m + self.zero_slope_m_per_n[0] * load,
+                self.y_p_m + self.zero_slope_m_per_n[1] * load)
 
     def gain_maps(self):
         """Return the gains as (top, bottom) float arrays, or (None, None)."""
@@ -233,6 +251,8 @@ class Calibration:
         out['made_utc'] = self.made_utc
         out['made'] = dict(zip(PARTS, self.part_utc))
         out['skin'] = None if self.skin is None else asdict(self.skin)
+        out['zero_slope_m_per_n'] = [float(v) for v in self.zero_slope_m_per_n]
+        out['zero_ref_n'] = float(self.zero_ref_n)
         out['force_curves'] = (None if self.force_curves is None else
                                {layer: c.to_dict() for layer, c in
                                 zip(('top', 'bottom'), self.force_curves)})
@@ -284,6 +304,10 @@ class Calibration:
             values['part_utc'] = tuple(str(made.get(part) or '') for part in PARTS)
             if doc.get('skin') is not None:
                 values['skin'] = SkinIdentity.from_dict(doc['skin'])
+            if doc.get('zero_slope_m_per_n') is not None:
+                values['zero_slope_m_per_n'] = tuple(float(v)
+                                                     for v in doc['zero_slope_m_per_n'])
+                values['zero_ref_n'] = float(doc.get('zero_ref_n', 0.0))
             curves = doc.get('force_curves')
             if curves is not None:
                 values['force_curves'] = tuple(ForceCurve.from_dict(curves[layer])
@@ -328,6 +352,43 @@ def calibrate_from_shifts(shifts_m, max_std_m: float = 0.001,
                          'repeat the presses along the normal')
     return Calibration(float(mean[0]), float(mean[1]), float(std[0]), float(std[1]),
                        int(s.shape[0]), float(compliance_m_per_n))
+
+
+# A slope of the zero with the normal force is kept only when it stands out of its own noise
+# by this many standard errors; otherwise the zero is the plain mean.
+_SLOPE_SIGNIFICANCE = 3.0
+
+
+def calibrate_zero(shifts_m, normal_forces_n, max_std_m: float = 0.001) -> Calibration:
+    """
+    Return the calibration of the zero from normal presses: mean shift and, when measurable, slope.
+
+    ``shifts_m`` K x 2 raw shifts, ``normal_forces_n`` the K measured normal forces. On each axis
+    the shift is fitted as ``mean + slope * (F - mean F)``; a slope within
+    ``_SLOPE_SIGNIFICANCE`` standard errors of zero is dropped. ``std_x_m``, ``std_y_m`` are the
+    spreads about the fitted zero. Errors as :func:`calibrate_from_shifts`.
+    """
+    plain = calibrate_from_shifts(shifts_m, max_std_m)
+    s = np.asarray(shifts_m, dtype=np.float64).reshape(-1, 2)
+    f = np.asarray(normal_forces_n, dtype=np.float64).ravel()
+    if f.shape != (s.shape[0],) or not np.isfinite(f).all():
+        raise ValueError(f'need one finite normal force per shift, got {f.shape}')
+    ref = float(f.mean())
+    df = f - ref
+    spread = float(df @ df)
+    if s.shape[0] < 4 or spread <= 0:
+        return replace(plain, zero_ref_n=max(ref, 0.0))
+    slopes, stds = [], []
+    for axis in range(2):
+        d = s[:, axis] - s[:, axis].mean()
+        slope = float(d @ df) / spread
+        rest = d - slope * df
+        error = math.sqrt(float(rest @ rest) / (s.shape[0] - 2) / spread)
+        keep = abs(slope) > _SLOPE_SIGNIFICANCE * error
+        slopes.append(slope if keep else 0.0)
+        stds.append(float((rest if keep else d).std()))
+    return replace(plain, std_x_m=stds[0], std_y_m=stds[1], zero_slope_m_per_n=tuple(slopes),
+                   zero_ref_n=max(ref, 0.0))
 
 
 def compliance_from_presses(shifts_m, tangential_force_n, offset_m=(0.0, 0.0)) -> float:

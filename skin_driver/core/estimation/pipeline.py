@@ -131,6 +131,15 @@ def _axis_basis(shape: tuple) -> np.ndarray:
     return basis
 
 
+def _force_window(pair: LayerPair, maps: np.ndarray, force: np.ndarray) -> np.ndarray:
+    """Return the pair's window of the force maps, its share of each taxel as in its counts."""
+    r0, c0 = pair.origin
+    h, w = pair.maps.shape[1:]
+    counts = maps[:, r0:r0 + h, c0:c0 + w]
+    share = np.divide(pair.maps, counts, out=np.zeros_like(pair.maps), where=counts > 0)
+    return force[:, r0:r0 + h, c0:c0 + w] * share
+
+
 def _or_zero(v: float) -> float:
     return float(v) if math.isfinite(v) else 0.0
 
@@ -208,7 +217,13 @@ class ContactEstimator:
             whole = method.function(np.stack((t, b)).astype(np.float64))
         out = []
         for pair in pairs:
-            est = whole if whole is not None else method.function(pair.maps)
+            if whole is not None:
+                est = whole
+            elif method.linear:
+                est = method.function(np.concatenate((_force_window(pair, maps, force),
+                                                      pair.maps)))
+            else:
+                est = method.function(pair.maps)
             if not (math.isfinite(est.dx) and math.isfinite(est.dy)):
                 est = NO_SHIFT
             out.append((pair, est, self._sigma(pair, maps, noise, len(pairs) == 1)))
@@ -303,7 +318,8 @@ class ContactEstimator:
             if normal < cfg.min_contact_force_n:
                 continue
             raw_x, raw_y = est.dx * pitch, est.dy * pitch
-            sx, sy = raw_x - cal.x_p_m, raw_y - cal.y_p_m
+            zero_x, zero_y = cal.zero_m(normal)
+            sx, sy = raw_x - zero_x, raw_y - zero_y
             magnitude = math.hypot(sx, sy)
             snr = magnitude / (sigma * pitch) if sigma > 0 else math.inf
             method_conf = min(max(_or_zero(est.confidence), 0.0), 1.0)

@@ -47,12 +47,16 @@ def calibrate_from_frames(est: ContactEstimator, data: Dataset, frames: np.ndarr
     """
     frames = np.asarray(frames, dtype=int)
     normal = frames[data.alpha_deg[frames] == 0]
-    est, note = _session(est, data, normal, 'offset', max_std_m=math.inf)
-    notes = [note]
+    notes = []
     if full and data.force_n is not None:
+        # The force curves before the offset: the zero's slope with the normal force
+        # (calibration.calibrate_zero) is in the newtons they give.
         known = normal[data.force_n[normal] > 0]
-        est, note = _session(est, data, known, 'force', forces_n=data.force_n[known])
-        notes.append(note)
+        est, force_note = _session(est, data, known, 'force', forces_n=data.force_n[known])
+        notes.append(force_note)
+    est, note = _session(est, data, normal, 'offset', max_std_m=math.inf)
+    notes.insert(0, note)
+    if full and data.force_n is not None:
         tilted = frames[(data.alpha_deg[frames] > 0) & (data.force_n[frames] > 0)]
         est, note = _session(est, data, tilted, 'compliance', forces_n=data.force_n[tilted],
                              alphas_rad=np.radians(data.alpha_deg[tilted]))

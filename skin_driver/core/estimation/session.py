@@ -27,8 +27,7 @@ from typing import Optional, Sequence
 
 import numpy as np
 
-from .calibration import (calibrate_from_shifts, Calibration, compliance_from_presses,
-                          SkinIdentity)
+from .calibration import calibrate_zero, Calibration, compliance_from_presses, SkinIdentity
 from .forcecurve import check_known_forces, fit_force_curve
 from .gains import gains_from_force_sums, limits_note
 from .presses import PressSegmenter
@@ -159,8 +158,9 @@ class CalibrationSession:
         if contacts:
             c = contacts[0]
             payload = (top_counts, bottom_counts, wrench_n)
-            press = self._segmenter.add(c.force_n, (c.shift_m[0] + cal.x_p_m,
-                                                    c.shift_m[1] + cal.y_p_m), payload)
+            zero = cal.zero_m(c.force_n)
+            press = self._segmenter.add(c.force_n, (c.shift_m[0] + zero[0],
+                                                    c.shift_m[1] + zero[1]), payload)
         else:
             press = self._segmenter.add(0.0, None)
         if press is None:
@@ -181,7 +181,8 @@ class CalibrationSession:
         if not contacts:
             return PressRecord(0.0, (math.nan, math.nan), counts, wrench_n=wrench_n)
         c = contacts[0]
-        return PressRecord(c.force_n, (c.shift_m[0] + cal.x_p_m, c.shift_m[1] + cal.y_p_m),
+        zero = cal.zero_m(c.force_n)
+        return PressRecord(c.force_n, (c.shift_m[0] + zero[0], c.shift_m[1] + zero[1]),
                            counts, wrench_n=wrench_n)
 
     def add_press(self, record: PressRecord) -> str:
@@ -232,10 +233,13 @@ class CalibrationSession:
     # ---- one fit per kind --------------------------------------------------------------------
     def _fit_offset(self) -> Outcome:
         shifts = np.array([r.shift_m for r in self.accepted])
-        fit = calibrate_from_shifts(shifts, max_std_m=self.max_std_m)
+        forces = np.array([r.peak_force_n for r in self.accepted])
+        fit = calibrate_zero(shifts, forces, max_std_m=self.max_std_m)
         new = self._updated(x_p_m=fit.x_p_m, y_p_m=fit.y_p_m, std_x_m=fit.std_x_m,
-                            std_y_m=fit.std_y_m, presses=fit.presses)
-        residuals = tuple(float(math.hypot(x - fit.x_p_m, y - fit.y_p_m)) for x, y in shifts)
+                            std_y_m=fit.std_y_m, presses=fit.presses,
+                            zero_slope_m_per_n=fit.zero_slope_m_per_n, zero_ref_n=fit.zero_ref_n)
+        residuals = tuple(float(math.hypot(x - zx, y - zy)) for (x, y), (zx, zy) in
+                          zip(shifts, (fit.zero_m(f) for f in forces)))
         return Outcome(new, fit.presses, tuple(map(tuple, shifts.tolist())), residuals,
                        f'offset from {fit.presses} normal presses: x_p = {fit.x_p_m:.6f} m, '
                        f'y_p = {fit.y_p_m:.6f} m (std {fit.std_x_m:.6f}, {fit.std_y_m:.6f} m)')
@@ -290,13 +294,14 @@ class CalibrationSession:
                                      f'needs at least {MIN_COMPLIANCE_PRESSES}')
         tangential, _ = self._known_loads()
         previous = self.estimator.calibration
-        offset = (previous.x_p_m, previous.y_p_m)
-        shifts = np.array([r.shift_m for r in self.accepted])
-        compliance = compliance_from_presses(shifts, tangential, offset)
+        # Each press's shift from the zero at its own normal force.
+        shifts = np.array([np.subtract(r.shift_m, previous.zero_m(r.peak_force_n))
+                           for r in self.accepted])
+        compliance = compliance_from_presses(shifts, tangential)
         if not (math.isfinite(compliance) and compliance > 0):
             raise CalibrationRefused('the layer shift does not grow with the tangential force; '
                                      'press at alpha > 0 with a known load')
-        magnitude = np.hypot(shifts[:, 0] - offset[0], shifts[:, 1] - offset[1])
+        magnitude = np.hypot(shifts[:, 0], shifts[:, 1])
         residuals = magnitude - compliance * tangential
         new = self._updated(compliance_m_per_n=compliance, compliance_presses=n)
         return Outcome(new, n, tuple(float(v) for v in compliance * tangential),

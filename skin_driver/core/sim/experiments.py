@@ -91,9 +91,16 @@ def _tare(model: SkinModel, rng: np.random.Generator) -> tuple:
     return np.stack([t for t, _ in maps]), np.stack([b for _, b in maps])
 
 
-def _build(model: SkinModel, frames: list, rng: np.random.Generator) -> Dataset:
-    """Render frames (each a list of presses) into a dataset with per-press ground truth."""
+def _build(model: SkinModel, frames: list, rng: np.random.Generator,
+           truth_out: list = None) -> Dataset:
+    """
+    Render frames (each a list of presses) into a dataset with per-press ground truth.
+
+    ``truth_out``, when given, is extended by each frame's presses in the dataset's order.
+    """
     frames = [sorted(f, key=lambda p: -p.force_n) for f in frames]
+    if truth_out is not None:
+        truth_out.extend(frames)
     maps = [render(model, f, rng) for f in frames]
     tare_top, tare_bottom = _tare(model, rng)
     k = max(len(f) for f in frames)
@@ -155,19 +162,19 @@ def press_for_shift(model: SkinModel, shift_taxels: float, rng: np.random.Genera
 
 def make_seed_experiment(model: SkinModel = None, repeats: int = 20,
                          rng: np.random.Generator = None,
-                         force_n: float = PAPER_FORCE_N) -> Dataset:
+                         force_n: float = PAPER_FORCE_N, truth_out: list = None) -> Dataset:
     """Render the paper's protocol (:func:`paper_presses`) with the robot's repeatability."""
     model = _default_skin(model)
     rng = rng if rng is not None else np.random.default_rng(0)
     presses = paper_presses(model, force_n, repeats, rng=rng)
-    return _build(model, [[p] for p in presses], rng)
+    return _build(model, [[p] for p in presses], rng, truth_out)
 
 
 def make_random_experiment(model: SkinModel = None, frames: int = 400,
                            rng: np.random.Generator = None, force_range_n: tuple = (5.0, 15.0),
                            alpha_range_deg: tuple = ALPHA_RANGE_DEG,
                            diameter_range_m: tuple = DIAMETER_RANGE_M,
-                           border_m: float = 0.01) -> Dataset:
+                           border_m: float = 0.01, truth_out: list = None) -> Dataset:
     """Render single presses at random spots at least ``border_m`` inside the taxel span."""
     model = _default_skin(model)
     rng = rng if rng is not None else np.random.default_rng(0)
@@ -176,12 +183,13 @@ def make_random_experiment(model: SkinModel = None, frames: int = 400,
         x, y = _interior_spot(model, rng, border_m)
         out.append([_random_press(rng, x, y, force_range_n, alpha_range_deg, diameter_range_m,
                                   normal=i % NORMAL_EVERY == 0)])
-    return _build(model, out, rng)
+    return _build(model, out, rng, truth_out)
 
 
 def make_border_experiment(model: SkinModel = None, frames: int = 200,
                            rng: np.random.Generator = None,
-                           force_range_n: tuple = (5.0, 15.0)) -> Dataset:
+                           force_range_n: tuple = (5.0, 15.0), truth_out: list = None
+                           ) -> Dataset:
     """
     Render tilted presses centred from half a taxel outside to one taxel inside an edge.
 
@@ -206,12 +214,13 @@ def make_border_experiment(model: SkinModel = None, frames: int = 200,
         if edge != 0:
             y = depth[1] if edge == 1 or (edge == 3 and rng.random() < 0.5) else height - depth[1]
         out.append([_random_press(rng, x, y, force_range_n)])
-    return _build(model, out, rng)
+    return _build(model, out, rng, truth_out)
 
 
 def make_multi_experiment(model: SkinModel = None, frames: int = 200,
                           rng: np.random.Generator = None, force_range_n: tuple = (5.0, 15.0),
-                          separation_taxels: tuple = (2.0, 8.0)) -> Dataset:
+                          separation_taxels: tuple = (2.0, 8.0), truth_out: list = None
+                          ) -> Dataset:
     """
     Render two or three presses at once (one frame in three has three), 2..8 taxels apart.
 
@@ -247,18 +256,21 @@ def make_multi_experiment(model: SkinModel = None, frames: int = 200,
             continue
         out.append([_random_press(rng, x, y, force_range_n, normal=rng.random() < 0.2)
                     for x, y in spots])
-    return _build(model, out, rng)
+    return _build(model, out, rng, truth_out)
 
 
 SCENE_KINDS = ('paper', 'random', 'border', 'multi')
 _DEFAULT_SIZE = {'paper': 10, 'random': 300, 'border': 200, 'multi': 200}
 
 
-def make_scene(kind: str, skin, rng: np.random.Generator = None, size: int = None) -> Dataset:
+def make_scene(kind: str, skin, rng: np.random.Generator = None, size: int = None,
+               truth_out: list = None) -> Dataset:
     """
     Render scene ``kind`` on a family skin (a name or a :class:`FamilySkin`).
 
     ``size`` is the number of repeats for ``paper`` (nine frames each), of frames otherwise.
+    ``truth_out``, when given, is extended by each frame's presses (:class:`Press` lists), which
+    the oracle (:mod:`oracle`) fits.
     """
     member = skin if isinstance(skin, FamilySkin) else family_skin(skin)
     if kind not in SCENE_KINDS:
@@ -267,10 +279,10 @@ def make_scene(kind: str, skin, rng: np.random.Generator = None, size: int = Non
     rng = rng if rng is not None else np.random.default_rng(0)
     model = member.model
     if kind == 'paper':
-        return make_seed_experiment(model, size, rng, member.paper_force_n)
+        return make_seed_experiment(model, size, rng, member.paper_force_n, truth_out)
     maker = {'random': make_random_experiment, 'border': make_border_experiment,
              'multi': make_multi_experiment}[kind]
-    return maker(model, size, rng, force_range_n=member.force_range_n)
+    return maker(model, size, rng, force_range_n=member.force_range_n, truth_out=truth_out)
 
 
 def add_calibration_frames(data: Dataset, model: SkinModel, rng: np.random.Generator = None,

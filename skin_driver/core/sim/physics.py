@@ -19,6 +19,18 @@ layer between them, a 12-bit ADC reading each FSR through a voltage divider):
   spread (``baseline_spread_counts``), row/column crosstalk of the passive matrix (a share
   ``crosstalk`` of the load of every other taxel on the same row and column), Gaussian noise, dead
   taxels and 12-bit clipping. Per-taxel gains and offsets are fixed by the skin's ``seed``.
+
+Optional physics of real films and tips (all off by default, so older skins render unchanged):
+
+* ``turn_on_pa``: the film is open where its local pressure (after the cover's or the layer's
+  blur) is below this; a taxel senses only the load where it is exceeded, and with
+  ``turn_on_ohm`` its resistance steps from open to that value as soon as any of it conducts:
+  imprints get cliffs at their rims.
+* ``hertz_reference_n``: a soft hemispherical tip whose contact radius grows as the cube root
+  of the normal force (Hertz); ``Press.radius_m`` is the radius at this normal force.
+* ``normal_shift_m_per_n``: the bottom imprint also moves with the normal load (an anisotropic
+  or pre-sheared layer), so the zero shift depends on how hard one presses.
+* The FSR's resistance floor ``FsrModel.r_min_ohm`` is a hard saturation already.
 """
 
 from __future__ import annotations
@@ -33,7 +45,8 @@ import numpy as np
 
 from ..estimation.fsr import FsrModel
 
-__all__ = ['SkinModel', 'Press', 'render', 'render_force', 'layer_shift_m', 'taxel_spread']
+__all__ = ['SkinModel', 'Press', 'render', 'render_force', 'render_expected', 'expected_counts',
+           'layer_shift_m', 'taxel_spread', 'contact_radius_m']
 
 
 @dataclass(frozen=True)
@@ -104,6 +117,10 @@ class SkinModel:
     gain_spread: float = 0.0
     baseline_spread_counts: float = 0.0
     seed: int = 0
+    turn_on_pa: float = 0.0
+    turn_on_ohm: float = 0.0
+    hertz_reference_n: float = 0.0
+    normal_shift_m_per_n: tuple = (0.0, 0.0)
 
     def __post_init__(self):
         """Reject inconsistent parameters."""
@@ -111,7 +128,8 @@ class SkinModel:
             raise ValueError('SkinModel rows and cols must be at least 1')
         for name in ('pitch_m', 'compliance_m_per_n', 'spread_m', 'noise_counts', 'crosstalk',
                      'fill_factor', 'baseline_counts', 'cover_spread_m', 'gain_spread',
-                     'baseline_spread_counts'):
+                     'baseline_spread_counts', 'turn_on_pa', 'turn_on_ohm',
+                     'hertz_reference_n'):
             v = getattr(self, name)
             if not (math.isfinite(v) and v >= 0):
                 raise ValueError(f'SkinModel.{name} must be finite and non-negative')
@@ -119,8 +137,13 @@ class SkinModel:
             raise ValueError('SkinModel.gain_spread must be below 1')
         if self.pitch_m <= 0 or not 0 < self.fill_factor <= 1:
             raise ValueError('SkinModel needs pitch_m > 0 and 0 < fill_factor <= 1')
-        if len(self.misalignment_m) != 2 or not all(math.isfinite(v) for v in self.misalignment_m):
-            raise ValueError('SkinModel.misalignment_m must be two finite numbers')
+        for name in ('misalignment_m', 'normal_shift_m_per_n'):
+            v = getattr(self, name)
+            if len(v) != 2 or not all(math.isfinite(x) for x in v):
+                raise ValueError(f'SkinModel.{name} must be two finite numbers')
+        if self.turn_on_ohm > 0 and not self.turn_on_pa > 0:
+            # Without a turn-on pressure every blur tail would step the film on.
+            raise ValueError('SkinModel.turn_on_ohm needs turn_on_pa > 0')
         for t in self.dead_taxels:
             if len(t) not in (2, 3):
                 raise ValueError('dead_taxels entries are (row, col) or (layer, row, col)')
@@ -129,8 +152,19 @@ class SkinModel:
 def layer_shift_m(model: SkinModel, press: Press) -> tuple:
     """Return the (x, y) displacement of the bottom map relative to the top one, in metres."""
     t = model.compliance_m_per_n * press.tangential_force_n
-    return (model.misalignment_m[0] + t * math.cos(press.beta_rad),
-            model.misalignment_m[1] + t * math.sin(press.beta_rad))
+    fz = press.normal_force_n
+    return (model.misalignment_m[0] + model.normal_shift_m_per_n[0] * fz
+            + t * math.cos(press.beta_rad),
+            model.misalignment_m[1] + model.normal_shift_m_per_n[1] * fz
+            + t * math.sin(press.beta_rad))
+
+
+def contact_radius_m(model: SkinModel, press: Press) -> float:
+    """Return the contact radius of the press: its own, or grown with the load (Hertz)."""
+    if model.hertz_reference_n <= 0:
+        return press.radius_m
+    load = max(press.normal_force_n, 1e-6) / model.hertz_reference_n
+    return press.radius_m * load ** (1.0 / 3.0)
 
 
 def _hertz(x: np.ndarray, y: np.ndarray, cx: float, cy: float, press: Press) -> np.ndarray:
@@ -153,6 +187,30 @@ def _cell_weights(sub: int, fill: float) -> np.ndarray:
 
 
 @lru_cache(maxsize=512)
+def _gather(cells: int, sub: int, fill: float) -> np.ndarray:
+    """Return the (cells x cells*sub) matrix that sums a fine axis over each active cell."""
+    gather = np.zeros((cells, cells * sub))
+    weights = _cell_weights(sub, fill)
+    for k in range(cells):
+        gather[k, k * sub:(k + 1) * sub] = weights
+    gather.flags.writeable = False
+    return gather
+
+
+@lru_cache(maxsize=512)
+def _blur(n: int, blur_px: float) -> np.ndarray:
+    """Return the (n x n) Gaussian blur of a fine axis (OpenCV's kernel, zero borders)."""
+    size = int(round(blur_px * 4 * 2 + 1)) | 1
+    kernel = cv2.getGaussianKernel(size, blur_px, cv2.CV_64F).ravel()
+    half = size // 2
+    offset = np.arange(n)[None, :] - np.arange(n)[:, None] + half
+    inside = (offset >= 0) & (offset < size)
+    blur = np.where(inside, kernel[np.clip(offset, 0, size - 1)], 0.0)
+    blur.flags.writeable = False
+    return blur
+
+
+@lru_cache(maxsize=512)
 def _axis_operator(cells: int, sub: int, fill: float, blur_px: float) -> np.ndarray:
     """
     Return the (cells x cells*sub) matrix that blurs a fine axis and integrates it per taxel.
@@ -164,21 +222,10 @@ def _axis_operator(cells: int, sub: int, fill: float, blur_px: float) -> np.ndar
     images) with zero borders, so the result equals blurring the full image with
     ``cv2.GaussianBlur(..., borderType=BORDER_CONSTANT)`` and summing, at a fraction of the cost.
     """
-    n = cells * sub
-    gather = np.zeros((cells, n))
-    weights = _cell_weights(sub, fill)
-    for k in range(cells):
-        gather[k, k * sub:(k + 1) * sub] = weights
+    gather = _gather(cells, sub, fill)
     if blur_px <= 0:
-        gather.flags.writeable = False
         return gather
-    size = int(round(blur_px * 4 * 2 + 1)) | 1
-    kernel = cv2.getGaussianKernel(size, blur_px, cv2.CV_64F).ravel()
-    half = size // 2
-    offset = np.arange(n)[None, :] - np.arange(n)[:, None] + half
-    inside = (offset >= 0) & (offset < size)
-    blur = np.where(inside, kernel[np.clip(offset, 0, size - 1)], 0.0)
-    operator = gather @ blur
+    operator = gather @ _blur(cells * sub, blur_px)
     operator.flags.writeable = False
     return operator
 
@@ -203,6 +250,10 @@ def _press_maps(model: SkinModel, press: Press) -> tuple:
     if fz <= 0:
         return top, bottom
     sx, sy = layer_shift_m(model, press)
+    radius = contact_radius_m(model, press)
+    if radius != press.radius_m:
+        press = Press(press.x_m, press.y_m, press.force_n, press.alpha_rad, press.beta_rad,
+                      radius, press.aspect, press.orientation_rad)
     a = press.radius_m * max(press.aspect, 1.0)
     h = min(pitch / 24.0, press.radius_m * min(press.aspect, 1.0) / 12.0)
     sub = int(math.ceil(pitch / h))
@@ -245,15 +296,41 @@ def _press_maps(model: SkinModel, press: Press) -> tuple:
             fine = np.ones((1, 1))
             total = 1.0
         blur_px = blur / h if blur > 0 else 0.0
-        op_y = _axis_operator(r1 - r0, sub, fill, blur_px)
-        op_x = op_y if c1 - c0 == r1 - r0 else _axis_operator(c1 - c0, sub, fill, blur_px)
-        cells = (op_y[:, y0:y1] @ fine @ op_x[:, x0:x1].T) * (fz / total)
+        if model.turn_on_pa > 0:
+            cells = _sensed_cells(model, fine * (fz / total), (r1 - r0, c1 - c0), sub,
+                                  (y0, y1, x0, x1), blur_px, h)
+        else:
+            op_y = _axis_operator(r1 - r0, sub, fill, blur_px)
+            op_x = op_y if c1 - c0 == r1 - r0 else _axis_operator(c1 - c0, sub, fill, blur_px)
+            cells = (op_y[:, y0:y1] @ fine @ op_x[:, x0:x1].T) * (fz / total)
         rr0, cc0 = max(r0, 0), max(c0, 0)
         rr1, cc1 = min(r1, model.rows), min(c1, model.cols)
         layer[rr0:rr1, cc0:cc1] += cells[rr0 - r0:rr1 - r0, cc0 - c0:cc1 - c0]
     top.flags.writeable = False
     bottom.flags.writeable = False
     return top, bottom
+
+
+def _sensed_cells(model: SkinModel, fine: np.ndarray, cells: tuple, sub: int, support: tuple,
+                  blur_px: float, h: float) -> np.ndarray:
+    """
+    Return the force per taxel that the film senses where it is turned on.
+
+    ``fine`` holds newtons per fine sample on the support box of the window. The turn-on acts
+    on the local pressure after the blur, so the blur and the cell sums cannot fold into one
+    operator: blur on the fine grid, cut below the turn-on, then sum per cell.
+    """
+    y0, y1, x0, x1 = support
+    rows, cols = cells
+    if blur_px > 0:
+        by, bx = _blur(rows * sub, blur_px), _blur(cols * sub, blur_px)
+        load = by[:, y0:y1] @ fine @ bx[:, x0:x1].T
+    else:
+        load = np.zeros((rows * sub, cols * sub))
+        load[y0:y1, x0:x1] = fine
+    load = np.where(load > model.turn_on_pa * h * h, load, 0.0)
+    fill = float(model.fill_factor)
+    return _gather(rows, sub, fill) @ load @ _gather(cols, sub, fill).T
 
 
 def render_force(model: SkinModel, presses: Sequence[Press]) -> tuple:
@@ -279,23 +356,52 @@ def taxel_spread(model: SkinModel) -> tuple:
     return gain, offset
 
 
-def _electronics(model: SkinModel, force: np.ndarray, layer: int,
-                 rng: np.random.Generator) -> np.ndarray:
+def _film_counts(model: SkinModel, force: np.ndarray, layer: int) -> np.ndarray:
+    """Return noise-free counts of one layer's force map: FSR, step, offset, crosstalk."""
     gain, offset = taxel_spread(model)
-    counts = model.fsr.force_to_counts(force * gain[layer]) + offset[layer]
+    fsr = model.fsr
+    counts = fsr.force_to_counts(force * gain[layer])
+    if model.turn_on_ohm > 0:
+        step = fsr.full_scale * fsr.r_series_ohm / (fsr.r_series_ohm + model.turn_on_ohm)
+        counts = np.where(force > 0, np.maximum(counts, step), counts)
+    counts = counts + offset[layer]
     if model.crosstalk > 0:
         # A passive matrix leaks a little of every taxel sharing the row or the column.
         leak = counts.sum(axis=1, keepdims=True) + counts.sum(axis=0, keepdims=True) - 2 * counts
         counts = counts + model.crosstalk * leak
-    if model.noise_counts > 0:
-        counts = counts + rng.normal(0.0, model.noise_counts, counts.shape)
+    return counts
+
+
+def _kill_dead(model: SkinModel, counts: np.ndarray, layer: int) -> np.ndarray:
     for t in model.dead_taxels:
         if len(t) == 3 and int(t[0]) != layer:
             continue
         r, c = int(t[-2]), int(t[-1])
         if 0 <= r < model.rows and 0 <= c < model.cols:
             counts[r, c] = 0.0
+    return counts
+
+
+def _electronics(model: SkinModel, force: np.ndarray, layer: int,
+                 rng: np.random.Generator) -> np.ndarray:
+    counts = _film_counts(model, force, layer)
+    if model.noise_counts > 0:
+        counts = counts + rng.normal(0.0, model.noise_counts, counts.shape)
+    counts = _kill_dead(model, counts, layer)
     return np.clip(np.rint(counts), 0, model.fsr.full_scale).astype(np.uint16)
+
+
+def expected_counts(model: SkinModel, top_force: np.ndarray, bottom_force: np.ndarray
+                    ) -> np.ndarray:
+    """Return the (2, rows, cols) noise-free float counts of two force maps (no rounding)."""
+    return np.stack([np.clip(_kill_dead(model, _film_counts(model, f, layer), layer), 0,
+                             model.fsr.full_scale)
+                     for layer, f in enumerate((top_force, bottom_force))])
+
+
+def render_expected(model: SkinModel, presses: Sequence[Press]) -> np.ndarray:
+    """Return the (2, rows, cols) noise-free float counts of the presses (no rounding)."""
+    return expected_counts(model, *render_force(model, presses))
 
 
 def render(model: SkinModel, presses: Sequence[Press],

@@ -4,10 +4,11 @@ A named, seeded family of simulated skins that the evaluator, the benchmark and 
 Each skin differs from the project's own simulated skin (``default``) in one or more ways a real
 skin can: FSR curve and saturation, layer compliance (shifts from 0.1 to 6 taxels), cover and
 elastic-layer spread, per-taxel gains and offsets, passive-matrix crosstalk, noise, layer
-misalignment. Each also names the forces its scenes press with, so that its shifts are
-meaningful: ``paper_force_n`` for the paper's protocol (alpha = 45 deg) and ``force_range_n``
-for random presses. Everything is fixed by the skin's ``seed``: the same name always gives the
-same skin.
+misalignment, films that turn on at a pressure with a step to a few kilohms, tips whose contact
+grows with the load (Hertz), a zero shift that moves with the normal load. Each also names the
+forces its scenes press with, so that its shifts are meaningful: ``paper_force_n`` for the
+paper's protocol (alpha = 45 deg) and ``force_range_n`` for random presses. Everything is
+fixed by the skin's ``seed``: the same name always gives the same skin.
 
 ``held_out:N`` names a skin drawn at random (seed N) within the family's ranges: once an
 estimator has been tuned on the named skins, these are data it has never seen. ``NAME@N`` is
@@ -55,6 +56,9 @@ _SATURATING_FSR = FsrModel(r_min_ohm=200.0, r_max_ohm=6000.0, force_at_r_max_n=0
 _FLAT_FSR = FsrModel(r_min_ohm=500.0, r_max_ohm=2500.0, force_at_r_max_n=0.3,
                      force_at_r_min_n=40.0)
 
+_FILM_FSR = FsrModel(r_series_ohm=2200.0, r_min_ohm=250.0, r_max_ohm=3500.0,
+                     force_at_r_max_n=0.3, force_at_r_min_n=12.0)
+
 _FAMILY = (
     FamilySkin('default', "the project's own simulated skin (seed prototype), 0.36 mm misaligned",
                SkinModel(misalignment_m=(3e-4, -2e-4)), 10.0, (5.0, 15.0)),
@@ -92,6 +96,17 @@ _FAMILY = (
                          gain_spread=0.1, baseline_spread_counts=15.0, noise_counts=8.0,
                          misalignment_m=(-1.5e-3, 2.0e-3), fsr=_SOFT_FSR, seed=10),
                20.0, (10.0, 40.0)),
+    FamilySkin('film', 'films open below 20 kPa, stepping to 4 kOhm; Hertz tips; floor at 12 N',
+               SkinModel(compliance_m_per_n=4e-4, spread_m=0.0015, cover_spread_m=0.0005,
+                         fsr=_FILM_FSR, turn_on_pa=2.0e4, turn_on_ohm=4000.0,
+                         hertz_reference_n=20.0, gain_spread=0.05, noise_counts=5.0,
+                         misalignment_m=(1.0e-3, 5e-4), seed=11),
+               20.0, (10.0, 40.0)),
+    FamilySkin('loaded', 'zero shift moving 0.2 taxel per 20 N of normal load, Hertz tips',
+               SkinModel(compliance_m_per_n=6e-4, hertz_reference_n=15.0,
+                         normal_shift_m_per_n=(4e-5, -3e-5), turn_on_pa=1.0e4,
+                         crosstalk=0.004, gain_spread=0.04, seed=12),
+               15.0, (8.0, 30.0)),
 )
 _BY_NAME = {s.name: s for s in _FAMILY}
 
@@ -101,12 +116,31 @@ def skin_names() -> list:
     return [s.name for s in _FAMILY]
 
 
+def _films_and_tips(pick, rng, force: float, pitch: float, fsr: FsrModel) -> dict:
+    """Return the held-out draw's turn-on, Hertz tip, normal-load shift and divider."""
+    extra = {'fsr': replace(fsr, r_series_ohm=pick(1000.0, 3300.0))}
+    if rng.random() < 2.0 / 3.0:
+        extra['turn_on_pa'] = pick(5e3, 3e4)
+        if rng.random() < 0.5:
+            extra['turn_on_ohm'] = fsr.r_max_ohm * pick(1.0, 1.5)
+    if rng.random() < 2.0 / 3.0:
+        extra['hertz_reference_n'] = force
+    if rng.random() < 0.5:
+        size, angle = pick(0.0, 0.2) * pitch / force, pick(0.0, 2.0 * math.pi)
+        extra['normal_shift_m_per_n'] = (size * math.cos(angle), size * math.sin(angle))
+    return extra
+
+
 def held_out_skin(seed: int) -> FamilySkin:
     """
     Return a skin drawn at random within the family's ranges, named ``held_out:<seed>``.
 
     Its paper press (alpha = 45 deg) shifts the layers by 0.3 to 5 taxels at 8 to 40 N; random
-    presses take half to one and a half times that force.
+    presses take half to one and a half times that force. Two in three draws have films that
+    turn on at 5 to 30 kPa (half of them stepping to a few kilohms), two in three Hertz tips,
+    one in two a zero shift that moves with the normal load (up to 0.2 taxel at the paper
+    force); the divider's series resistor is 1 to 3.3 kOhm. These are drawn after the rest, so
+    the other parameters of a seed are those it always had.
     """
     seed = int(seed)
     if seed < 0:
@@ -128,9 +162,14 @@ def held_out_skin(seed: int) -> FamilySkin:
         gain_spread=pick(0.0, 0.1), baseline_spread_counts=pick(0.0, 20.0),
         noise_counts=pick(2.0, 10.0),
         misalignment_m=(offset * math.cos(angle), offset * math.sin(angle)), seed=1000 + seed)
+    model = replace(model, **_films_and_tips(pick, rng, force, pitch, fsr))
     return FamilySkin(f'{HELD_OUT}{seed}',
                       f'held out (seed {seed}): {shift_taxels:.1f} taxel shift at {force:.0f} N, '
-                      f'saturates at {fsr.force_at_r_min_n:.0f} N per taxel',
+                      f'saturates at {fsr.force_at_r_min_n:.0f} N per taxel'
+                      + ''.join(f', {label}' for label, on in (
+                          ('turn-on', model.turn_on_pa > 0), ('step', model.turn_on_ohm > 0),
+                          ('Hertz tips', model.hertz_reference_n > 0),
+                          ('load-dependent zero', any(model.normal_shift_m_per_n))) if on),
                       model, force, (0.5 * force, 1.5 * force))
 
 

@@ -207,6 +207,34 @@ def write(res, out_dir) -> None:
         f.write(tables.markdown(res, images))
 
 
+def _family_only(args) -> int:
+    """Score the family on a few skins (a small run on a shared machine); print its rows."""
+    n = max(args.family_size, 2)
+    sizes = {'paper': max(n // 10, 1), 'random': n, 'border': n // 2, 'multi': n // 2}
+    fam = bench_core.family(sizes, bench_core.family_methods(True),
+                            args.family_only.split(','), seed=args.seed,
+                            log=lambda s: print(s, file=sys.stderr, flush=True))
+    fig = tables.figure
+    for kind in tables.SCENES:
+        print(f'{kind}: mean error deg (valid %)')
+        for skin in fam['skins']:
+            cells = [(r['method'], r['mean_error_deg'], r['valid_share']) for r in fam['rows']
+                     if (r['skin'], r['scene']) == (skin, kind)]
+            shown = [f'{m} {fig(e, ".2f")} ({fig(v and 100 * v, ".0f")})' for m, e, v in cells]
+            print(f'  {skin:12s}  ' + '  '.join(shown))
+    for m, w in fam['worst'].items():
+        print(f'{m} worst: ' + '; '.join(
+            f'{k} {fig(w[k]["mean_error_deg"], ".2f")} ({w[k]["error_skin"]}), / oracle '
+            f'{fig(w[k]["ratio_to_oracle"], ".2f")} ({w[k]["ratio_to_oracle_skin"]}), / centroid '
+            f'{fig(w[k]["ratio_to_centroid"], ".2f")} ({w[k]["ratio_to_centroid_skin"]})'
+            for k in tables.SCENES))
+    if args.out:
+        os.makedirs(args.out, exist_ok=True)
+        with open(os.path.join(args.out, 'family.json'), 'w') as f:
+            json.dump(json_safe(fam), f, indent=1, default=float)
+    return 0
+
+
 def main(argv=None) -> int:
     """Run the benchmark from the command line."""
     parser = argparse.ArgumentParser(prog='python -m skin_driver.tools.bench.cli',
@@ -219,7 +247,15 @@ def main(argv=None) -> int:
     parser.add_argument('--no-profile', dest='profile', action='store_false',
                         help='leave out the profiled 2 kHz run')
     parser.add_argument('--seed', type=int, default=0, help='random seed (0)')
+    parser.add_argument('--family-only', metavar='SKINS',
+                        help='run only the skin family on these comma-separated skins (names or '
+                             'held_out:N), every method and the oracle, and print its rows')
+    parser.add_argument('--family-size', type=int, default=40,
+                        help='with --family-only: random frames per skin (border and multi '
+                             'half, paper a tenth, in repeats)')
     args = parser.parse_args(argv)
+    if args.family_only:
+        return _family_only(args)
     if args.quick:
         args.profile = False
     if args.out is None:

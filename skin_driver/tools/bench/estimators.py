@@ -18,6 +18,7 @@ from skin_driver.core.estimation.shift import (
     centroid, DEFAULT_METHOD, Method, method_names, NO_SHIFT, ShiftEstimate)
 from skin_driver.core.sim.experiments import (
     make_random_experiment, make_scene, make_seed_experiment, press_for_shift, SCENE_KINDS)
+from skin_driver.core.sim.oracle import ORACLE, oracle_run
 from skin_driver.core.sim.physics import Press, render, SkinModel
 from skin_driver.core.sim.skins import family_skin, PATCH_M, skin_for_grid, skin_names
 from skin_driver.tools.evaluate.scoring import (
@@ -250,21 +251,25 @@ def _family_row(skin, kind, data, run, costs) -> dict:
             'median_us': 1e6 * float(np.median(costs)), 'mean_us': 1e6 * float(np.mean(costs))}
 
 
-def family(sizes: dict, methods: list, skins: list = None, seed: int = 0, log=print) -> dict:
+def family(sizes: dict, methods: list, skins: list = None, seed: int = 0, log=print,
+           oracle: bool = True) -> dict:
     """
     Score every method on every scene of every skin of the family, side by side.
 
     Each frame goes to every method in a fresh shuffled order (timed, contacts included, on
     the core the process is pinned to). Returns per (skin, scene, method) rows, the cost per
     (skin, method) over all the skin's frames, and the default's (reported azimuth sigma,
-    measured error) pairs.
+    measured error) pairs. With ``oracle`` the floor (:mod:`core.sim.oracle`, the simulator's
+    own model fitted to each frame from the truth) is scored too, as method ``oracle``.
     """
     rng = np.random.default_rng(seed)
     rows, costs, sigma = [], [], []
     for skin in skins or skin_names():
         per_skin = {m: [] for m in methods}
+        oracle_us = []
         for kind in SCENE_KINDS:
-            data = make_scene(kind, skin, rng, sizes[kind])
+            presses = []
+            data = make_scene(kind, skin, rng, sizes[kind], presses)
             ests = {m: (plain_centroid_estimator(data) if m == PLAIN_CENTROID
                         else prepared_estimator(data, m)[0]) for m in methods}
             contacts = {m: [] for m in methods}
@@ -282,10 +287,19 @@ def family(sizes: dict, methods: list, skins: list = None, seed: int = 0, log=pr
                 if m == DEFAULT_METHOD:
                     sigma += [(math.degrees(c.azimuth_sigma_rad), err, skin, kind)
                               for _, _, err, c in direction_errors(data, run) if err is not None]
+            if oracle:
+                found, us = oracle_run(family_skin(skin).model, presses, data)
+                rows.append(_family_row(skin, kind, data,
+                                        MethodRun(ORACLE, ests[methods[0]].calibration, found,
+                                                  us), [1e-6 * us]))
+                oracle_us.append(1e-6 * us)
+        if oracle:
+            per_skin[ORACLE] = oracle_us
         costs += [{'skin': skin, 'method': m, 'frames': len(t),
                    'median_us': 1e6 * float(np.median(t)), 'mean_us': 1e6 * float(np.mean(t)),
                    'p90_us': 1e6 * float(np.percentile(t, 90))} for m, t in per_skin.items()]
         log(f'  family: {skin} done')
+    methods = list(methods) + ([ORACLE] if oracle else [])
     return {'skins': {s: family_skin(s).description for s in (skins or skin_names())},
             'sizes': sizes, 'methods': methods, 'rows': rows, 'costs': costs,
             'sigma_vs_error': sigma, 'worst': family_worst(rows, costs, methods)}
@@ -303,8 +317,9 @@ def family_worst(rows, costs, methods) -> dict:
     """
     Return each method's worst case over the skins: per scene, error, valid share and more.
 
-    ``ratio_to_centroid`` and ``ratio_to_seed`` are the largest ratios of the method's mean
-    error to the plain centroid difference's and to seed's on the same skin and scene.
+    ``ratio_to_centroid``, ``ratio_to_seed`` and ``ratio_to_oracle`` are the largest ratios of
+    the method's mean error to the plain centroid difference's, to seed's and to the oracle's on
+    the same skin and scene.
     """
     index = {(r['skin'], r['scene'], r['method']): r for r in rows}
     out = {}
@@ -316,7 +331,7 @@ def family_worst(rows, costs, methods) -> dict:
             error, error_skin = _worst(sel, 'mean_error_deg', lowest=False)
             valid, valid_skin = _worst(sel, 'valid_share', lowest=True)
             ratios = {}
-            for ref in (PLAIN_CENTROID, 'seed'):
+            for ref in (PLAIN_CENTROID, 'seed', ORACLE):
                 if ref == m:
                     ratios[ref] = (None, None)
                     continue
@@ -330,7 +345,9 @@ def family_worst(rows, costs, methods) -> dict:
                            'ratio_to_centroid': ratios[PLAIN_CENTROID][0],
                            'ratio_to_centroid_skin': ratios[PLAIN_CENTROID][1],
                            'ratio_to_seed': ratios['seed'][0],
-                           'ratio_to_seed_skin': ratios['seed'][1]}
+                           'ratio_to_seed_skin': ratios['seed'][1],
+                           'ratio_to_oracle': ratios[ORACLE][0],
+                           'ratio_to_oracle_skin': ratios[ORACLE][1]}
         large, large_skin = _worst(mine, 'large_shift_valid_share', lowest=True)
         separate, separate_skin = _worst(mine, 'separate_share_far', lowest=True)
         cost, cost_skin = _worst([c for c in costs if c['method'] == m], 'median_us',

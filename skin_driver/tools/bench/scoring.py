@@ -83,6 +83,17 @@ def family_targets(worst) -> list:
                            '<= 1',
                            r is not None and r <= 1.0,
                            f'worst on {d[kind]["ratio_to_centroid_skin"]}' if r else ''))
+    for kind, limit in (('random', 1.5), ('paper', 1.5)):
+        r = d[kind]['ratio_to_oracle']
+        out.append(_target(f'family {kind}: error default / oracle (worst skin)', r,
+                           f'<= {limit:g}', r is not None and r <= limit,
+                           f'worst on {d[kind]["ratio_to_oracle_skin"]}'
+                           + (f', {r / limit:.1f} x the limit' if r and r > limit else '')
+                           if r else ''))
+    r = d['random']['ratio_to_centroid']
+    out.append(_target('family random: error default / plain centroid (worst skin)', r,
+                       '<= 0.6', r is not None and r <= 0.6,
+                       f'worst on {d["random"]["ratio_to_centroid_skin"]}' if r else ''))
     r = d['paper']['ratio_to_seed']
     out.append(_target("family paper's protocol: error default / seed (worst skin)", r, '<= 0.20',
                        r is not None and r <= 0.2,

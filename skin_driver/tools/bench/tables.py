@@ -5,7 +5,8 @@ from __future__ import annotations
 from skin_driver.tools.bench.scoring import label
 
 
-def _f(v, spec='.1f') -> str:
+def figure(v, spec='.1f') -> str:
+    """Return ``v`` formatted by ``spec``, or '-' for None."""
     return '-' if v is None else format(v, spec)
 
 
@@ -59,9 +60,9 @@ def markdown(res, images) -> str:
                 'windows (bench only).', '', f'![Pareto]({images["pareto"]})', '']
         out += _table(['grid', 'method', 'mean error [deg]', 'valid', 'us/frame (median)',
                        'us/frame (mean)'],
-                      [(r['grid'], r['method'], _f(r['mean_error_deg'], '.2f'),
-                        _f(r['valid_share'] and 100 * r['valid_share']) + ' %',
-                        _f(r['median_us']), _f(r['mean_us'])) for r in acc['summary']])
+                      [(r['grid'], r['method'], figure(r['mean_error_deg'], '.2f'),
+                        figure(r['valid_share'] and 100 * r['valid_share']) + ' %',
+                        figure(r['median_us']), figure(r['mean_us'])) for r in acc['summary']])
         out += ['']
     if 'seed' in res:
         s = res['seed']
@@ -78,15 +79,15 @@ def markdown(res, images) -> str:
         sc = res['scaling']
         out += ['## 4. Scale', '', f'![scaling]({images["scaling"]})', '']
         out += _table(['grid', 'method', 'median us', 'mean us', 'p90 us'],
-                      [(r['grid'], r['method'], _f(r['median_us']), _f(r['mean_us']),
-                        _f(r['p90_us'])) for r in sc['by_grid']])
+                      [(r['grid'], r['method'], figure(r['median_us']), figure(r['mean_us']),
+                        figure(r['p90_us'])) for r in sc['by_grid']])
         out += ['']
         out += ['Presses on a 3 x 3 lattice 24 mm apart (3 mm indenters, 5-15 N, alpha 40 '
                 'deg); neighbours whose pressure spreads into each other are segmented as one '
                 'contact, hence "contacts found" (mean per frame) below the presses.', '']
         out += _table(['grid', 'presses', 'contacts found', 'method', 'median us'],
-                      [(r['grid'], r['contacts'], _f(r['contacts_found']), r['method'],
-                        _f(r['median_us'])) for r in sc['by_contacts']])
+                      [(r['grid'], r['contacts'], figure(r['contacts_found']), r['method'],
+                        figure(r['median_us'])) for r in sc['by_contacts']])
         out += ['']
     if 'family' in res:
         out += _family_section(res['family'], images)
@@ -101,8 +102,11 @@ def _pct(v) -> str:
 
 def _worst_cell(w: dict) -> str:
     """Return 'error on skin, valid share on skin' of one scene's worst case."""
-    return (f'{_f(w["mean_error_deg"], ".2f")} deg ({w["error_skin"]}); valid '
+    return (f'{figure(w["mean_error_deg"], ".2f")} deg ({w["error_skin"]}); valid '
             f'{_pct(w["valid_share"])} ({w["valid_skin"]})')
+
+
+SCENES = ('paper', 'random', 'border', 'multi')
 
 
 def _family_headline(fam) -> list:
@@ -116,9 +120,19 @@ def _family_headline(fam) -> list:
         rows.append([m] + [_worst_cell(w[k]) for k in ('paper', 'random', 'border', 'multi')]
                     + [f'{_pct(w["large_shift_valid_share"])} ({w["large_shift_skin"]})',
                        f'{_pct(w["separate_share_far"])} ({w["separate_skin"]})',
-                       f'{_f(w["median_us"], ".0f")} ({w["cost_skin"]})'])
+                       f'{figure(w["median_us"], ".0f")} ({w["cost_skin"]})'])
     out += _table(['method', "paper's protocol", 'random spot', 'border', 'multi (per press)',
                    'valid, shift >= 1 taxel', 'apart, >= 3 taxels', 'us/frame pair'], rows)
+    if 'oracle' in fam['worst']:
+        out += ['', "Error over the floor (the simulator's own model fitted to each frame from "
+                'the truth, `core.sim.oracle`) and over the plain centroid difference, worst '
+                'skin per scene:', '']
+        out += _table(['method'] + [f'{k}: / oracle, / centroid' for k in SCENES],
+                      [[m] + [f'{figure(w[k]["ratio_to_oracle"], ".2f")} '
+                              f'({w[k]["ratio_to_oracle_skin"]}), '
+                              f'{figure(w[k]["ratio_to_centroid"], ".2f")} '
+                              f'({w[k]["ratio_to_centroid_skin"]})' for k in SCENES]
+                       for m, w in fam['worst'].items() if m != 'oracle'])
     return out + ['']
 
 
@@ -144,7 +158,7 @@ def _family_section(fam, images) -> list:
             for m in methods:
                 r = next(x for x in fam['rows'] if (x['skin'], x['scene'], x['method'])
                          == (skin, kind, m))
-                cell = f'{_f(r["mean_error_deg"], ".2f")} / {_pct(r["valid_share"])}'
+                cell = f'{figure(r["mean_error_deg"], ".2f")} / {_pct(r["valid_share"])}'
                 if kind == 'multi':
                     cell += f' / {_pct(r["separate_share_far"])} apart'
                 elif kind == 'paper':
@@ -156,8 +170,8 @@ def _family_section(fam, images) -> list:
     out += ['Cost per 16 x 16 frame pair over all the frames of each skin (median us, contacts '
             'included, one pinned core; other jobs share the machine):', '']
     out += _table(['skin'] + methods,
-                  [[skin] + [_f(next(c['median_us'] for c in fam['costs']
-                                     if (c['skin'], c['method']) == (skin, m)), '.0f')
+                  [[skin] + [figure(next(c['median_us'] for c in fam['costs']
+                                         if (c['skin'], c['method']) == (skin, m)), '.0f')
                              for m in methods] for skin in fam['skins']])
     out += ['', f'![sigma vs error]({images["sigma"]})', '',
             "The default's reported 1-sigma azimuth uncertainty against its measured error, "
@@ -167,7 +181,7 @@ def _family_section(fam, images) -> list:
 
 
 def _ms(d) -> str:
-    return ' / '.join(_f(d[k], '.2f') for k in ('p50', 'p99', 'max'))
+    return ' / '.join(figure(d[k], '.2f') for k in ('p50', 'p99', 'max'))
 
 
 def _e2e_section(res, images) -> list:
@@ -220,13 +234,14 @@ def _e2e_section(res, images) -> list:
     out += _table(['layout', 'rate [Hz]', 'driver decoded [Hz]', 'driver sequence gaps',
                    'estimated [Hz]', 'estimator mean cost, last period [us]',
                    'simulator: frames it could not write (whole run)'],
-                  [(label(r), f'{r["rate_hz"]:g}', _f(r['driver_decoded_hz']),
-                    _f(r['driver_sequence_gaps'], '.0f'), _f(r['estimated_hz']),
-                    _f(r['estimator_mean_us']), _f(r['sim_frames_dropped'], '.0f'))
+                  [(label(r), f'{r["rate_hz"]:g}', figure(r['driver_decoded_hz']),
+                    figure(r['driver_sequence_gaps'], '.0f'), figure(r['estimated_hz']),
+                    figure(r['estimator_mean_us']), figure(r['sim_frames_dropped'], '.0f'))
                    for r in e['runs']])
     out += ['', 'Per-scan cost of each stage at 16 x 16 with one press, measured in the bench '
             'process (least mean of five rounds of repeats: the machine is shared):', '']
-    out += _table(['stage', 'us per scan'], [(k, _f(v)) for k, v in e['stage_costs_us'].items()])
+    out += _table(['stage', 'us per scan'],
+                  [(k, figure(v)) for k, v in e['stage_costs_us'].items()])
     out += ['']
     if e.get('why'):
         out += ['### Where the time goes', ''] + [f'- {w}' for w in e['why']] + ['']
@@ -238,7 +253,7 @@ def _e2e_section(res, images) -> list:
         out += [f'cProfile of the {name} (separate profiled run, whole process including '
                 'start-up; own time; cProfile slows it, so compare shares only):', '']
         out += _table(['function', 'calls', 'own s', 'share'],
-                      [(r['function'], r['calls'], _f(r['own_s'], '.2f'),
-                        _f(100 * r['own_share']) + ' %') for r in rows])
+                      [(r['function'], r['calls'], figure(r['own_s'], '.2f'),
+                        figure(100 * r['own_share']) + ' %') for r in rows])
         out += ['']
     return out

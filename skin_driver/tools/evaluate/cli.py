@@ -14,7 +14,10 @@ compared with the ground-truth azimuth; frames with several presses are matched 
 (docs/dataset.md). With a ``split`` array (dataset format 2) only the calibration frames
 (split = 1) calibrate, and more fully: alpha = 0 frames with ``force_n`` give (x_p, y_p) and the
 force curves, tilted ones with ``force_n`` the compliance; only split = 0 frames are scored.
-``--calibration-frames`` adds such frames to a generated dataset. ROS-free.
+``--calibration-frames`` adds such frames to a generated dataset (or to the --skin data). With
+``--skin`` the oracle (:mod:`core.sim.oracle`, the simulator's forward model fitted to each
+frame, started at the truth) is scored beside the methods, and each method's error is given in
+units of the oracle's (``--no-oracle`` skips it). ROS-free.
 """
 
 from __future__ import annotations
@@ -62,8 +65,12 @@ def _parser() -> argparse.ArgumentParser:
                              'of --skin (default: default) and exit')
     parser.add_argument('--seed', type=int, default=0, help='random seed for generated data')
     parser.add_argument('--calibration-frames', action='store_true',
-                        help='with --generate: put 16 normal presses over 5-60 N and 16 tilted '
-                        'presses of known load in front, as calibration frames (split = 1)')
+                        help='with --generate or --skin: put 16 normal presses over 5-60 N and '
+                        '16 tilted presses of known load in front, as calibration frames '
+                        '(split = 1)')
+    parser.add_argument('--no-oracle', action='store_true',
+                        help='with --skin: do not fit the oracle (the forward model, a few ms '
+                        'to tens of ms per frame)')
     parser.add_argument('--list-skins', action='store_true', help='list the family and exit')
     parser.add_argument('--list-methods', action='store_true', help='list estimators and exit')
     return parser
@@ -113,8 +120,14 @@ def main(argv=None) -> int:
         parser.error('give a dataset .npz or --skin NAME (not both)')
     try:
         config = _config(args)
+        truth = None
         if args.skin:
-            data = make_scene(args.scene, args.skin, rng, args.size)
+            presses = []
+            data = make_scene(args.scene, args.skin, rng, args.size, presses)
+            model = family_skin(args.skin).model
+            if args.calibration_frames:
+                data = add_calibration_frames(data, model, rng)
+            truth = None if args.no_oracle else (model, presses)
             source = f'skin {args.skin}, scene {args.scene}, seed {args.seed}'
         else:
             data = load_dataset(args.data)
@@ -124,9 +137,9 @@ def main(argv=None) -> int:
         return 2
     method = args.method or DEFAULT_METHOD
     runs = {}
-    report = evaluate(data, method, config, runs)
+    report = evaluate(data, method, config, runs, truth)
     if args.contacts:
-        rows = write_contacts(args.contacts, runs[method])
+        rows = write_contacts(args.contacts, runs[method], data.scored_frames())
         print(f'wrote {rows} contacts of {method} to {args.contacts}', file=sys.stderr)
     if args.json:
         print(json.dumps(json_safe({'dataset': source, **report})))

@@ -21,6 +21,7 @@ from skin_driver.core.estimation.dataset import Dataset
 from skin_driver.core.estimation.pipeline import EstimatorConfig
 from skin_driver.core.estimation.recorded import prepared_estimator
 from skin_driver.core.estimation.shift import DEFAULT_METHOD
+from skin_driver.core.sim.oracle import ORACLE, oracle_run
 
 __all__ = ['PAPER_TABLE', 'MethodRun', 'summarise', 'angle_error_deg', 'run_method',
            'score_run', 'evaluate_method', 'evaluate', 'match_presses', 'direction_errors']
@@ -284,6 +285,16 @@ def evaluate_method(data: Dataset, method: str, config: EstimatorConfig = None) 
     return score_run(data.select(data.scored_frames()), run_method(data, method, config))
 
 
+def _ratios(mine: dict, oracle: dict) -> dict:
+    """Return mean error / the oracle's, over the single tilted presses and the multi ones."""
+    def ratio(a, b):
+        return a / b if a is not None and b else None
+    return {'single': ratio(mine['summary']['mean_error_deg'],
+                            oracle['summary']['mean_error_deg']),
+            'multi': ratio(mine['presses'] and mine['presses']['mean_error_deg'],
+                           oracle['presses'] and oracle['presses']['mean_error_deg'])}
+
+
 def _seed_like(data: Dataset) -> bool:
     """Return whether the single tilted presses are the paper's (alpha = 45 deg, eight betas)."""
     tilted = (data.alpha_deg > 0) & (data.press_counts() == 1)
@@ -292,11 +303,13 @@ def _seed_like(data: Dataset) -> bool:
 
 
 def evaluate(data: Dataset, method: str = DEFAULT_METHOD, config: EstimatorConfig = None,
-             runs: dict = None) -> dict:
+             runs: dict = None, truth: tuple = None) -> dict:
     """
     Return the figures of ``method`` and of ``seed`` on ``data`` as one JSON-ready dict.
 
-    ``runs`` (a dict), when given, receives each :class:`MethodRun` by method name.
+    ``runs`` (a dict), when given, receives each :class:`MethodRun` by method name. ``truth``
+    ``(model, presses of each scored frame)`` adds the oracle's figures (``core.sim.oracle``)
+    and each method's ``ratio_to_oracle`` (its mean error over the oracle's).
     """
     names = [method] if method == 'seed' else [method, 'seed']
     scored = data.select(data.scored_frames())
@@ -306,6 +319,14 @@ def evaluate(data: Dataset, method: str = DEFAULT_METHOD, config: EstimatorConfi
         if runs is not None:
             runs[n] = run
         methods[n] = score_run(scored, run)
+    if truth is not None:
+        contacts, us = oracle_run(truth[0], truth[1], scored)
+        run = MethodRun(ORACLE, Calibration(), contacts, us)
+        if runs is not None:
+            runs[ORACLE] = run
+        methods[ORACLE] = score_run(scored, run)
+        for n in names:
+            methods[n]['ratio_to_oracle'] = _ratios(methods[n], methods[ORACLE])
     single = scored.press_counts() == 1
     return {
         'frames': data.frames, 'shape': list(data.shape), 'pitch_m': data.pitch_m,

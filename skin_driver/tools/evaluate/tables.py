@@ -15,10 +15,16 @@ CONTACT_COLUMNS = ('frame', 'rank', 'x_m', 'y_m', 'force_n', 'azimuth_deg', 'alp
                    'azimuth_sigma_deg')
 
 
-def write_contacts(path, run: MethodRun) -> int:
-    """Write one CSV row per reported contact of every frame (atomically); return the rows."""
+def write_contacts(path, run: MethodRun, frame_numbers=None) -> int:
+    """
+    Write one CSV row per reported contact of every frame (atomically); return the rows.
+
+    ``frame_numbers`` gives each of the run's frames its index in the dataset (default 0, 1,
+    ...; ``Dataset.scored_frames()`` for a dataset with a ``split``).
+    """
     rows = []
-    for frame, contacts in enumerate(run.contacts):
+    numbers = range(len(run.contacts)) if frame_numbers is None else frame_numbers
+    for frame, contacts in zip((int(n) for n in numbers), run.contacts):
         for rank, c in enumerate(contacts):
             rows.append((frame, rank, c.x_m, c.y_m, c.force_n, math.degrees(c.azimuth_rad),
                          math.degrees(c.alpha_rad), int(c.direction_valid), c.confidence,
@@ -97,6 +103,11 @@ def format_table(report: dict) -> str:
             lines.append(f'{" " * len(n)}  alpha error {_fmt(s["alpha_mean_error_deg"])} deg '
                          f'(std {_fmt(s["alpha_std_error_deg"])}, '
                          f'bias {_fmt(s["alpha_bias_deg"], "+.2f")}){force}')
+    for n in names:
+        ratio = report['methods'][n].get('ratio_to_oracle')
+        if ratio:
+            lines.append(f'{n}: error / oracle {_fmt(ratio["single"])} (single presses), '
+                         f'{_fmt(ratio["multi"])} (several presses)')
     for n in names:
         lines += _extra_lines(n, report['methods'][n])
         for note in report['methods'][n].get('calibration_notes', []):

@@ -23,13 +23,14 @@ def _pair(dx_m, dy_m, model=None):
 def test_all_methods_registered_with_stable_names():
     for name in REQUIRED:
         assert direction.get_method(name).name == name
-    assert direction.DEFAULT_METHOD == 'poc'
-    assert direction.method_names() == ['poc', 'centroid', 'seed']
+    assert direction.DEFAULT_METHOD == 'taxel_fit'
+    assert direction.method_names() == ['taxel_fit', 'centroid', 'poc', 'seed']
     assert direction.get_method('seed').whole_map
 
 
 def test_unknown_method_lists_names():
-    with pytest.raises(ValueError, match='unknown direction method .*poc, centroid, seed'):
+    with pytest.raises(ValueError,
+                       match='unknown direction method .*taxel_fit, centroid, poc, seed'):
         direction.get_method('nope')
 
 

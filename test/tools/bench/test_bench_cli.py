@@ -77,3 +77,13 @@ def test_the_default_report_goes_to_the_repositorys_docs():
 def test_cpu_seconds_of_this_process_and_of_a_missing_one():
     assert bench_ros.cpu_seconds(os.getpid()) > 0
     assert bench_ros.cpu_seconds(2 ** 22 + 12345) == 0.0
+
+
+def test_family_only_prints_every_scene_and_the_worst_with_the_oracle(capsys, tmp_path):
+    assert bench.main(['--family-only', 'default', '--family-size', '4',
+                       '--out', str(tmp_path)]) == 0
+    text = capsys.readouterr().out
+    for kind in ('paper', 'random', 'border', 'multi'):
+        assert f'{kind}: mean error deg' in text
+    assert 'oracle' in text and 'taxel_fit worst:' in text and '/ oracle' in text
+    assert (tmp_path / 'family.json').exists()

@@ -36,7 +36,8 @@ def test_scaling_has_a_point_per_grid_contact_count_and_method(results):
 
 def test_family_scores_every_skin_scene_and_method_and_names_the_worst(results):
     fam = results['family']
-    methods = ['poc', 'seed', 'plain_centroid']
+    # The floor (the simulator's model fitted from the truth) is scored beside the methods.
+    methods = ['taxel_fit', 'seed', 'plain_centroid', 'oracle']
     assert fam['methods'] == methods
     assert {(r['skin'], r['scene'], r['method']) for r in fam['rows']} == {
         (s, k, m) for s in ('default', 'soft') for k in ('paper', 'random', 'border', 'multi')
@@ -49,4 +50,7 @@ def test_family_scores_every_skin_scene_and_method_and_names_the_worst(results):
                   if r['method'] == m and r['scene'] == 'random'}
         assert worst['mean_error_deg'] == max(errors.values())
         assert errors[worst['error_skin']] == worst['mean_error_deg']
+    for kind in ('paper', 'random'):
+        # Nothing estimates the azimuth better than the floor on its own frames.
+        assert fam['worst']['taxel_fit'][kind]['ratio_to_oracle'] > 1.0
     assert all(s > 0 and 0 <= e <= 180 for s, e, _, _ in fam['sigma_vs_error'])

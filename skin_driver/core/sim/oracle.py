@@ -1,0 +1,168 @@
+"""
+The floor of the direction estimate: the simulator's own forward model fitted to each frame.
+
+For a frame whose presses and skin are known (FSR curve, turn-on, true per-taxel gains and
+offsets, crosstalk, dead taxels), the oracle fits each press's position, normal force and
+tangential layer displacement to the frame's counts by damped Gauss-Newton (Levenberg-Marquardt)
+on the noise-free float counts of :func:`physics.expected_counts`, started at the truth. What
+it cannot undo is only the noise and the rounding of the counts, so its azimuth error is about
+the least the frames allow; the evaluator and the benchmark report every estimator's error in
+units of it. It knows the skin: it is for evaluation only, never a driver's estimator.
+
+Cost: each iteration renders every press once more per parameter (five per press), so a frame
+costs tens of renders, milliseconds to tens of milliseconds; callers may skip it.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from typing import Sequence
+
+import numpy as np
+
+from .physics import expected_counts, Press, render_force, SkinModel
+from ..estimation.pipeline import Contact
+
+__all__ = ['ORACLE', 'fit_presses', 'oracle_contacts', 'oracle_run']
+
+ORACLE = 'oracle'
+
+# Parameters per press: x, y (taxels), log normal force, tangential displacement x, y (taxels).
+_PER_PRESS = 5
+# Finite-difference steps: a fiftieth of a taxel averages over the fine grid's steps.
+_STEP = np.array((0.02, 0.02, 0.01, 0.02, 0.02))
+_ITERATIONS = 8
+
+
+def _press_of(model: SkinModel, like: Press, u: np.ndarray) -> Press:
+    """Return the press with parameters ``u`` and ``like``'s indenter."""
+    pitch = model.pitch_m
+    normal = math.exp(u[2])
+    tx, ty = u[3] * pitch, u[4] * pitch
+    tangential = math.hypot(tx, ty) / model.compliance_m_per_n
+    return Press(u[0] * pitch, u[1] * pitch, math.hypot(normal, tangential),
+                 math.atan2(tangential, normal), math.atan2(ty, tx) if tangential > 0 else 0.0,
+                 like.radius_m, like.aspect, like.orientation_rad)
+
+
+def _parameters(model: SkinModel, press: Press) -> np.ndarray:
+    """Return the fit's parameters of a press (the truth it starts at)."""
+    pitch = model.pitch_m
+    t = model.compliance_m_per_n * press.tangential_force_n / pitch
+    return np.array((press.x_m / pitch, press.y_m / pitch,
+                     math.log(max(press.normal_force_n, 1e-6)),
+                     t * math.cos(press.beta_rad), t * math.sin(press.beta_rad)))
+
+
+class _Frame:
+    """Residuals of one frame's model, with each press's force maps kept apart."""
+
+    def __init__(self, model: SkinModel, presses: Sequence[Press], counts: np.ndarray):
+        self.model = model
+        self.presses = list(presses)
+        self.counts = np.asarray(counts, dtype=np.float64)
+        self.scale = 1.0 / max(model.noise_counts, 1.0)
+
+    def forces(self, u: np.ndarray) -> list:
+        return [np.stack(render_force(self.model, [_press_of(self.model, p, u[k])]))
+                for k, p in enumerate(self.presses)]
+
+    def residual(self, forces: list) -> np.ndarray:
+        total = np.sum(forces, axis=0)
+        return ((expected_counts(self.model, total[0], total[1]) - self.counts)
+                * self.scale).ravel()
+
+    def jacobian(self, u: np.ndarray, forces: list, r0: np.ndarray) -> np.ndarray:
+        # Each parameter moves only its own press's maps: re-render that press alone.
+        jac = np.empty((r0.size, u.size))
+        for k, p in enumerate(self.presses):
+            others = forces[:k] + forces[k + 1:]
+            for j in range(_PER_PRESS):
+                v = u[k].copy()
+                v[j] += _STEP[j]
+                moved = np.stack(render_force(self.model, [_press_of(self.model, p, v)]))
+                jac[:, k * _PER_PRESS + j] = (self.residual(others + [moved]) - r0) / _STEP[j]
+        return jac
+
+
+def fit_presses(model: SkinModel, presses: Sequence[Press], counts: np.ndarray) -> tuple:
+    """
+    Fit the presses' parameters to one frame's (2, rows, cols) counts, started at the truth.
+
+    Returns (K x 5 parameters: x, y in taxels, log normal force, tangential displacement x, y in
+    taxels; their K x 5 standard errors from the fit's curvature).
+    """
+    frame = _Frame(model, presses, counts)
+    u = np.array([_parameters(model, p) for p in presses])
+    forces = frame.forces(u)
+    r = frame.residual(forces)
+    cost = r @ r
+    damping = 1e-3
+    jac = frame.jacobian(u, forces, r)
+    for _ in range(_ITERATIONS):
+        normal = jac.T @ jac
+        step = np.linalg.solve(normal + damping * np.diag(np.diag(normal) + 1e-9), -jac.T @ r)
+        trial = u + step.reshape(u.shape)
+        trial_forces = frame.forces(trial)
+        trial_r = frame.residual(trial_forces)
+        trial_cost = trial_r @ trial_r
+        if trial_cost < cost:
+            u, forces, r, cost = trial, trial_forces, trial_r, trial_cost
+            damping *= 0.3
+            if np.abs(step).max() < 1e-4:
+                break
+            jac = frame.jacobian(u, forces, r)
+        else:
+            damping *= 10.0
+    try:
+        covariance = np.linalg.inv(jac.T @ jac)
+        sigma = np.sqrt(np.clip(np.diag(covariance), 0.0, None)).reshape(u.shape)
+    except np.linalg.LinAlgError:
+        sigma = np.full(u.shape, math.inf)
+    return u, sigma
+
+
+def oracle_contacts(model: SkinModel, presses: Sequence[Press], counts: np.ndarray) -> list:
+    """
+    Return the oracle's contacts of one frame (strongest first), as the pipeline reports them.
+
+    Each press gives one contact at its fitted place, with its fitted normal force and the
+    azimuth of its fitted tangential displacement; the azimuth sigma comes from the fit's
+    curvature. An empty press list gives no contact.
+    """
+    if not presses:
+        return []
+    u, sigma = fit_presses(model, presses, counts)
+    pitch = model.pitch_m
+    out = []
+    for (x, y, log_fz, tx, ty), (_, _, _, sx, sy) in zip(u.tolist(), sigma.tolist()):
+        normal = math.exp(log_fz)
+        length = math.hypot(tx, ty)
+        tangential = length * pitch / model.compliance_m_per_n
+        fx, fy = ((tangential * tx / length, tangential * ty / length) if length > 0
+                  else (0.0, 0.0))
+        spread = math.hypot(sx, sy) / math.sqrt(2.0)
+        out.append(Contact(
+            x_m=x * pitch, y_m=y * pitch, force_n=normal, area_m2=0.0,
+            shift_m=(tx * pitch, ty * pitch), azimuth_rad=math.atan2(ty, tx),
+            azimuth_sigma_rad=math.atan2(spread, length) if math.isfinite(spread) else math.pi,
+            alpha_rad=math.atan2(tangential, normal), force_xyz_n=(fx, fy, -normal),
+            confidence=1.0, direction_valid=length > 0))
+    out.sort(key=lambda c: -c.force_n)
+    return out
+
+
+def oracle_run(model: SkinModel, presses: Sequence, data) -> tuple:
+    """
+    Return (contacts per frame, microseconds per frame) of the oracle over ``data``'s frames.
+
+    ``presses`` holds each frame's true presses, in the dataset's order.
+    """
+    if len(presses) != data.frames:
+        raise ValueError(f'the oracle needs the presses of all {data.frames} frames, '
+                         f'got {len(presses)}')
+    start = time.perf_counter()
+    contacts = [oracle_contacts(model, presses[i], np.stack((data.top[i], data.bottom[i])))
+                for i in range(data.frames)]
+    return contacts, (time.perf_counter() - start) / max(data.frames, 1) * 1e6

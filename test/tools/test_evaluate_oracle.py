@@ -1,0 +1,37 @@
+"""Tests of the evaluator's oracle column and of --contacts numbering with a split."""
+
+import csv
+import json
+
+import numpy as np
+
+from skin_driver.core.estimation.dataset import save_dataset
+from skin_driver.core.sim.experiments import add_calibration_frames, make_scene
+from skin_driver.core.sim.skins import family_skin
+from skin_driver.tools.evaluate import cli
+
+
+def test_evaluator_scores_the_oracle_beside_the_methods(capsys):
+    assert cli.main(['--skin', 'default', '--scene', 'random', '--size', '10', '--json']) == 0
+    report = json.loads(capsys.readouterr().out)
+    oracle = report['methods']['oracle']['summary']
+    default = report['methods']['taxel_fit']
+    assert oracle['valid_share'] == 1.0
+    assert oracle['mean_error_deg'] < default['summary']['mean_error_deg']
+    assert default['ratio_to_oracle']['single'] > 1.0
+    assert cli.main(['--skin', 'default', '--scene', 'random', '--size', '10', '--no-oracle',
+                     '--json']) == 0
+    assert 'oracle' not in json.loads(capsys.readouterr().out)['methods']
+
+
+def test_contacts_are_numbered_by_their_frame_in_the_dataset(tmp_path):
+    rng = np.random.default_rng(0)
+    data = add_calibration_frames(make_scene('random', 'default', rng, 6),
+                                  family_skin('default').model, rng)
+    path, out = tmp_path / 'd.npz', tmp_path / 'c.csv'
+    save_dataset(path, data)
+    assert cli.main([str(path), '--contacts', str(out)]) == 0
+    with open(out) as f:
+        frames = {int(row['frame']) for row in csv.DictReader(f)}
+    scored = set(np.flatnonzero(data.split == 0).tolist())
+    assert frames and frames <= scored and min(frames) >= 32
