@@ -16,6 +16,7 @@ setup(
         ('share/' + PACKAGE, ['package.xml']),
         ('share/' + PACKAGE + '/launch', glob('launch/*.launch.py')),
         ('share/' + PACKAGE + '/config', glob('config/*.yaml') + glob('config/*.rviz')),
+        ('share/' + PACKAGE + '/urdf', glob('urdf/*.xacro')),
     ],
     install_requires=['setuptools'],
     zip_safe=True,
@@ -32,6 +33,9 @@ setup(
             'evaluate = skin_driver.tools.evaluate.cli:main',
             'demo = skin_driver.tools.demo:main',
             'bench = skin_driver.tools.bench.cli:main',
+            'record = skin_driver.tools.record:main',
+            'bag_to_dataset = skin_driver.tools.bag_to_dataset:main',
+            'mount_tf = skin_driver.ros.frames:main',
         ],
     },
 )

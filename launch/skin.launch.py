@@ -5,15 +5,26 @@ Bring up the skin: serial driver and direction node, optionally the simulated sk
     ros2 launch skin_driver skin.launch.py port:=/dev/ttyACM0
     ros2 launch skin_driver skin.launch.py sim:=true rviz:=true  # simulated skin + heatmap
     ros2 launch skin_driver skin.launch.py fused:=true          # estimate in the driver process
+    ros2 launch skin_driver skin.launch.py namespace:=left parent_frame:=left_forearm_link \
+        mount_z:=0.05 mount_pitch:=1.5708                      # mounted on a robot link
+
+When the simulated skin exits (a bad scene, a port it cannot link), the launch stops with it.
 """
 
 from launch import LaunchDescription
-from launch.actions import DeclareLaunchArgument, ExecuteProcess, OpaqueFunction
+from launch.actions import (DeclareLaunchArgument, ExecuteProcess, OpaqueFunction,
+                            RegisterEventHandler, Shutdown)
 from launch.conditions import IfCondition, UnlessCondition
+from launch.event_handlers import OnProcessExit
 from launch.substitutions import LaunchConfiguration, PathJoinSubstitution
 from launch_ros.actions import LifecycleNode, Node
+from launch_ros.parameter_descriptions import ParameterValue
 from launch_ros.substitutions import FindPackagePrefix, FindPackageShare
 from skin_driver.ros import rviz_config
+from skin_driver.ros.frames import default_frame_id
+
+MOUNT_POSE = (('x', 'm'), ('y', 'm'), ('z', 'm'), ('roll', 'rad'), ('pitch', 'rad'),
+              ('yaw', 'rad'))
 
 
 def _require_rviz2(context):
@@ -27,9 +38,30 @@ def _require_rviz2(context):
 def _rviz(context):
     template = PathJoinSubstitution([FindPackageShare('skin_driver'), 'config', 'skin.rviz'])
     config = rviz_config.write_namespaced(template.perform(context),
-                                          LaunchConfiguration('namespace').perform(context))
+                                          LaunchConfiguration('namespace').perform(context),
+                                          LaunchConfiguration('frame_id').perform(context))
     return [Node(package='rviz2', executable='rviz2', name='skin_rviz', arguments=['-d', config],
                  output='screen')]
+
+
+def _mount(context):
+    # Without a parent link the skin's frame stands alone (rviz shows it as its fixed frame).
+    parent = LaunchConfiguration('parent_frame').perform(context)
+    if not parent:
+        return []
+    namespace = LaunchConfiguration('namespace').perform(context)
+    frame = LaunchConfiguration('frame_id').perform(context) or default_frame_id(namespace)
+    pose = {name: float(LaunchConfiguration(f'mount_{name}').perform(context))
+            for name, _ in MOUNT_POSE}
+    return [Node(package='skin_driver', executable='mount_tf', name='skin_mount_tf',
+                 namespace=namespace, output='screen',
+                 parameters=[{'parent_frame': parent, 'frame_id': frame, **pose}])]
+
+
+def _simulator_exited(event, context):
+    # The driver would retry a port nobody serves: stop everything, saying why.
+    return [Shutdown(reason=f'the simulated skin exited (code {event.returncode}); its message '
+                            'is above')]
 
 
 def generate_launch_description():
@@ -60,7 +92,17 @@ def generate_launch_description():
                               description='Estimate contacts inside the driver process, on its '
                                           'serial reader thread (1-2 kHz), instead of in a '
                                           'separate direction node.'),
-    ]
+        DeclareLaunchArgument('frame_id', default_value='',
+                              description="The skin's frame in every header; empty: "
+                                          '<namespace>_skin_link (skin_link in the namespace '
+                                          'skin or none).'),
+        DeclareLaunchArgument('parent_frame', default_value='',
+                              description='Link the skin is mounted on: publishes the mount pose '
+                                          '(mount_x, _y, _z, _roll, _pitch, _yaw) on '
+                                          '/tf_static; empty: no transform.'),
+    ] + [DeclareLaunchArgument(f'mount_{name}', default_value='0.0',
+                               description=f'Mount pose on parent_frame: {name} ({unit}).')
+         for name, unit in MOUNT_POSE]
     # The simulator is a device, not a ROS node: it takes no --ros-args.
     simulator = ExecuteProcess(
         cmd=[PathJoinSubstitution([FindPackagePrefix('skin_driver'), 'lib', 'skin_driver', 'sim']),
@@ -69,7 +111,11 @@ def generate_launch_description():
         name='skin_sim', output='screen', condition=IfCondition(LaunchConfiguration('sim')))
     driver = LifecycleNode(
         package='skin_driver', executable='driver', name='skin_driver', namespace=namespace,
-        parameters=[params_file, {'port': port, 'fused': fused}], output='screen')
+        parameters=[params_file, {'port': port, 'fused': fused,
+                                  # as a string even when empty (empty YAML would be null)
+                                  'frame_id': ParameterValue(LaunchConfiguration('frame_id'),
+                                                             value_type=str)}],
+        output='screen')
     # Fused, the driver process runs the skin_direction node itself (same name, parameters from
     # the same section of params_file, same services and topics).
     direction = Node(
@@ -78,5 +124,6 @@ def generate_launch_description():
         condition=UnlessCondition(fused))
     return LaunchDescription(arguments + [
         OpaqueFunction(function=_require_rviz2, condition=with_rviz),
-        simulator, driver, direction,
+        simulator, driver, direction, OpaqueFunction(function=_mount),
+        RegisterEventHandler(OnProcessExit(target_action=simulator, on_exit=_simulator_exited)),
         OpaqueFunction(function=_rviz, condition=with_rviz)])

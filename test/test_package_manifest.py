@@ -9,7 +9,8 @@ ROOT = pathlib.Path(__file__).resolve().parents[1]
 # Python module -> rosdep key, for the modules whose key differs from their name.
 ROSDEP_KEYS = {'cv2': 'python3-opencv', 'hypothesis': 'python3-hypothesis',
                'matplotlib': 'python3-matplotlib', 'numpy': 'python3-numpy',
-               'pytest': 'python3-pytest', 'serial': 'python3-serial',
+               'pytest': 'python3-pytest', 'rosbags': 'python3-rosbags-pip',
+               'serial': 'python3-serial',
                'skimage': 'python3-skimage', 'yaml': 'python3-yaml'}
 # This project's own packages and the tests' helper modules.
 OWN = {'skin_driver', 'skin_msgs', 'rosutil', 'pipeline', 'conftest'}

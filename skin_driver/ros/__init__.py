@@ -1,0 +1,1 @@
+"""The ROS side of the driver: nodes and what they share."""

@@ -11,10 +11,12 @@ from typing import Iterable, Sequence, Tuple
 
 from builtin_interfaces.msg import Time
 from diagnostic_msgs.msg import DiagnosticStatus
-from geometry_msgs.msg import Point, Vector3, Wrench, WrenchStamped
+from geometry_msgs.msg import (Point, Quaternion, Transform, TransformStamped, Vector3,
+                               Wrench, WrenchStamped)
 import numpy as np
 from sensor_msgs.msg import Image
 from skin_driver.core.estimation.heatmap import colour_map
+from skin_driver.core.estimation.recording import layers_of
 from skin_driver.core.estimation.wrench import torque_about_origin
 from skin_msgs.msg import SkinFrame, TactileContact, TactileContactArray
 from std_msgs.msg import ColorRGBA, Header
@@ -44,13 +46,7 @@ def skin_frame_to_msg(header: Header, sequence: int, device_time_us: int,
 
 def skin_frame_layers(msg: SkinFrame) -> Tuple[np.ndarray, np.ndarray]:
     """Return the (top, bottom) count maps of a SkinFrame, checking that its sizes agree."""
-    n = int(msg.rows) * int(msg.cols)
-    if n == 0 or len(msg.top) != n or len(msg.bottom) != n:
-        raise ValueError(f'SkinFrame {msg.rows}x{msg.cols} carries {len(msg.top)} top and '
-                         f'{len(msg.bottom)} bottom counts; expected {n} each')
-    shape = (int(msg.rows), int(msg.cols))
-    return (np.asarray(msg.top, dtype=np.uint16).reshape(shape),
-            np.asarray(msg.bottom, dtype=np.uint16).reshape(shape))
+    return layers_of(msg.rows, msg.cols, msg.top, msg.bottom)
 
 
 def counts_to_image(header: Header, counts: np.ndarray) -> Image:
@@ -158,6 +154,19 @@ def wrench_stamped(header: Header, force_xyz_n: Sequence[float],
                    at_xy_m: Sequence[float] = (0.0, 0.0)) -> WrenchStamped:
     """Return a force applied at at_xy_m (skin plane, z = 0) as a WrenchStamped, torque r x F."""
     return WrenchStamped(header=header, wrench=_wrench_at(force_xyz_n, *at_xy_m))
+
+
+def mount_transform(stamp: Time, parent: str, child: str, xyz: Sequence[float],
+                    rpy: Sequence[float]) -> TransformStamped:
+    """Return the pose of ``child`` on ``parent``: translation xyz, fixed-axis roll-pitch-yaw."""
+    half = [0.5 * float(a) for a in rpy]
+    (cr, cp, cy), (sr, sp, sy) = ([math.cos(a) for a in half], [math.sin(a) for a in half])
+    rotation = Quaternion(x=sr * cp * cy - cr * sp * sy, y=cr * sp * cy + sr * cp * sy,
+                          z=cr * cp * sy - sr * sp * cy, w=cr * cp * cy + sr * sp * sy)
+    x, y, z = (float(v) for v in xyz)
+    return TransformStamped(header=Header(stamp=stamp, frame_id=parent), child_frame_id=child,
+                            transform=Transform(translation=Vector3(x=x, y=y, z=z),
+                                                rotation=rotation))
 
 
 def heatmap_markers(header: Header, force_map: np.ndarray, pitch_m: float, contacts: Iterable,

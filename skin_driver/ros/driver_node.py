@@ -41,6 +41,7 @@ from skin_driver.core.protocol.link import CONNECTED, DISCONNECTED, SerialLink, 
 from skin_driver.core.protocol.wire import FrameDecoder
 from skin_driver.ros import conversions, diagnostics
 from skin_driver.ros.direction_node import DirectionNode
+from skin_driver.ros.frames import default_frame_id
 from skin_driver.ros.params import declare, ParameterError
 from skin_driver.ros.spin import spin_nodes
 from skin_msgs.msg import SkinFrame
@@ -98,8 +99,9 @@ class SkinDriverNode(Node):
         declare(self, 'cols', 16, 'Taxel columns the board must send (along x).', low=1, high=128)
         declare(self, 'pitch', 0.005, 'Distance between taxel centres, metres.',
                 low=0.0001, high=0.1)
-        declare(self, 'frame_id', 'skin_link', 'TF frame of the skin patch in every header.',
-                non_empty=True)
+        declare(self, 'frame_id', '',
+                'TF frame of the skin patch in every header; empty: from the namespace '
+                '(<namespace>_skin_link, skin_link in the namespace skin or none).')
         declare(self, 'publish_images', True,
                 'Also publish each layer as a mono16 image (costs time at kHz rates).')
         declare(self, 'read_timeout', 0.05,
@@ -132,10 +134,9 @@ class SkinDriverNode(Node):
                 f"{', '.join(map(repr, fixed))} cannot change while the driver is "
                 f'{self._lifecycle}: it is read at configure; deactivate, cleanup, set it, then '
                 'configure and activate'))
-        for name in ('port', 'frame_id'):
-            if name in new and not str(new[name]).strip():
-                return SetParametersResult(successful=False,
-                                           reason=f'parameter {name!r} must not be empty')
+        if 'port' in new and not str(new['port']).strip():
+            return SetParametersResult(successful=False,
+                                       reason="parameter 'port' must not be empty")
         problem = _backoff_problem(new.get('reconnect_min', self._p('reconnect_min')),
                                    new.get('reconnect_max', self._p('reconnect_max')))
         return SetParametersResult(successful=not problem, reason=problem)
@@ -147,7 +148,7 @@ class SkinDriverNode(Node):
         if problem:
             self.get_logger().error(f'parameter {problem}')
             return TransitionCallbackReturn.FAILURE
-        self._frame_id = self._p('frame_id')
+        self._frame_id = self._p('frame_id').strip() or default_frame_id(self.get_namespace())
         self._pitch = float(self._p('pitch'))
         self._pubs['frame'] = self.create_lifecycle_publisher(SkinFrame, 'frame',
                                                               qos_profile_sensor_data)

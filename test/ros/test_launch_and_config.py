@@ -44,7 +44,8 @@ def test_nodes_take_their_section_of_the_config_through_the_namespace_wildcard()
     try:
         node = SkinDriverNode(context=context, namespace='/anywhere', parameter_overrides=[])
         assert node.get_parameter('baud').value == _section('skin_driver')['baud']
-        assert node.get_parameter('frame_id').value == 'skin_link'
+        # Empty: the driver names the frame after its namespace (anywhere_skin_link).
+        assert node.get_parameter('frame_id').value == ''
         node.destroy_node()
     finally:
         rclpy.shutdown(context=context)
@@ -69,6 +70,9 @@ def test_rviz_config_follows_the_launch_namespace(tmp_path, monkeypatch):
     assert rviz_config.namespaced('Value: /skin/wrench', '/robot/left_hand/') == \
         'Value: /robot/left_hand/wrench'
     assert rviz_config.namespaced('Value: /skin/wrench', '') == 'Value: /wrench'
+    assert manager['Global Options']['Fixed Frame'] == 'left_skin_link'
+    assert 'Fixed Frame: tool0' in rviz_config.namespaced('    Fixed Frame: skin_link', 'left',
+                                                          'tool0')
 
 
 def test_missing_rviz2_is_one_line_naming_the_package(monkeypatch):
@@ -102,7 +106,8 @@ def test_launch_file_declares_its_arguments_and_nodes():
     assert isinstance(description, LaunchDescription)
     names = {a.name for a in description.entities if isinstance(a, DeclareLaunchArgument)}
     assert names == {'port', 'params_file', 'namespace', 'sim', 'scene', 'sim_rate', 'rviz',
-                     'fused'}
+                     'fused', 'frame_id', 'parent_frame', 'mount_x', 'mount_y', 'mount_z',
+                     'mount_roll', 'mount_pitch', 'mount_yaw'}
     executables = [getattr(a, 'node_executable', None) for a in description.entities]
     assert {'driver', 'direction'} <= set(executables)
     # ExecuteProcess keeps its name as substitutions until launch performs them (nodes have
@@ -132,3 +137,24 @@ def test_rviz_without_rviz2_fails_up_front_and_starts_nothing(tmp_path, monkeypa
                               'port': str(tmp_path / 'skin0')}.items())]))
     assert service.run() != 0
     assert [e.process_name for e in started] == []
+
+
+@NO_LAUNCH_ROS
+@pytest.mark.timeout(60)
+def test_a_simulator_that_dies_stops_the_launch_with_its_reason(tmp_path):
+    from launch import LaunchDescription, LaunchService
+    from launch.actions import IncludeLaunchDescription, RegisterEventHandler
+    from launch.event_handlers import OnShutdown
+    from launch.launch_description_sources import PythonLaunchDescriptionSource
+    reasons = []
+    service = LaunchService()
+    service.include_launch_description(LaunchDescription([
+        RegisterEventHandler(OnShutdown(on_shutdown=lambda event, _: reasons.append(
+            event.reason))),
+        IncludeLaunchDescription(
+            PythonLaunchDescriptionSource(str(ROOT / 'launch' / 'skin.launch.py')),
+            launch_arguments={'sim': 'true', 'scene': 'nosuch',
+                              'port': str(tmp_path / 'skin0')}.items())]))
+    # Before: the launch kept the driver retrying a port nobody serves, and never returned.
+    service.run()
+    assert any('simulated skin exited' in str(reason) for reason in reasons)

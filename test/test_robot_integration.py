@@ -1,0 +1,133 @@
+"""On a robot: the skin's frame per namespace, its mount, its URDF patch, and live recording."""
+
+import math
+import pathlib
+import xml.etree.ElementTree as ElementTree
+
+from builtin_interfaces.msg import Time
+import numpy as np
+from pipeline import overrides, scene
+import pytest
+import rclpy
+from rclpy.qos import qos_profile_sensor_data
+from rosutil import ros_context, spin_until
+from skin_driver.ros import conversions
+from skin_driver.core.estimation.dataset import load_dataset
+from skin_driver.ros.driver_node import SkinDriverNode
+from skin_driver.tools.processes import spawn, stop
+from skin_driver.ros.frames import default_frame_id
+from skin_driver.tools.sim import SimulatedSkin
+from skin_msgs.msg import SkinFrame
+import xacro
+
+ROOT = pathlib.Path(__file__).resolve().parents[1]
+
+
+@pytest.mark.parametrize('namespace, frame', [
+    ('/left', 'left_skin_link'), ('/robot/right', 'robot_right_skin_link'),
+    ('/skin', 'skin_link'), ('/', 'skin_link'), ('', 'skin_link')])
+def test_the_skins_frame_is_named_after_its_namespace(namespace, frame):
+    assert default_frame_id(namespace) == frame
+
+
+@pytest.mark.ros
+def test_two_skins_in_two_namespaces_have_two_frames(tmp_path):
+    the_scene = scene([])
+    sims, frames = [], {}
+    with ros_context() as (context, executor):
+        drivers = []
+        for name in ('left', 'right'):
+            link = str(tmp_path / f'{name}0')
+            sims.append(SimulatedSkin(the_scene, rate_hz=100.0, link_path=link, seed=1))
+            drivers.append(SkinDriverNode(context=context, namespace=f'/{name}',
+                                          parameter_overrides=overrides({'port': link})))
+        listener = rclpy.create_node('listener', context=context)
+        for name in ('left', 'right'):
+            listener.create_subscription(
+                SkinFrame, f'/{name}/frame',
+                lambda msg, name=name: frames.setdefault(name, msg.header.frame_id),
+                qos_profile_sensor_data)
+        for node in drivers + [listener]:
+            executor.add_node(node)
+        try:
+            for sim in sims:
+                sim.start()
+            for driver in drivers:
+                driver.trigger_configure()
+                driver.trigger_activate()
+            assert spin_until(executor, lambda: len(frames) == 2)
+        finally:
+            for driver in drivers:
+                driver.close()
+                driver.destroy_node()
+            for sim in sims:
+                sim.stop()
+            listener.destroy_node()
+    assert frames == {'left': 'left_skin_link', 'right': 'right_skin_link'}
+
+
+def test_the_mount_pose_is_a_rotation_and_a_translation_of_the_parent_link():
+    # Pitch of 90 degrees: the skin's z (out of the skin) points along the parent's x.
+    t = conversions.mount_transform(Time(sec=1), 'forearm_link', 'left_skin_link',
+                                    (0.1, 0.0, 0.05),
+                                    (0.0, math.pi / 2, 0.0))
+    assert (t.header.frame_id, t.child_frame_id) == ('forearm_link', 'left_skin_link')
+    assert (t.transform.translation.x, t.transform.translation.z) == (0.1, 0.05)
+    q = t.transform.rotation
+    assert (q.x, q.y, q.z, q.w) == pytest.approx((0.0, math.sqrt(0.5), 0.0, math.sqrt(0.5)))
+
+
+def test_the_skin_patch_macro_gives_a_link_with_its_visual_fixed_to_the_parent(tmp_path):
+    robot = tmp_path / 'arm.urdf.xacro'
+    robot.write_text(
+        '<?xml version="1.0"?>\n<robot name="arm" xmlns:xacro="http://www.ros.org/wiki/xacro">\n'
+        f'  <xacro:include filename="{ROOT / "urdf" / "skin_patch.urdf.xacro"}"/>\n'
+        '  <link name="forearm_link"/>\n'
+        '  <xacro:skin_patch name="left_skin_link" parent="forearm_link" rows="8" cols="16"\n'
+        '                    pitch="0.005" xyz="0 0.04 0.1" rpy="0 1.5708 0"/>\n'
+        '</robot>\n')
+    urdf = ElementTree.fromstring(xacro.process_file(str(robot)).toxml())
+    link = urdf.find("link[@name='left_skin_link']")
+    size = [float(v) for v in link.find('visual/geometry/box').get('size').split()]
+    assert size[:2] == pytest.approx([0.08, 0.04])
+    centre = [float(v) for v in link.find('visual/origin').get('xyz').split()]
+    assert centre[:2] == pytest.approx([0.0375, 0.0175]) and centre[2] < 0
+    joint = urdf.find("joint[@name='left_skin_link_mount']")
+    assert joint.get('type') == 'fixed'
+    assert joint.find('parent').get('link') == 'forearm_link'
+    assert joint.find('child').get('link') == 'left_skin_link'
+    assert joint.find('origin').get('rpy') == '0 1.5708 0'
+
+
+@pytest.mark.ros
+def test_record_writes_the_live_frames_and_their_tare_as_a_dataset(tmp_path):
+    link = str(tmp_path / 'skin0')
+    out = tmp_path / 'live.npz'
+    # Pressed from 0.3 s on, for as long as the recorder may take to start.
+    the_scene = scene([{'time_s': 0.3, 'alpha_deg': 45.0, 'beta_deg': 90.0,
+                        'duration_s': 120.0}])
+    sim = SimulatedSkin(the_scene, rate_hz=100.0, link_path=link, seed=1)
+    with ros_context() as (context, executor):
+        driver = SkinDriverNode(context=context, parameter_overrides=overrides({'port': link}))
+        executor.add_node(driver)
+        sim.start()
+        with open(tmp_path / 'record.log', 'w') as log:
+            recorder = spawn(['-m', 'skin_driver.tools.record', str(out), '--topic', '/frame',
+                              '--scans', '60', '--tare-frames', '10'], log)
+        try:
+            driver.trigger_configure()
+            driver.trigger_activate()
+            assert spin_until(executor, lambda: recorder.poll() is not None, 60.0), \
+                (tmp_path / 'record.log').read_text()
+        finally:
+            stop([recorder])
+            driver.close()
+            driver.destroy_node()
+            sim.stop()
+    assert recorder.returncode == 0, (tmp_path / 'record.log').read_text()
+    data = load_dataset(out)
+    assert data.frames == 50 and data.tare_top.shape == (10, 16, 16)
+    # Unlabelled: a recording has no ground truth of its own.
+    assert np.isnan(data.azimuth_deg).all() and (data.alpha_deg == 0).all()
+    # The press is in the recording: the scans are the skin's, not empty maps.
+    assert data.top.max() > 1000
