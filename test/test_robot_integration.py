@@ -11,11 +11,11 @@ import pytest
 import rclpy
 from rclpy.qos import qos_profile_sensor_data
 from rosutil import ros_context, spin_until
-from skin_driver.ros import conversions
 from skin_driver.core.estimation.dataset import load_dataset
+from skin_driver.ros import conversions
 from skin_driver.ros.driver_node import SkinDriverNode
-from skin_driver.tools.processes import spawn, stop
 from skin_driver.ros.frames import default_frame_id
+from skin_driver.tools.processes import spawn, stop
 from skin_driver.tools.sim import SimulatedSkin
 from skin_msgs.msg import SkinFrame
 import xacro
