@@ -7,10 +7,10 @@ import numpy as np
 import pytest
 from rosbags.rosbag2 import StoragePlugin, Writer
 from rosbags.typesys import get_types_from_msg, get_typestore, Stores
-from skin_driver.tools.evaluate import cli as evaluate
 from skin_driver.core.estimation.dataset import load_dataset
 from skin_driver.core.sim.experiments import make_scene
 from skin_driver.tools import bag_to_dataset
+from skin_driver.tools.evaluate import cli as evaluate
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 SKIN_FRAME = 'skin_msgs/msg/SkinFrame'

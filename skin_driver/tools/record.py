@@ -21,9 +21,9 @@ import rclpy
 from rclpy.executors import ExternalShutdownException
 from rclpy.qos import qos_profile_sensor_data
 from rclpy.qos_overriding_options import QoSOverridingOptions
-from skin_driver.ros import conversions
 from skin_driver.core.estimation.dataset import save_dataset
 from skin_driver.core.estimation.recording import Recording
+from skin_driver.ros import conversions
 from skin_driver.tools.recording_args import add_recording_arguments, labels_of
 from skin_msgs.msg import SkinFrame
 
