@@ -38,11 +38,11 @@ from geometry_msgs.msg import WrenchStamped
 from rcl_interfaces.msg import SetParametersResult
 from rclpy.action import ActionServer, CancelResponse, GoalResponse
 from rclpy.callback_groups import MutuallyExclusiveCallbackGroup
-from rclpy.qos import qos_profile_sensor_data
 from rclpy.task import Future
 from skin_driver.core.estimation.calibration import (Calibration, CalibrationMismatch, PARTS,
                                                      SkinIdentity)
 from skin_driver.core.estimation.session import CalibrationRefused, CalibrationSession
+from skin_driver.ros import qos
 from skin_driver.ros.params import declare
 from skin_driver.ros.paths import ros_home
 from skin_msgs.action import Calibrate, CalibrateCompliance, CalibrateForce, CalibrateGains
@@ -236,7 +236,7 @@ class CalibrationServices:
         if topic:
             # Best effort takes a sensor's samples from a reliable or a best-effort publisher.
             self._wrench_sub = self._node.create_subscription(
-                WrenchStamped, topic, self._on_wrench, qos_profile_sensor_data)
+                WrenchStamped, topic, self._on_wrench, qos.STREAM, **qos.overridable())
 
     def _on_wrench(self, msg: WrenchStamped) -> None:
         f = msg.wrench.force

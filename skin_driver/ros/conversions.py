@@ -17,7 +17,7 @@ import numpy as np
 from sensor_msgs.msg import Image
 from skin_driver.core.estimation.heatmap import colour_map
 from skin_driver.core.estimation.recording import layers_of
-from skin_driver.core.estimation.wrench import torque_about_origin
+from skin_driver.core.estimation.wrench import net_wrench, torque_about_origin
 from skin_msgs.msg import SkinFrame, TactileContact, TactileContactArray
 from std_msgs.msg import ColorRGBA, Header
 from visualization_msgs.msg import Marker, MarkerArray
@@ -143,17 +143,21 @@ def contacts_to_array(header: Header, contacts: Sequence, sequence: int = 0,
     return ContactArrayWriter().fill(header, contacts, sequence, device_time_us)
 
 
-def _wrench_at(force_xyz_n: Sequence[float], x_m: float, y_m: float) -> Wrench:
-    """Return the wrench of a force applied at (x, y, 0): torque r x F about the frame origin."""
-    fx, fy, fz = (_finite(v, 'force') for v in force_xyz_n)
-    tx, ty, tz = torque_about_origin(_finite(x_m, 'x'), _finite(y_m, 'y'), (fx, fy, fz))
-    return Wrench(force=Vector3(x=fx, y=fy, z=fz), torque=Vector3(x=tx, y=ty, z=tz))
 
 
-def wrench_stamped(header: Header, force_xyz_n: Sequence[float],
-                   at_xy_m: Sequence[float] = (0.0, 0.0)) -> WrenchStamped:
-    """Return a force applied at at_xy_m (skin plane, z = 0) as a WrenchStamped, torque r x F."""
-    return WrenchStamped(header=header, wrench=_wrench_at(force_xyz_n, *at_xy_m))
+def wrench_stamped(header: Header, contacts: Sequence) -> WrenchStamped:
+    """
+    Return the net wrench of all contacts of one scan, as a force/torque sensor would report it.
+
+    The force is the sum of the contacts' forces, the torque the sum of their r x F about the
+    frame origin; zero when nothing touches. Two fingers pinching report what the skin carries,
+    not the strongest finger.
+    """
+    force, torque = net_wrench(contacts)
+    fx, fy, fz = (_finite(v, 'force') for v in force)
+    tx, ty, tz = (_finite(v, 'torque') for v in torque)
+    return WrenchStamped(header=header, wrench=Wrench(force=Vector3(x=fx, y=fy, z=fz),
+                                                      torque=Vector3(x=tx, y=ty, z=tz)))
 
 
 def mount_transform(stamp: Time, parent: str, child: str, xyz: Sequence[float],

@@ -8,6 +8,7 @@ result is what diagnostic_aggregator and rqt_robot_monitor expect on /diagnostic
 from typing import Dict, Iterable, Tuple
 
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
+from skin_driver.ros import qos
 
 OK = DiagnosticStatus.OK
 WARN = DiagnosticStatus.WARN
@@ -34,7 +35,8 @@ class DiagnosticPublisher:
 
     def __init__(self, node):
         self._node = node
-        self._pub = node.create_publisher(DiagnosticArray, '/diagnostics', 10)
+        self._pub = node.create_publisher(DiagnosticArray, '/diagnostics', qos.DIAGNOSTICS_DEPTH,
+                                          **qos.overridable())
 
     def publish(self, statuses: Iterable[DiagnosticStatus]) -> None:
         """Send the statuses, stamped now."""

@@ -16,8 +16,7 @@ Either way the estimation itself is skin_driver.ros.estimation_host.
 
 import rclpy
 from rclpy.node import Node
-from rclpy.qos import qos_profile_sensor_data
-from skin_driver.ros import conversions
+from skin_driver.ros import conversions, qos
 from skin_driver.ros.estimation_host import EstimationHost
 from skin_driver.ros.params import ParameterError
 from skin_driver.ros.spin import spin_nodes
@@ -32,7 +31,8 @@ class DirectionNode(Node):
         super().__init__('skin_direction', **kwargs)
         self.host = EstimationHost(self)
         if subscribe:
-            self.create_subscription(SkinFrame, 'frame', self._on_frame, qos_profile_sensor_data)
+            self.create_subscription(SkinFrame, 'frame', self._on_frame, qos.STREAM,
+                                     **qos.overridable())
 
     def _on_frame(self, msg: SkinFrame) -> None:
         try:

@@ -34,15 +34,14 @@ import time
 from rcl_interfaces.msg import SetParametersResult
 import rclpy
 from rclpy.lifecycle import Node, State, TransitionCallbackReturn
-from rclpy.qos import qos_profile_sensor_data
 from sensor_msgs.msg import Image
 from skin_driver.core.protocol.health import LinkHealth
 from skin_driver.core.protocol.link import CONNECTED, DISCONNECTED, SerialLink, STOPPED
 from skin_driver.core.protocol.wire import FrameDecoder
-from skin_driver.ros import conversions, diagnostics
+from skin_driver.ros import conversions, diagnostics, qos
 from skin_driver.ros.direction_node import DirectionNode
 from skin_driver.ros.frames import default_frame_id
-from skin_driver.ros.params import declare, ParameterError
+from skin_driver.ros.params import accept_whole_numbers, declare, ParameterError
 from skin_driver.ros.spin import spin_nodes
 from skin_msgs.msg import SkinFrame
 
@@ -60,6 +59,7 @@ class SkinDriverNode(Node):
     def __init__(self, **kwargs):
         super().__init__('skin_driver', **kwargs)
         self._declare_parameters()
+        accept_whole_numbers(self)
         self._link = None
         self._pubs = {}
         self._rate = None
@@ -150,12 +150,12 @@ class SkinDriverNode(Node):
             return TransitionCallbackReturn.FAILURE
         self._frame_id = self._p('frame_id').strip() or default_frame_id(self.get_namespace())
         self._pitch = float(self._p('pitch'))
-        self._pubs['frame'] = self.create_lifecycle_publisher(SkinFrame, 'frame',
-                                                              qos_profile_sensor_data)
+        self._pubs['frame'] = self.create_lifecycle_publisher(SkinFrame, 'frame', qos.STREAM,
+                                                              **qos.overridable())
         if self._p('publish_images'):
             for layer in ('top', 'bottom'):
                 self._pubs[layer] = self.create_lifecycle_publisher(
-                    Image, f'{layer}/image_raw', qos_profile_sensor_data)
+                    Image, f'{layer}/image_raw', qos.STREAM, **qos.overridable())
         decoder = FrameDecoder(expected_shape=(self._p('rows'), self._p('cols')))
         self._link = SerialLink(
             self._p('port'), self._p('baud'), decoder, self._publish_frames, self._on_link_state,

@@ -27,21 +27,18 @@ from geometry_msgs.msg import WrenchStamped
 import numpy as np
 from rcl_interfaces.msg import SetParametersResult
 from rclpy.event_handler import PublisherEventCallbacks
-from rclpy.qos import qos_profile_sensor_data
 from sensor_msgs.msg import Image
 from skin_driver.core.estimation.heatmap import colour_map
 from skin_driver.core.estimation.pipeline import ContactEstimator, EstimatorConfig
 from skin_driver.core.estimation.shift import DEFAULT_METHOD, method_names
 from skin_driver.core.estimation.tare import RecentScans
-from skin_driver.ros import conversions, diagnostics
+from skin_driver.ros import conversions, diagnostics, qos
 from skin_driver.ros.calibration_services import CalibrationServices
 from skin_driver.ros.estimator_params import estimator_config, ESTIMATOR_PARAMETERS
-from skin_driver.ros.params import check, declare, ParameterError
+from skin_driver.ros.params import accept_whole_numbers, check, declare, ParameterError
 from skin_msgs.msg import TactileContact, TactileContactArray
 from std_srvs.srv import Trigger
 from visualization_msgs.msg import MarkerArray
-
-ZERO_FORCE = (0.0, 0.0, 0.0)
 
 
 class EstimationHost:
@@ -53,6 +50,7 @@ class EstimationHost:
         # ~120 us of CPU per scan (measured) and saved nothing. One thread for the process.
         cv2.setNumThreads(1)
         self._declare_parameters()
+        accept_whole_numbers(node)
         self._lock = threading.Lock()  # serialises changes of the estimator, never the hot path
         self._estimator = ContactEstimator(self._config(EstimatorConfig().pitch_m))
         # The estimator holds the calibration; the services put every new one in force here.
@@ -70,15 +68,16 @@ class EstimationHost:
 
         # Every QoS event handler is one more entity the Python executor walks on each wake,
         # at up to 2 kHz; readers of these topics still get rclpy's incompatible-QoS warnings.
-        quiet = {'event_callbacks': PublisherEventCallbacks(use_default_callbacks=False)}
-        stream = qos_profile_sensor_data
-        self._pub_contacts = node.create_publisher(TactileContactArray, 'contacts', stream,
+        quiet = {'event_callbacks': PublisherEventCallbacks(use_default_callbacks=False),
+                 **qos.overridable()}
+        self._pub_contacts = node.create_publisher(TactileContactArray, 'contacts', qos.STREAM,
                                                    **quiet)
-        self._pub_contact = node.create_publisher(TactileContact, 'contact', stream, **quiet)
-        self._pub_wrench = node.create_publisher(WrenchStamped, 'wrench', stream, **quiet)
-        self._pub_heat = {layer: node.create_publisher(Image, f'{layer}/heatmap', 5, **quiet)
+        self._pub_contact = node.create_publisher(TactileContact, 'contact', qos.STREAM, **quiet)
+        self._pub_wrench = node.create_publisher(WrenchStamped, 'wrench', qos.STREAM, **quiet)
+        self._pub_heat = {layer: node.create_publisher(Image, f'{layer}/heatmap', qos.VIZ_DEPTH,
+                                                       **quiet)
                           for layer in ('top', 'bottom')}
-        self._pub_markers = node.create_publisher(MarkerArray, 'markers', 5, **quiet)
+        self._pub_markers = node.create_publisher(MarkerArray, 'markers', qos.VIZ_DEPTH, **quiet)
         node.create_service(Trigger, '~/tare', self._on_tare)
         self._diag = diagnostics.DiagnosticPublisher(node)
         node.create_timer(self._p('diagnostics_period'), self._report)
@@ -208,9 +207,7 @@ class EstimationHost:
             # The array already holds the strongest contact's message: no second conversion.
             self._pub_contact.publish(array.contacts[0])
         if self._pub_wrench.get_subscription_count():
-            self._pub_wrench.publish(conversions.wrench_stamped(
-                header, contacts[0].force_xyz_n, (contacts[0].x_m, contacts[0].y_m))
-                if contacts else conversions.wrench_stamped(header, ZERO_FORCE))
+            self._pub_wrench.publish(conversions.wrench_stamped(header, contacts))
         self._frames += 1
         self._contacts += len(contacts)
         self._cost_sum += cost

@@ -13,7 +13,7 @@ from rclpy.executors import ExternalShutdownException
 from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 from skin_driver.ros import conversions
-from skin_driver.ros.params import declare, ParameterError
+from skin_driver.ros.params import accept_whole_numbers, declare, ParameterError
 
 
 def default_frame_id(namespace: str) -> str:
@@ -46,6 +46,7 @@ class MountTransform(Node):
                     ('roll', 'roll about x in radians', -2 * math.pi, 2 * math.pi),
                     ('pitch', 'pitch about y in radians', -2 * math.pi, 2 * math.pi),
                     ('yaw', 'yaw about z in radians', -2 * math.pi, 2 * math.pi))]
+        accept_whole_numbers(self)
         self.transform = conversions.mount_transform(
             self.get_clock().now().to_msg(), parent, child or default_frame_id(
                 self.get_namespace()), pose[:3], pose[3:])

@@ -4,13 +4,18 @@ Declare node parameters with descriptions and ranges, and fail with one clear me
 rclpy checks ranges itself when a value is set; these helpers add the description, turn a value
 out of range at start-up into a ParameterError that names the parameter, its value and what it
 accepts, and check the constraints that a range cannot express (choices, non-empty strings).
+
+A parameter that takes a double takes a whole number too, as a user writes it (``threshold:=40``,
+``threshold: 40`` in YAML, ``ros2 param set ... threshold 60``): it is stored as the double.
+rclpy would refuse it as of the wrong type.
 """
 
 import re
 from typing import Any, Optional, Sequence
 
-from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescriptor
+from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescriptor, ParameterType
 from rclpy.exceptions import InvalidParameterValueException, ParameterException
+from rclpy.parameter import Parameter
 
 
 class ParameterError(ValueError):
@@ -37,8 +42,13 @@ def declare(node, name: str, default: Any, description: str, *,
     if choices:
         descriptor.additional_constraints = 'one of: ' + ', '.join(choices)
         accepts = descriptor.additional_constraints
+    override = _whole_number_override(node, name) if isinstance(default, float) else None
     try:
-        value = node.declare_parameter(name, default, descriptor).value
+        if override is None:
+            value = node.declare_parameter(name, default, descriptor).value
+        else:
+            value = node.declare_parameter(name, float(override), descriptor,
+                                           ignore_override=True).value
     except InvalidParameterValueException as err:
         found = re.search(r'value: (\S+?):? ', str(err) + ' ')
         value = found.group(1) if found else 'given'
@@ -58,3 +68,24 @@ def check(name: str, value: Any, description: str, *,
                              f'{", ".join(choices)} ({description})')
     if non_empty and not str(value).strip():
         raise ParameterError(f'parameter {name!r} is empty; it needs {description}')
+
+
+def _whole_number_override(node, name: str) -> Optional[int]:
+    """Return the start-up value of ``name`` when it is an integer, else None."""
+    # rclpy keeps the command line's and the YAML file's values here, and offers no public view.
+    given = getattr(node, '_parameter_overrides', {}).get(name)
+    return given.value if given is not None and given.type_ == Parameter.Type.INTEGER else None
+
+
+def accept_whole_numbers(node) -> None:
+    """Let ``node`` take an integer for any of its double parameters when one is set."""
+    def as_doubles(parameters):
+        out = []
+        for param in parameters:
+            if (param.type_ == Parameter.Type.INTEGER and node.has_parameter(param.name)
+                    and node.describe_parameter(param.name).type
+                    == ParameterType.PARAMETER_DOUBLE):
+                param = Parameter(param.name, Parameter.Type.DOUBLE, float(param.value))
+            out.append(param)
+        return out
+    node.add_pre_set_parameters_callback(as_doubles)

@@ -19,11 +19,9 @@ import time
 
 import rclpy
 from rclpy.executors import ExternalShutdownException
-from rclpy.qos import qos_profile_sensor_data
-from rclpy.qos_overriding_options import QoSOverridingOptions
 from skin_driver.core.estimation.dataset import save_dataset
 from skin_driver.core.estimation.recording import Recording
-from skin_driver.ros import conversions
+from skin_driver.ros import conversions, qos
 from skin_driver.tools.recording_args import add_recording_arguments, labels_of
 from skin_msgs.msg import SkinFrame
 
@@ -36,8 +34,7 @@ class FrameRecorder:
         self.recording = Recording(tare_frames)
         self.rejected = 0
         node.create_subscription(
-            SkinFrame, topic, self._on_frame, qos_profile_sensor_data,
-            qos_overriding_options=QoSOverridingOptions.with_default_policies())
+            SkinFrame, topic, self._on_frame, qos.STREAM, **qos.overridable())
 
     def _on_frame(self, msg: SkinFrame) -> None:
         try:

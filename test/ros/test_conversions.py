@@ -87,12 +87,25 @@ def test_contact_wrench_torque_is_the_force_moment_about_the_frame_origin():
 
 
 def test_wrench_stamped_carries_the_torque_of_the_force_at_its_point():
-    stamped = conversions.wrench_stamped(HEADER, (1.0, -2.0, -5.0), (0.02, 0.01))
+    one = _contact(x_m=0.02, y_m=0.01, force_xyz_n=(1.0, -2.0, -5.0))
+    stamped = conversions.wrench_stamped(HEADER, [one])
     assert _vec(stamped.wrench.force) == pytest.approx((1.0, -2.0, -5.0))
     assert _vec(stamped.wrench.torque) == pytest.approx(
         np.cross((0.02, 0.01, 0.0), (1.0, -2.0, -5.0)))
-    assert _vec(conversions.wrench_stamped(HEADER, (0.0, 0.0, 0.0)).wrench.torque) == \
-        pytest.approx(0.0)
+    nothing = conversions.wrench_stamped(HEADER, [])
+    assert _vec(nothing.wrench.force) == _vec(nothing.wrench.torque) == pytest.approx(0.0)
+
+
+def test_the_wrench_of_a_pinch_is_the_net_of_both_fingers_as_an_ft_sensor_reports_it():
+    # Two fingers pushing towards each other along x, both pressing 5 N into the skin.
+    left = _contact(x_m=0.02, y_m=0.04, force_xyz_n=(3.0, 0.0, -5.0), force_n=5.0)
+    right = _contact(x_m=0.06, y_m=0.04, force_xyz_n=(-3.0, 0.0, -5.0), force_n=5.0)
+    net = conversions.wrench_stamped(HEADER, [left, right]).wrench
+    # Tangential forces cancel; the normal ones add; torques about the origin sum.
+    assert _vec(net.force) == pytest.approx((0.0, 0.0, -10.0))
+    expected = (np.cross((0.02, 0.04, 0.0), (3.0, 0.0, -5.0))
+                + np.cross((0.06, 0.04, 0.0), (-3.0, 0.0, -5.0)))
+    assert _vec(net.torque) == pytest.approx(expected)
 
 
 def test_a_reused_array_carries_each_scan_exactly_as_a_new_one_would():

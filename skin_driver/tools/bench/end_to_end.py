@@ -227,7 +227,7 @@ def stage_costs(repeats=500) -> dict:
                 repeats),
             'publish contact + wrench': _per_call(
                 lambda: (pub_contact.publish(array.contacts[0]), pub_wrench.publish(
-                    conversions.wrench_stamped(header, contacts[0].force_xyz_n))), repeats),
+                    conversions.wrench_stamped(header, contacts))), repeats),
             'EstimationHost.process (estimate + publish all three, reused messages)': _per_call(
                 lambda: host.process(header, 1, 1000, 0.005, top, bottom), repeats),
         }

@@ -1,0 +1,24 @@
+"""
+The QoS of the skin's topics, and ROS 2's standard way for a user to change it.
+
+Streams (frame, images, contacts, contact, wrench) keep the sensor-data profile: best effort,
+keep last 5, so a late or slow reader costs the publisher nothing and never sees stale scans.
+The rviz topics and /diagnostics are reliable, keep last 5 and 10. Every publisher and
+subscription takes ROS 2's QoS overrides, parameters read once at start-up, e.g.
+
+    --ros-args -p qos_overrides./skin/wrench.publisher.reliability:=reliable
+
+(history, depth and reliability; a YAML parameter file takes them as well).
+"""
+
+from rclpy.qos import qos_profile_sensor_data
+from rclpy.qos_overriding_options import QoSOverridingOptions
+
+STREAM = qos_profile_sensor_data
+VIZ_DEPTH = 5
+DIAGNOSTICS_DEPTH = 10
+
+
+def overridable() -> dict:
+    """Return the keyword that lets a publisher or subscription take QoS overrides."""
+    return {'qos_overriding_options': QoSOverridingOptions.with_default_policies()}

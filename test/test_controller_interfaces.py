@@ -1,0 +1,141 @@
+"""What a controller relies on: the net wrench, QoS it can connect to, parameters, ~/tare."""
+
+import math
+
+from geometry_msgs.msg import WrenchStamped
+from pipeline import pipeline, scene
+import pytest
+from rcl_interfaces.srv import SetParameters
+import rclpy
+from rclpy.executors import SingleThreadedExecutor
+from rclpy.parameter import Parameter
+from rclpy.qos import qos_profile_sensor_data, ReliabilityPolicy
+from rosutil import ros_context, spin_until
+from skin_driver.ros.direction_node import DirectionNode
+from skin_driver.ros.driver_node import SkinDriverNode
+from skin_msgs.msg import TactileContactArray
+
+pytestmark = pytest.mark.ros
+
+PINCH = [{'time_s': 0.2, 'x_m': 0.025, 'y_m': 0.0375, 'force_n': 10.0, 'alpha_deg': 40.0,
+          'beta_deg': 0.0, 'duration_s': 3.0},
+         {'time_s': 0.2, 'x_m': 0.050, 'y_m': 0.0375, 'force_n': 10.0, 'alpha_deg': 40.0,
+          'beta_deg': 180.0, 'duration_s': 3.0}]
+
+
+def test_a_pinch_gives_the_net_wrench_about_zero_tangential_force_not_one_finger(tmp_path):
+    scans = {}
+    with pipeline(tmp_path, scene(PINCH)) as (_, _, direction, probe, executor):
+        node = probe.node
+
+        def on_contacts(msg):
+            scans.setdefault(msg.header.stamp.sec * 10**9 + msg.header.stamp.nanosec, {})[
+                'contacts'] = msg.contacts
+
+        def on_wrench(msg):
+            scans.setdefault(msg.header.stamp.sec * 10**9 + msg.header.stamp.nanosec, {})[
+                'wrench'] = msg.wrench
+        node.create_subscription(TactileContactArray, 'contacts', on_contacts,
+                                 qos_profile_sensor_data)
+        node.create_subscription(WrenchStamped, 'wrench', on_wrench, qos_profile_sensor_data)
+
+        def pinched():
+            # At full load (7.7 N normal each), not on the ramps.
+            return [s for s in scans.values() if len(s) == 2 and len(s['contacts']) == 2
+                    and all(c.direction_valid and -c.wrench.force.z > 6.0
+                            for c in s['contacts'])]
+        assert spin_until(executor, lambda: len(pinched()) >= 20, 20.0)
+    for scan in pinched():
+        contacts, wrench = scan['contacts'], scan['wrench']
+        strongest = math.hypot(contacts[0].wrench.force.x, contacts[0].wrench.force.y)
+        # Each finger pushes sideways with ~6 N; the skin carries about none of it net.
+        assert strongest > 3.0
+        assert abs(wrench.force.x) < 0.3 * strongest
+        # The normal forces add: the wrench is the sum of both contacts, torque included.
+        for axis in ('x', 'y', 'z'):
+            assert getattr(wrench.force, axis) == pytest.approx(
+                sum(getattr(c.wrench.force, axis) for c in contacts), abs=1e-9)
+            assert getattr(wrench.torque, axis) == pytest.approx(
+                sum(getattr(c.wrench.torque, axis) for c in contacts), abs=1e-9)
+
+
+def test_the_wrench_is_zero_when_nothing_touches(tmp_path):
+    wrenches = []
+    with pipeline(tmp_path, scene([])) as (_, _, _, probe, executor):
+        probe.node.create_subscription(WrenchStamped, 'wrench', wrenches.append,
+                                       qos_profile_sensor_data)
+        assert spin_until(executor, lambda: len(wrenches) >= 10)
+    assert all((w.wrench.force.x, w.wrench.force.y, w.wrench.force.z, w.wrench.torque.x,
+                w.wrench.torque.y, w.wrench.torque.z) == (0.0,) * 6 for w in wrenches)
+
+
+def test_a_reliable_subscriber_gets_the_wrench_once_the_publisher_is_overridden(tmp_path):
+    # As a controller subscribes by default: reliable, keep last 10.
+    override = {'qos_overrides./wrench.publisher.reliability': 'reliable'}
+    wrenches = []
+    with pipeline(tmp_path, scene([]), direction=override) as (
+            _, _, direction, probe, executor):
+        probe.node.create_subscription(WrenchStamped, '/wrench', wrenches.append, 10)
+        assert spin_until(executor, lambda: len(wrenches) >= 5)
+        # The other streams keep the sensor-data profile.
+        info = direction.get_publishers_info_by_topic('/contacts')
+        assert [i.qos_profile.reliability for i in info] == [ReliabilityPolicy.BEST_EFFORT]
+
+
+def _set_through_the_service(executor, node, target, name, value):
+    """Set one parameter as `ros2 param set` does: through the node's service."""
+    client = node.create_client(SetParameters, f'{target}/set_parameters')
+    assert client.wait_for_service(timeout_sec=5.0)
+    future = client.call_async(SetParameters.Request(
+        parameters=[Parameter(name, value=value).to_parameter_msg()]))
+    assert spin_until(executor, future.done)
+    return future.result().results[0]
+
+
+def test_double_parameters_take_whole_numbers_at_start_up_in_yaml_and_when_set(tmp_path):
+    params = tmp_path / 'params.yaml'
+    params.write_text('/**/skin_direction:\n  ros__parameters:\n    compliance: 1\n'
+                      '    viz_full_scale: 20\n')
+    context = rclpy.Context()
+    rclpy.init(context=context, args=['--ros-args', '--params-file', str(params)])
+    executor = SingleThreadedExecutor(context=context)
+    try:
+        direction = DirectionNode(context=context, parameter_overrides=[
+            Parameter('threshold', value=40), Parameter('calibration.timeout', value=30),
+            Parameter('calibration_file', value=str(tmp_path / 'cal.yaml'))])
+        helper = rclpy.create_node('helper', context=context)
+        for node in (direction, helper):
+            executor.add_node(node)
+        assert direction.get_parameter('threshold').value == 40.0
+        assert direction.get_parameter('calibration.timeout').value == 30.0
+        assert direction.get_parameter('compliance').value == 1.0
+        assert direction.get_parameter('viz_full_scale').value == 20.0
+        result = _set_through_the_service(executor, helper, '/skin_direction', 'threshold', 60)
+        assert result.successful, result.reason
+        assert direction.get_parameter('threshold').type_ == Parameter.Type.DOUBLE
+        assert direction.get_parameter('threshold').value == 60.0
+        # Ranges still hold for the number given as an integer.
+        result = _set_through_the_service(executor, helper, '/skin_direction', 'threshold', 5000)
+        assert not result.successful
+        # An integer parameter stays an integer; a string is still refused.
+        assert _set_through_the_service(executor, helper, '/skin_direction', 'tare.frames',
+                                        30).successful
+        assert direction.get_parameter('tare.frames').value == 30
+        assert not _set_through_the_service(executor, helper, '/skin_direction', 'threshold',
+                                            'sixty').successful
+        direction.destroy_node()
+        helper.destroy_node()
+    finally:
+        executor.shutdown()
+        rclpy.try_shutdown(context=context)
+
+
+def test_the_driver_takes_a_whole_number_of_seconds_and_metres(tmp_path):
+    with ros_context() as (context, _):
+        driver = SkinDriverNode(context=context, parameter_overrides=[
+            Parameter('stall_timeout', value=2), Parameter('reconnect_max', value=1)])
+        assert driver.get_parameter('stall_timeout').value == 2.0
+        assert driver.set_parameters([Parameter('diagnostics_period', value=3)])[0].successful
+        assert driver.get_parameter('diagnostics_period').value == 3.0
+        driver.close()
+        driver.destroy_node()
