@@ -3,7 +3,7 @@
 import math
 
 from geometry_msgs.msg import WrenchStamped
-from pipeline import pipeline, scene
+from pipeline import call, pipeline, scene
 import pytest
 from rcl_interfaces.srv import SetParameters
 import rclpy
@@ -14,6 +14,7 @@ from rosutil import ros_context, spin_until
 from skin_driver.ros.direction_node import DirectionNode
 from skin_driver.ros.driver_node import SkinDriverNode
 from skin_msgs.msg import TactileContactArray
+from std_srvs.srv import Trigger
 
 pytestmark = pytest.mark.ros
 
@@ -139,3 +140,20 @@ def test_the_driver_takes_a_whole_number_of_seconds_and_metres(tmp_path):
         assert driver.get_parameter('diagnostics_period').value == 3.0
         driver.close()
         driver.destroy_node()
+
+
+@pytest.mark.parametrize('fused', [False, True], ids=['split', 'fused'])
+def test_tare_refuses_while_no_scans_arrive_and_never_uses_stale_ones(tmp_path, fused):
+    with pipeline(tmp_path, scene([]), fused=fused) as (_, driver, direction, probe, executor):
+        assert spin_until(executor, lambda: len(probe.frames) >= 30)
+        driver.trigger_deactivate()
+        # Wait until the scans of before the deactivation are old (a second, STALE_AFTER_S).
+        spin_until(executor, lambda: False, 1.5)
+        stale = call(executor, direction, Trigger, '/skin_direction/tare', Trigger.Request())
+        assert not stale.success
+        assert 'no scan is arriving' in stale.message and 'driver active' in stale.message
+        driver.trigger_activate()
+        count = len(probe.frames)
+        assert spin_until(executor, lambda: len(probe.frames) >= count + 30)
+        fresh = call(executor, direction, Trigger, '/skin_direction/tare', Trigger.Request())
+        assert fresh.success, fresh.message

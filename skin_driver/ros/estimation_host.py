@@ -215,7 +215,7 @@ class EstimationHost:
         if cost > self._cost_max:
             self._cost_max = cost
         self._rate.add()
-        self._recent.add(top, bottom, len(contacts))
+        self._recent.add(top, bottom, len(contacts), time.monotonic())
         self._latest = (header, pitch_m, top, bottom, contacts)
         self.calibration.feed(top, bottom, contacts)
 
@@ -263,7 +263,7 @@ class EstimationHost:
     # ---- tare -------------------------------------------------------------------------------
     def _on_tare(self, request, response):
         try:
-            tops, bottoms = self._recent.unloaded(self._p('tare.frames'))
+            tops, bottoms = self._recent.unloaded(self._p('tare.frames'), time.monotonic())
             self._swap(lambda estimator: estimator.with_tare(tops, bottoms))
         except ValueError as err:  # TareRefused, or frames the conditioner cannot take
             response.success = False
