@@ -356,7 +356,8 @@ class CalibrationServices:
         path = self.path
         try:
             outcome = session.finish()
-            outcome.calibration.save_yaml(path)
+            # The node's own state: its folder (by default under ROS_HOME) is made as needed.
+            outcome.calibration.save_yaml(path, make_parents=True)
         except (CalibrationRefused, OSError, ValueError) as err:
             result.message = f'{err}{KEEP}'
             goal_handle.abort()
@@ -386,7 +387,7 @@ class CalibrationServices:
         path = self.path
         defaults = Calibration(skin=self._skin)
         try:
-            defaults.save_yaml(path)
+            defaults.save_yaml(path, make_parents=True)
         except OSError as err:
             response.success = False
             response.message = f'{err}{KEEP}'

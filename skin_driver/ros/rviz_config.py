@@ -36,7 +36,7 @@ def write_namespaced(template_path: str, namespace: str, frame_id: str = '') -> 
         text = namespaced(f.read(), namespace, frame_id)
     name = '_'.join(part for part in namespace.split('/') if part) or 'root'
     path = os.path.join(ros_home(), 'skin_driver', 'rviz', f'{name}.rviz')
-    write_atomically(path, lambda out: out.write(text))
+    write_atomically(path, lambda out: out.write(text), make_parents=True)
     return path
 
 

@@ -17,6 +17,7 @@ import os
 import pathlib
 import sys
 
+from skin_driver.core.estimation.atomic import check_writable
 from skin_driver.core.estimation.dataset import save_dataset
 from skin_driver.core.estimation.recording import layers_of, Recording
 from skin_driver.tools.recording_args import add_recording_arguments, labels_of
@@ -87,6 +88,7 @@ def main(argv=None) -> int:
     add_recording_arguments(parser)
     args = parser.parse_args(argv)
     try:
+        check_writable(args.out)
         recording = read_bag(args.bag, args.topic, args.tare_frames)
         data = recording.dataset(labels_of(args))
         save_dataset(args.out, data)

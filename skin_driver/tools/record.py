@@ -19,6 +19,7 @@ import time
 
 import rclpy
 from rclpy.executors import ExternalShutdownException
+from skin_driver.core.estimation.atomic import check_writable
 from skin_driver.core.estimation.dataset import save_dataset
 from skin_driver.core.estimation.recording import Recording
 from skin_driver.ros import conversions, qos
@@ -63,7 +64,12 @@ def main(argv=None) -> int:
     """Record until done or interrupted, then write the dataset; return the exit status."""
     args_in = sys.argv[1:] if argv is None else list(argv)
     ros_args = rclpy.utilities.remove_ros_args(['record'] + args_in)[1:]
-    args = _parser().parse_args(ros_args)
+    parser = _parser()
+    args = parser.parse_args(ros_args)
+    try:
+        check_writable(args.out)
+    except ValueError as err:
+        parser.error(str(err))
     rclpy.init(args=['record'] + args_in)
     node = rclpy.create_node('skin_recorder')
     recorder = FrameRecorder(node, args.topic, args.tare_frames)

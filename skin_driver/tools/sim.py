@@ -14,10 +14,11 @@ import sys
 import threading
 import time
 
+from skin_driver.core.estimation.atomic import check_writable
 from skin_driver.core.estimation.dataset import save_dataset
 from skin_driver.core.sim.board import SimulatedSkin
 from skin_driver.core.sim.experiments import render_scene
-from skin_driver.core.sim.scene import load_scene
+from skin_driver.core.sim.scene import bundled_scene_names, load_scene
 
 
 # ---- command line ---------------------------------------------------------------------------
@@ -26,13 +27,14 @@ def _parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog='sim', description='Simulated two-layer tactile skin on a pseudo-terminal.')
     parser.add_argument('--scene', default='seed',
-                        help='bundled scene name or YAML path (default: seed)')
+                        help='bundled scene (' + ', '.join(bundled_scene_names()) +
+                             ') or the path of a scene YAML file (default: seed)')
     parser.add_argument('--rate', type=float, default=100.0, help='frames per second (100)')
     parser.add_argument('--link', default=None, help='make this path a symlink to the port')
     parser.add_argument('--duration', type=float, default=None,
                         help='stop after this many seconds (default: run until Ctrl-C)')
     parser.add_argument('--loop', action='store_true', help='replay the scene when it ends')
-    parser.add_argument('--seed', type=int, default=0, help='noise seed (0)')
+    parser.add_argument('--seed', type=int, default=0, help='noise seed, 0 or more (0)')
     parser.add_argument('--export', metavar='OUT.npz', default=None,
                         help='render the scene into a dataset file and exit, without a pty')
     parser.add_argument('--samples-per-press', type=int, default=1,
@@ -48,6 +50,11 @@ def main(argv=None) -> int:
         argv = argv[:argv.index('--ros-args')]
     args = _parser().parse_args(argv)
     try:
+        if args.seed < 0:
+            raise ValueError(f'--seed must be 0 or more, got {args.seed}')
+        for path in (args.link, args.export):
+            if path:
+                check_writable(path)
         scene = load_scene(args.scene)
         if args.duration is not None and not (math.isfinite(args.duration)
                                               and args.duration >= 0):

@@ -196,7 +196,7 @@ def test_two_skins_in_two_namespaces_never_share_a_calibration_file(tmp_path, mo
     monkeypatch.setenv('ROS_HOME', str(tmp_path))
     left = default_calibration_file('/left/skin_direction')
     assert left == str(tmp_path / 'skin_driver' / 'calibration' / 'left' / 'skin_direction.yaml')
-    Calibration(x_p_m=5e-4, presses=3).save_yaml(left)
+    Calibration(x_p_m=5e-4, presses=3).save_yaml(left, make_parents=True)
     with ros_context() as (context, _):
         nodes = {ns: DirectionNode(context=context, namespace=ns) for ns in ('/left', '/skin')}
         try:

@@ -261,10 +261,11 @@ class Calibration:
                          zip(('top', 'bottom'), self.gains)})
         return out
 
-    def save_yaml(self, path) -> None:
+    def save_yaml(self, path, make_parents: bool = False) -> None:
         """Write the calibration to ``path`` atomically (temp file, fsync, rename)."""
         doc = {'format': _FORMAT, 'version': _VERSION, **self.to_dict()}
-        write_atomically(path, lambda f: yaml.safe_dump(doc, f, sort_keys=False))
+        write_atomically(path, lambda f: yaml.safe_dump(doc, f, sort_keys=False),
+                         make_parents=make_parents)
 
     @classmethod
     def load_yaml(cls, path, skin: SkinIdentity = None) -> 'Calibration':

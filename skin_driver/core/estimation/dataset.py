@@ -15,6 +15,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 import math
 import os
+import zipfile
 
 import numpy as np
 
@@ -231,10 +232,17 @@ def save_dataset(path, data: Dataset) -> None:
 def load_dataset(path) -> Dataset:
     """Read and validate a dataset written by :func:`save_dataset` (or by hand, same keys)."""
     path = os.fspath(path)
+    if os.path.isfile(path) and os.path.getsize(path) == 0:
+        raise ValueError(f'{path}: cannot read as .npz: the file is empty')
     try:
         npz = np.load(path, allow_pickle=False)
-    except (OSError, ValueError) as exc:
+    except (OSError, EOFError, zipfile.BadZipFile) as exc:
         raise ValueError(f'{path}: cannot read as .npz: {exc}') from None
+    except ValueError:
+        # numpy takes what is not an array file for pickled data and names allow_pickle.
+        raise ValueError(f'{path}: cannot read as .npz: not a NumPy zip archive') from None
+    if not hasattr(npz, 'files'):
+        raise ValueError(f'{path}: holds one array, not a .npz archive of named arrays')
     with npz:
         keys = set(npz.files)
         missing = {'top', 'bottom', 'pitch_m', 'azimuth_deg', 'alpha_deg'} - keys

@@ -28,6 +28,7 @@ import sys
 
 import numpy as np
 
+from skin_driver.core.estimation.atomic import check_writable
 from skin_driver.core.estimation.dataset import load_dataset, save_dataset
 from skin_driver.core.estimation.pipeline import EstimatorConfig
 from skin_driver.core.estimation.shift import DEFAULT_METHOD, method_names
@@ -58,12 +59,13 @@ def _parser() -> argparse.ArgumentParser:
                              'grid over the same patch)')
     parser.add_argument('--scene', default='paper', choices=SCENE_KINDS,
                         help='scene kind rendered with --skin (default paper)')
-    parser.add_argument('--size', type=int, default=None,
+    parser.add_argument('--size', type=_count, default=None,
                         help='repeats (paper) or frames (other scenes) to render')
     parser.add_argument('--generate', nargs=2, metavar=('KIND', 'OUT'),
                         help=f'write a simulated dataset (KIND one of {", ".join(SCENE_KINDS)}) '
                              'of --skin (default: default) and exit')
-    parser.add_argument('--seed', type=int, default=0, help='random seed for generated data')
+    parser.add_argument('--seed', type=_seed, default=0,
+                        help='random seed for generated data (0 or more)')
     parser.add_argument('--calibration-frames', action='store_true',
                         help='with --generate or --skin: put 16 normal presses over 5-60 N and '
                         '16 tilted presses of known load in front, as calibration frames '
@@ -74,6 +76,22 @@ def _parser() -> argparse.ArgumentParser:
     parser.add_argument('--list-skins', action='store_true', help='list the family and exit')
     parser.add_argument('--list-methods', action='store_true', help='list estimators and exit')
     return parser
+
+
+def _count(text: str) -> int:
+    """Return a whole number of at least 1 (argparse type)."""
+    value = int(text)
+    if value < 1:
+        raise argparse.ArgumentTypeError(f'must be 1 or more, got {value}')
+    return value
+
+
+def _seed(text: str) -> int:
+    """Return a whole number of at least 0 (argparse type)."""
+    value = int(text)
+    if value < 0:
+        raise argparse.ArgumentTypeError(f'must be 0 or more, got {value}')
+    return value
 
 
 def _config(args) -> EstimatorConfig:
@@ -110,15 +128,23 @@ def main(argv=None) -> int:
         kind, out = args.generate
         if kind not in SCENE_KINDS:
             parser.error(f'--generate KIND must be one of {", ".join(SCENE_KINDS)}, got {kind!r}')
-        data = make_scene(kind, args.skin or 'default', rng, args.size)
-        if args.calibration_frames:
-            data = add_calibration_frames(data, family_skin(args.skin or 'default').model, rng)
-        save_dataset(out, data)
+        try:
+            check_writable(out)
+            data = make_scene(kind, args.skin or 'default', rng, args.size)
+            if args.calibration_frames:
+                data = add_calibration_frames(data, family_skin(args.skin or 'default').model,
+                                              rng)
+            save_dataset(out, data)
+        except (OSError, ValueError) as exc:
+            print(f'error: {exc}', file=sys.stderr)
+            return 2
         print(f'wrote {data.frames} frames to {out}')
         return 0
     if bool(args.data) == bool(args.skin):
         parser.error('give a dataset .npz or --skin NAME (not both)')
     try:
+        if args.contacts:
+            check_writable(args.contacts)
         config = _config(args)
         truth = None
         if args.skin:
