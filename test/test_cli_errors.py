@@ -45,7 +45,7 @@ def test_the_evaluator_refuses_bad_input_in_one_line_and_creates_nothing(
 
 
 @pytest.mark.parametrize('argv, expected', [
-    (['--scene', 'nosuch'], "bundled scenes are border, random, seed, two_finger"),
+    (['--scene', 'nosuch'], 'bundled scenes are border, random, seed, two_finger'),
     (['--export', 'TMP/nodir/x.npz'], 'directory TMP/nodir does not exist'),
     (['--export', 'TMP'], 'is a directory'),
     (['--link', 'TMP/nodir/skin0'], 'directory TMP/nodir does not exist'),
