@@ -12,7 +12,7 @@ from skin_driver.core.sim.experiments import make_scene
 from skin_driver.tools import bag_to_dataset
 from skin_driver.tools.evaluate import cli as evaluate
 
-ROOT = pathlib.Path(__file__).resolve().parents[1]
+ROOT = pathlib.Path(__file__).resolve().parents[2]
 SKIN_FRAME = 'skin_msgs/msg/SkinFrame'
 
 
