@@ -1,8 +1,7 @@
 """
 Bring up the skin: serial driver and direction node, optionally the simulated skin and rviz2.
 
-    ros2 launch skin_driver skin.launch.py                      # a real skin on /tmp/skin0
-    ros2 launch skin_driver skin.launch.py port:=/dev/ttyACM0
+    ros2 launch skin_driver skin.launch.py port:=/dev/ttyACM0   # a real skin
     ros2 launch skin_driver skin.launch.py sim:=true rviz:=true  # simulated skin + heatmap
     ros2 launch skin_driver skin.launch.py fused:=true          # estimate in the driver process
     ros2 launch skin_driver skin.launch.py namespace:=left parent_frame:=left_forearm_link \
@@ -16,10 +15,12 @@ from launch.actions import (DeclareLaunchArgument, ExecuteProcess, OpaqueFunctio
                             RegisterEventHandler, Shutdown)
 from launch.conditions import IfCondition, UnlessCondition
 from launch.event_handlers import OnProcessExit
+from launch.substitution import Substitution
 from launch.substitutions import LaunchConfiguration, PathJoinSubstitution
 from launch_ros.actions import LifecycleNode, Node
 from launch_ros.parameter_descriptions import ParameterValue
 from launch_ros.substitutions import FindPackagePrefix, FindPackageShare
+from skin_driver.core.protocol.link import default_port
 from skin_driver.ros import rviz_config
 from skin_driver.ros.frames import default_frame_id
 
@@ -58,6 +59,14 @@ def _mount(context):
                  parameters=[{'parent_frame': parent, 'frame_id': frame, **pose}])]
 
 
+class _Port(Substitution):
+    """The port launch argument, or the namespace's default port when it is empty."""
+
+    def perform(self, context) -> str:
+        given = LaunchConfiguration('port').perform(context)
+        return given or default_port(LaunchConfiguration('namespace').perform(context))
+
+
 def _simulator_exited(event, context):
     # The driver would retry a port nobody serves: stop everything, saying why.
     return [Shutdown(reason=f'the simulated skin exited (code {event.returncode}); its message '
@@ -67,14 +76,16 @@ def _simulator_exited(event, context):
 def generate_launch_description():
     """Return the launch description of the whole skin pipeline."""
     share = FindPackageShare('skin_driver')
-    port = LaunchConfiguration('port')
+    port = _Port()
     namespace = LaunchConfiguration('namespace')
     params_file = LaunchConfiguration('params_file')
     with_rviz = IfCondition(LaunchConfiguration('rviz'))
     fused = LaunchConfiguration('fused')
     arguments = [
-        DeclareLaunchArgument('port', default_value='/tmp/skin0',
-                              description='Serial device or pyserial URL of the skin board.'),
+        DeclareLaunchArgument('port', default_value='',
+                              description='Serial device or pyserial URL of the skin board; '
+                                          'empty: $XDG_RUNTIME_DIR/skin_driver/<namespace>/skin0 '
+                                          '(where the simulated skin links).'),
         DeclareLaunchArgument('params_file',
                               default_value=PathJoinSubstitution([share, 'config', 'skin.yaml']),
                               description='Parameter file for the driver and direction nodes.'),

@@ -388,7 +388,7 @@ class CalibrationServices:
         defaults = Calibration(skin=self._skin)
         try:
             defaults.save_yaml(path, make_parents=True)
-        except OSError as err:
+        except (OSError, ValueError) as err:
             response.success = False
             response.message = f'{err}{KEEP}'
             return response

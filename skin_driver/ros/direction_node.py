@@ -50,7 +50,7 @@ def main(args=None):
     try:
         node = DirectionNode()
     except ParameterError as err:
-        rclpy.logging.get_logger('skin_direction').fatal(str(err))
+        err.log_fatal('skin_direction')
         rclpy.try_shutdown()
         raise SystemExit(1)
     spin_nodes([node])

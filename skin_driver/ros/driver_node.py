@@ -36,7 +36,8 @@ import rclpy
 from rclpy.lifecycle import Node, State, TransitionCallbackReturn
 from sensor_msgs.msg import Image
 from skin_driver.core.protocol.health import LinkHealth
-from skin_driver.core.protocol.link import CONNECTED, DISCONNECTED, SerialLink, STOPPED
+from skin_driver.core.protocol.link import (CONNECTED, default_port, DISCONNECTED, SerialLink,
+                                            STOPPED)
 from skin_driver.core.protocol.wire import FrameDecoder
 from skin_driver.ros import conversions, diagnostics, qos
 from skin_driver.ros.direction_node import DirectionNode
@@ -90,9 +91,10 @@ class SkinDriverNode(Node):
         self.autostart = declare(
             self, 'autostart', True,
             'Walk through configure and activate at start-up, as a plain node would.')
-        declare(self, 'port', '/tmp/skin0',
+        declare(self, 'port', '',
                 'Serial device or pyserial URL of the skin board, e.g. /dev/ttyACM0, '
-                'socket://localhost:5000, loop://', non_empty=True)
+                'socket://localhost:5000, loop://; empty: the path of this user for the namespace '
+                '($XDG_RUNTIME_DIR/skin_driver/<namespace>/skin0), where the simulator links')
         declare(self, 'baud', 921600, 'Serial baud rate (USB CDC and ptys ignore it).',
                 low=1200, high=12000000)
         declare(self, 'rows', 16, 'Taxel rows the board must send (along y).', low=1, high=128)
@@ -125,6 +127,9 @@ class SkinDriverNode(Node):
     def _p(self, name):
         return self.get_parameter(name).value
 
+    def _port(self) -> str:
+        return self._p('port').strip() or default_port(self.get_namespace())
+
     def _check_new_parameters(self, params) -> SetParametersResult:
         """Refuse at run time what start-up refuses; rclpy itself checks the ranges."""
         new = {p.name: p.value for p in params}
@@ -134,9 +139,6 @@ class SkinDriverNode(Node):
                 f"{', '.join(map(repr, fixed))} cannot change while the driver is "
                 f'{self._lifecycle}: it is read at configure; deactivate, cleanup, set it, then '
                 'configure and activate'))
-        if 'port' in new and not str(new['port']).strip():
-            return SetParametersResult(successful=False,
-                                       reason="parameter 'port' must not be empty")
         problem = _backoff_problem(new.get('reconnect_min', self._p('reconnect_min')),
                                    new.get('reconnect_max', self._p('reconnect_max')))
         return SetParametersResult(successful=not problem, reason=problem)
@@ -158,7 +160,7 @@ class SkinDriverNode(Node):
                     Image, f'{layer}/image_raw', qos.STREAM, **qos.overridable())
         decoder = FrameDecoder(expected_shape=(self._p('rows'), self._p('cols')))
         self._link = SerialLink(
-            self._p('port'), self._p('baud'), decoder, self._publish_frames, self._on_link_state,
+            self._port(), self._p('baud'), decoder, self._publish_frames, self._on_link_state,
             read_timeout_s=self._p('read_timeout'), stall_timeout_s=self._p('stall_timeout'),
             backoff_min_s=self._p('reconnect_min'), backoff_max_s=self._p('reconnect_max'))
         self._rate = diagnostics.RateMeter(time.monotonic())
@@ -166,7 +168,7 @@ class SkinDriverNode(Node):
         self.destroy_timer(self._diag_timer)
         self._diag_timer = self.create_timer(self._p('diagnostics_period'), self._report)
         self._lifecycle = 'inactive'
-        self.get_logger().info(f"configured for {self._p('port')} "
+        self.get_logger().info(f'configured for {self._port()} '
                                f"({self._p('rows')}x{self._p('cols')} taxels)")
         return TransitionCallbackReturn.SUCCESS
 
@@ -255,18 +257,18 @@ class SkinDriverNode(Node):
                 self._report_link()
             else:
                 self._diag.publish([diagnostics.make_status(
-                    f'{self.get_fully_qualified_name()}: skin link', self._p('port'),
+                    f'{self.get_fully_qualified_name()}: skin link', self._port(),
                     diagnostics.OK, f'{self._lifecycle}: not reading, as requested',
-                    {'port': self._p('port'), 'lifecycle state': self._lifecycle})])
+                    {'port': self._port(), 'lifecycle state': self._lifecycle})])
 
     def _report_link(self) -> None:
         rate, _ = self._rate.take(time.monotonic())
         burst, self._burst = self._burst, 0
         health = self._health.assess(self._link, self._state_detail)
-        values = {'port': self._p('port'), 'frame rate [Hz]': rate,
+        values = {'port': self._port(), 'frame rate [Hz]': rate,
                   'largest burst [frames]': burst, **health.values}
         self._diag.publish([diagnostics.make_status(
-            f'{self.get_fully_qualified_name()}: skin link', self._p('port'), health.level,
+            f'{self.get_fully_qualified_name()}: skin link', self._port(), health.level,
             health.message, values)])
 
 
@@ -294,7 +296,7 @@ def main(args=None):
         direction = fuse(node, cli_args=[
             '--ros-args', '-r', '__node:=skin_direction']) if node.fused else None
     except ParameterError as err:
-        rclpy.logging.get_logger('skin_driver').fatal(str(err))
+        err.log_fatal('skin_driver')
         rclpy.try_shutdown()
         raise SystemExit(1)
 

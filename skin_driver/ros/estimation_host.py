@@ -35,6 +35,7 @@ from skin_driver.core.estimation.tare import RecentScans
 from skin_driver.ros import conversions, diagnostics, qos
 from skin_driver.ros.calibration_services import CalibrationServices
 from skin_driver.ros.estimator_params import estimator_config, ESTIMATOR_PARAMETERS
+from skin_driver.ros.frames import default_frame_id
 from skin_driver.ros.params import accept_whole_numbers, check, declare, ParameterError
 from skin_msgs.msg import TactileContact, TactileContactArray
 from std_srvs.srv import Trigger
@@ -62,6 +63,9 @@ class EstimationHost:
         self._cost_count = 0
         self._latest = None
         self._skin_seen = None
+        # The skin it estimates, for /diagnostics: the frame its scans carry (until the first
+        # scan, the frame its namespace gives).
+        self._skin = default_frame_id(node.get_namespace())
         self._writer = conversions.ContactArrayWriter()
         self._rate = diagnostics.RateMeter(time.monotonic())
         self._rebuilders = []
@@ -217,6 +221,7 @@ class EstimationHost:
         self._rate.add()
         self._recent.add(top, bottom, len(contacts), time.monotonic())
         self._latest = (header, pitch_m, top, bottom, contacts)
+        self._skin = header.frame_id
         self.calibration.feed(top, bottom, contacts)
 
     def reject(self, sequence: int, err: Exception) -> None:
@@ -295,5 +300,5 @@ class EstimationHost:
         elif rate == 0.0:
             level, message = diagnostics.WARN, 'no frame in the last period'
         self._diag.publish([diagnostics.make_status(
-            f'{self.node.get_fully_qualified_name()}: contact estimation', 'skin', level,
+            f'{self.node.get_fully_qualified_name()}: contact estimation', self._skin, level,
             message, values)])

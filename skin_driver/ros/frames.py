@@ -64,7 +64,7 @@ def main(args=None):
     try:
         node = MountTransform()
     except ParameterError as err:
-        rclpy.logging.get_logger('skin_mount_tf').fatal(str(err))
+        err.log_fatal('skin_mount_tf')
         rclpy.try_shutdown()
         raise SystemExit(1)
     try:

@@ -15,11 +15,19 @@ from typing import Any, Optional, Sequence
 
 from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescriptor, ParameterType
 from rclpy.exceptions import InvalidParameterValueException, ParameterException
+import rclpy.logging
 from rclpy.parameter import Parameter
 
 
 class ParameterError(ValueError):
     """A parameter has a value the node cannot work with."""
+
+    # The logger of the node that refused it (its namespace and name), once declare() knows it.
+    logger_name = ''
+
+    def log_fatal(self, fallback: str) -> None:
+        """Log this error as fatal under the node's own logger, e.g. [left.skin_direction]."""
+        rclpy.logging.get_logger(self.logger_name or fallback).fatal(str(self))
 
 
 def declare(node, name: str, default: Any, description: str, *,
@@ -27,6 +35,16 @@ def declare(node, name: str, default: Any, description: str, *,
             choices: Optional[Sequence[str]] = None, read_only: bool = False,
             non_empty: bool = False) -> Any:
     """Declare one parameter and return its validated value."""
+    try:
+        return _declare(node, name, default, description, low=low, high=high, choices=choices,
+                        read_only=read_only, non_empty=non_empty)
+    except ParameterError as err:
+        err.logger_name = node.get_logger().name
+        raise
+
+
+def _declare(node, name: str, default: Any, description: str, *, low, high, choices, read_only,
+             non_empty) -> Any:
     descriptor = ParameterDescriptor(description=description, read_only=read_only)
     accepts = ''
     if low is not None and high is not None:

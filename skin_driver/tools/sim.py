@@ -9,6 +9,7 @@ The board itself is :mod:`skin_driver.core.sim.board`.
 
 import argparse
 import math
+import os
 import signal
 import sys
 import threading
@@ -16,6 +17,7 @@ import time
 
 from skin_driver.core.estimation.atomic import check_writable
 from skin_driver.core.estimation.dataset import save_dataset
+from skin_driver.core.protocol.link import default_port
 from skin_driver.core.sim.board import SimulatedSkin
 from skin_driver.core.sim.experiments import render_scene
 from skin_driver.core.sim.scene import bundled_scene_names, load_scene
@@ -30,7 +32,9 @@ def _parser() -> argparse.ArgumentParser:
                         help='bundled scene (' + ', '.join(bundled_scene_names()) +
                              ') or the path of a scene YAML file (default: seed)')
     parser.add_argument('--rate', type=float, default=100.0, help='frames per second (100)')
-    parser.add_argument('--link', default=None, help='make this path a symlink to the port')
+    parser.add_argument('--link', default=None,
+                        help='make this path a symlink to the port (default: '
+                             f'{default_port()}, where the driver looks by default)')
     parser.add_argument('--duration', type=float, default=None,
                         help='stop after this many seconds (default: run until Ctrl-C)')
     parser.add_argument('--loop', action='store_true', help='replay the scene when it ends')
@@ -66,6 +70,10 @@ def main(argv=None) -> int:
             print(f'sim: wrote {n} samples of scene {scene.name!r} to {args.export}',
                   file=sys.stderr)
             return 0
+        if not args.link:
+            # The default place is the simulator's own: its folder is made as needed.
+            args.link = default_port()
+            os.makedirs(os.path.dirname(args.link), exist_ok=True)
         skin = SimulatedSkin(scene, rate_hz=args.rate, link_path=args.link, seed=args.seed,
                              loop=args.loop)
         port = skin.start()

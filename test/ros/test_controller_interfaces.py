@@ -13,6 +13,7 @@ from rclpy.qos import qos_profile_sensor_data, ReliabilityPolicy
 from rosutil import ros_context, spin_until
 from skin_driver.ros.direction_node import DirectionNode
 from skin_driver.ros.driver_node import SkinDriverNode
+from skin_driver.tools.processes import spawn, stop
 from skin_msgs.msg import TactileContactArray
 from std_srvs.srv import Trigger
 
@@ -157,3 +158,19 @@ def test_tare_refuses_while_no_scans_arrive_and_never_uses_stale_ones(tmp_path, 
         assert spin_until(executor, lambda: len(probe.frames) >= count + 30)
         fresh = call(executor, direction, Trigger, '/skin_direction/tare', Trigger.Request())
         assert fresh.success, fresh.message
+
+
+@pytest.mark.parametrize('module, node', [('skin_driver.ros.direction_node', 'skin_direction'),
+                                          ('skin_driver.ros.driver_node', 'skin_driver')])
+def test_a_fatal_start_up_error_is_logged_by_the_node_in_its_namespace(tmp_path, module, node):
+    bad = 'method:=bogus' if node == 'skin_direction' else 'rows:=300'
+    with open(tmp_path / 'out.log', 'w') as log:
+        proc = spawn(['-m', module, '--ros-args', '-r', '__ns:=/left', '-p', bad], log)
+        try:
+            proc.wait(60)
+        finally:
+            stop([proc])
+    out = (tmp_path / 'out.log').read_text()
+    assert proc.returncode == 1, out
+    line = next(line for line in out.splitlines() if 'FATAL' in line)
+    assert f'[left.{node}]' in line and ('bogus' in line or '300' in line)

@@ -23,7 +23,9 @@ def _contact(**changes):
 def test_contact_message_carries_every_field():
     msg = conversions.contact_to_msg(HEADER, _contact())
     assert (msg.location.x, msg.location.y, msg.location.z) == (0.03, 0.04, 0.0)
-    assert msg.magnitude == 7.0 and msg.azimuth == pytest.approx(math.pi / 2)
+    # |F| of a 45 degree push with 7 N into the skin; the normal part on its own.
+    assert msg.magnitude == pytest.approx(7.0 * math.sqrt(2.0)) and msg.normal_force == 7.0
+    assert msg.confidence == 0.9 and msg.azimuth == pytest.approx(math.pi / 2)
     assert msg.polar == pytest.approx(math.pi / 4) and msg.direction_valid
     assert msg.azimuth_sigma == 0.05
     assert (msg.wrench.force.y, msg.wrench.force.z) == (7.0, -7.0)

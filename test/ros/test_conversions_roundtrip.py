@@ -20,7 +20,8 @@ pytestmark = pytest.mark.ros
 
 def _contact(header):
     return TactileContact(
-        header=header, location=Point(x=0.035, y=0.04, z=0.0), magnitude=9.5,
+        header=header, location=Point(x=0.035, y=0.04, z=0.0), magnitude=9.5 * math.sqrt(2.0),
+        normal_force=9.5,
         azimuth=math.radians(135.0), polar=math.radians(45.0), shift=Vector3(x=-0.003, y=0.003),
         wrench=Wrench(force=Vector3(x=-4.7, y=4.7, z=-9.5)), area=4.0e-5, confidence=0.875,
         direction_valid=True)

@@ -5,16 +5,20 @@ import pathlib
 import xml.etree.ElementTree as ElementTree
 
 from builtin_interfaces.msg import Time
+from diagnostic_msgs.msg import DiagnosticArray
 from pipeline import overrides, scene
 import pytest
 import rclpy
 from rclpy.qos import qos_profile_sensor_data
 from rosutil import ros_context, spin_until
+from skin_driver.core.protocol.link import default_port
 from skin_driver.core.sim.board import SimulatedSkin
 from skin_driver.ros import conversions
+from skin_driver.ros.direction_node import DirectionNode
 from skin_driver.ros.driver_node import SkinDriverNode
 from skin_driver.ros.frames import default_frame_id
-from skin_msgs.msg import SkinFrame
+from skin_driver.tools.processes import spawn, stop
+from skin_msgs.msg import SkinFrame, TactileContactArray
 import xacro
 
 ROOT = pathlib.Path(__file__).resolve().parents[2]
@@ -30,21 +34,32 @@ def test_the_skins_frame_is_named_after_its_namespace(namespace, frame):
 @pytest.mark.ros
 def test_two_skins_in_two_namespaces_have_two_frames(tmp_path):
     the_scene = scene([])
-    sims, frames = [], {}
+    sims, frames, skins = [], {}, {}
     with ros_context() as (context, executor):
-        drivers = []
+        drivers, directions = [], []
         for name in ('left', 'right'):
             link = str(tmp_path / f'{name}0')
             sims.append(SimulatedSkin(the_scene, rate_hz=100.0, link_path=link, seed=1))
             drivers.append(SkinDriverNode(context=context, namespace=f'/{name}',
                                           parameter_overrides=overrides({'port': link})))
+            directions.append(DirectionNode(context=context, namespace=f'/{name}',
+                                            parameter_overrides=overrides({
+                                                'diagnostics_period': 0.2,
+                                                'calibration_file': str(tmp_path / name)})))
         listener = rclpy.create_node('listener', context=context)
         for name in ('left', 'right'):
             listener.create_subscription(
-                SkinFrame, f'/{name}/frame',
+                TactileContactArray, f'/{name}/contacts',
                 lambda msg, name=name: frames.setdefault(name, msg.header.frame_id),
                 qos_profile_sensor_data)
-        for node in drivers + [listener]:
+
+        def on_diagnostics(msg):
+            for status in msg.status:
+                if status.name.endswith('contact estimation') and status.message != \
+                        'no frame received yet':
+                    skins[status.name.split('/')[1]] = status.hardware_id
+        listener.create_subscription(DiagnosticArray, '/diagnostics', on_diagnostics, 10)
+        for node in drivers + directions + [listener]:
             executor.add_node(node)
         try:
             for sim in sims:
@@ -52,15 +67,19 @@ def test_two_skins_in_two_namespaces_have_two_frames(tmp_path):
             for driver in drivers:
                 driver.trigger_configure()
                 driver.trigger_activate()
-            assert spin_until(executor, lambda: len(frames) == 2)
+            assert spin_until(executor, lambda: len(frames) == 2 and len(skins) == 2)
         finally:
             for driver in drivers:
                 driver.close()
                 driver.destroy_node()
+            for direction in directions:
+                direction.destroy_node()
             for sim in sims:
                 sim.stop()
             listener.destroy_node()
+    # The contacts carry the frame of their skin, and so does each skin's estimation status.
     assert frames == {'left': 'left_skin_link', 'right': 'right_skin_link'}
+    assert skins == frames
 
 
 def test_the_mount_pose_is_a_rotation_and_a_translation_of_the_parent_link():
@@ -94,3 +113,31 @@ def test_the_skin_patch_macro_gives_a_link_with_its_visual_fixed_to_the_parent(t
     assert joint.find('parent').get('link') == 'forearm_link'
     assert joint.find('child').get('link') == 'left_skin_link'
     assert joint.find('origin').get('rpy') == '0 1.5708 0'
+
+
+@pytest.mark.ros
+def test_the_simulator_and_the_driver_meet_by_default_on_a_path_of_the_users_own(
+        tmp_path, monkeypatch):
+    monkeypatch.setenv('XDG_RUNTIME_DIR', str(tmp_path))
+    assert default_port('/left') == str(tmp_path / 'skin_driver' / 'left' / 'skin0')
+    frames = []
+    with open(tmp_path / 'sim.log', 'w') as log:
+        sim = spawn(['-m', 'skin_driver.tools.sim', '--rate', '100'], log)
+    try:
+        with ros_context() as (context, executor):
+            # Neither names a port: both take this user's default, not a shared /tmp path.
+            driver = SkinDriverNode(context=context)
+            listener = rclpy.create_node('listener', context=context)
+            listener.create_subscription(SkinFrame, '/frame', frames.append,
+                                         qos_profile_sensor_data)
+            for node in (driver, listener):
+                executor.add_node(node)
+            driver.trigger_configure()
+            driver.trigger_activate()
+            assert spin_until(executor, lambda: frames, 30.0), (tmp_path / 'sim.log').read_text()
+            driver.close()
+            driver.destroy_node()
+            listener.destroy_node()
+    finally:
+        stop([sim])
+    assert (tmp_path / 'skin_driver' / 'skin').is_dir()

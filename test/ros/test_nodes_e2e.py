@@ -186,8 +186,6 @@ def test_bad_parameters_stop_start_up_with_a_clear_message():
             SkinDriverNode(context=context, parameter_overrides=overrides({'rows': 300}))
         with pytest.raises(ParameterError, match="'method' is 'bogus'"):
             DirectionNode(context=context, parameter_overrides=overrides({'method': 'bogus'}))
-        with pytest.raises(ParameterError, match="'port' is empty"):
-            SkinDriverNode(context=context, parameter_overrides=overrides({'port': ' '}))
         node = SkinDriverNode(context=context, parameter_overrides=overrides(
             {'reconnect_min': 5.0, 'reconnect_max': 1.0}))
         assert node.trigger_configure() == TransitionCallbackReturn.FAILURE

@@ -37,6 +37,20 @@ PATH_POLL_S = 0.05
 SAME_BOARD_TOLERANCE_S = 1.0
 
 
+def default_port(namespace: str = '') -> str:
+    """
+    Return where the skin of ``namespace`` is found by default: a path of this user's own.
+
+    Under $XDG_RUNTIME_DIR (else $ROS_HOME, else ~/.ros), one folder per namespace as the frames
+    are named (``skin`` for the namespace skin or none): two users or two skins on one machine
+    never meet on a shared /tmp path. The simulator links its pseudo-terminal there.
+    """
+    base = (os.environ.get('XDG_RUNTIME_DIR') or os.environ.get('ROS_HOME')
+            or os.path.join(os.path.expanduser('~'), '.ros'))
+    name = namespace.strip('/').replace('/', '_') or 'skin'
+    return os.path.join(base, 'skin_driver', name, 'skin0')
+
+
 @dataclass
 class LinkStats:
     """What the link has seen since it was created."""
