@@ -3,9 +3,10 @@ Direction node: turns SkinFrame scans into contacts with location, force and dir
 
 Subscribes to frame (skin_msgs/SkinFrame). Publishes contacts (TactileContactArray, every scan,
 empty when nothing touches), contact (the strongest TactileContact, when there is one) and wrench
-(its force as geometry_msgs/WrenchStamped; zero when nothing touches, so a controller sees the
-release). For rviz, at most viz_rate times a second: top/heatmap and bottom/heatmap (rgb8) and
-markers (visualization_msgs/MarkerArray). Actions: ~/calibrate, ~/calibrate_force,
+(geometry_msgs/WrenchStamped: the net wrench of all contacts about the frame origin, as a
+force/torque sensor reports it; zero when nothing touches, so a controller sees the release).
+For rviz, at most viz_rate times a second: top/heatmap and bottom/heatmap (rgb8) and markers
+(visualization_msgs/MarkerArray). Actions: ~/calibrate, ~/calibrate_force,
 ~/calibrate_compliance, ~/calibrate_gains (skin_msgs/action). Services: ~/tare and
 ~/reset_calibration (std_srvs/srv/Trigger). Diagnostics on /diagnostics.
 
