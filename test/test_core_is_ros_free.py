@@ -13,9 +13,10 @@ import sys
 import pytest
 
 CORE = pathlib.Path(__file__).resolve().parents[1] / 'skin_driver' / 'core'
-# The ROS-free tools beside the core: the evaluator and the simulator run without ROS too.
+# The ROS-free tools beside the core: the evaluator, the simulator and the bag converter run
+# without ROS too.
 ROS_FREE_TOOLS = ['skin_driver.tools.evaluate.cli', 'skin_driver.tools.sim',
-                  'skin_driver.tools.bench.estimators']
+                  'skin_driver.tools.bench.estimators', 'skin_driver.tools.bag_to_dataset']
 FORBIDDEN = ('rclpy', 'rosidl', 'builtin_interfaces', 'std_msgs', 'geometry_msgs', 'sensor_msgs',
              'skin_msgs', 'visualization_msgs', 'diagnostic_msgs', 'std_srvs', 'launch')
 # What each wing may not import (besides ROS).

@@ -1,5 +1,6 @@
 """On a robot: the skin's frame per namespace, its mount on a parent link, its URDF patch."""
 
+import importlib.util
 import math
 import pathlib
 import xml.etree.ElementTree as ElementTree
@@ -9,14 +10,14 @@ from diagnostic_msgs.msg import DiagnosticArray
 from pipeline import overrides, scene
 import pytest
 import rclpy
-from rclpy.qos import qos_profile_sensor_data
+from rclpy.qos import DurabilityPolicy, qos_profile_sensor_data, QoSProfile, ReliabilityPolicy
 from rosutil import ros_context, spin_until
 from skin_driver.core.protocol.link import default_port
 from skin_driver.core.sim.board import SimulatedSkin
 from skin_driver.ros import conversions
 from skin_driver.ros.direction_node import DirectionNode
 from skin_driver.ros.driver_node import SkinDriverNode
-from skin_driver.ros.frames import default_frame_id
+from skin_driver.ros.frames import default_frame_id, MountTransform
 from skin_driver.tools.processes import spawn, stop
 from skin_msgs.msg import SkinFrame, TactileContactArray
 import xacro
@@ -113,6 +114,30 @@ def test_the_skin_patch_macro_gives_a_link_with_its_visual_fixed_to_the_parent(t
     assert joint.find('parent').get('link') == 'forearm_link'
     assert joint.find('child').get('link') == 'left_skin_link'
     assert joint.find('origin').get('rpy') == '0 1.5708 0'
+
+
+@pytest.mark.ros
+@pytest.mark.skipif(importlib.util.find_spec('tf2_msgs') is None,
+                    reason='tf2_msgs is not installed (no wheel exists); every ROS 2 install '
+                           'has it and runs this test')
+def test_the_mount_is_latched_on_tf_static_for_a_listener_that_comes_later():
+    from tf2_msgs.msg import TFMessage
+    received = []
+    with ros_context() as (context, executor):
+        mount = MountTransform(context=context, namespace='/left', parameter_overrides=overrides(
+            {'parent_frame': 'left_forearm_link', 'z': 0.05, 'pitch': 1.5708}))
+        listener = rclpy.create_node('listener', context=context)
+        latched = QoSProfile(depth=1, durability=DurabilityPolicy.TRANSIENT_LOCAL,
+                             reliability=ReliabilityPolicy.RELIABLE)
+        listener.create_subscription(TFMessage, '/tf_static', received.append, latched)
+        for node in (mount, listener):
+            executor.add_node(node)
+        assert spin_until(executor, lambda: received)
+        mount.destroy_node()
+        listener.destroy_node()
+    (t,) = received[0].transforms
+    assert (t.header.frame_id, t.child_frame_id) == ('left_forearm_link', 'left_skin_link')
+    assert t.transform.translation.z == 0.05
 
 
 @pytest.mark.ros
