@@ -144,8 +144,6 @@ def contacts_to_array(header: Header, contacts: Sequence, sequence: int = 0,
     return ContactArrayWriter().fill(header, contacts, sequence, device_time_us)
 
 
-
-
 def wrench_stamped(header: Header, contacts: Sequence) -> WrenchStamped:
     """
     Return the net wrench of all contacts of one scan, as a force/torque sensor would report it.

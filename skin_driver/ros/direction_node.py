@@ -19,8 +19,7 @@ import rclpy
 from rclpy.node import Node
 from skin_driver.ros import conversions, qos
 from skin_driver.ros.estimation_host import EstimationHost
-from skin_driver.ros.params import ParameterError
-from skin_driver.ros.spin import spin_nodes
+from skin_driver.ros.spin import create_or_exit, spin_nodes
 from skin_msgs.msg import SkinFrame
 
 
@@ -48,13 +47,7 @@ class DirectionNode(Node):
 def main(args=None):
     """Run the direction node until shut down."""
     rclpy.init(args=args)
-    try:
-        node = DirectionNode()
-    except ParameterError as err:
-        err.log_fatal('skin_direction')
-        rclpy.try_shutdown()
-        raise SystemExit(1)
-    spin_nodes([node])
+    spin_nodes([create_or_exit(DirectionNode, 'skin_direction')])
 
 
 if __name__ == '__main__':

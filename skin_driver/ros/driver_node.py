@@ -42,8 +42,8 @@ from skin_driver.core.protocol.wire import FrameDecoder
 from skin_driver.ros import conversions, diagnostics, qos
 from skin_driver.ros.direction_node import DirectionNode
 from skin_driver.ros.frames import default_frame_id
-from skin_driver.ros.params import accept_whole_numbers, declare, ParameterError
-from skin_driver.ros.spin import spin_nodes
+from skin_driver.ros.params import accept_whole_numbers, declare
+from skin_driver.ros.spin import create_or_exit, spin_nodes
 from skin_msgs.msg import SkinFrame
 
 # Every other parameter is read by configure: a change while configured would be accepted and
@@ -289,16 +289,14 @@ def fuse(driver: SkinDriverNode, **direction_kwargs) -> DirectionNode:
 def main(args=None):
     """Run the driver node until shut down."""
     rclpy.init(args=args)
-    try:
+
+    def create():
         node = SkinDriverNode()
         # launch_ros names a node with a process-wide rule (-r __node:=skin_driver); a rule of
         # the node's own takes precedence and keeps this one skin_direction.
-        direction = fuse(node, cli_args=[
+        return node, fuse(node, cli_args=[
             '--ros-args', '-r', '__node:=skin_direction']) if node.fused else None
-    except ParameterError as err:
-        err.log_fatal('skin_driver')
-        rclpy.try_shutdown()
-        raise SystemExit(1)
+    node, direction = create_or_exit(create, 'skin_driver')
 
     def autostart():
         if node.autostart:

@@ -9,11 +9,11 @@ and ``skin_link`` for the launch file's namespace ``skin`` or none.
 import math
 
 import rclpy
-from rclpy.executors import ExternalShutdownException
 from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 from skin_driver.ros import conversions
-from skin_driver.ros.params import accept_whole_numbers, declare, ParameterError
+from skin_driver.ros.params import accept_whole_numbers, declare
+from skin_driver.ros.spin import create_or_exit, spin_nodes
 
 
 def default_frame_id(namespace: str) -> str:
@@ -61,16 +61,4 @@ class MountTransform(Node):
 def main(args=None):
     """Publish the mount transform and keep it latched until shut down."""
     rclpy.init(args=args)
-    try:
-        node = MountTransform()
-    except ParameterError as err:
-        err.log_fatal('skin_mount_tf')
-        rclpy.try_shutdown()
-        raise SystemExit(1)
-    try:
-        rclpy.spin(node)
-    except (KeyboardInterrupt, ExternalShutdownException):
-        pass
-    finally:
-        node.destroy_node()
-        rclpy.try_shutdown()
+    spin_nodes([create_or_exit(MountTransform, 'skin_mount_tf')])

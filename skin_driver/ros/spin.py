@@ -2,6 +2,22 @@
 
 import rclpy
 from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
+from skin_driver.ros.params import ParameterError
+
+
+def create_or_exit(create, name: str):
+    """
+    Return ``create()`` (the nodes of an executable, after rclpy.init).
+
+    A parameter it refuses stops the process with status 1 and one fatal line, logged by the
+    node that refused it with its namespace ([left.skin_direction]), else by ``name``.
+    """
+    try:
+        return create()
+    except ParameterError as err:
+        err.log_fatal(name)
+        rclpy.try_shutdown()
+        raise SystemExit(1)
 
 
 def spin_nodes(nodes, before_spin=None) -> None:
