@@ -13,7 +13,7 @@ from rclpy.qos import qos_profile_sensor_data, ReliabilityPolicy
 from rosutil import ros_context, spin_until
 from skin_driver.ros.direction_node import DirectionNode
 from skin_driver.ros.driver_node import SkinDriverNode
-from skin_driver.tools.processes import spawn, stop
+from skin_driver.tools.harness import spawn, stop
 from skin_msgs.msg import TactileContactArray
 from std_srvs.srv import Trigger
 

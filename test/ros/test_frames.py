@@ -18,7 +18,7 @@ from skin_driver.ros import conversions
 from skin_driver.ros.direction_node import DirectionNode
 from skin_driver.ros.driver_node import SkinDriverNode
 from skin_driver.ros.frames import default_frame_id, MountTransform
-from skin_driver.tools.processes import spawn, stop
+from skin_driver.tools.harness import spawn, stop
 from skin_msgs.msg import SkinFrame, TactileContactArray
 import xacro
 

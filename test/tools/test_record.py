@@ -7,7 +7,7 @@ from rosutil import ros_context, spin_until
 from skin_driver.core.estimation.dataset import load_dataset
 from skin_driver.core.sim.board import SimulatedSkin
 from skin_driver.ros.driver_node import SkinDriverNode
-from skin_driver.tools.processes import spawn, stop
+from skin_driver.tools.harness import spawn, stop
 
 
 @pytest.mark.ros
