@@ -10,6 +10,8 @@ Bring up the skin: serial driver and direction node, optionally the simulated sk
 When the simulated skin exits (a bad scene, a port it cannot link), the launch stops with it.
 """
 
+import os
+
 from launch import LaunchDescription
 from launch.actions import (DeclareLaunchArgument, ExecuteProcess, OpaqueFunction,
                             RegisterEventHandler, Shutdown)
@@ -64,11 +66,19 @@ class _Port(Substitution):
 
     def perform(self, context) -> str:
         given = LaunchConfiguration('port').perform(context)
-        return given or default_port(LaunchConfiguration('namespace').perform(context))
+        if given:
+            return given
+        port = default_port(LaunchConfiguration('namespace').perform(context))
+        # The default place is this package's own: its folder is made for the simulator's link.
+        os.makedirs(os.path.dirname(port), exist_ok=True)
+        return port
 
 
 def _simulator_exited(event, context):
-    # The driver would retry a port nobody serves: stop everything, saying why.
+    # The driver would retry a port nobody serves: stop everything, saying why. Not when the
+    # launch is already stopping (Ctrl-C stops the simulator too): a second shutdown is an error.
+    if context.is_shutdown:
+        return []
     return [Shutdown(reason=f'the simulated skin exited (code {event.returncode}); its message '
                             'is above')]
 

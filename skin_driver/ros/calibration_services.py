@@ -236,7 +236,7 @@ class CalibrationServices:
         if topic:
             # Best effort takes a sensor's samples from a reliable or a best-effort publisher.
             self._wrench_sub = self._node.create_subscription(
-                WrenchStamped, topic, self._on_wrench, qos.STREAM, **qos.overridable())
+                WrenchStamped, topic, self._on_wrench, qos.stream(), **qos.overridable())
 
     def _on_wrench(self, msg: WrenchStamped) -> None:
         f = msg.wrench.force

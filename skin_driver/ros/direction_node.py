@@ -31,7 +31,7 @@ class DirectionNode(Node):
         super().__init__('skin_direction', **kwargs)
         self.host = EstimationHost(self)
         if subscribe:
-            self.create_subscription(SkinFrame, 'frame', self._on_frame, qos.STREAM,
+            self.create_subscription(SkinFrame, 'frame', self._on_frame, qos.stream(),
                                      **qos.overridable())
 
     def _on_frame(self, msg: SkinFrame) -> None:

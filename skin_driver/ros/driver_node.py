@@ -152,12 +152,12 @@ class SkinDriverNode(Node):
             return TransitionCallbackReturn.FAILURE
         self._frame_id = self._p('frame_id').strip() or default_frame_id(self.get_namespace())
         self._pitch = float(self._p('pitch'))
-        self._pubs['frame'] = self.create_lifecycle_publisher(SkinFrame, 'frame', qos.STREAM,
+        self._pubs['frame'] = self.create_lifecycle_publisher(SkinFrame, 'frame', qos.stream(),
                                                               **qos.overridable())
         if self._p('publish_images'):
             for layer in ('top', 'bottom'):
                 self._pubs[layer] = self.create_lifecycle_publisher(
-                    Image, f'{layer}/image_raw', qos.STREAM, **qos.overridable())
+                    Image, f'{layer}/image_raw', qos.stream(), **qos.overridable())
         decoder = FrameDecoder(expected_shape=(self._p('rows'), self._p('cols')))
         self._link = SerialLink(
             self._port(), self._p('baud'), decoder, self._publish_frames, self._on_link_state,

@@ -74,10 +74,10 @@ class EstimationHost:
         # at up to 2 kHz; readers of these topics still get rclpy's incompatible-QoS warnings.
         quiet = {'event_callbacks': PublisherEventCallbacks(use_default_callbacks=False),
                  **qos.overridable()}
-        self._pub_contacts = node.create_publisher(TactileContactArray, 'contacts', qos.STREAM,
+        self._pub_contacts = node.create_publisher(TactileContactArray, 'contacts', qos.stream(),
                                                    **quiet)
-        self._pub_contact = node.create_publisher(TactileContact, 'contact', qos.STREAM, **quiet)
-        self._pub_wrench = node.create_publisher(WrenchStamped, 'wrench', qos.STREAM, **quiet)
+        self._pub_contact = node.create_publisher(TactileContact, 'contact', qos.stream(), **quiet)
+        self._pub_wrench = node.create_publisher(WrenchStamped, 'wrench', qos.stream(), **quiet)
         self._pub_heat = {layer: node.create_publisher(Image, f'{layer}/heatmap', qos.VIZ_DEPTH,
                                                        **quiet)
                           for layer in ('top', 'bottom')}

@@ -11,12 +11,20 @@ subscription takes ROS 2's QoS overrides, parameters read once at start-up, e.g.
 (history, depth and reliability; a YAML parameter file takes them as well).
 """
 
-from rclpy.qos import qos_profile_sensor_data
+from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 from rclpy.qos_overriding_options import QoSOverridingOptions
 
-STREAM = qos_profile_sensor_data
 VIZ_DEPTH = 5
 DIAGNOSTICS_DEPTH = 10
+
+
+def stream() -> QoSProfile:
+    """Return a fresh sensor-data profile (rclpy's qos_profile_sensor_data) for one stream."""
+    # A fresh one each time: rclpy applies a topic's overrides to the profile object it is given,
+    # and on the shared qos_profile_sensor_data they would leak to every later stream.
+    return QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=5,
+                      reliability=ReliabilityPolicy.BEST_EFFORT,
+                      durability=DurabilityPolicy.VOLATILE)
 
 
 def overridable() -> dict:

@@ -35,7 +35,7 @@ class FrameRecorder:
         self.recording = Recording(tare_frames)
         self.rejected = 0
         node.create_subscription(
-            SkinFrame, topic, self._on_frame, qos.STREAM, **qos.overridable())
+            SkinFrame, topic, self._on_frame, qos.stream(), **qos.overridable())
 
     def _on_frame(self, msg: SkinFrame) -> None:
         try:

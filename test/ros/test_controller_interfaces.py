@@ -11,6 +11,7 @@ from rclpy.executors import SingleThreadedExecutor
 from rclpy.parameter import Parameter
 from rclpy.qos import qos_profile_sensor_data, ReliabilityPolicy
 from rosutil import ros_context, spin_until
+from skin_driver.ros import qos
 from skin_driver.ros.direction_node import DirectionNode
 from skin_driver.ros.driver_node import SkinDriverNode
 from skin_driver.tools.harness import spawn, stop
@@ -79,9 +80,14 @@ def test_a_reliable_subscriber_gets_the_wrench_once_the_publisher_is_overridden(
             _, _, direction, probe, executor):
         probe.node.create_subscription(WrenchStamped, '/wrench', wrenches.append, 10)
         assert spin_until(executor, lambda: len(wrenches) >= 5)
-        # The other streams keep the sensor-data profile.
-        info = direction.get_publishers_info_by_topic('/contacts')
-        assert [i.qos_profile.reliability for i in info] == [ReliabilityPolicy.BEST_EFFORT]
+        # The other streams keep the sensor-data profile, those made after the wrench too.
+        best_effort = [ReliabilityPolicy.BEST_EFFORT]
+        for topic in ('/contacts', '/frame'):
+            info = direction.get_publishers_info_by_topic(topic)
+            assert [i.qos_profile.reliability for i in info] == best_effort, topic
+        info = [i for i in direction.get_subscriptions_info_by_topic('/frame')
+                if i.node_name == 'skin_direction']
+        assert [i.qos_profile.reliability for i in info] == best_effort
 
 
 def _set_through_the_service(executor, node, target, name, value):
@@ -174,3 +180,8 @@ def test_a_fatal_start_up_error_is_logged_by_the_node_in_its_namespace(tmp_path,
     assert proc.returncode == 1, out
     line = next(line for line in out.splitlines() if 'FATAL' in line)
     assert f'[left.{node}]' in line and ('bogus' in line or '300' in line)
+
+
+def test_each_stream_gets_its_own_copy_of_the_sensor_data_profile():
+    # rclpy writes a topic's overrides into the profile it is given: never the shared one.
+    assert qos.stream() == qos_profile_sensor_data and qos.stream() is not qos.stream()
