@@ -8,6 +8,7 @@ import pytest
 from rosbags.rosbag2 import StoragePlugin, Writer
 from rosbags.typesys import get_types_from_msg, get_typestore, Stores
 from skin_driver.core.estimation.dataset import load_dataset
+from skin_driver.core.estimation.shift import DEFAULT_METHOD
 from skin_driver.core.sim.experiments import make_scene
 from skin_driver.tools import bag_to_dataset
 from skin_driver.tools.evaluate import cli as evaluate
@@ -60,7 +61,7 @@ def test_a_bag_of_frames_becomes_a_dataset_the_evaluator_scores(
     assert data.pitch_m == pytest.approx(pitch, rel=1e-6)
     capsys.readouterr()
     assert evaluate.main([str(out), '--json']) == 0
-    summary = json.loads(capsys.readouterr().out)['methods']['poc']['summary']
+    summary = json.loads(capsys.readouterr().out)['methods'][DEFAULT_METHOD]['summary']
     # The default skin's paper presses: every direction valid and within a few degrees.
     assert summary['frames'] == 2 and summary['valid'] == 2
     assert summary['max_error_deg'] < 5.0
