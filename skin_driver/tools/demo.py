@@ -26,7 +26,7 @@ from rclpy.node import Node
 from skin_driver.core.estimation.calibration import Calibration
 from skin_driver.core.estimation.heatmap import text_map
 from skin_driver.core.estimation.pipeline import ContactEstimator, EstimatorConfig
-from skin_driver.core.estimation.shift import DEFAULT_METHOD
+from skin_driver.core.estimation.shift import DEFAULT_METHOD, REFERENCES
 from skin_driver.core.sim.scene import find_scene, scene_from_dict
 from skin_driver.ros import conversions
 from skin_driver.tools.evaluate.scoring import summarise
@@ -81,7 +81,8 @@ class DemoMonitor:
         self.calibration = Calibration()
         self.calibrated = False
         # The paper's method runs here on the very scans the node sees, for the side-by-side table.
-        self.seed = ContactEstimator(EstimatorConfig(method='seed'), self.calibration)
+        self.seed = ContactEstimator(EstimatorConfig(), self.calibration,
+                                     shift=REFERENCES['seed'])
         self.results = {method: [], 'seed': []}
         # (true |F|, estimated |F|, true alpha, estimated alpha) of the node's contacts.
         self.forces = []

@@ -116,13 +116,13 @@ def test_direction_refuses_an_unknown_method_at_run_time_and_applies_a_known_one
         try:
             (result,) = node.set_parameters([Parameter('method', value='bogus')])
             assert not result.successful and "'method' is 'bogus'" in result.reason
-            (result,) = node.set_parameters([Parameter('method', value='seed')])
+            (result,) = node.set_parameters([Parameter('method', value='centroid')])
             assert result.successful
             # The estimator is rebuilt off the executor thread; it is in force once that is done.
             deadline = time.monotonic() + 10.0
             while node.host.rebuilding and time.monotonic() < deadline:
                 time.sleep(0.01)
-            assert node.host.estimator.config.method == 'seed'
+            assert node.host.estimator.config.method == 'centroid'
         finally:
             node.destroy_node()
 

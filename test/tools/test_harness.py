@@ -19,13 +19,13 @@ def executor():
 
 def test_parameter_file_points_both_nodes_at_the_workdir_and_takes_overrides(tmp_path):
     path = harness.write_params(str(tmp_path), driver={'publish_images': False},
-                                direction={'method': 'seed'})
+                                direction={'method': 'centroid'})
     params = yaml.safe_load(open(path))
     driver = params['/**/skin_driver']['ros__parameters']
     direction = params['/**/skin_direction']['ros__parameters']
     assert driver == {'port': str(tmp_path / 'skin0'), 'publish_images': False}
     assert direction == {'calibration_file': str(tmp_path / 'calibration.yaml'),
-                         'method': 'seed'}
+                         'method': 'centroid'}
     args = harness.ros_args('/ns', path)
     assert args[args.index('--params-file') + 1] == path and '__ns:=/ns' in args
 

@@ -18,6 +18,7 @@ import numpy as np
 from .dataset import Dataset
 from .pipeline import ContactEstimator, EstimatorConfig
 from .session import CalibrationRefused, CalibrationSession
+from .shift import resolve
 
 __all__ = ['calibrate_from_frames', 'prepared_estimator']
 
@@ -69,9 +70,12 @@ def prepared_estimator(data: Dataset, method: str, config: EstimatorConfig = Non
     """
     Return (estimator ``method`` ready for ``data``, calibration notes).
 
-    ``config`` gives its other settings; ``shift`` swaps in a shift method that is not registered
-    (the benchmark's references). See the module docstring for the tare and calibration.
+    ``config`` gives its other settings; ``method`` may name a reference (``shift.REFERENCES``),
+    and ``shift`` swaps in any other shift method that is not registered. See the module
+    docstring for the tare and calibration.
     """
+    if shift is None:
+        method, shift = resolve(method)
     base = config or EstimatorConfig(pitch_m=data.pitch_m)
     cfg = EstimatorConfig(**{**base.__dict__, 'method': method, 'pitch_m': data.pitch_m})
     est = ContactEstimator(cfg, shift=shift)

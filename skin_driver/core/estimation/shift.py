@@ -21,7 +21,9 @@ Registered names (stable; the benchmark compares them on the whole family of sim
   cycles per taxel, so it fails on fine grids (imprints tens of taxels wide).
 * ``centroid`` -- difference of the weighted centroids of the two imprints: no assumption about
   the imprint's shape, about two thirds of the cost, a little less accurate on most skins.
-* ``seed`` -- ``cv2.phaseCorrelate`` on the whole raw maps, no window, exactly as the paper.
+
+Reference, for comparison only (``REFERENCES``; a node cannot select it): ``seed`` --
+``cv2.phaseCorrelate`` on the whole raw maps, no window, exactly as the paper.
 """
 
 from __future__ import annotations
@@ -37,8 +39,8 @@ import numpy as np
 from .taxelfit import cell_fit_shift
 from .validate import check_pair
 
-__all__ = ['ShiftEstimate', 'Method', 'METHODS', 'DEFAULT_METHOD', 'get_method',
-           'method_names', 'estimate_shift']
+__all__ = ['ShiftEstimate', 'Method', 'METHODS', 'DEFAULT_METHOD', 'REFERENCES', 'get_method',
+           'method_names', 'resolve', 'estimate_shift']
 
 _EPS = 1e-12
 # Largest band DFT (taxels x bins) done as one dense product; beyond it the separable row and
@@ -193,7 +195,7 @@ def centroid(maps: np.ndarray) -> ShiftEstimate:
     return ShiftEstimate(float(cx[1] - cx[0]), float(cy[1] - cy[0]), 1.0)
 
 
-def seed(maps: np.ndarray) -> ShiftEstimate:
+def paper_phase_correlation(maps: np.ndarray) -> ShiftEstimate:
     """Estimate the shift with ``cv2.phaseCorrelate`` on the whole maps, as the seed paper does."""
     top, bottom = maps
     if not (top.any() and bottom.any()):
@@ -220,12 +222,30 @@ METHODS = {m.name: m for m in (
     Method('poc', poc, False, 'band-limited phase-plane POC on the contact window'),
     Method('centroid', centroid, False,
            "difference of the layers' weighted centroids in the contact's window"),
-    Method('seed', seed, True, 'cv2.phaseCorrelate on the whole raw maps, no window (paper)'),
     Method('taxel_fit', taxel_fit, False,
            'cell-integrated profiles fitted to the linearised window (default)', linear=True),
 )}
 
 DEFAULT_METHOD = 'taxel_fit'
+
+# References the evaluator, the benchmark and the demo compare with, never run by a node: the
+# paper's method (named for the seed paper) is worse than every registered one everywhere.
+REFERENCES = {m.name: m for m in (
+    Method('seed', paper_phase_correlation, True,
+           "the paper's cv2.phaseCorrelate on the whole raw maps, no window"),
+)}
+
+
+def resolve(name: str) -> tuple:
+    """
+    Return (registered method to configure, shift override or None) for an estimator name.
+
+    A reference runs in the default's pipeline with only its shift swapped in.
+    """
+    if name in REFERENCES:
+        return DEFAULT_METHOD, REFERENCES[name]
+    get_method(name)
+    return name, None
 
 
 def method_names() -> list:
@@ -244,6 +264,7 @@ def get_method(name: str) -> Method:
 
 def estimate_shift(top: np.ndarray, bottom: np.ndarray, method: str = DEFAULT_METHOD
                    ) -> ShiftEstimate:
-    """Return the shift of ``bottom`` relative to ``top`` (checked maps) with the named method."""
+    """Return the shift of ``bottom`` relative to ``top`` (checked maps): a method or reference."""
     t, b = check_pair(top, bottom, None)
-    return get_method(method).function(np.stack((t, b)).astype(np.float64))
+    found = REFERENCES.get(method) or get_method(method)
+    return found.function(np.stack((t, b)).astype(np.float64))

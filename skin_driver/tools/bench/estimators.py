@@ -15,7 +15,8 @@ import numpy as np
 from skin_driver.core.estimation.pipeline import ContactEstimator, EstimatorConfig
 from skin_driver.core.estimation.recorded import prepared_estimator
 from skin_driver.core.estimation.shift import (
-    centroid, DEFAULT_METHOD, Method, method_names, NO_SHIFT, ShiftEstimate)
+    centroid, DEFAULT_METHOD, Method, method_names, NO_SHIFT, REFERENCES, resolve,
+    ShiftEstimate)
 from skin_driver.core.sim.experiments import (
     make_random_experiment, make_scene, make_seed_experiment, press_for_shift, SCENE_KINDS)
 from skin_driver.core.sim.oracle import ORACLE, oracle_run
@@ -45,19 +46,19 @@ def skimage_shift(maps: np.ndarray) -> ShiftEstimate:
 
 def bench_methods(with_reference: bool = True) -> list:
     """Return the estimator names benchmarked: the registered ones, then the reference."""
-    return method_names() + ([SKIMAGE] if with_reference else [])
+    return method_names() + list(REFERENCES) + ([SKIMAGE] if with_reference else [])
 
 
 def make_estimator(name: str, model: SkinModel, calibration=None) -> ContactEstimator:
     """Return the pipeline with estimator ``name`` (a registered one or the skimage reference)."""
-    registered = name if name != SKIMAGE else 'centroid'
+    registered, reference = resolve(name if name != SKIMAGE else 'centroid')
     # The no-shear floor follows the pitch (the default's 0.25 mm is 1/20 of the seed's taxel),
     # so that small shifts on fine grids are judged by the estimator, not by a fixed threshold.
     config = EstimatorConfig(method=registered, pitch_m=model.pitch_m, fsr=model.fsr,
                              min_shift_m=0.05 * model.pitch_m)
     # Bench only: the reference is never a runtime estimator, so it is swapped in here.
-    reference = (Method(SKIMAGE, skimage_shift, False, 'scikit-image, upsampled x100')
-                 if name == SKIMAGE else None)
+    if name == SKIMAGE:
+        reference = Method(SKIMAGE, skimage_shift, False, 'scikit-image, upsampled x100')
     return ContactEstimator(config, calibration, shift=reference)
 
 
@@ -135,8 +136,9 @@ def seed_experiment(repeats: int, random_frames: int, seed: int = 0) -> dict:
     shifts = {}
     tilted = np.flatnonzero(data.alpha_deg > 0)
     for name in ('seed', method_names()[0]):
-        est = ContactEstimator(EstimatorConfig(method=name, pitch_m=data.pitch_m)).with_tare(
-            data.tare_top, data.tare_bottom)
+        registered, reference = resolve(name)
+        est = ContactEstimator(EstimatorConfig(method=registered, pitch_m=data.pitch_m),
+                               shift=reference).with_tare(data.tare_top, data.tare_bottom)
         pts = []
         for i in tilted:
             s = est.measure_shifts(data.top[i], data.bottom[i])

@@ -31,7 +31,7 @@ import numpy as np
 from skin_driver.core.estimation.atomic import check_writable
 from skin_driver.core.estimation.dataset import load_dataset, save_dataset
 from skin_driver.core.estimation.pipeline import EstimatorConfig
-from skin_driver.core.estimation.shift import DEFAULT_METHOD, method_names
+from skin_driver.core.estimation.shift import DEFAULT_METHOD, method_names, REFERENCES
 from skin_driver.core.sim.experiments import add_calibration_frames, make_scene, SCENE_KINDS
 from skin_driver.core.sim.skins import family_skin, GRID, HELD_OUT, skin_names
 from skin_driver.ros.estimator_params import estimator_config, load_direction_parameters
@@ -45,7 +45,7 @@ def _parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog='python -m skin_driver.evaluate',
                                      description=__doc__.strip().split('\n')[0])
     parser.add_argument('data', nargs='?', help='dataset .npz to evaluate')
-    parser.add_argument('--method', default=None, choices=method_names(),
+    parser.add_argument('--method', default=None, choices=method_names() + list(REFERENCES),
                         help=f"estimator (default: the --params file's, else {DEFAULT_METHOD})")
     parser.add_argument('--params', metavar='FILE',
                         help="the direction node's parameter file (config/skin.yaml format): "
@@ -117,6 +117,8 @@ def main(argv=None) -> int:
         return 0
     if args.list_methods:
         print('\n'.join(method_names()))
+        for name, reference in REFERENCES.items():
+            print(f'{name} (reference: {reference.description})')
         return 0
     if args.skin:
         try:

@@ -7,6 +7,7 @@ import pytest
 
 from skin_driver.core.estimation.calibration import calibrate_from_shifts, Calibration
 from skin_driver.core.estimation.pipeline import Contact, ContactEstimator, EstimatorConfig
+from skin_driver.core.estimation.shift import resolve
 from skin_driver.core.sim.physics import Press, render, SkinModel
 
 
@@ -17,14 +18,15 @@ def make(model=None, method='poc', calibration=None, seed=0, calibrate=True):
     """Return a tared estimator calibrated with normal presses at SPOT, as the seed does."""
     model = model or SkinModel()
     rng = np.random.default_rng(seed)
-    config = EstimatorConfig(method=method, pitch_m=model.pitch_m)
-    est = ContactEstimator(config, calibration)
+    registered, reference = resolve(method)
+    config = EstimatorConfig(method=registered, pitch_m=model.pitch_m)
+    est = ContactEstimator(config, calibration, shift=reference)
     frames = [render(model, [], rng) for _ in range(10)]
     est = est.with_tare(np.stack([t for t, _ in frames]), np.stack([b for _, b in frames]))
     if calibrate and calibration is None:
         shifts = [est.measure_shifts(*render(model, [Press(*SPOT, 10.0)], rng))[0]
                   for _ in range(5)]
-        est = ContactEstimator(config, calibrate_from_shifts(shifts), est.conditioner)
+        est = est.with_calibration(calibrate_from_shifts(shifts))
     return est, model, rng
 
 

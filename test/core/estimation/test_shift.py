@@ -8,7 +8,7 @@ import pytest
 from skin_driver.core.estimation import shift as direction
 from skin_driver.core.sim.physics import Press, render_force, SkinModel
 
-REQUIRED = ('centroid', 'poc', 'seed')
+REQUIRED = ('centroid', 'poc', 'taxel_fit')
 
 
 def _pair(dx_m, dy_m, model=None):
@@ -24,13 +24,21 @@ def test_all_methods_registered_with_stable_names():
     for name in REQUIRED:
         assert direction.get_method(name).name == name
     assert direction.DEFAULT_METHOD == 'taxel_fit'
-    assert direction.method_names() == ['taxel_fit', 'centroid', 'poc', 'seed']
-    assert direction.get_method('seed').whole_map
+    assert direction.method_names() == ['taxel_fit', 'centroid', 'poc']
+
+
+def test_the_papers_method_is_a_reference_a_node_cannot_select():
+    assert direction.REFERENCES['seed'].whole_map
+    with pytest.raises(ValueError, match='unknown direction method'):
+        direction.get_method('seed')
+    method, override = direction.resolve('seed')
+    assert method == direction.DEFAULT_METHOD and override is direction.REFERENCES['seed']
+    assert direction.resolve('poc') == ('poc', None)
 
 
 def test_unknown_method_lists_names():
     with pytest.raises(ValueError,
-                       match='unknown direction method .*taxel_fit, centroid, poc, seed'):
+                       match='unknown direction method .*taxel_fit, centroid, poc'):
         direction.get_method('nope')
 
 
@@ -54,7 +62,7 @@ def test_sub_taxel_shift_of_physical_maps(name):
     assert (est.dx - ref.dx, est.dy - ref.dy) == pytest.approx((0.7, -0.4), abs=0.03)
 
 
-def test_default_beats_seed_on_direction():
+def test_the_centroid_beats_the_papers_reference_on_direction():
     errs = {'centroid': [], 'seed': []}
     refs = {name: direction.estimate_shift(*_pair(0.0, 0.0), name) for name in errs}
     for beta in np.radians(np.arange(0, 360, 45)):
