@@ -5,16 +5,14 @@ import struct
 import time
 
 import numpy as np
+from port_reader import Reader
 import pytest
-import serial
 
-from skin_driver.core.protocol.wire import encode_frame, FrameDecoder, header_crc, SYNC
+from skin_driver.core.protocol.wire import encode_frame, header_crc, SYNC
 from skin_driver.core.sim.board import SimulatedSkin
 from skin_driver.core.sim.scene import scene_from_dict
 
 RATE_HZ = 200.0
-# Generous deadlines only bound a hung test; no assertion depends on how fast anything runs.
-DEADLINE_S = 10.0
 
 
 def held_press_scene():
@@ -22,48 +20,6 @@ def held_press_scene():
     return scene_from_dict({'presses': [{
         'time_s': 0.0, 'x_m': 0.0375, 'y_m': 0.0375, 'force_n': 10.0, 'alpha_deg': 45.0,
         'beta_deg': 135.0, 'radius_m': 0.004, 'duration_s': 1000.0, 'ramp_s': 0.0}]})
-
-
-class Reader:
-    """Read a port with pyserial, decode frames and reopen the port after it disappears."""
-
-    def __init__(self, port):
-        self.port = port
-        self.decoder = FrameDecoder(expected_shape=(16, 16))
-        self.frames = []
-        self.disconnects = 0
-        self.serial = serial.Serial(port, timeout=0.02)
-
-    def read_until(self, done):
-        end = time.monotonic() + DEADLINE_S
-        while not done():
-            assert time.monotonic() < end, 'timed out waiting for frames'
-            if self.serial is None:
-                self._reopen()
-                continue
-            try:
-                data = self.serial.read(4096)
-            except serial.SerialException:
-                self.serial.close()
-                self.serial = None
-                self.disconnects += 1
-                self.decoder.reset()
-                continue
-            self.frames += self.decoder.feed(data)
-
-    def read_frames(self, count):
-        target = len(self.frames) + count
-        self.read_until(lambda: len(self.frames) >= target)
-
-    def _reopen(self):
-        try:
-            self.serial = serial.Serial(self.port, timeout=0.02)
-        except (serial.SerialException, OSError):
-            time.sleep(0.01)
-
-    def close(self):
-        if self.serial is not None:
-            self.serial.close()
 
 
 @pytest.fixture
