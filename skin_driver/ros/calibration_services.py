@@ -42,7 +42,7 @@ from rclpy.task import Future
 from skin_driver.core.estimation.calibration import (Calibration, CalibrationMismatch, PARTS,
                                                      SkinIdentity)
 from skin_driver.core.estimation.session import CalibrationRefused, CalibrationSession
-from skin_driver.ros import qos
+from skin_driver.ros import conversions, qos
 from skin_driver.ros.params import declare
 from skin_driver.ros.paths import ros_home
 from skin_msgs.action import Calibrate, CalibrateCompliance, CalibrateForce, CalibrateGains
@@ -121,12 +121,14 @@ class CalibrationServices:
         self.load()
         self._follow_wrench_topic()
         for action, name, kind, goal_args, answer in (
-                (Calibrate, '~/calibrate', 'offset', self._offset_args, _answer_offset),
-                (CalibrateForce, '~/calibrate_force', 'force', self._force_args, _answer_force),
+                (Calibrate, '~/calibrate', 'offset', self._offset_args,
+                 conversions.fill_offset_result),
+                (CalibrateForce, '~/calibrate_force', 'force', self._force_args,
+                 conversions.fill_force_result),
                 (CalibrateCompliance, '~/calibrate_compliance', 'compliance',
-                 self._compliance_args, _answer_compliance),
+                 self._compliance_args, conversions.fill_compliance_result),
                 (CalibrateGains, '~/calibrate_gains', 'gains', self._gains_args,
-                 _answer_gains)):
+                 conversions.fill_gains_result)):
             ActionServer(
                 node, action, name,
                 execute_callback=self._executor(action, kind, goal_args, answer),
@@ -253,7 +255,8 @@ class CalibrationServices:
         note = session.add_scan(top, bottom, contacts, wrench)
         if note:
             self._node.get_logger().info(f'calibration ({session.kind}): {note}')
-            goal.publish_feedback(_feedback(type(goal.request), session, note))
+            goal.publish_feedback(
+                conversions.calibration_feedback(type(goal.request), session, note))
         if session.done and not future.done():
             future.set_result('done')
 
@@ -399,50 +402,3 @@ class CalibrationServices:
         response.message = self.note
         self._node.get_logger().info(self.note)
         return response
-
-
-def _feedback(action_goal, session, note: str):
-    """Return the feedback after a press: counts, and what the last accepted press read."""
-    feedback = _ACTIONS[action_goal].Feedback()
-    feedback.presses_done = len(session.accepted)
-    feedback.presses_wanted = session.wanted
-    if session.accepted:
-        last = session.accepted[-1]
-        feedback.last_force = float(last.peak_force_n)
-        shift = [float(v) if math.isfinite(v) else 0.0 for v in last.shift_m]
-        feedback.last_shift_x, feedback.last_shift_y = shift
-    feedback.note = note
-    return feedback
-
-
-_ACTIONS = {a.Goal: a for a in (Calibrate, CalibrateForce, CalibrateCompliance, CalibrateGains)}
-
-
-def _answer_offset(result, cal: Calibration, outcome) -> None:
-    result.x_p, result.y_p = cal.x_p_m, cal.y_p_m
-    result.std_x, result.std_y = cal.std_x_m, cal.std_y_m
-
-
-def _answer_force(result, cal: Calibration, outcome) -> None:
-    curve = cal.force_curves[1] if cal.force_curves else None
-    result.curve_counts = list(curve.counts) if curve else []
-    result.curve_forces = list(curve.force_n) if curve else []
-    result.fitted = list(outcome.fitted) if outcome else []
-    result.residuals = list(outcome.residuals) if outcome else []
-
-
-def _answer_compliance(result, cal: Calibration, outcome) -> None:
-    result.compliance = cal.compliance_m_per_n
-    result.fitted = list(outcome.fitted) if outcome else []
-    result.residuals = list(outcome.residuals) if outcome else []
-
-
-def _answer_gains(result, cal: Calibration, outcome) -> None:
-    top, bottom = cal.gain_maps()
-    if top is None:
-        result.gain_min = result.gain_max = 1.0
-    else:
-        result.gain_min = float(min(top.min(), bottom.min()))
-        result.gain_max = float(max(top.max(), bottom.max()))
-    result.covered = outcome.covered if outcome is not None else 0.0
-    result.warning = '; '.join(outcome.warnings) if outcome is not None else ''

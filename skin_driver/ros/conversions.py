@@ -18,6 +18,7 @@ from sensor_msgs.msg import Image
 from skin_driver.core.estimation.heatmap import colour_map
 from skin_driver.core.estimation.recording import layers_of
 from skin_driver.core.estimation.wrench import net_wrench, torque_about_origin
+from skin_msgs.action import Calibrate, CalibrateCompliance, CalibrateForce, CalibrateGains
 from skin_msgs.msg import SkinFrame, TactileContact, TactileContactArray
 from std_msgs.msg import ColorRGBA, Header
 from visualization_msgs.msg import Marker, MarkerArray
@@ -215,3 +216,57 @@ def heatmap_markers(header: Header, force_map: np.ndarray, pitch_m: float, conta
 def status_values(status: DiagnosticStatus) -> dict:
     """Return a diagnostic status's key/value pairs as a dict of strings."""
     return {kv.key: kv.value for kv in status.values}
+
+
+# ---- calibration actions -------------------------------------------------------------------
+
+def calibration_feedback(action_goal, session, note: str):
+    """Return a calibration action's feedback after a press: counts, the last press's reading."""
+    feedback = _CALIBRATIONS[action_goal].Feedback()
+    feedback.presses_done = len(session.accepted)
+    feedback.presses_wanted = session.wanted
+    if session.accepted:
+        last = session.accepted[-1]
+        feedback.last_force = float(last.peak_force_n)
+        shift = [float(v) if math.isfinite(v) else 0.0 for v in last.shift_m]
+        feedback.last_shift_x, feedback.last_shift_y = shift
+    feedback.note = note
+    return feedback
+
+
+_CALIBRATIONS = {a.Goal: a for a in (Calibrate, CalibrateForce, CalibrateCompliance,
+                                     CalibrateGains)}
+
+
+def fill_offset_result(result, cal, outcome) -> None:
+    """Fill a Calibrate result with the calibration in force (and the outcome, if any)."""
+    result.x_p, result.y_p = cal.x_p_m, cal.y_p_m
+    result.std_x, result.std_y = cal.std_x_m, cal.std_y_m
+
+
+def fill_force_result(result, cal, outcome) -> None:
+    """Fill a CalibrateForce result with the calibration in force (and the outcome, if any)."""
+    curve = cal.force_curves[1] if cal.force_curves else None
+    result.curve_counts = list(curve.counts) if curve else []
+    result.curve_forces = list(curve.force_n) if curve else []
+    result.fitted = list(outcome.fitted) if outcome else []
+    result.residuals = list(outcome.residuals) if outcome else []
+
+
+def fill_compliance_result(result, cal, outcome) -> None:
+    """Fill a CalibrateCompliance result with the calibration in force (and outcome, if any)."""
+    result.compliance = cal.compliance_m_per_n
+    result.fitted = list(outcome.fitted) if outcome else []
+    result.residuals = list(outcome.residuals) if outcome else []
+
+
+def fill_gains_result(result, cal, outcome) -> None:
+    """Fill a CalibrateGains result with the calibration in force (and the outcome, if any)."""
+    top, bottom = cal.gain_maps()
+    if top is None:
+        result.gain_min = result.gain_max = 1.0
+    else:
+        result.gain_min = float(min(top.min(), bottom.min()))
+        result.gain_max = float(max(top.max(), bottom.max()))
+    result.covered = outcome.covered if outcome is not None else 0.0
+    result.warning = '; '.join(outcome.warnings) if outcome is not None else ''
