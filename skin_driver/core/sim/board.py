@@ -29,6 +29,7 @@ import tty
 import numpy as np
 
 from . import physics
+from .line import damage, point_link, remove_link
 from .scene import load_scene, Scene
 from ..estimation.validate import check_int, check_number
 from ..protocol.wire import encode_frame, frame_size, MAX_SEQ
@@ -40,7 +41,6 @@ MAX_LAG_S = 0.5
 # Sent frames remembered to tell, at an unplug, which of them the reader had not read yet.
 SENT_HISTORY = 8192
 UNPLUG_SETTLE_S = 0.01
-DAMAGE_KINDS = ('bit flip', 'dropped byte', 'duplicated byte', 'inserted bytes', 'truncated')
 
 
 @dataclass(frozen=True)
@@ -236,7 +236,7 @@ class SimulatedSkin:
             fcntl.fcntl(master, fcntl.F_SETFL, flags | os.O_NONBLOCK)
             port = os.ttyname(slave)
             if self.link_path:
-                _point_link(self.link_path, port)
+                point_link(self.link_path, port)
         except BaseException:
             os.close(master)
             os.close(slave)
@@ -262,7 +262,7 @@ class SimulatedSkin:
             except OSError:
                 pass
         if self.link_path:
-            _remove_link(self.link_path, self._port)
+            remove_link(self.link_path, self._port)
         self._master = self._slave = self._port = None
         self._pending.clear()
         self._frame_ends.clear()
@@ -335,7 +335,7 @@ class SimulatedSkin:
                            tuple(i for i, _ in active))
         junk, wire, damaged = b'', raw, False
         if self._noise and self._noise_rng.random() < self._noise:
-            wire = _damage(raw, self._noise_rng)
+            wire = damage(raw, self._noise_rng)
             # Damage at the very end may leave the frame intact with junk behind it.
             damaged = wire[:len(raw)] != raw
         if self._noise and self._noise_rng.random() < self._noise:
@@ -399,41 +399,3 @@ def _reshape(layer: np.ndarray, shape: tuple) -> np.ndarray:
     rows, cols = min(shape[0], layer.shape[0]), min(shape[1], layer.shape[1])
     out[:rows, :cols] = layer[:rows, :cols]
     return out
-
-
-def _damage(raw: bytes, rng: np.random.Generator) -> bytes:
-    """Return raw with one kind of line damage applied at a random place."""
-    kind = DAMAGE_KINDS[int(rng.integers(len(DAMAGE_KINDS)))]
-    data = bytearray(raw)
-    at = int(rng.integers(len(data)))
-    if kind == 'bit flip':
-        data[at] ^= 1 << int(rng.integers(8))
-    elif kind == 'dropped byte':
-        del data[at]
-    elif kind == 'duplicated byte':
-        data.insert(at, data[at])
-    elif kind == 'inserted bytes':
-        data[at:at] = rng.integers(0, 256, int(rng.integers(1, 9)), dtype=np.uint8).tobytes()
-    else:
-        del data[max(at, 1):]
-    return bytes(data)
-
-
-def _point_link(link: str, target: str) -> None:
-    """Atomically make link a symlink to target; never replace anything but a symlink."""
-    if os.path.lexists(link) and not os.path.islink(link):
-        raise ValueError(f'link path {link!r} exists and is not a symlink; refusing to replace it')
-    tmp = f'{link}.tmp{os.getpid()}'
-    if os.path.lexists(tmp):
-        os.unlink(tmp)
-    os.symlink(target, tmp)
-    os.replace(tmp, link)
-
-
-def _remove_link(link: str, target: str | None) -> None:
-    """Remove link if it still points at target (as udev removes a by-id link on unplug)."""
-    try:
-        if os.path.islink(link) and os.readlink(link) == target:
-            os.unlink(link)
-    except OSError:
-        pass
