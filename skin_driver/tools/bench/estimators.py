@@ -13,7 +13,7 @@ import time
 import numpy as np
 
 from skin_driver.core.estimation.pipeline import ContactEstimator, EstimatorConfig
-from skin_driver.core.estimation.recorded import prepared_estimator
+from skin_driver.core.estimation.prepared import prepared_estimator
 from skin_driver.core.estimation.shift import (
     centroid, DEFAULT_METHOD, Method, method_names, NO_SHIFT, REFERENCES, resolve,
     ShiftEstimate)

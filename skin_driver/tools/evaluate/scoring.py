@@ -4,7 +4,7 @@ Scoring of direction estimators on a dataset: Table 1 of the seed paper and the 
 The single normal presses calibrate (x_p, y_p); every single tilted press's strongest contact is
 compared with the ground-truth azimuth; frames with several presses are matched press by press
 (docs/dataset.md). With a ``split`` array (dataset format 2) only the calibration frames
-(split = 1) calibrate, and more fully (:mod:`skin_driver.core.estimation.recorded`); only
+(split = 1) calibrate, and more fully (:mod:`skin_driver.core.estimation.prepared`); only
 split = 0 frames are scored. ROS-free.
 """
 
@@ -19,7 +19,7 @@ import numpy as np
 from skin_driver.core.estimation.calibration import Calibration
 from skin_driver.core.estimation.dataset import Dataset
 from skin_driver.core.estimation.pipeline import EstimatorConfig
-from skin_driver.core.estimation.recorded import prepared_estimator
+from skin_driver.core.estimation.prepared import prepared_estimator
 from skin_driver.core.estimation.shift import DEFAULT_METHOD
 from skin_driver.core.sim.oracle import ORACLE, oracle_run
 
@@ -130,7 +130,7 @@ class MethodRun:
 
 def run_method(data: Dataset, method: str, config: EstimatorConfig = None) -> MethodRun:
     """
-    Run estimator ``method`` (made ready by :func:`recorded.prepared_estimator`) over the data.
+    Run estimator ``method`` (made ready by :func:`prepared.prepared_estimator`) over the data.
 
     Its contacts are those of the scored frames (``data.scored_frames()``), frame by frame.
     """

@@ -2,7 +2,7 @@
 
 import numpy as np
 import pytest
-from skin_driver.core.estimation.recorded import prepared_estimator
+from skin_driver.core.estimation.prepared import prepared_estimator
 from skin_driver.core.sim.experiments import add_calibration_frames, make_scene
 from skin_driver.core.sim.physics import Press, render
 from skin_driver.core.sim.skins import family_skin
