@@ -13,7 +13,7 @@ ROSDEP_KEYS = {'cv2': 'python3-opencv', 'hypothesis': 'python3-hypothesis',
                'serial': 'python3-serial',
                'skimage': 'python3-skimage', 'yaml': 'python3-yaml'}
 # This project's own packages and the tests' helper modules.
-OWN = {'skin_driver', 'skin_msgs', 'rosutil', 'pipeline', 'conftest'}
+OWN = {'skin_driver', 'skin_msgs', 'rosutil', 'pipeline', 'port_reader', 'conftest'}
 
 
 def _imported_modules():
