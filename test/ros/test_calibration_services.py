@@ -47,7 +47,10 @@ def test_force_then_compliance_through_the_actions_with_feedback_per_press(tmp_p
     presses += [{'time_s': start + 1.6 * i, 'force_n': f, 'alpha_deg': a, 'beta_deg': b}
                 for i, (f, a, b) in enumerate(TILTED)]
     feedback = []
-    with pipeline(tmp_path, scene(presses, **MODEL)) as (sim, _, direction, probe, executor):
+    # At 100 scans/s (the paper's board sends ~30) a loaded CI machine keeps up with the scans; at
+    # 200 under a parallel suite one press of eight was once read 20 % off (see the closing note).
+    with pipeline(tmp_path, scene(presses, **MODEL), rate_hz=100.0) as (
+            sim, _, direction, probe, executor):
         status, force = send_goal(executor, direction, CalibrateForce, FORCE,
                                   CalibrateForce.Goal(forces=FORCES, timeout=40.0),
                                   timeout_s=50.0, feedback=feedback.append)
