@@ -34,7 +34,8 @@ def ranged_parameters(node_class):
     with ros_context() as (context, _):
         node = node_class(context=context)
         found = {}
-        for name, descriptor in node._descriptors.items():
+        names = node.list_parameters([], 0).names
+        for name, descriptor in zip(names, node.describe_parameters(names)):
             for rng in descriptor.integer_range:
                 found[name] = (rng.from_value, rng.to_value, True)
             for rng in descriptor.floating_point_range:

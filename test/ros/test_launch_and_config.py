@@ -26,7 +26,7 @@ def test_config_holds_every_declared_parameter_and_nothing_else(name):
     with ros_context() as (context, _):
         node = NODES[name](context=context)
         # ROS's own: QoS overrides (read-only, per topic) are ROS 2's, not the node's.
-        declared = {name for name in node._parameters
+        declared = {name for name in node.list_parameters([], 0).names
                     if not name.startswith('qos_overrides.')} - {
             'use_sim_time', 'start_type_description_service'}
         node.destroy_node()
