@@ -96,7 +96,8 @@ class EstimationHost:
     def _declare_parameters(self) -> None:
         node = self.node
         declare(node, 'method', DEFAULT_METHOD,
-                "Shift estimator between the layers; seed is the paper's phase correlation.",
+                "Shift estimator between the layers (the paper's phase correlation is a "
+                'reference of the evaluator, not a choice).',
                 choices=method_names())
         # The core's defaults are the node's: the evaluator and the node measure the same thing.
         core = EstimatorConfig()

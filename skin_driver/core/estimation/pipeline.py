@@ -140,6 +140,20 @@ def _force_window(pair: LayerPair, maps: np.ndarray, force: np.ndarray) -> np.nd
     return force[:, r0:r0 + h, c0:c0 + w] * share
 
 
+def _censored(pair: LayerPair, window: np.ndarray, curves) -> LayerPair:
+    """
+    Return ``pair`` with its saturated taxels' force filled in from the rims (imprint).
+
+    ``window`` is the pair's share of the force maps (:func:`_force_window`).
+    """
+    sums = [pair.top_force_n, pair.bottom_force_n]
+    for layer, curve in enumerate(curves):
+        own = pair.maps[layer]
+        if curve.censor_counts and own.max() >= curve.censor_counts:
+            sums[layer] = curve.imprint_force(own, window[layer])
+    return replace(pair, top_force_n=sums[0], bottom_force_n=sums[1])
+
+
 def _or_zero(v: float) -> float:
     return float(v) if math.isfinite(v) else 0.0
 
@@ -208,8 +222,7 @@ class ContactEstimator:
         if not pairs:
             return []
         curves = self.calibration.force_curves
-        if curves and any(c.censor_counts for c in curves):
-            pairs = [self._censored(pair, maps, force, curves) for pair in pairs]
+        censoring = bool(curves) and any(c.censor_counts for c in curves)
         method = self._method
         noise = conditioner.count_noise()
         whole = None
@@ -217,34 +230,20 @@ class ContactEstimator:
             whole = method.function(np.stack((t, b)).astype(np.float64))
         out = []
         for pair in pairs:
+            window = (_force_window(pair, maps, force) if censoring or method.linear
+                      else None)
+            if censoring:
+                pair = _censored(pair, window, curves)
             if whole is not None:
                 est = whole
             elif method.linear:
-                est = method.function(np.concatenate((_force_window(pair, maps, force),
-                                                      pair.maps)))
+                est = method.function(np.concatenate((window, pair.maps)))
             else:
                 est = method.function(pair.maps)
             if not (math.isfinite(est.dx) and math.isfinite(est.dy)):
                 est = NO_SHIFT
             out.append((pair, est, self._sigma(pair, maps, noise, len(pairs) == 1)))
         return out
-
-    @staticmethod
-    def _censored(pair: LayerPair, maps: np.ndarray, force: np.ndarray, curves) -> LayerPair:
-        """Return ``pair`` with its saturated taxels' force filled in from the rims (imprint)."""
-        r0, c0 = pair.origin
-        h, w = pair.maps.shape[1:]
-        sums = []
-        for layer, curve in enumerate(curves):
-            own = pair.maps[layer]
-            if not (curve.censor_counts and own.max() >= curve.censor_counts):
-                sums.append((pair.top_force_n, pair.bottom_force_n)[layer])
-                continue
-            full = maps[layer, r0:r0 + h, c0:c0 + w]
-            # A contact's share of a layer's counts carries the same share of its force.
-            share = np.divide(own, full, out=np.zeros_like(own), where=full > 0)
-            sums.append(curve.imprint_force(own, share * force[layer, r0:r0 + h, c0:c0 + w]))
-        return replace(pair, top_force_n=sums[0], bottom_force_n=sums[1])
 
     def _sigma(self, pair: LayerPair, maps: np.ndarray, noise: np.ndarray,
                alone: bool) -> float:

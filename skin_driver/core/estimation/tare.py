@@ -36,10 +36,6 @@ class RecentScans:
         """Keep the last ``keep`` scans from now on (those already kept stay, up to that)."""
         self._scans = collections.deque(self._scans, maxlen=int(keep))
 
-    def clear(self) -> None:
-        """Forget every scan (the stream stopped: old scans say nothing of the skin now)."""
-        self._scans.clear()
-
     def add(self, top: np.ndarray, bottom: np.ndarray, contacts: int, now_s: float) -> None:
         """Remember one scan, its number of contacts and when it arrived (monotonic seconds)."""
         scans = self._scans
