@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Make the workspace usable on a fresh machine: a .venv holding ROS 2 Jazzy's Python side (wheels, or
-# the sourced system Jazzy) and the project's pinned dependencies, then a colcon build of skin_msgs and
-# skin_driver. Each step is skipped when its inputs have not changed, so a second run takes a second.
+# the sourced system Jazzy) and the project's pinned dependencies, then a colcon build of skin_msgs,
+# skin_kernel (the compiled estimation, C) and skin_driver. Each step is skipped when its inputs have not changed, so a second run takes a second.
 set -euo pipefail
 
 root=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
@@ -32,7 +32,7 @@ else
 fi
 command -v cmake >/dev/null 2>&1 || die "missing: cmake (needed to build skin_msgs); install it, e.g. apt-get install cmake"
 command -v cc >/dev/null 2>&1 || command -v gcc >/dev/null 2>&1 \
-  || die "missing: a C compiler (needed to build skin_msgs); install one, e.g. apt-get install gcc"
+  || die "missing: a C compiler (needed to build skin_msgs and skin_kernel); install one, e.g. apt-get install gcc"
 "$py" -c 'import ensurepip, venv' 2>/dev/null || die "missing: python venv support for $py; install it, e.g. apt-get install python3-venv"
 pyinc=$("$py" -c 'import sysconfig; print(sysconfig.get_paths()["include"])')
 [ -f "$pyinc/Python.h" ] || die "missing: Python headers in $pyinc (needed by rosidl); install them, e.g. apt-get install python3-dev"
@@ -87,18 +87,19 @@ if [ "$have" != "$want" ]; then
 fi
 
 # --- the colcon build -------------------------------------------------------------------------
-build_inputs=$(find package.xml setup.py setup.cfg resource skin_msgs launch config skin_driver \
+build_inputs=$(find package.xml setup.py setup.cfg resource skin_msgs skin_kernel launch config skin_driver \
   -type f \( -name '*.py' -o -name '*.xml' -o -name '*.txt' -o -name '*.msg' -o -name '*.srv' -o -name '*.action' \
+  -o -name '*.c' -o -name '*.h' \
   -o -name '*.yaml' -o -name '*.rviz' -o -name '*.cfg' -o -name 'skin_driver' \) -not -path '*/__pycache__/*' | sort)
 bwant=$(hash_of $build_inputs; echo "$want")
 if [ "$(cat install/.build-stamp 2>/dev/null)" != "$bwant" ]; then
-  say "colcon build of skin_msgs and skin_driver"
+  say "colcon build of skin_msgs, skin_kernel and skin_driver"
   prefix=${AMENT_PREFIX_PATH:-}
   [ -n "$system_ros" ] || prefix="$venv"
   # shellcheck disable=SC1091
   if ! ( . "$venv/bin/activate"
          export AMENT_PREFIX_PATH="$prefix" CMAKE_PREFIX_PATH="$prefix${CMAKE_PREFIX_PATH:+:$CMAKE_PREFIX_PATH}"
-         colcon --log-base build/log build --base-paths . skin_msgs --build-base build --install-base install \
+         colcon --log-base build/log build --base-paths . skin_msgs skin_kernel --build-base build --install-base install \
            --event-handlers console_cohesion- status- summary- \
            --cmake-args -DPython3_EXECUTABLE="$venv/bin/python" -DBUILD_TESTING=OFF ) >"$root/build-colcon.log" 2>&1; then
     tail -n 30 "$root/build-colcon.log" >&2

@@ -11,6 +11,7 @@ neighbours so that a dead taxel inside a contact does not fake a shift between t
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import NamedTuple
 
 import cv2
 import numpy as np
@@ -19,7 +20,7 @@ from .crosstalk import remove_line_leak
 from .fsr import FsrModel
 from .validate import check_map, check_number, check_pair, check_stack
 
-__all__ = ['ConditioningConfig', 'Conditioner']
+__all__ = ['ConditioningConfig', 'Conditioner', 'ConditionerState']
 
 
 @dataclass(frozen=True)
@@ -114,6 +115,17 @@ class _Stacked:
                                   for g in gains])
         self.dead = [(i, _DeadFill(layer.dead, fill_dead)) for i, layer in enumerate(layers)
                      if layer.dead.any()]
+
+
+class ConditionerState(NamedTuple):
+    """A conditioner's per-taxel arrays, (2, rows, cols) each, and force tables (copies)."""
+
+    baseline: np.ndarray
+    threshold: np.ndarray
+    noise: np.ndarray
+    gain: np.ndarray     # None when no gain is set
+    dead: np.ndarray     # bool
+    tables: np.ndarray   # (2, full_scale + 1): each layer's force at every count
 
 
 class Conditioner:
@@ -257,6 +269,15 @@ class Conditioner:
         if self._stack is None:
             self._stack = _Stacked(self._layers, self.config.fill_dead)
         return self._stack
+
+    def state(self, shape: tuple) -> ConditionerState:
+        """Return copies of what conditions ``shape`` maps (the compiled kernel's copy of it)."""
+        self._ensure(tuple(shape))
+        st = self._stacked()
+        return ConditionerState(st.baseline.copy(), st.threshold.copy(), st.noise.copy(),
+                                None if st.gain is None else st.gain.copy(),
+                                np.stack(self.dead_masks()),
+                                np.stack([table.force for table in self._tables]))
 
     def count_noise(self) -> np.ndarray:
         """Return the (2, rows, cols) 1-sigma count noise of every taxel (measured by the tare)."""

@@ -36,6 +36,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field, replace
 from functools import lru_cache
 import math
+import threading
 
 import numpy as np
 
@@ -43,6 +44,7 @@ from .calibration import Calibration
 from .conditioning import Conditioner, ConditioningConfig
 from .contacts import LayerPair, pair_layers
 from .fsr import FsrModel
+from . import kernel as compiled_kernel
 from .shift import DEFAULT_METHOD, get_method, Method, NO_SHIFT
 from .validate import check_int, check_number, check_pair
 
@@ -140,17 +142,27 @@ def _force_window(pair: LayerPair, maps: np.ndarray, force: np.ndarray) -> np.nd
     return force[:, r0:r0 + h, c0:c0 + w] * share
 
 
-def _censored(pair: LayerPair, window: np.ndarray, curves) -> LayerPair:
-    """
-    Return ``pair`` with its saturated taxels' force filled in from the rims (imprint).
+def _saturated(maps: np.ndarray, curves) -> tuple:
+    """Return per layer whether a contact's counts reach its curve's censoring counts."""
+    return tuple(bool(c.censor_counts and own.max() >= c.censor_counts)
+                 for own, c in zip(maps, curves))
 
-    ``window`` is the pair's share of the force maps (:func:`_force_window`).
+
+def _imprint_sums(maps: np.ndarray, window: np.ndarray, saturated, sums, curves) -> list:
     """
-    sums = [pair.top_force_n, pair.bottom_force_n]
-    for layer, curve in enumerate(curves):
-        own = pair.maps[layer]
-        if curve.censor_counts and own.max() >= curve.censor_counts:
-            sums[layer] = curve.imprint_force(own, window[layer])
+    Return a contact's force sums with each saturated layer's filled in from the rims (imprint).
+
+    ``maps`` are the contact's counts, ``window`` its share of the force maps
+    (:func:`_force_window`), ``sums`` its (top, bottom) force sums as summed.
+    """
+    return [curve.imprint_force(own, force) if hit else float(total)
+            for own, force, hit, total, curve in zip(maps, window, saturated, sums, curves)]
+
+
+def _censored(pair: LayerPair, window: np.ndarray, curves) -> LayerPair:
+    """Return ``pair`` with its saturated taxels' force filled in (:func:`_imprint_sums`)."""
+    sums = _imprint_sums(pair.maps, window, _saturated(pair.maps, curves),
+                         (pair.top_force_n, pair.bottom_force_n), curves)
     return replace(pair, top_force_n=sums[0], bottom_force_n=sums[1])
 
 
@@ -159,16 +171,23 @@ def _or_zero(v: float) -> float:
 
 
 class ContactEstimator:
-    """Estimate contacts (location, force, direction) from raw top and bottom count maps."""
+    """
+    Estimate contacts (location, force, direction) from raw top and bottom count maps.
+
+    The methods the compiled kernel runs (:data:`kernel.METHODS`) run there, one call per scan;
+    the Python code of this module and the ones it calls describes that algorithm and runs with
+    ``compiled=False`` (the tests compare the two) and for the other methods.
+    """
 
     def __init__(self, config: EstimatorConfig = None, calibration: Calibration = None,
-                 conditioner: Conditioner = None, shift: Method = None):
+                 conditioner: Conditioner = None, shift: Method = None, compiled: bool = True):
         """
         Create the pipeline; ``conditioner`` may carry a tare (it is copied, never shared).
 
         ``shift`` replaces the configured shift method by one that is not registered (the
         benchmark's references). An estimator does not change once made: a tare, a calibration
         or other settings make a new one (``with_*``), which a live host swaps in whole.
+        ``compiled=False`` runs the Python description instead of the compiled kernel.
         """
         self.config = config or EstimatorConfig()
         cond_config = ConditioningConfig(fsr=self.config.fsr,
@@ -184,6 +203,11 @@ class ContactEstimator:
             self.conditioner.set_gain(top, bottom)
         self._shift = shift
         self._method = shift or get_method(self.config.method)
+        self._compiled = compiled
+        self._use_kernel = (compiled and shift is None
+                            and self._method.name in compiled_kernel.METHODS)
+        self._kernel = None
+        self._kernel_lock = threading.Lock()
 
     @property
     def calibration(self) -> Calibration:
@@ -192,17 +216,20 @@ class ContactEstimator:
 
     def with_calibration(self, calibration: Calibration) -> 'ContactEstimator':
         """Return this estimator with ``calibration`` (force curves and gains too) in force."""
-        return ContactEstimator(self.config, calibration, self.conditioner, self._shift)
+        return ContactEstimator(self.config, calibration, self.conditioner, self._shift,
+                                self._compiled)
 
     def with_config(self, config: EstimatorConfig) -> 'ContactEstimator':
         """Return an estimator with other settings, keeping the tare and the calibration."""
-        return ContactEstimator(config, self._calibration, self.conditioner, self._shift)
+        return ContactEstimator(config, self._calibration, self.conditioner, self._shift,
+                                self._compiled)
 
     def with_tare(self, top_frames, bottom_frames) -> 'ContactEstimator':
         """Return this estimator tared from no-touch frames (N x rows x cols each)."""
         tared = self.conditioner.copy()
         tared.tare(top_frames, bottom_frames)
-        return ContactEstimator(self.config, self._calibration, tared, self._shift)
+        return ContactEstimator(self.config, self._calibration, tared, self._shift,
+                                self._compiled)
 
     @property
     def compliance_m_per_n(self) -> float:
@@ -277,11 +304,15 @@ class ContactEstimator:
                 total += 0.5 * (max(spread, 0.0) + 0.5 * lock * lock)
         if pair.at_border:
             total += _BORDER_SIGMA ** 2
+        return math.sqrt(total + self._calibration_variance())
+
+    def _calibration_variance(self) -> float:
+        """Return the calibration's share of sigma**2 (taxels**2): its standard error."""
         cal = self.calibration
-        if cal.presses > 0:
-            pitch = self.config.pitch_m
-            total += (cal.std_x_m ** 2 + cal.std_y_m ** 2) / (2.0 * cal.presses * pitch * pitch)
-        return math.sqrt(total)
+        if cal.presses <= 0:
+            return 0.0
+        pitch = self.config.pitch_m
+        return (cal.std_x_m ** 2 + cal.std_y_m ** 2) / (2.0 * cal.presses * pitch * pitch)
 
     def _normal_force(self, pair: LayerPair) -> float:
         """Return the contact's normal force: sensed sum / fill_factor**2 (module docstring)."""
@@ -299,12 +330,53 @@ class ContactEstimator:
         Use it on normal presses to feed :func:`calibration.calibrate_from_shifts`.
         """
         p = self.config.pitch_m
+        if self._use_kernel:
+            dx, dy = compiled_kernel.DX, compiled_kernel.DY
+            return [(r[dx] * p, r[dy] * p) for r in self._scan(top_counts, bottom_counts)]
         raw = sorted(self._raw(top_counts, bottom_counts),
                      key=lambda item: -self._normal_force(item[0]))
         return [(est.dx * p, est.dy * p) for _, est, _ in raw]
 
     def process(self, top_counts, bottom_counts) -> list:
         """Return the contacts in the two raw count maps, strongest (normal force) first."""
+        if not self._use_kernel:
+            return self._process_described(top_counts, bottom_counts)
+        kept, n = compiled_kernel.KEPT, compiled_kernel.CONTACT_FIELDS
+        return [_contact(r[:n]) for r in self._scan(top_counts, bottom_counts) if r[kept]]
+
+    def _scan(self, top_counts, bottom_counts) -> list:
+        """Return the compiled kernel's records of every contact (kernel.scan)."""
+        kernel = self._kernel or self._build_kernel(top_counts, bottom_counts)
+        records, revived = kernel.scan(top_counts, bottom_counts, self._imprint_forces)
+        if revived is not None:
+            self.conditioner.set_dead(revived[0], revived[1])
+        return records
+
+    def _build_kernel(self, top_counts, bottom_counts) -> compiled_kernel.Kernel:
+        t, _ = check_pair(top_counts, bottom_counts)
+        with self._kernel_lock:
+            if self._kernel is None:
+                cfg, cal = self.config, self.calibration
+                state = self.conditioner.state(t.shape)
+                curves = cal.force_curves or (None, None)
+                reals = (cfg.pitch_m, self.compliance_m_per_n, cfg.min_contact_force_n,
+                         cfg.min_confidence, cfg.min_shift_m, cfg.force_scale, cfg.fill_factor,
+                         cal.x_p_m, cal.y_p_m, *cal.zero_slope_m_per_n, cal.zero_ref_n,
+                         self._calibration_variance(),
+                         *(c.censor_counts if c is not None else 0.0 for c in curves))
+                cond = self.conditioner.config
+                self._kernel = compiled_kernel.Kernel(compiled_kernel.KernelSettings(
+                    self._method.name, cfg.max_contacts, cond.remove_crosstalk, cond.fill_dead,
+                    reals, *state))
+        return self._kernel
+
+    def _imprint_forces(self, window: np.ndarray, saturated, sums) -> list:
+        """Return a saturated contact's force sums (the compiled kernel's censoring hook)."""
+        return _imprint_sums(window[:2], window[2:], saturated, sums,
+                             self.calibration.force_curves)
+
+    def _process_described(self, top_counts, bottom_counts) -> list:
+        """Return the contacts as :meth:`process`, by the Python description of the pipeline."""
         cfg = self.config
         cal = self.calibration
         compliance = self.compliance_m_per_n
@@ -343,3 +415,9 @@ class ContactEstimator:
                 force_xyz_n=(fx, fy, -normal), confidence=conf, direction_valid=bool(valid)))
         contacts.sort(key=lambda c: -c.force_n)
         return contacts
+
+
+def _contact(r: list) -> Contact:
+    """Return the Contact of a compiled record's fields (kernel.CONTACT_FIELDS)."""
+    return Contact(r[0], r[1], r[2], r[3], (r[4], r[5]), r[6], r[7], r[8], (r[9], r[10], r[11]),
+                   r[12], r[13] > 0)

@@ -1,0 +1,190 @@
+"""
+The compiled per-scan estimation (package ``skin_kernel``, plain C) bound through ctypes.
+
+One call per scan does what :class:`pipeline.ContactEstimator` describes in Python:
+conditioning, contacts, each contact's shift (``taxel_fit`` or ``centroid``) and uncertainty, and
+the contact figures. The Python code stays the description of the algorithm; the tests run both
+side by side (test/core/estimation/test_kernel.py).
+
+A :class:`Kernel` copies an estimator's state once (tare, gains, force tables, settings) and owns
+preallocated buffers, so a scan costs one copy of the maps into its buffer and one foreign call.
+Two things stay in Python because they change elsewhere: a saturated imprint's force
+(``forcecurve.ForceCurve.imprint_force``, asked for only when a calibrated censoring curve meets a
+saturated taxel) and the dead-taxel marks a touch revives (handed back to the conditioner).
+"""
+
+from __future__ import annotations
+
+import ctypes
+from functools import lru_cache
+import os
+import threading
+from typing import NamedTuple
+import weakref
+
+import numpy as np
+
+from .validate import check_pair
+
+__all__ = ['METHODS', 'KernelSettings', 'Kernel', 'KernelMissing', 'load_library', 'CONTACT_FIELDS',
+           'KEPT', 'DX', 'DY']
+
+# Shift methods the kernel runs, by their registered names (skin_kernel.h: SK_CENTROID, ...).
+METHODS = {'centroid': 0, 'taxel_fit': 1}
+
+# skin_kernel.h's layout: bump both together.
+_ABI_VERSION = 1
+_INTS = 8
+_REALS = 15
+_NREC = 23
+_NSTATUS = 3
+# A record's first CONTACT_FIELDS numbers are pipeline.Contact's fields in order, the shift and
+# the force vector flattened (x_m, y_m, force_n, area_m2, shift x, y, azimuth_rad, ...).
+CONTACT_FIELDS = 14
+(KEPT, DX, DY, _PAIR, _CENSORED, _SIGMA, _TOP_FORCE, _BOTTOM_FORCE,
+ _SHIFT_CONFIDENCE) = range(CONTACT_FIELDS, _NREC)
+_PAIRS, _ANY_CENSORED, _REVIVED = range(_NSTATUS)
+
+_FIX = ('build it with `make setup` (or `colcon build` in the workspace) and source the '
+        'workspace, e.g. `tools/with-env.sh`')
+
+
+class KernelMissing(RuntimeError):
+    """The compiled kernel (package skin_kernel) is not installed or does not load."""
+
+
+@lru_cache(maxsize=1)
+def load_library() -> ctypes.CDLL:
+    """Return the loaded ``libskin_kernel.so`` found through the ament index, signatures set."""
+    try:
+        from ament_index_python.packages import get_package_prefix, PackageNotFoundError
+    except ImportError as exc:
+        raise KernelMissing(f'skin_kernel: ament_index_python is missing ({exc}); {_FIX}') from None
+    try:
+        prefix = get_package_prefix('skin_kernel')
+    except PackageNotFoundError:
+        raise KernelMissing('skin_kernel: the package is not in the ament index (AMENT_PREFIX_PATH'
+                            f'={os.environ.get("AMENT_PREFIX_PATH", "")!r}); {_FIX}') from None
+    path = os.path.join(prefix, 'lib', 'libskin_kernel.so')
+    try:
+        lib = ctypes.CDLL(path)
+    except OSError as exc:
+        raise KernelMissing(f'skin_kernel: cannot load {path} ({exc}); {_FIX}') from None
+    ptr = ctypes.c_void_p
+    lib.sk_abi_version.restype = ctypes.c_int
+    lib.sk_abi_version.argtypes = []
+    if lib.sk_abi_version() != _ABI_VERSION:
+        raise KernelMissing(f'skin_kernel: {path} is another version than this skin_driver; '
+                            f'{_FIX}')
+    signatures = {'sk_new': (ptr, [ptr] * 8), 'sk_free': (None, [ptr]),
+                  'sk_scan': (ctypes.c_int, [ptr] * 4), 'sk_finish': (ctypes.c_int, [ptr] * 3),
+                  'sk_window': (ctypes.c_int, [ptr, ctypes.c_int, ptr, ptr]),
+                  'sk_dead': (None, [ptr, ptr])}
+    for name, (restype, argtypes) in signatures.items():
+        function = getattr(lib, name)
+        function.restype = restype
+        function.argtypes = argtypes
+    return lib
+
+
+class KernelSettings(NamedTuple):
+    """Everything a kernel copies from an estimator, as plain numbers and arrays."""
+
+    method: str
+    max_contacts: int
+    remove_crosstalk: bool
+    fill_dead: bool
+    reals: tuple         # skin_kernel.h's SK_PITCH ... SK_CENSOR_BOTTOM, in that order
+    baseline: np.ndarray  # (2, rows, cols) each, like threshold, noise, gain (or None), dead
+    threshold: np.ndarray
+    noise: np.ndarray
+    gain: np.ndarray
+    dead: np.ndarray
+    tables: np.ndarray    # (2, full_scale + 1): each layer's force at every count
+
+
+def _address(array: np.ndarray) -> ctypes.c_void_p:
+    return ctypes.c_void_p(array.ctypes.data)
+
+
+class Kernel:
+    """One estimator's compiled state and buffers; scans run one at a time."""
+
+    def __init__(self, settings: KernelSettings):
+        """Copy ``settings`` into a new compiled kernel (raises KernelMissing without one)."""
+        lib = load_library()
+        rows, cols = settings.baseline.shape[1:]
+        full_scale = settings.tables.shape[1] - 1
+        ints = np.array([rows, cols, settings.max_contacts, METHODS[settings.method],
+                         settings.remove_crosstalk, settings.fill_dead, full_scale,
+                         settings.gain is not None], dtype=np.intc)
+        assert ints.size == _INTS and len(settings.reals) == _REALS
+        reals = np.array(settings.reals, dtype=np.float64)
+        arrays = [np.ascontiguousarray(a, dtype=np.float64) for a in (
+            settings.baseline, settings.threshold, settings.noise)]
+        gain = (None if settings.gain is None
+                else np.ascontiguousarray(settings.gain, dtype=np.float64))
+        dead = np.ascontiguousarray(settings.dead, dtype=np.uint8)
+        tables = np.ascontiguousarray(settings.tables, dtype=np.float64)
+        handle = lib.sk_new(*(_address(a) for a in [ints, reals] + arrays),
+                            None if gain is None else _address(gain), _address(dead),
+                            _address(tables))
+        if not handle:
+            raise MemoryError(f'skin_kernel: no kernel for {rows} x {cols} maps')
+        self._lib = lib
+        self._handle = ctypes.c_void_p(handle)
+        weakref.finalize(self, lib.sk_free, self._handle)
+        self.shape = (rows, cols)
+        self._maps = np.zeros((2, rows, cols))
+        self._out = np.zeros((max(min(settings.max_contacts, rows * cols), 1), _NREC))
+        self._status = np.zeros(_NSTATUS, dtype=np.intc)
+        self._scan_args = (self._handle, _address(self._maps), _address(self._out),
+                           _address(self._status))
+        self._lock = threading.Lock()
+
+    def scan(self, top, bottom, imprint_forces=None) -> tuple:
+        """
+        Return (records, revived) of the raw maps: a list per contact, strongest first.
+
+        ``revived`` is None, or the dead-taxel marks after this scan revived some. Bad maps
+        raise ValueError saying what is wrong. ``imprint_forces(window, censored, forces)``
+        returns a saturated contact's (top, bottom) force sums from its (4, h, w) window (counts
+        then force share of both layers); called only for such contacts.
+        """
+        if not (type(top) is np.ndarray and type(bottom) is np.ndarray
+                and top.shape == self.shape and bottom.shape == self.shape
+                and top.dtype.kind in 'uif' and bottom.dtype.kind in 'uif'):
+            top, bottom = check_pair(top, bottom, self.shape)
+        with self._lock:
+            np.copyto(self._maps[0], top)
+            np.copyto(self._maps[1], bottom)
+            count = self._lib.sk_scan(*self._scan_args)
+            if count < 0:
+                check_pair(top, bottom, self.shape)
+                raise ValueError('top or bottom holds a value that is not a count')
+            if self._status[_ANY_CENSORED] and imprint_forces is not None:
+                self._censor(count, imprint_forces)
+            revived = self.dead_masks() if self._status[_REVIVED] else None
+            return self._out[:count].tolist(), revived
+
+    def dead_masks(self) -> np.ndarray:
+        """Return the kernel's dead-taxel marks, (2, rows, cols) bool."""
+        out = np.zeros((2,) + self.shape, dtype=np.uint8)
+        self._lib.sk_dead(self._handle, _address(out))
+        return out.astype(bool)
+
+    def _censor(self, count: int, imprint_forces) -> None:
+        records = self._out[:count]
+        forces = np.zeros((count, 2))
+        pairs = records[:, _PAIR].astype(int)
+        forces[pairs] = records[:, [_TOP_FORCE, _BOTTOM_FORCE]]
+        window = np.zeros((4,) + self.shape)
+        shape = np.zeros(4, dtype=np.intc)
+        for pair, censored in zip(pairs.tolist(), records[:, _CENSORED].astype(int).tolist()):
+            if not censored:
+                continue
+            self._lib.sk_window(self._handle, pair, _address(window), _address(shape))
+            h, w = int(shape[2]), int(shape[3])
+            own = window.ravel()[:4 * h * w].reshape(4, h, w)
+            forces[pair] = imprint_forces(own, (censored & 1, censored & 2), forces[pair])
+        self._lib.sk_finish(self._handle, _address(forces), _address(self._out))

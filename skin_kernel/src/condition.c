@@ -1,0 +1,228 @@
+/*
+ * Conditioning: raw counts to tared touch counts (baseline, line leak, threshold, dead taxels)
+ * and touch counts to force. Python description: conditioning.py and crosstalk.py.
+ */
+#include <stdlib.h>
+#include <string.h>
+
+#include "internal.h"
+
+/* Largest median, as a share of the line's highest reading, taken for leak (crosstalk.py). */
+#define LEAK_SHARE 0.25
+
+/*
+ * Unnormalised 3 x 3 box sum with a zero border, in OpenCV's order (boxFilter: three-term row
+ * sums, then running column sums that add the entering row and subtract the leaving one), so
+ * that a filled-in taxel equals the reference's to the bit, residues of the running sum included.
+ */
+static void box3(const double *src, int rows, int cols, double *rowsum, double *dst)
+{
+  for (int r = 0; r < rows; r++) {
+    const double *s = src + r * cols;
+    double *d = rowsum + r * cols;
+    for (int c = 0; c < cols; c++) {
+      double left = c > 0 ? s[c - 1] : 0.0;
+      double right = c + 1 < cols ? s[c + 1] : 0.0;
+      d[c] = left + s[c] + right;
+    }
+  }
+  for (int c = 0; c < cols; c++) {
+    /* The running sum starts with the zero row above and row 0. */
+    double sum = 0.0 + 0.0;
+    sum += rowsum[c];
+    for (int r = 0; r < rows; r++) {
+      double enter = r + 1 < rows ? rowsum[(r + 1) * cols + c] : 0.0;
+      double leave = r > 0 ? rowsum[(r - 1) * cols + c] : 0.0;
+      double s0 = sum + enter;
+      dst[r * cols + c] = s0;
+      sum = s0 - leave;
+    }
+  }
+}
+
+void sk_live_counts(sk_kernel *k)
+{
+  int n = k->n;
+  for (int layer = 0; layer < 2; layer++) {
+    int any = 0;
+    for (int i = 0; i < n; i++) {
+      k->live[layer * n + i] = k->dead[layer * n + i] ? 0.0 : 1.0;
+      any |= k->dead[layer * n + i];
+    }
+    k->any_dead[layer] = any;
+    box3(k->live + layer * n, k->rows, k->cols, k->scratch, k->live_count + layer * n);
+  }
+}
+
+static int cmp_double(const void *a, const void *b)
+{
+  double x = *(const double *)a, y = *(const double *)b;
+  return (x > y) - (x < y);
+}
+
+/* The median of a line (stride apart), numpy's way: mean of the two middle values if even. */
+static double line_median(const double *a, int len, int stride, double *buf, double *peak)
+{
+  double top = a[0];
+  for (int i = 0; i < len; i++) {
+    buf[i] = a[i * stride];
+    top = buf[i] > top ? buf[i] : top;
+  }
+  *peak = top;
+  if (len > 24) {
+    qsort(buf, len, sizeof(double), cmp_double);
+  } else {
+    for (int i = 1; i < len; i++) {
+      double v = buf[i];
+      int j = i - 1;
+      for (; j >= 0 && buf[j] > v; j--) {
+        buf[j + 1] = buf[j];
+      }
+      buf[j + 1] = v;
+    }
+  }
+  double lo = buf[(len - 1) / 2];
+  return len % 2 ? lo : 0.5 * (lo + buf[len / 2]);
+}
+
+/* Take each line's leak (its median when that is far below its peak) out of both layers. */
+static void remove_line_leak(sk_kernel *k)
+{
+  int rows = k->rows, cols = k->cols, n = k->n;
+  double half = 0.5 * (rows < cols ? rows : cols);
+  int lifted = 0;
+  for (int layer = 0; layer < 2 && !lifted; layer++) {
+    const double *c = k->counts + layer * n, *thr = k->threshold + layer * n;
+    for (int r = 0; r < rows && !lifted; r++) {
+      int over = 0;
+      for (int j = 0; j < cols; j++) {
+        over += c[r * cols + j] >= thr[r * cols + j];
+      }
+      lifted = over >= half;
+    }
+    for (int j = 0; j < cols && !lifted; j++) {
+      int over = 0;
+      for (int r = 0; r < rows; r++) {
+        over += c[r * cols + j] >= thr[r * cols + j];
+      }
+      lifted = over >= half;
+    }
+  }
+  if (!lifted) {
+    return;
+  }
+  double *buf = k->scratch;
+  double *leak = k->scratch + (rows > cols ? rows : cols);
+  /* Rows first, then columns: the leak is a row term plus a column term. */
+  for (int layer = 0; layer < 2; layer++) {
+    double *c = k->counts + layer * n;
+    for (int r = 0; r < rows; r++) {
+      double peak, median = line_median(c + r * cols, cols, 1, buf, &peak);
+      leak[r] = median > LEAK_SHARE * peak ? 0.0 : (median > 0.0 ? median : 0.0);
+    }
+    for (int r = 0; r < rows; r++) {
+      for (int j = 0; j < cols; j++) {
+        c[r * cols + j] -= leak[r];
+      }
+    }
+  }
+  for (int layer = 0; layer < 2; layer++) {
+    double *c = k->counts + layer * n;
+    for (int j = 0; j < cols; j++) {
+      double peak, median = line_median(c + j, rows, cols, buf, &peak);
+      leak[j] = median > LEAK_SHARE * peak ? 0.0 : (median > 0.0 ? median : 0.0);
+    }
+    for (int r = 0; r < rows; r++) {
+      for (int j = 0; j < cols; j++) {
+        c[r * cols + j] -= leak[j];
+      }
+    }
+  }
+}
+
+/* Unmark dead taxels that read a touch (they only rest below zero), then fill the dead ones. */
+static void dead_taxels(sk_kernel *k)
+{
+  int n = k->n;
+  int changed = 0;
+  for (int layer = 0; layer < 2; layer++) {
+    if (!k->any_dead[layer]) {
+      continue;
+    }
+    for (int i = 0; i < n; i++) {
+      if (k->dead[layer * n + i] && k->counts[layer * n + i] > 0) {
+        k->dead[layer * n + i] = 0;
+        changed = 1;
+      }
+    }
+  }
+  if (changed) {
+    k->revived = 1;
+    sk_live_counts(k);
+  }
+  double *masked = k->scratch, *rowsum = k->scratch + n, *total = k->scratch + 2 * n;
+  for (int layer = 0; layer < 2; layer++) {
+    if (!k->any_dead[layer]) {
+      continue;
+    }
+    double *c = k->counts + layer * n;
+    const unsigned char *dead = k->dead + layer * n;
+    if (!k->fill_dead) {
+      for (int i = 0; i < n; i++) {
+        c[i] = dead[i] ? 0.0 : c[i];
+      }
+      continue;
+    }
+    const double *live = k->live + layer * n, *count = k->live_count + layer * n;
+    for (int i = 0; i < n; i++) {
+      masked[i] = c[i] * live[i];
+    }
+    box3(masked, k->rows, k->cols, rowsum, total);
+    for (int i = 0; i < n; i++) {
+      if (dead[i]) {
+        c[i] = count[i] > 0 ? total[i] / count[i] : 0.0;
+      }
+    }
+  }
+}
+
+void sk_touch_counts(sk_kernel *k, const double *maps)
+{
+  int n2 = 2 * k->n;
+  for (int i = 0; i < n2; i++) {
+    k->counts[i] = maps[i] - k->baseline[i];
+  }
+  if (k->crosstalk) {
+    remove_line_leak(k);
+  }
+  for (int i = 0; i < n2; i++) {
+    if (k->counts[i] < k->threshold[i]) {
+      k->counts[i] = 0.0;
+    }
+  }
+  if (k->any_dead[0] || k->any_dead[1]) {
+    dead_taxels(k);
+  }
+}
+
+/* Force by linear interpolation in the layer's table at every integer count (_ForceTable). */
+void sk_force_of(sk_kernel *k)
+{
+  int n = k->n, size = k->full_scale + 1;
+  double last = (double)k->full_scale;
+  for (int layer = 0; layer < 2; layer++) {
+    const double *table = k->table_force + layer * size, *slope = k->table_slope + layer * size;
+    const double *c = k->counts + layer * n;
+    double *f = k->force + layer * n;
+    const double *gain = k->has_gain ? k->gain + layer * n : NULL;
+    for (int i = 0; i < n; i++) {
+      double v = 0.0;
+      if (c[i] != 0.0) {
+        double x = c[i] < last ? c[i] : last;
+        int j = (int)x;
+        v = slope[j] * (x - j) + table[j];
+      }
+      f[i] = gain ? v * gain[i] : v;
+    }
+  }
+}

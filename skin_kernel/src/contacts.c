@@ -1,0 +1,375 @@
+/*
+ * Contacts: connected top imprints (8-connected), split at clear peaks, each paired with its
+ * share of the bottom load by a small Gaussian mixture. Python description: contacts.py.
+ */
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "internal.h"
+
+/* contacts.py's constants: the saddle test, the mixture and the window's share of the bottom */
+#define SADDLE_RATIO 0.85
+#define MIN_PEAK_DISTANCE 2
+#define MIXTURE_ITERATIONS 3
+#define WINDOW_SHARE 0.02
+
+/* 3 x 3 maximum over the taxels inside the map (cv2.dilate's border leaves them out). */
+static void dilate3(const double *src, int rows, int cols, double *dst)
+{
+  for (int r = 0; r < rows; r++) {
+    for (int c = 0; c < cols; c++) {
+      double m = src[r * cols + c];
+      for (int rr = r > 0 ? r - 1 : 0; rr <= r + 1 && rr < rows; rr++) {
+        for (int cc = c > 0 ? c - 1 : 0; cc <= c + 1 && cc < cols; cc++) {
+          m = src[rr * cols + cc] > m ? src[rr * cols + cc] : m;
+        }
+      }
+      dst[r * cols + c] = m;
+    }
+  }
+}
+
+/* Label the 8-connected loaded taxels 1, 2, ... in the raster order of their first taxel. */
+static int components(const double *top, int rows, int cols, int *labels, int *stack)
+{
+  int n = rows * cols, count = 0;
+  memset(labels, 0, sizeof(int) * n);
+  for (int start = 0; start < n; start++) {
+    if (!(top[start] > 0) || labels[start]) {
+      continue;
+    }
+    labels[start] = ++count;
+    int depth = 0;
+    stack[depth++] = start;
+    while (depth) {
+      int i = stack[--depth], r = i / cols, c = i % cols;
+      for (int rr = r - 1; rr <= r + 1; rr++) {
+        for (int cc = c - 1; cc <= c + 1; cc++) {
+          int j = rr * cols + cc;
+          if (rr >= 0 && rr < rows && cc >= 0 && cc < cols && top[j] > 0 && !labels[j]) {
+            labels[j] = count;
+            stack[depth++] = j;
+          }
+        }
+      }
+    }
+  }
+  return count;
+}
+
+/*
+ * Whether peak p stands apart from the higher peak q: the load along the straight line between
+ * them, interpolated between taxels, drops below SADDLE_RATIO of p (contacts._separate).
+ */
+static int separate(const double *top, const double *values, int rows, int cols, int p, int q)
+{
+  int pr = p / cols, pc = p % cols, qr = q / cols, qc = q % cols;
+  int dr = abs(pr - qr), dc = abs(pc - qc);
+  int steps = dr > dc ? dr : dc;
+  if (steps < MIN_PEAK_DISTANCE) {
+    return 0;
+  }
+  int num = 4 * steps + 1;
+  double step = 1.0 / (num - 1), lowest = INFINITY;
+  int rmax = rows - 2 > 0 ? rows - 2 : 0, cmax = cols - 2 > 0 ? cols - 2 : 0;
+  for (int i = 0; i < num; i++) {
+    /* numpy.linspace's points: i * step, the last exactly 1 */
+    double t = i == num - 1 ? 1.0 : i * step + 0.0;
+    double r = pr + (qr - pr) * t, c = pc + (qc - pc) * t;
+    int r0 = (int)floor(r), c0 = (int)floor(c);
+    r0 = r0 < 0 ? 0 : (r0 > rmax ? rmax : r0);
+    c0 = c0 < 0 ? 0 : (c0 > cmax ? cmax : c0);
+    int r1 = r0 + 1 < rows - 1 ? r0 + 1 : rows - 1, c1 = c0 + 1 < cols - 1 ? c0 + 1 : cols - 1;
+    double fr = r - r0, fc = c - c0;
+    double v = (1 - fr) * (1 - fc) * values[r0 * cols + c0] + (1 - fr) * fc * values[r0 * cols + c1]
+      + fr * (1 - fc) * values[r1 * cols + c0] + fr * fc * values[r1 * cols + c1];
+    lowest = v < lowest ? v : lowest;
+  }
+  return lowest < SADDLE_RATIO * top[p];
+}
+
+/* Give each clear peak of a connected group its own label; the nearest peak takes a taxel. */
+static int split_peaks(sk_kernel *k, const double *top, int count)
+{
+  int rows = k->rows, cols = k->cols, n = k->n;
+  double *dil = k->scratch, *values = k->scratch + n;
+  int *labels = k->labels, *peaks = k->iscratch, *kept = k->iscratch + n;
+  int *kept_label = k->iscratch + 2 * n, *groups = k->iscratch + 3 * n;
+  dilate3(top, rows, cols, dil);
+  int npeaks = 0;
+  for (int i = 0; i < n; i++) {
+    if (top[i] >= dil[i] && top[i] > 0) {
+      peaks[npeaks++] = i;
+    }
+  }
+  if (npeaks <= count) {
+    return count;
+  }
+  /* Highest first; equal heights keep the raster order (a stable sort). */
+  for (int i = 1; i < npeaks; i++) {
+    int v = peaks[i], j = i - 1;
+    for (; j >= 0 && top[peaks[j]] < top[v]; j--) {
+      peaks[j + 1] = peaks[j];
+    }
+    peaks[j + 1] = v;
+  }
+  /* A filled-in dead taxel is no evidence of a dip: the path takes its higher neighbour. */
+  const unsigned char *dead = k->any_dead[0] ? k->dead : NULL;
+  for (int i = 0; i < n; i++) {
+    values[i] = dead && dead[i] ? dil[i] : top[i];
+  }
+  int nkept = 0, ngroups = 0, split = 0;
+  for (int i = 0; i < npeaks; i++) {
+    int p = peaks[i], label = labels[p], apart = 1, seen = 0;
+    for (int j = 0; j < nkept && apart; j++) {
+      if (kept_label[j] == label) {
+        seen = 1;
+        apart = separate(top, values, rows, cols, p, kept[j]);
+      }
+    }
+    if (!seen) {
+      groups[ngroups++] = label;
+    }
+    if (apart) {
+      split |= seen;
+      kept_label[nkept] = label;
+      kept[nkept++] = p;
+    }
+  }
+  if (!split) {
+    return count;
+  }
+  int next = count + 1;
+  for (int g = 0; g < ngroups; g++) {
+    int label = groups[g], centres = 0;
+    for (int j = 0; j < nkept; j++) {
+      centres += kept_label[j] == label;
+    }
+    if (centres < 2) {
+      continue;
+    }
+    for (int i = 0; i < n; i++) {
+      if (labels[i] != label) {
+        continue;
+      }
+      int r = i / cols, c = i % cols, best = -1, which = 0, rank = 0, best_d2 = 0;
+      for (int j = 0; j < nkept; j++) {
+        if (kept_label[j] != label) {
+          continue;
+        }
+        int dr = r - kept[j] / cols, dc = c - kept[j] % cols, d2 = dr * dr + dc * dc;
+        if (best < 0 || d2 < best_d2) {
+          best = j;
+          best_d2 = d2;
+          which = rank;
+        }
+        rank++;
+      }
+      labels[i] = which == 0 ? label : next + which - 1;
+    }
+    next += centres - 1;
+  }
+  return next - 1;
+}
+
+/* Each kept top imprint's share (0..1) of every loaded bottom taxel (contacts._share_bottom). */
+static void share_bottom(sk_kernel *k, int kn, const double *bottom)
+{
+  int n = k->n, cols = k->cols;
+  int *loaded = k->iscratch;
+  double *bv = k->scratch, *ks = k->scratch + n;
+  double *mass = ks, *cr = ks + kn, *cc = ks + 2 * kn, *var = ks + 3 * kn, *lw = ks + 4 * kn;
+  double *m = ks + 5 * kn, *logp = ks + 9 * kn;
+  memset(k->fractions, 0, sizeof(double) * kn * n);
+  int nl = 0;
+  for (int i = 0; i < n; i++) {
+    if (bottom[i] > 0) {
+      bv[nl] = bottom[i];
+      loaded[nl++] = i;
+    }
+  }
+  if (!nl) {
+    return;
+  }
+  double mc_r = 0.0, mc_c = 0.0;
+  for (int q = 0; q < kn; q++) {
+    const double *t = k->tops + q * n;
+    double s0 = 0.0, s1 = 0.0, s2 = 0.0, s3 = 0.0;
+    for (int i = 0; i < n; i++) {
+      double r = i / cols, c = i % cols;
+      s0 += t[i];
+      s1 += t[i] * r;
+      s2 += t[i] * c;
+      s3 += t[i] * (r * r + c * c);
+    }
+    mass[q] = s0;
+    cr[q] = s1 / s0;
+    cc[q] = s2 / s0;
+    double spread = 0.5 * (s3 / s0 - (cr[q] * cr[q] + cc[q] * cc[q]));
+    var[q] = (spread > 0.0 ? spread : 0.0) + 1.0;
+    mc_r += s0 * cr[q];
+    mc_c += s0 * cc[q];
+  }
+  double msum = sk_sum(mass, kn), bsum = sk_sum(bv, nl), br = 0.0, bc = 0.0;
+  for (int j = 0; j < nl; j++) {
+    br += bv[j] * (double)(loaded[j] / cols);
+    bc += bv[j] * (double)(loaded[j] % cols);
+  }
+  /*
+   * Presses of one hand or tool mostly share their tangential direction: every bottom imprint
+   * starts where the common shift of the whole maps puts it, a taxel wider than its top.
+   */
+  double common_r = br / bsum - mc_r / msum, common_c = bc / bsum - mc_c / msum;
+  for (int q = 0; q < kn; q++) {
+    cr[q] += common_r;
+    cc[q] += common_c;
+    lw[q] = log(mass[q] / msum);
+  }
+  for (int it = 0; it < MIXTURE_ITERATIONS; it++) {
+    memset(m, 0, sizeof(double) * 4 * kn);
+    for (int j = 0; j < nl; j++) {
+      double r = loaded[j] / cols, c = loaded[j] % cols, pos2 = r * r + c * c, top = -INFINITY;
+      for (int q = 0; q < kn; q++) {
+        double d2 = pos2 - 2.0 * (cr[q] * r + cc[q] * c) + (cr[q] * cr[q] + cc[q] * cc[q]);
+        logp[q] = (lw[q] - log(var[q])) - 0.5 * d2 / var[q];
+        top = logp[q] > top ? logp[q] : top;
+      }
+      double total = 0.0;
+      for (int q = 0; q < kn; q++) {
+        logp[q] = exp(logp[q] - top);
+        total += logp[q];
+      }
+      for (int q = 0; q < kn; q++) {
+        double resp = logp[q] / total, w = resp * bv[j];
+        k->fractions[q * n + loaded[j]] = resp;
+        m[4 * q] += w;
+        m[4 * q + 1] += w * r;
+        m[4 * q + 2] += w * c;
+        m[4 * q + 3] += w * pos2;
+      }
+    }
+    int starved = 0;
+    for (int q = 0; q < kn; q++) {
+      starved |= !(m[4 * q] > 1e-12 * bsum);
+      logp[q] = m[4 * q];
+    }
+    if (starved) {
+      break;
+    }
+    double gsum = sk_sum(logp, kn);
+    for (int q = 0; q < kn; q++) {
+      double got = m[4 * q];
+      cr[q] = m[4 * q + 1] / got;
+      cc[q] = m[4 * q + 2] / got;
+      double v = 0.5 * (m[4 * q + 3] / got - (cr[q] * cr[q] + cc[q] * cc[q]));
+      var[q] = v > 0.25 ? v : 0.25;
+      lw[q] = log(got / gsum);
+    }
+  }
+}
+
+/* Window, centroid and force sums of contact q (contacts._pair). */
+static void make_pair(sk_kernel *k, int q, sk_pair *p)
+{
+  int rows = k->rows, cols = k->cols, n = k->n;
+  const double *t = k->tops + q * n, *fraction = k->fractions + q * n;
+  const double *bottom = k->counts + n, *force = k->force;
+  double *tmp = k->scratch;
+  double mt = 0.0, sr = 0.0, sc = 0.0, peak = -INFINITY;
+  int taxels = 0, r0 = rows, r1 = -1, c0 = cols, c1 = -1;
+  for (int i = 0; i < n; i++) {
+    double r = i / cols, c = i % cols, b = fraction[i] * bottom[i];
+    mt += t[i];
+    sr += t[i] * r;
+    sc += t[i] * c;
+    peak = b > peak ? b : peak;
+  }
+  p->row = mt > 0 ? sr / mt : 0.0;
+  p->col = mt > 0 ? sc / mt : 0.0;
+  double cut = WINDOW_SHARE * peak;
+  for (int i = 0; i < n; i++) {
+    int r = i / cols, c = i % cols;
+    int touched = t[i] != 0.0, own = peak > 0 && fraction[i] * bottom[i] > cut;
+    taxels += touched;
+    if (touched || own) {
+      r0 = r < r0 ? r : r0;
+      r1 = r > r1 ? r : r1;
+      c0 = c < c0 ? c : c0;
+      c1 = c > c1 ? c : c1;
+    }
+    tmp[i] = force[i] * (t[i] != 0.0 ? 1.0 : 0.0);
+  }
+  r1++;
+  c1++;
+  p->at_border = r0 == 0 || c0 == 0 || r1 == rows || c1 == cols;
+  p->r0 = r0 > 0 ? r0 - 1 : 0;
+  p->c0 = c0 > 0 ? c0 - 1 : 0;
+  p->h = (r1 + 1 < rows ? r1 + 1 : rows) - p->r0;
+  p->w = (c1 + 1 < cols ? c1 + 1 : cols) - p->c0;
+  p->taxels = taxels;
+  p->top_force = sk_sum(tmp, n);
+  int m = 0;
+  for (int r = p->r0; r < p->r0 + p->h; r++) {
+    for (int c = p->c0; c < p->c0 + p->w; c++) {
+      int i = r * cols + c;
+      int own = peak > 0 && fraction[i] * bottom[i] > cut;
+      tmp[m++] = fraction[i] * force[n + i] * (own ? 1.0 : 0.0);
+    }
+  }
+  p->bottom_force = sk_sum(tmp, m);
+}
+
+int sk_pair_layers(sk_kernel *k)
+{
+  int n = k->n;
+  const double *top = k->counts;
+  int count = components(top, k->rows, k->cols, k->labels, k->iscratch);
+  if (!count) {
+    return 0;
+  }
+  count = split_peaks(k, top, count);
+  if (k->kmax < 1) {
+    return 0;
+  }
+  int kn;
+  if (count == 1) {
+    /* One top imprint (the common case): it is the whole top map and takes all the bottom. */
+    kn = 1;
+    memcpy(k->tops, top, sizeof(double) * n);
+    for (int i = 0; i < n; i++) {
+      k->fractions[i] = 1.0;
+    }
+  } else {
+    double *masses = k->scratch;
+    int *order = k->iscratch;
+    memset(masses, 0, sizeof(double) * (count + 1));
+    for (int i = 0; i < n; i++) {
+      masses[k->labels[i]] += top[i];
+    }
+    /* The strongest top imprints first (a stable sort); the pipeline orders by force later. */
+    kn = 0;
+    for (int label = 1; label <= count; label++) {
+      if (!(masses[label] > 0)) {
+        continue;
+      }
+      int j = kn++ - 1;
+      for (; j >= 0 && masses[order[j]] < masses[label]; j--) {
+        order[j + 1] = order[j];
+      }
+      order[j + 1] = label;
+    }
+    kn = kn < k->kmax ? kn : k->kmax;
+    for (int q = 0; q < kn; q++) {
+      double *t = k->tops + q * n;
+      for (int i = 0; i < n; i++) {
+        t[i] = top[i] * (k->labels[i] == order[q] ? 1.0 : 0.0);
+      }
+    }
+    share_bottom(k, kn, top + n);
+  }
+  for (int q = 0; q < kn; q++) {
+    make_pair(k, q, &k->pairs[q]);
+  }
+  return kn;
+}

@@ -1,0 +1,58 @@
+/* The kernel's state and the stages' entry points, shared by the source files. */
+#ifndef SKIN_KERNEL_INTERNAL_H
+#define SKIN_KERNEL_INTERNAL_H
+
+#include "skin_kernel/skin_kernel.h"
+
+/* One contact of the last scan: its window and the figures found before the contact stage. */
+typedef struct {
+  int r0, c0, h, w;       /* window in the full map */
+  double row, col;        /* top centroid, taxels */
+  double top_force, bottom_force;
+  int taxels, at_border, censored;
+  double dx, dy, confidence, sigma;
+} sk_pair;
+
+struct sk_kernel {
+  int rows, cols, n, kmax, method, crosstalk, fill_dead, full_scale, has_gain;
+  double reals[SK_NREALS];
+  /* the estimator's state, (2, n) each */
+  double *baseline, *threshold, *noise, *gain;
+  unsigned char *dead;
+  int any_dead[2];
+  double *live, *live_count;        /* dead fill: live taxels and their count per 3 x 3 */
+  double *table_force, *table_slope; /* 2 x (full_scale + 1) */
+  /* the last scan */
+  double *counts, *force;           /* (2, n): tared counts, force */
+  int npairs;
+  sk_pair *pairs;                   /* kmax */
+  /* (kmax, n): each contact's own top map and its share (0..1) of every bottom taxel */
+  double *tops, *fractions;
+  /* scratch */
+  double *scratch;                  /* 6 n + 4 * (max(rows, cols) + 1) */
+  int *labels, *iscratch;           /* n, 4 n */
+  double *fit;                      /* 4 windows (4 n) for the shift */
+  int revived;
+};
+
+/* numsum.c: numpy's pairwise sum, so that sums agree with the reference to the bit */
+double sk_sum(const double *a, int n);
+
+/* condition.c */
+void sk_live_counts(sk_kernel *k);
+void sk_touch_counts(sk_kernel *k, const double *maps);
+void sk_force_of(sk_kernel *k);
+
+/* contacts.c: fills k->pairs (geometry and forces), returns their number */
+int sk_pair_layers(sk_kernel *k);
+
+/* taxelfit.c: the shift of a (2, h, w) window; force may be NULL (centroid) */
+void sk_taxel_fit(const double *force, const double *counts, int h, int w, double *scratch,
+                  double *dx, double *dy, double *confidence);
+void sk_centroid(const double *counts, int h, int w, double *scratch, double *dx, double *dy,
+                 double *confidence);
+
+/* sigma.c: 1-sigma uncertainty of one axis of pair p's shift (taxels) */
+double sk_sigma(const sk_kernel *k, const sk_pair *p, const double *window, int alone);
+
+#endif

@@ -1,0 +1,293 @@
+/*
+ * The kernel's life cycle and the per-scan entry points: conditioning, contacts, each contact's
+ * shift and uncertainty, then the contact figures. Python description: pipeline.py.
+ */
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "internal.h"
+
+/* pipeline.py's constant: a shift shorter than this many of its sigmas has no direction */
+#define MIN_SNR 3.0
+#define PI 3.14159265358979323846
+
+int sk_abi_version(void)
+{
+  return SK_ABI_VERSION;
+}
+
+static double *copy_of(const double *src, size_t count)
+{
+  double *dst = malloc(sizeof(double) * (count ? count : 1));
+  if (dst && src) {
+    memcpy(dst, src, sizeof(double) * count);
+  }
+  return dst;
+}
+
+void sk_free(sk_kernel *k)
+{
+  if (!k) {
+    return;
+  }
+  double *arrays[] = {k->baseline, k->threshold, k->noise, k->gain, k->live, k->live_count,
+                      k->table_force, k->table_slope, k->counts, k->force, k->tops, k->fractions,
+                      k->scratch, k->fit};
+  for (size_t i = 0; i < sizeof(arrays) / sizeof(arrays[0]); i++) {
+    free(arrays[i]);
+  }
+  free(k->dead);
+  free(k->pairs);
+  free(k->labels);
+  free(k->iscratch);
+  free(k);
+}
+
+sk_kernel *sk_new(const int *ints, const double *reals, const double *baseline,
+                  const double *threshold, const double *noise, const double *gain,
+                  const unsigned char *dead, const double *tables)
+{
+  int rows = ints[SK_ROWS], cols = ints[SK_COLS], full_scale = ints[SK_FULL_SCALE];
+  if (rows < 1 || cols < 1 || full_scale < 1 || ints[SK_MAX_CONTACTS] < 0
+      || rows > 4096 || cols > 4096) {
+    return NULL;
+  }
+  sk_kernel *k = calloc(1, sizeof(sk_kernel));
+  if (!k) {
+    return NULL;
+  }
+  int n = rows * cols, line = rows > cols ? rows : cols;
+  k->rows = rows;
+  k->cols = cols;
+  k->n = n;
+  k->kmax = ints[SK_MAX_CONTACTS] < n ? ints[SK_MAX_CONTACTS] : n;
+  k->method = ints[SK_METHOD];
+  k->crosstalk = ints[SK_REMOVE_CROSSTALK];
+  k->fill_dead = ints[SK_FILL_DEAD];
+  k->full_scale = full_scale;
+  k->has_gain = gain != NULL;
+  memcpy(k->reals, reals, sizeof(k->reals));
+  size_t size = (size_t)full_scale + 1, kcap = k->kmax ? k->kmax : 1;
+  k->baseline = copy_of(baseline, 2 * n);
+  k->threshold = copy_of(threshold, 2 * n);
+  k->noise = copy_of(noise, 2 * n);
+  k->gain = gain ? copy_of(gain, 2 * n) : NULL;
+  k->dead = malloc(2 * n);
+  k->live = copy_of(NULL, 2 * n);
+  k->live_count = copy_of(NULL, 2 * n);
+  k->table_force = copy_of(tables, 2 * size);
+  k->table_slope = copy_of(NULL, 2 * size);
+  k->counts = copy_of(NULL, 2 * n);
+  k->force = copy_of(NULL, 2 * n);
+  k->pairs = calloc(kcap, sizeof(sk_pair));
+  k->tops = copy_of(NULL, kcap * n);
+  k->fractions = copy_of(NULL, kcap * n);
+  k->scratch = copy_of(NULL, 4 * (size_t)n + 16 * kcap + 4 * ((size_t)line + 1));
+  k->fit = copy_of(NULL, 4 * (size_t)n + 8 * ((size_t)line + 1));
+  k->labels = malloc(sizeof(int) * n);
+  k->iscratch = malloc(sizeof(int) * 4 * n);
+  if (!k->baseline || !k->threshold || !k->noise || (gain && !k->gain) || !k->dead || !k->live
+      || !k->live_count || !k->table_force || !k->table_slope || !k->counts || !k->force
+      || !k->pairs || !k->tops || !k->fractions || !k->scratch || !k->fit || !k->labels
+      || !k->iscratch) {
+    sk_free(k);
+    return NULL;
+  }
+  memcpy(k->dead, dead, 2 * n);
+  for (int layer = 0; layer < 2; layer++) {
+    /* numpy.diff of the table, and a zero slope past the last count (_ForceTable) */
+    const double *f = k->table_force + layer * size;
+    double *slope = k->table_slope + layer * size;
+    for (size_t j = 0; j + 1 < size; j++) {
+      slope[j] = f[j + 1] - f[j];
+    }
+    slope[size - 1] = 0.0;
+  }
+  sk_live_counts(k);
+  return k;
+}
+
+/* Copy pair p's window: counts (top, bottom) then its share of the force maps (_force_window). */
+static void pair_window(const sk_kernel *k, int q, double *out)
+{
+  const sk_pair *p = &k->pairs[q];
+  int n = k->n, m = p->h * p->w;
+  const double *t = k->tops + q * n, *fraction = k->fractions + q * n;
+  const double *bottom = k->counts + n;
+  double peak = -INFINITY;
+  for (int i = 0; i < n; i++) {
+    double b = fraction[i] * bottom[i];
+    peak = b > peak ? b : peak;
+  }
+  double cut = 0.02 * peak;
+  for (int r = 0; r < p->h; r++) {
+    for (int c = 0; c < p->w; c++) {
+      int i = (p->r0 + r) * k->cols + p->c0 + c, j = r * p->w + c;
+      double b = fraction[i] * bottom[i];
+      out[j] = t[i];
+      out[m + j] = b * (peak > 0 && b > cut ? 1.0 : 0.0);
+      for (int layer = 0; layer < 2; layer++) {
+        double full = k->counts[layer * n + i];
+        double share = full > 0 ? out[layer * m + j] / full : 0.0;
+        out[(2 + layer) * m + j] = k->force[layer * n + i] * share;
+      }
+    }
+  }
+}
+
+static double finite_or_zero(double v)
+{
+  return isfinite(v) ? v : 0.0;
+}
+
+/* Normal force: the sensed sum (bottom, or the larger one at the edge) / fill_factor**2. */
+static double normal_force(const sk_kernel *k, const sk_pair *p)
+{
+  double sensed = p->at_border ? (p->top_force >= p->bottom_force ? p->top_force
+                                  : p->bottom_force) : p->bottom_force;
+  if (sensed <= 0) {
+    sensed = p->top_force;
+  }
+  double fill = k->reals[SK_FILL_FACTOR];
+  return sensed * k->reals[SK_FORCE_SCALE] / (fill * fill);
+}
+
+/* One contact's record (ContactEstimator.process). */
+static void contact(const sk_kernel *k, int q, double *rec)
+{
+  const sk_pair *p = &k->pairs[q];
+  const double *c = k->reals;
+  double pitch = c[SK_PITCH], normal = normal_force(k, p);
+  double compliance = c[SK_COMPLIANCE];
+  double reach = 0.5 * (k->rows < k->cols ? k->rows : k->cols);
+  double load = normal - c[SK_ZERO_REF];
+  double sx = p->dx * pitch - (c[SK_X_P] + c[SK_SLOPE_X] * load);
+  double sy = p->dy * pitch - (c[SK_Y_P] + c[SK_SLOPE_Y] * load);
+  double magnitude = hypot(sx, sy);
+  double snr = p->sigma > 0 ? magnitude / (p->sigma * pitch) : INFINITY;
+  double own = finite_or_zero(p->confidence);
+  own = own < 0.0 ? 0.0 : (own > 1.0 ? 1.0 : own);
+  double conf = own * (isfinite(snr) ? snr * snr / (snr * snr + MIN_SNR * MIN_SNR) : 1.0);
+  int valid = snr >= MIN_SNR && conf >= c[SK_MIN_CONFIDENCE] && c[SK_MIN_SHIFT] <= magnitude
+    && hypot(p->dx, p->dy) <= reach;
+  memset(rec, 0, sizeof(double) * SK_NREC);
+  rec[SK_AZIMUTH_SIGMA] = PI;
+  if (valid) {
+    double azimuth = atan2(sy, sx), tangential = magnitude / compliance;
+    rec[SK_AZIMUTH] = azimuth;
+    rec[SK_ALPHA] = atan2(tangential, normal);
+    rec[SK_FORCE_X] = tangential * cos(azimuth);
+    rec[SK_FORCE_Y] = tangential * sin(azimuth);
+    rec[SK_AZIMUTH_SIGMA] = atan2(p->sigma * pitch, magnitude);
+  }
+  rec[SK_X_M] = p->col * pitch;
+  rec[SK_Y_M] = p->row * pitch;
+  rec[SK_FORCE_N] = normal;
+  rec[SK_AREA_M2] = p->taxels * pitch * pitch;
+  rec[SK_SHIFT_X_M] = finite_or_zero(sx);
+  rec[SK_SHIFT_Y_M] = finite_or_zero(sy);
+  rec[SK_FORCE_Z] = -normal;
+  rec[SK_CONFIDENCE] = conf;
+  rec[SK_VALID] = valid;
+  rec[SK_KEPT] = normal >= c[SK_MIN_FORCE];
+  rec[SK_DX] = p->dx;
+  rec[SK_DY] = p->dy;
+  rec[SK_PAIR] = q;
+  rec[SK_CENSORED] = p->censored;
+  rec[SK_SIGMA] = p->sigma;
+  rec[SK_TOP_FORCE] = p->top_force;
+  rec[SK_BOTTOM_FORCE] = p->bottom_force;
+  rec[SK_SHIFT_CONFIDENCE] = p->confidence;
+}
+
+int sk_finish(sk_kernel *k, const double *forces, double *out)
+{
+  int count = k->npairs;
+  for (int q = 0; q < count; q++) {
+    if (forces) {
+      k->pairs[q].top_force = forces[2 * q];
+      k->pairs[q].bottom_force = forces[2 * q + 1];
+    }
+    double *rec = out + q * SK_NREC;
+    contact(k, q, rec);
+    /* strongest first, a stable insertion */
+    for (int j = q; j > 0 && out[(j - 1) * SK_NREC + SK_FORCE_N] < out[j * SK_NREC + SK_FORCE_N];
+         j--) {
+      double tmp[SK_NREC];
+      memcpy(tmp, out + j * SK_NREC, sizeof(tmp));
+      memcpy(out + j * SK_NREC, out + (j - 1) * SK_NREC, sizeof(tmp));
+      memcpy(out + (j - 1) * SK_NREC, tmp, sizeof(tmp));
+    }
+  }
+  return count;
+}
+
+int sk_scan(sk_kernel *k, const double *maps, double *out, int *status)
+{
+  int n2 = 2 * k->n;
+  for (int i = 0; i < n2; i++) {
+    if (!isfinite(maps[i])) {
+      return SK_ERR_NOT_FINITE;
+    }
+    if (maps[i] < 0) {
+      return SK_ERR_NEGATIVE;
+    }
+  }
+  k->revived = 0;
+  k->npairs = 0;
+  sk_touch_counts(k, maps);
+  sk_force_of(k);
+  int count = sk_pair_layers(k);
+  k->npairs = count;
+  int censored = 0;
+  for (int q = 0; q < count; q++) {
+    sk_pair *p = &k->pairs[q];
+    int m = p->h * p->w;
+    pair_window(k, q, k->fit);
+    double *scratch = k->fit + 4 * m;
+    if (k->method == SK_TAXEL_FIT) {
+      sk_taxel_fit(k->fit + 2 * m, k->fit, p->h, p->w, scratch, &p->dx, &p->dy, &p->confidence);
+    } else {
+      sk_centroid(k->fit, p->h, p->w, scratch, &p->dx, &p->dy, &p->confidence);
+    }
+    if (!(isfinite(p->dx) && isfinite(p->dy))) {
+      p->dx = p->dy = p->confidence = 0.0;
+    }
+    p->sigma = sk_sigma(k, p, k->fit, count == 1);
+    p->censored = 0;
+    for (int layer = 0; layer < 2; layer++) {
+      double censor = k->reals[SK_CENSOR_TOP + layer], peak = 0.0;
+      for (int j = 0; j < m; j++) {
+        peak = k->fit[layer * m + j] > peak ? k->fit[layer * m + j] : peak;
+      }
+      if (censor > 0 && peak >= censor) {
+        p->censored |= 1 << layer;
+      }
+    }
+    censored |= p->censored;
+  }
+  status[SK_STATUS_PAIRS] = count;
+  status[SK_STATUS_CENSORED] = censored;
+  status[SK_STATUS_REVIVED] = k->revived;
+  return sk_finish(k, NULL, out);
+}
+
+int sk_window(const sk_kernel *k, int pair, double *out, int *shape)
+{
+  if (pair < 0 || pair >= k->npairs) {
+    return -1;
+  }
+  const sk_pair *p = &k->pairs[pair];
+  shape[0] = p->r0;
+  shape[1] = p->c0;
+  shape[2] = p->h;
+  shape[3] = p->w;
+  pair_window(k, pair, out);
+  return 0;
+}
+
+void sk_dead(const sk_kernel *k, unsigned char *out)
+{
+  memcpy(out, k->dead, 2 * k->n);
+}

@@ -1,0 +1,294 @@
+/*
+ * Shift of one contact's window: cell-integrated Gaussian profiles (taxel_fit) or the centroid
+ * difference. Python description: taxelfit.py and shift.centroid.
+ */
+#include <math.h>
+
+#include "internal.h"
+
+/* taxelfit.py's constants */
+#define ITERATIONS 8
+#define TOLERANCE 1e-4
+#define MIN_WIDTH 0.25
+#define MIN_EXPLAINED 0.5
+#define WIDE 1.5
+#define PLATEAU 1e-9
+#define INV_SQRT2PI 0.3989422804014327
+/* Abramowitz and Stegun 7.1.26: erf to 1.5e-7, far below the counts' noise */
+static const double AS_P = 0.3275911;
+static const double AS[5] = {0.254829592, -0.284496736, 1.421413741, -1.453152027, 1.061405429};
+
+static double clip(double x, double lo, double hi)
+{
+  /* comparisons keep a NaN, as numpy.clip does */
+  return x < lo ? lo : (x > hi ? hi : x);
+}
+
+static double normal_cdf(double u)
+{
+  double x = fabs(u) * (1.0 / sqrt(2.0));
+  double t = 1.0 / (1.0 + AS_P * x);
+  double poly = t * (AS[0] + t * (AS[1] + t * (AS[2] + t * (AS[3] + t * AS[4]))));
+  double half = 0.5 * poly * exp(-x * x);
+  return u >= 0 ? 1.0 - half : half;
+}
+
+/*
+ * Solve the 3 x 3 system a x = b as numpy.linalg.solve does with OpenBLAS (dgesv: left-looking
+ * LU with partial pivoting, multipliers by the pivot's reciprocal, column-wise substitutions),
+ * so that the fit follows the reference's steps to the bit: its narrow windows are ill-conditioned
+ * and any other order of operations drifts by up to 1e-4 taxels. Returns 0 for a zero pivot.
+ */
+static int solve3(double a[3][3], double b[3], double x[3])
+{
+  int piv[3];
+  for (int j = 0; j < 3; j++) {
+    for (int i = 0; i < j; i++) {
+      double t = a[i][j];
+      a[i][j] = a[piv[i]][j];
+      a[piv[i]][j] = t;
+    }
+    for (int i = 1; i < j; i++) {
+      double dot = 0.0;
+      for (int m = 0; m < i; m++) {
+        dot += a[i][m] * a[m][j];
+      }
+      a[i][j] = a[i][j] - dot;
+    }
+    for (int i = j; i < 3; i++) {
+      double dot = 0.0;
+      for (int m = 0; m < j; m++) {
+        dot += a[i][m] * a[m][j];
+      }
+      a[i][j] = a[i][j] + -1.0 * dot;
+    }
+    int p = j;
+    for (int i = j + 1; i < 3; i++) {
+      p = fabs(a[i][j]) > fabs(a[p][j]) ? i : p;
+    }
+    piv[j] = p;
+    if (a[p][j] == 0.0) {
+      return 0;
+    }
+    double inv = 1.0 / a[p][j];
+    for (int m = 0; m <= j; m++) {
+      double t = a[j][m];
+      a[j][m] = a[p][m];
+      a[p][m] = t;
+    }
+    for (int i = j + 1; i < 3; i++) {
+      a[i][j] *= inv;
+    }
+  }
+  for (int i = 0; i < 3; i++) {
+    x[i] = b[i];
+  }
+  for (int i = 0; i < 3; i++) {
+    double t = x[i];
+    x[i] = x[piv[i]];
+    x[piv[i]] = t;
+  }
+  for (int i = 0; i < 3; i++) {
+    for (int r = i + 1; r < 3; r++) {
+      x[r] += -x[i] * a[r][i];
+    }
+  }
+  for (int i = 2; i >= 0; i--) {
+    x[i] = x[i] / a[i][i];
+    for (int r = 0; r < i; r++) {
+      x[r] += -x[i] * a[r][i];
+    }
+  }
+  return 1;
+}
+
+/* Cells of the profile (mu, s) over len cells: differences of the CDF at the cell edges. */
+static void cells_of(double mu, double s, int len, double *cells)
+{
+  double before = normal_cdf((-0.5 - mu) / s);
+  for (int i = 0; i < len; i++) {
+    double after = normal_cdf(((i + 1) - 0.5 - mu) / s);
+    cells[i] = after - before;
+    before = after;
+  }
+}
+
+/*
+ * Fit cell-integrated Gaussians to 4 profiles of nn cells (the first len[j] real); returns 0
+ * when a profile has no load, else the centres and explained shares (fit_cell_profiles).
+ */
+static int fit_profiles(const double *profiles, int nn, const int *len, double *scratch,
+                        double *centre, double *explained)
+{
+  double mass[4], mu[4], s[4], amp[4], start[4], start_width[4], high[4];
+  double *cells = scratch, *tmp = scratch + nn;
+  for (int j = 0; j < 4; j++) {
+    const double *p = profiles + j * nn;
+    mass[j] = sk_sum(p, nn);
+    if (!(mass[j] > 0)) {
+      return 0;
+    }
+    double m1 = 0.0, m2 = 0.0;
+    for (int i = 0; i < nn; i++) {
+      m1 += p[i] * i;
+      m2 += p[i] * ((double)i * i);
+    }
+    mu[j] = m1 / mass[j];
+    double var = m2 / mass[j] - mu[j] * mu[j];
+    double v = var - 1.0 / 12.0;
+    s[j] = sqrt(v < MIN_WIDTH * MIN_WIDTH ? MIN_WIDTH * MIN_WIDTH : v);
+    amp[j] = mass[j];
+    start[j] = mu[j];
+    start_width[j] = s[j];
+    /* the centre stays within the cells the profile has */
+    high[j] = len[j] - 0.5;
+  }
+  for (int it = 0; it < ITERATIONS; it++) {
+    double step[4][3];
+    int solved = 1;
+    for (int j = 0; j < 4 && solved; j++) {
+      const double *p = profiles + j * nn;
+      double u0 = (-0.5 - mu[j]) / s[j];
+      double pdf0 = exp(-0.5 * u0 * u0) * INV_SQRT2PI, cdf0 = normal_cdf(u0), updf0 = u0 * pdf0;
+      double normal[3][3] = {{0}}, rhs[3] = {0};
+      for (int i = 0; i < len[j]; i++) {
+        double u1 = ((i + 1) - 0.5 - mu[j]) / s[j];
+        double pdf1 = exp(-0.5 * u1 * u1) * INV_SQRT2PI, cdf1 = normal_cdf(u1), updf1 = u1 * pdf1;
+        double jac[3] = {cdf1 - cdf0, amp[j] * (-(pdf1 - pdf0) / s[j]),
+                         amp[j] * (-(updf1 - updf0) / s[j])};
+        double residual = p[i] - amp[j] * jac[0];
+        for (int a = 0; a < 3; a++) {
+          for (int b = 0; b < 3; b++) {
+            normal[a][b] += jac[a] * jac[b];
+          }
+          rhs[a] += jac[a] * residual;
+        }
+        pdf0 = pdf1;
+        cdf0 = cdf1;
+        updf0 = updf1;
+      }
+      for (int a = 0; a < 3; a++) {
+        normal[a][a] += 1e-12;
+      }
+      solved = solve3(normal, rhs, step[j]);
+    }
+    if (!solved) {
+      break;
+    }
+    int small = 1;
+    for (int j = 0; j < 4; j++) {
+      /* Damped: a step never moves the centre by more than a taxel nor the width by half. */
+      amp[j] = amp[j] + step[j][0];
+      mu[j] = clip(mu[j] + clip(step[j][1], -1.0, 1.0), -0.5, high[j]);
+      double w = s[j] + clip(step[j][2], -0.5 * s[j], 0.5 * s[j]);
+      s[j] = w < MIN_WIDTH ? MIN_WIDTH : w;
+      small &= fabs(step[j][1]) < TOLERANCE;
+    }
+    if (small) {
+      break;
+    }
+  }
+  for (int j = 0; j < 4; j++) {
+    const double *p = profiles + j * nn;
+    for (int i = 0; i < nn; i++) {
+      tmp[i] = p[i] * p[i];
+    }
+    double energy = sk_sum(tmp, nn);
+    cells_of(mu[j], s[j], len[j], cells);
+    for (int i = 0; i < nn; i++) {
+      double r = p[i] - (i < len[j] ? amp[j] * cells[i] : 0.0);
+      tmp[i] = r * r;
+    }
+    double e = 1.0 - sk_sum(tmp, nn) / (energy > 0 ? energy : 1.0);
+    /*
+     * A fit that explains little of its profile keeps the centroid it started from; so does a
+     * profile a taxel and a half wide, whose centroid has no sampling bias to speak of.
+     */
+    int keep = isfinite(mu[j]) && e >= MIN_EXPLAINED && start_width[j] < WIDE;
+    centre[j] = keep ? mu[j] : start[j];
+    e = isfinite(e) ? e : 0.0;
+    explained[j] = e > 0.0 ? e : 0.0;
+  }
+  return 1;
+}
+
+static int plateau(const double *layer, int m)
+{
+  double peak = layer[0];
+  for (int i = 1; i < m; i++) {
+    peak = layer[i] > peak ? layer[i] : peak;
+  }
+  int at_peak = 0;
+  for (int i = 0; i < m; i++) {
+    at_peak += layer[i] >= peak * (1.0 - PLATEAU);
+  }
+  return peak > 0 && at_peak >= 2;
+}
+
+/* Column profiles (summed over rows, in row order) and row profiles (numpy's pairwise sums). */
+static void profiles_of(const double *layer, int h, int w, int nn, double *along_x,
+                        double *along_y)
+{
+  for (int i = 0; i < nn; i++) {
+    along_x[i] = 0.0;
+    along_y[i] = 0.0;
+  }
+  for (int r = 0; r < h; r++) {
+    for (int c = 0; c < w; c++) {
+      along_x[c] += layer[r * w + c];
+    }
+    along_y[r] = sk_sum(layer + r * w, w);
+  }
+}
+
+void sk_taxel_fit(const double *force, const double *counts, int h, int w, double *scratch,
+                  double *dx, double *dy, double *confidence)
+{
+  int m = h * w, nn = h > w ? h : w;
+  double *profiles = scratch;
+  int len[4] = {w, w, h, h};
+  for (int layer = 0; layer < 2; layer++) {
+    /* A layer flat at its peak hit the end of its force curve: fit it on its counts. */
+    const double *maps = plateau(force + layer * m, m) ? counts + layer * m : force + layer * m;
+    profiles_of(maps, h, w, nn, profiles + layer * nn, profiles + (2 + layer) * nn);
+  }
+  double centre[4], explained[4];
+  if (!fit_profiles(profiles, nn, len, scratch + 4 * nn, centre, explained)) {
+    *dx = *dy = *confidence = NAN;
+    return;
+  }
+  *dx = centre[1] - centre[0];
+  *dy = centre[3] - centre[2];
+  double worst = explained[0];
+  for (int j = 1; j < 4; j++) {
+    worst = explained[j] < worst ? explained[j] : worst;
+  }
+  *confidence = worst > 1.0 ? 1.0 : worst;
+}
+
+void sk_centroid(const double *counts, int h, int w, double *scratch, double *dx, double *dy,
+                 double *confidence)
+{
+  int m = h * w, nn = h > w ? h : w;
+  double centre[4];
+  for (int layer = 0; layer < 2; layer++) {
+    double *along_x = scratch, *along_y = scratch + nn;
+    profiles_of(counts + layer * m, h, w, nn, along_x, along_y);
+    double mass = sk_sum(along_x, w), sx = 0.0, sy = 0.0;
+    if (!(mass > 0)) {
+      *dx = *dy = *confidence = NAN;
+      return;
+    }
+    for (int c = 0; c < w; c++) {
+      sx += along_x[c] * c;
+    }
+    for (int r = 0; r < h; r++) {
+      sy += along_y[r] * r;
+    }
+    centre[layer] = sx / mass;
+    centre[2 + layer] = sy / mass;
+  }
+  *dx = centre[1] - centre[0];
+  *dy = centre[3] - centre[2];
+  *confidence = 1.0;
+}
