@@ -8,24 +8,30 @@
 
 #include "internal.h"
 
-/* contacts.py's constants: the saddle test, the mixture and the window's share of the bottom */
+/* contacts.py's constants: the saddle test and the mixture (WINDOW_SHARE: internal.h) */
 #define SADDLE_RATIO 0.85
 #define MIN_PEAK_DISTANCE 2
 #define MIXTURE_ITERATIONS 3
-#define WINDOW_SHARE 0.02
 
 /* 3 x 3 maximum over the taxels inside the map (cv2.dilate's border leaves them out). */
-static void dilate3(const double *src, int rows, int cols, double *dst)
+static void dilate3(const double *src, int rows, int cols, double *rowmax, double *dst)
 {
+  /* A maximum is exact in any order: rows first, then columns. */
   for (int r = 0; r < rows; r++) {
+    const double *s = src + r * cols;
+    double *d = rowmax + r * cols;
     for (int c = 0; c < cols; c++) {
-      double m = src[r * cols + c];
-      for (int rr = r > 0 ? r - 1 : 0; rr <= r + 1 && rr < rows; rr++) {
-        for (int cc = c > 0 ? c - 1 : 0; cc <= c + 1 && cc < cols; cc++) {
-          m = src[rr * cols + cc] > m ? src[rr * cols + cc] : m;
-        }
-      }
-      dst[r * cols + c] = m;
+      double m = s[c];
+      m = c > 0 && s[c - 1] > m ? s[c - 1] : m;
+      d[c] = c + 1 < cols && s[c + 1] > m ? s[c + 1] : m;
+    }
+  }
+  for (int r = 0; r < rows; r++) {
+    const double *up = rowmax + (r > 0 ? r - 1 : r) * cols, *mid = rowmax + r * cols;
+    const double *down = rowmax + (r + 1 < rows ? r + 1 : r) * cols;
+    for (int c = 0; c < cols; c++) {
+      double m = mid[c] > up[c] ? mid[c] : up[c];
+      dst[r * cols + c] = down[c] > m ? down[c] : m;
     }
   }
 }
@@ -96,7 +102,7 @@ static int split_peaks(sk_kernel *k, const double *top, int count)
   double *dil = k->scratch, *values = k->scratch + n;
   int *labels = k->labels, *peaks = k->iscratch, *kept = k->iscratch + n;
   int *kept_label = k->iscratch + 2 * n, *groups = k->iscratch + 3 * n;
-  dilate3(top, rows, cols, dil);
+  dilate3(top, rows, cols, values, dil);
   int npeaks = 0;
   for (int i = 0; i < n; i++) {
     if (top[i] >= dil[i] && top[i] > 0) {
@@ -196,12 +202,13 @@ static void share_bottom(sk_kernel *k, int kn, const double *bottom)
   for (int q = 0; q < kn; q++) {
     const double *t = k->tops + q * n;
     double s0 = 0.0, s1 = 0.0, s2 = 0.0, s3 = 0.0;
-    for (int i = 0; i < n; i++) {
-      double r = i / cols, c = i % cols;
-      s0 += t[i];
-      s1 += t[i] * r;
-      s2 += t[i] * c;
-      s3 += t[i] * (r * r + c * c);
+    for (int r = 0, i = 0; r < k->rows; r++) {
+      for (int c = 0; c < cols; c++, i++) {
+        s0 += t[i];
+        s1 += t[i] * r;
+        s2 += t[i] * c;
+        s3 += t[i] * ((double)r * r + (double)c * c);
+      }
     }
     mass[q] = s0;
     cr[q] = s1 / s0;
@@ -275,30 +282,34 @@ static void make_pair(sk_kernel *k, int q, sk_pair *p)
   int rows = k->rows, cols = k->cols, n = k->n;
   const double *t = k->tops + q * n, *fraction = k->fractions + q * n;
   const double *bottom = k->counts + n, *force = k->force;
-  double *tmp = k->scratch;
+  double *tmp = k->scratch, *b = k->scratch + n;
   double mt = 0.0, sr = 0.0, sc = 0.0, peak = -INFINITY;
   int taxels = 0, r0 = rows, r1 = -1, c0 = cols, c1 = -1;
-  for (int i = 0; i < n; i++) {
-    double r = i / cols, c = i % cols, b = fraction[i] * bottom[i];
-    mt += t[i];
-    sr += t[i] * r;
-    sc += t[i] * c;
-    peak = b > peak ? b : peak;
+  for (int r = 0, i = 0; r < rows; r++) {
+    for (int c = 0; c < cols; c++, i++) {
+      b[i] = fraction[i] * bottom[i];
+      mt += t[i];
+      sr += t[i] * r;
+      sc += t[i] * c;
+      peak = b[i] > peak ? b[i] : peak;
+    }
   }
   p->row = mt > 0 ? sr / mt : 0.0;
   p->col = mt > 0 ? sc / mt : 0.0;
+  p->peak = peak;
   double cut = WINDOW_SHARE * peak;
-  for (int i = 0; i < n; i++) {
-    int r = i / cols, c = i % cols;
-    int touched = t[i] != 0.0, own = peak > 0 && fraction[i] * bottom[i] > cut;
-    taxels += touched;
-    if (touched || own) {
-      r0 = r < r0 ? r : r0;
-      r1 = r > r1 ? r : r1;
-      c0 = c < c0 ? c : c0;
-      c1 = c > c1 ? c : c1;
+  for (int r = 0, i = 0; r < rows; r++) {
+    for (int c = 0; c < cols; c++, i++) {
+      int touched = t[i] != 0.0, own = peak > 0 && b[i] > cut;
+      taxels += touched;
+      if (touched || own) {
+        r0 = r < r0 ? r : r0;
+        r1 = r > r1 ? r : r1;
+        c0 = c < c0 ? c : c0;
+        c1 = c > c1 ? c : c1;
+      }
+      tmp[i] = force[i] * (touched ? 1.0 : 0.0);
     }
-    tmp[i] = force[i] * (t[i] != 0.0 ? 1.0 : 0.0);
   }
   r1++;
   c1++;
@@ -313,11 +324,34 @@ static void make_pair(sk_kernel *k, int q, sk_pair *p)
   for (int r = p->r0; r < p->r0 + p->h; r++) {
     for (int c = p->c0; c < p->c0 + p->w; c++) {
       int i = r * cols + c;
-      int own = peak > 0 && fraction[i] * bottom[i] > cut;
+      int own = peak > 0 && b[i] > cut;
       tmp[m++] = fraction[i] * force[n + i] * (own ? 1.0 : 0.0);
     }
   }
   p->bottom_force = sk_sum(tmp, m);
+}
+
+/* Copy pair p's window: counts (top, bottom) then its share of the force maps (_force_window). */
+void sk_pair_window(const sk_kernel *k, int q, double *out)
+{
+  const sk_pair *p = &k->pairs[q];
+  int n = k->n, m = p->h * p->w;
+  const double *t = k->tops + q * n, *fraction = k->fractions + q * n;
+  const double *bottom = k->counts + n;
+  double peak = p->peak, cut = WINDOW_SHARE * peak;
+  for (int r = 0; r < p->h; r++) {
+    for (int c = 0; c < p->w; c++) {
+      int i = (p->r0 + r) * k->cols + p->c0 + c, j = r * p->w + c;
+      double b = fraction[i] * bottom[i];
+      out[j] = t[i];
+      out[m + j] = b * (peak > 0 && b > cut ? 1.0 : 0.0);
+      for (int layer = 0; layer < 2; layer++) {
+        double full = k->counts[layer * n + i];
+        double share = full > 0 ? out[layer * m + j] / full : 0.0;
+        out[(2 + layer) * m + j] = k->force[layer * n + i] * share;
+      }
+    }
+  }
 }
 
 int sk_pair_layers(sk_kernel *k)

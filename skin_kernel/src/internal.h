@@ -8,6 +8,7 @@
 typedef struct {
   int r0, c0, h, w;       /* window in the full map */
   double row, col;        /* top centroid, taxels */
+  double peak;            /* highest share of a bottom taxel, counts */
   double top_force, bottom_force;
   int taxels, at_border, censored;
   double dx, dy, confidence, sigma;
@@ -45,6 +46,11 @@ void sk_force_of(sk_kernel *k);
 
 /* contacts.c: fills k->pairs (geometry and forces), returns their number */
 int sk_pair_layers(sk_kernel *k);
+/* contacts.c: pair q's window, counts (top, bottom) then its share of the force maps */
+void sk_pair_window(const sk_kernel *k, int q, double *out);
+
+/* Bottom load below this share of a contact's peak share is not part of its window. */
+#define WINDOW_SHARE 0.02
 
 /* taxelfit.c: the shift of a (2, h, w) window; force may be NULL (centroid) */
 void sk_taxel_fit(const double *force, const double *counts, int h, int w, double *scratch,

@@ -108,34 +108,6 @@ sk_kernel *sk_new(const int *ints, const double *reals, const double *baseline,
   return k;
 }
 
-/* Copy pair p's window: counts (top, bottom) then its share of the force maps (_force_window). */
-static void pair_window(const sk_kernel *k, int q, double *out)
-{
-  const sk_pair *p = &k->pairs[q];
-  int n = k->n, m = p->h * p->w;
-  const double *t = k->tops + q * n, *fraction = k->fractions + q * n;
-  const double *bottom = k->counts + n;
-  double peak = -INFINITY;
-  for (int i = 0; i < n; i++) {
-    double b = fraction[i] * bottom[i];
-    peak = b > peak ? b : peak;
-  }
-  double cut = 0.02 * peak;
-  for (int r = 0; r < p->h; r++) {
-    for (int c = 0; c < p->w; c++) {
-      int i = (p->r0 + r) * k->cols + p->c0 + c, j = r * p->w + c;
-      double b = fraction[i] * bottom[i];
-      out[j] = t[i];
-      out[m + j] = b * (peak > 0 && b > cut ? 1.0 : 0.0);
-      for (int layer = 0; layer < 2; layer++) {
-        double full = k->counts[layer * n + i];
-        double share = full > 0 ? out[layer * m + j] / full : 0.0;
-        out[(2 + layer) * m + j] = k->force[layer * n + i] * share;
-      }
-    }
-  }
-}
-
 static double finite_or_zero(double v)
 {
   return isfinite(v) ? v : 0.0;
@@ -244,7 +216,7 @@ int sk_scan(sk_kernel *k, const double *maps, double *out, int *status)
   for (int q = 0; q < count; q++) {
     sk_pair *p = &k->pairs[q];
     int m = p->h * p->w;
-    pair_window(k, q, k->fit);
+    sk_pair_window(k, q, k->fit);
     double *scratch = k->fit + 4 * m;
     if (k->method == SK_TAXEL_FIT) {
       sk_taxel_fit(k->fit + 2 * m, k->fit, p->h, p->w, scratch, &p->dx, &p->dy, &p->confidence);
@@ -283,7 +255,7 @@ int sk_window(const sk_kernel *k, int pair, double *out, int *shape)
   shape[1] = p->c0;
   shape[2] = p->h;
   shape[3] = p->w;
-  pair_window(k, pair, out);
+  sk_pair_window(k, pair, out);
   return 0;
 }
 

@@ -231,6 +231,11 @@ class ContactEstimator:
         return ContactEstimator(self.config, self._calibration, tared, self._shift,
                                 self._compiled)
 
+    def with_compiled(self, compiled: bool) -> 'ContactEstimator':
+        """Return this estimator on the compiled kernel or on its Python description."""
+        return ContactEstimator(self.config, self._calibration, self.conditioner, self._shift,
+                                compiled)
+
     @property
     def compliance_m_per_n(self) -> float:
         """Return the compliance in use: the calibrated one, else the configured one."""

@@ -44,6 +44,12 @@ def skimage_shift(maps: np.ndarray) -> ShiftEstimate:
     return ShiftEstimate(float(dx), float(dy), 1.0)
 
 
+# Bench-only: the default estimator run by its Python description (pipeline.ContactEstimator
+# with compiled=False) instead of the compiled kernel, same state, to put the two costs side by
+# side in one run.
+PYTHON_DEFAULT = f'{DEFAULT_METHOD}_python'
+
+
 def bench_methods(with_reference: bool = True) -> list:
     """Return the estimator names benchmarked: the registered ones, then the reference."""
     return method_names() + list(REFERENCES) + ([SKIMAGE] if with_reference else [])
@@ -51,6 +57,8 @@ def bench_methods(with_reference: bool = True) -> list:
 
 def make_estimator(name: str, model: SkinModel, calibration=None) -> ContactEstimator:
     """Return the pipeline with estimator ``name`` (a registered one or the skimage reference)."""
+    if name == PYTHON_DEFAULT:
+        return make_estimator(DEFAULT_METHOD, model, calibration).with_compiled(False)
     registered, reference = resolve(name if name != SKIMAGE else 'centroid')
     # The no-shear floor follows the pitch (the default's 0.25 mm is 1/20 of the seed's taxel),
     # so that small shifts on fine grids are judged by the estimator, not by a fixed threshold.
@@ -177,8 +185,15 @@ def _interleaved_cost(ests, frames, rng, repeats) -> dict:
 
 
 def scaling(grids, contact_counts, methods, frames, repeats, seed=0, log=print) -> dict:
-    """Return pipeline cost (contacts included) against taxel count and against contacts."""
+    """
+    Return pipeline cost (contacts included) against taxel count and against contacts.
+
+    With the default among ``methods``, its Python description runs beside it (PYTHON_DEFAULT).
+    """
     rng = np.random.default_rng(seed)
+    if DEFAULT_METHOD in methods and PYTHON_DEFAULT not in methods:
+        at = list(methods).index(DEFAULT_METHOD) + 1
+        methods = list(methods[:at]) + [PYTHON_DEFAULT] + list(methods[at:])
     by_grid = []
     for n in grids:
         model = skin_for_grid(n)
@@ -212,8 +227,13 @@ PLAIN_CENTROID = 'plain_centroid'
 
 
 def family_methods(everything: bool = True) -> list:
-    """Return the family benchmark's methods: default, seed, the plain centroid, the others."""
-    first = [DEFAULT_METHOD, 'seed', PLAIN_CENTROID]
+    """
+    Return the family benchmark's methods: default, seed, the plain centroid, the others.
+
+    The default's Python description (PYTHON_DEFAULT) comes second: its cost beside the
+    compiled kernel's, its scores equal to the default's.
+    """
+    first = [DEFAULT_METHOD, PYTHON_DEFAULT, 'seed', PLAIN_CENTROID]
     return first + ([m for m in method_names() if m not in first] if everything else [])
 
 
@@ -253,6 +273,12 @@ def _family_row(skin, kind, data, run, costs) -> dict:
             'median_us': 1e6 * float(np.median(costs)), 'mean_us': 1e6 * float(np.mean(costs))}
 
 
+def _family_estimator(data, method: str) -> ContactEstimator:
+    if method == PLAIN_CENTROID:
+        return plain_centroid_estimator(data)
+    return prepared_estimator(data, method)[0]
+
+
 def family(sizes: dict, methods: list, skins: list = None, seed: int = 0, log=print,
            oracle: bool = True) -> dict:
     """
@@ -272,8 +298,10 @@ def family(sizes: dict, methods: list, skins: list = None, seed: int = 0, log=pr
         for kind in SCENE_KINDS:
             presses = []
             data = make_scene(kind, skin, rng, sizes[kind], presses)
-            ests = {m: (plain_centroid_estimator(data) if m == PLAIN_CENTROID
-                        else prepared_estimator(data, m)[0]) for m in methods}
+            ests = {m: _family_estimator(data, m) for m in methods if m != PYTHON_DEFAULT}
+            if PYTHON_DEFAULT in methods:
+                compiled = ests.get(DEFAULT_METHOD) or _family_estimator(data, DEFAULT_METHOD)
+                ests[PYTHON_DEFAULT] = compiled.with_compiled(False)
             contacts = {m: [] for m in methods}
             times = {m: [] for m in methods}
             for i in range(data.frames):

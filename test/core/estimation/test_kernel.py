@@ -1,0 +1,241 @@
+"""
+The compiled kernel (skin_kernel, through kernel.py) against the pipeline's Python description.
+
+Every comparison runs one estimator both ways on the same state (``with_compiled``) and asks
+for the same contacts, in the same order, with the same figures to 1e-9 (relative, or absolute
+below 1): the two follow the same operations in the same order nearly everywhere and agree to
+the bit there; where the reference sums through BLAS (centroids, mixture moments) the order
+differs and they part by a few ulp (at most 2e-13 relative over the family when measured). The
+Gauss-Newton fit of narrow windows is ill-conditioned enough to turn a changed order of
+operations into 1e-5 taxels; 1e-9 catches that and any real divergence.
+"""
+
+import math
+import os
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from skin_driver.core.estimation.calibration import Calibration
+from skin_driver.core.estimation.pipeline import ContactEstimator, EstimatorConfig
+from skin_driver.core.estimation.prepared import prepared_estimator
+from skin_driver.core.sim.experiments import add_calibration_frames, make_scene
+from skin_driver.core.sim.physics import Press, render, SkinModel
+from skin_driver.core.sim.skins import family_skin, skin_names
+
+TOLERANCE = 1e-9
+# Noise specks of one to three taxels: three-parameter fits on so few cells are ill-conditioned
+# enough to grow a few ulp into 1e-8 taxels (measured); still far below any meaningful shift.
+SPECK_TOLERANCE = 1e-6
+SCENES = ('random', 'multi', 'border')
+
+
+def figures(contact) -> np.ndarray:
+    return np.array([contact.x_m, contact.y_m, contact.force_n, contact.area_m2,
+                     *contact.shift_m, contact.azimuth_rad, contact.azimuth_sigma_rad,
+                     contact.alpha_rad, *contact.force_xyz_n, contact.confidence,
+                     contact.direction_valid], dtype=np.float64)
+
+
+def assert_same(compiled, described, top, bottom, tolerance=TOLERANCE):
+    """Assert both estimators find the same contacts and shifts in one frame pair."""
+    got, want = compiled.process(top, bottom), described.process(top, bottom)
+    assert len(got) == len(want)
+    for g, w in zip(got, want):
+        a, b = figures(g), figures(w)
+        assert np.isfinite(a).all()
+        np.testing.assert_allclose(a, b, rtol=tolerance, atol=tolerance)
+    np.testing.assert_allclose(np.reshape(compiled.measure_shifts(top, bottom), (-1, 2)),
+                               np.reshape(described.measure_shifts(top, bottom), (-1, 2)),
+                               rtol=tolerance, atol=tolerance * compiled.config.pitch_m)
+    return got
+
+
+def both_ways(est: ContactEstimator) -> tuple:
+    return est.with_compiled(True), est.with_compiled(False)
+
+
+def scene_estimators(skin, kind, frames, method='taxel_fit', seed=1):
+    data = make_scene(kind, skin, np.random.default_rng(seed), size=frames)
+    est = ContactEstimator(EstimatorConfig(method=method, pitch_m=data.pitch_m))
+    if data.tare_top is not None:
+        est = est.with_tare(data.tare_top, data.tare_bottom)
+    return data, both_ways(est)
+
+
+@pytest.mark.parametrize('skin', skin_names() + ['held_out:1', 'held_out:2', 'held_out:3'])
+@pytest.mark.parametrize('kind', SCENES)
+def test_family_frames_give_the_same_contacts(skin, kind):
+    data, (compiled, described) = scene_estimators(skin, kind, 4)
+    for top, bottom in zip(data.top, data.bottom):
+        assert_same(compiled, described, top, bottom)
+
+
+@pytest.mark.parametrize('skin', ['default@32', 'soft@32', 'default@64'])
+def test_finer_grids_give_the_same_contacts(skin):
+    data, (compiled, described) = scene_estimators(skin, 'multi', 2)
+    for top, bottom in zip(data.top, data.bottom):
+        assert_same(compiled, described, top, bottom)
+
+
+@pytest.mark.parametrize('skin', ['crosstalk', 'noisy'])
+def test_centroid_method_gives_the_same_contacts(skin):
+    data, (compiled, described) = scene_estimators(skin, 'multi', 4, method='centroid')
+    for top, bottom in zip(data.top, data.bottom):
+        assert_same(compiled, described, top, bottom)
+
+
+@pytest.mark.parametrize('skin', ['saturating', 'film', 'noisy', 'held_out:2'])
+def test_calibrated_estimators_give_the_same_contacts(skin):
+    # Calibrated as the evaluator does: offset, force curves (censoring on the saturating skin,
+    # gains where the skin has them) and compliance, all from the scene's own frames.
+    data = make_scene('paper', skin, np.random.default_rng(2), size=1)
+    compiled, described = both_ways(prepared_estimator(data, 'taxel_fit')[0])
+    for top, bottom in zip(data.top, data.bottom):
+        assert_same(compiled, described, top, bottom)
+
+
+def test_a_censoring_force_curve_fills_in_the_saturated_imprint_alike():
+    # 3 N a taxel saturates this film: presses of 15 to 50 N read the ceiling at their centre,
+    # and the calibrated curve fills their force in from the rims (forcecurve, in Python).
+    member = family_skin('saturating')
+    rng = np.random.default_rng(3)
+    data = add_calibration_frames(make_scene('random', member, rng, 2), member.model, rng)
+    est, notes = prepared_estimator(data, 'taxel_fit')
+    assert any('filled in from their rims' in note for note in notes)
+    compiled, described = both_ways(est)
+    for force in (15.0, 30.0, 50.0):
+        press = Press(0.0431, 0.0353, force, radius_m=0.004)
+        (contact,) = assert_same(compiled, described, *render(member.model, [press], rng))
+        assert contact.force_n == pytest.approx(force, rel=0.1)
+
+
+def test_gains_scale_the_force_alike():
+    model = SkinModel(noise_counts=0)
+    top, bottom = render(model, [Press(0.04, 0.04, 12.0, math.radians(30), 1.0)],
+                         np.random.default_rng(3))
+    gain = np.full((16, 16), 1.25)
+    compiled, described = both_ways(ContactEstimator(calibration=Calibration(
+        gains=(gain, 0.5 * gain))))
+    (contact,) = assert_same(compiled, described, top, bottom)
+    assert contact.force_n == pytest.approx(
+        0.5 * 1.25 * ContactEstimator().process(top, bottom)[0].force_n)
+
+
+def tared_with_dead_taxel(model, rng, spot):
+    frames = [render(model, [], rng) for _ in range(8)]
+    tops = np.stack([t for t, _ in frames])
+    tops[:, spot[0], spot[1]] = 0
+    return ContactEstimator().with_tare(tops, np.stack([b for _, b in frames]))
+
+
+def test_dead_taxels_are_filled_and_revived_alike():
+    model = SkinModel()
+    rng = np.random.default_rng(4)
+    est = tared_with_dead_taxel(model, rng, (8, 8))
+    assert est.conditioner.dead_masks()[0][8, 8]
+    compiled, described = both_ways(est)
+    # A press beside the dead taxel: it is filled in from its neighbours.
+    top, bottom = render(model, [Press(0.0425, 0.0325, 10.0, 0.5, 2.0)], rng)
+    top[8, 8] = 0
+    assert_same(compiled, described, top, bottom)
+    # A press on it that reads: the taxel was only resting below zero and is alive again.
+    top, bottom = render(model, [Press(0.0425, 0.0425, 10.0, 0.5, 2.0)], rng)
+    assert_same(compiled, described, top, bottom)
+    assert not compiled.conditioner.dead_masks()[0][8, 8]
+    assert not described.conditioner.dead_masks()[0][8, 8]
+
+
+def test_empty_maps_give_no_contact():
+    compiled = ContactEstimator()
+    zeros = np.zeros((16, 16), dtype=np.uint16)
+    assert compiled.process(zeros, zeros) == []
+    assert compiled.measure_shifts(zeros, zeros) == []
+
+
+def test_all_taxels_loaded_give_one_contact_at_the_centre_without_direction():
+    full = np.full((16, 16), 3000, dtype=np.uint16)
+    compiled, described = both_ways(ContactEstimator())
+    (contact,) = assert_same(compiled, described, full, full)
+    assert (contact.x_m, contact.y_m) == pytest.approx((7.5 * 0.005, 7.5 * 0.005))
+    assert contact.area_m2 == pytest.approx(256 * 0.005 ** 2)
+    assert not contact.direction_valid
+
+
+@pytest.mark.parametrize('max_contacts, expected', [(0, 0), (1, 1), (32, 2)])
+def test_max_contacts_caps_the_contacts(max_contacts, expected):
+    model = SkinModel(noise_counts=0)
+    top, bottom = render(model, [Press(0.02, 0.02, 10.0), Press(0.06, 0.06, 8.0)],
+                         np.random.default_rng(5))
+    est = ContactEstimator(EstimatorConfig(max_contacts=max_contacts))
+    compiled, described = both_ways(est)
+    assert len(assert_same(compiled, described, top, bottom)) == expected
+
+
+def test_a_single_row_map_gives_the_same_contact():
+    line = np.zeros((1, 12))
+    line[0, 3:6] = (200.0, 900.0, 300.0)
+    below = np.zeros((1, 12))
+    below[0, 4:8] = (150.0, 500.0, 600.0, 100.0)
+    compiled, described = both_ways(ContactEstimator())
+    (contact,) = assert_same(compiled, described, line, below)
+    assert contact.y_m == 0.0 and contact.x_m == pytest.approx(
+        0.005 * (3 * 200 + 4 * 900 + 5 * 300) / 1400)
+
+
+def test_noise_only_frames_are_nan_free():
+    model = SkinModel(noise_counts=30.0)
+    rng = np.random.default_rng(6)
+    compiled, described = both_ways(ContactEstimator(EstimatorConfig(threshold_counts=20.0)))
+    for _ in range(5):
+        for contact in assert_same(compiled, described, *render(model, [], rng),
+                                   tolerance=SPECK_TOLERANCE):
+            assert np.isfinite(figures(contact)).all()
+
+
+@pytest.mark.parametrize('top, message', [
+    (np.full((16, 16), np.nan), 'top contains NaN'),
+    (np.full((16, 16), -1.0), 'top contains negative'),
+    (np.zeros((16, 15)), 'shapes differ'),
+    (np.zeros((16, 16), dtype=bool), 'integer or float'),
+])
+def test_bad_maps_raise_what_is_wrong_and_the_next_scan_works(top, message):
+    est = ContactEstimator()
+    good = np.zeros((16, 16))
+    est.process(good, good)
+    with pytest.raises(ValueError, match=message):
+        est.process(top, good)
+    assert est.process(good, good) == []
+
+
+def test_maps_of_another_shape_than_the_first_are_refused():
+    est = ContactEstimator()
+    est.process(np.zeros((16, 16)), np.zeros((16, 16)))
+    with pytest.raises(ValueError, match='expected'):
+        est.process(np.zeros((8, 8)), np.zeros((8, 8)))
+
+
+def test_nested_lists_are_maps_too():
+    model = SkinModel(noise_counts=0)
+    top, bottom = render(model, [Press(0.04, 0.04, 10.0, 0.6, 0.3)], np.random.default_rng(7))
+    compiled, described = both_ways(ContactEstimator())
+    assert assert_same(compiled, described, top.tolist(), bottom.tolist())
+
+
+def test_methods_the_kernel_does_not_run_keep_the_python_path():
+    # poc is not compiled: the estimator runs its Python description (same results both ways).
+    data, (compiled, described) = scene_estimators('default', 'random', 2, method='poc')
+    for top, bottom in zip(data.top, data.bottom):
+        assert_same(compiled, described, top, bottom)
+
+
+def test_a_missing_kernel_names_the_fix():
+    code = ('import numpy as np\n'
+            'from skin_driver.core.estimation.pipeline import ContactEstimator\n'
+            'ContactEstimator().process(np.zeros((4, 4)), np.zeros((4, 4)))\n')
+    env = {**os.environ, 'AMENT_PREFIX_PATH': os.devnull}
+    out = subprocess.run([sys.executable, '-c', code], capture_output=True, text=True, env=env)
+    assert out.returncode != 0
+    assert 'KernelMissing' in out.stderr and 'make setup' in out.stderr
