@@ -26,8 +26,8 @@ import numpy as np
 
 from .validate import check_pair
 
-__all__ = ['METHODS', 'KernelSettings', 'Kernel', 'KernelMissing', 'load_library', 'CONTACT_FIELDS',
-           'KEPT', 'DX', 'DY']
+__all__ = ['METHODS', 'KernelSettings', 'Kernel', 'KernelMissing', 'load_library',
+           'CONTACT_FIELDS', 'KEPT', 'DX', 'DY']
 
 # Shift methods the kernel runs, by their registered names (skin_kernel.h: SK_CENTROID, ...).
 METHODS = {'centroid': 0, 'taxel_fit': 1}
@@ -59,7 +59,8 @@ def load_library() -> ctypes.CDLL:
     try:
         from ament_index_python.packages import get_package_prefix, PackageNotFoundError
     except ImportError as exc:
-        raise KernelMissing(f'skin_kernel: ament_index_python is missing ({exc}); {_FIX}') from None
+        raise KernelMissing(f'skin_kernel: ament_index_python is missing ({exc}); '
+                            f'{_FIX}') from None
     try:
         prefix = get_package_prefix('skin_kernel')
     except PackageNotFoundError:

@@ -40,11 +40,11 @@ import threading
 
 import numpy as np
 
+from . import kernel as compiled_kernel
 from .calibration import Calibration
 from .conditioning import Conditioner, ConditioningConfig
 from .contacts import LayerPair, pair_layers
 from .fsr import FsrModel
-from . import kernel as compiled_kernel
 from .shift import DEFAULT_METHOD, get_method, Method, NO_SHIFT
 from .validate import check_int, check_number, check_pair
 
