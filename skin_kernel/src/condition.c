@@ -2,7 +2,6 @@
  * Conditioning: raw counts to tared touch counts (baseline, line leak, threshold, dead taxels)
  * and touch counts to force. Python description: conditioning.py and crosstalk.py.
  */
-#include <stdlib.h>
 #include <string.h>
 
 #include "internal.h"
@@ -54,10 +53,36 @@ void sk_live_counts(sk_kernel *k)
   }
 }
 
-static int cmp_double(const void *a, const void *b)
+/* The k-th smallest of buf[0..len) (Wirth's selection; reorders buf, leaves it split at k). */
+static double select_kth(double *buf, int len, int k)
 {
-  double x = *(const double *)a, y = *(const double *)b;
-  return (x > y) - (x < y);
+  int lo = 0, hi = len - 1;
+  while (lo < hi) {
+    double pivot = buf[k];
+    int i = lo, j = hi;
+    do {
+      while (buf[i] < pivot) {
+        i++;
+      }
+      while (pivot < buf[j]) {
+        j--;
+      }
+      if (i <= j) {
+        double t = buf[i];
+        buf[i] = buf[j];
+        buf[j] = t;
+        i++;
+        j--;
+      }
+    } while (i <= j);
+    if (j < k) {
+      lo = i;
+    }
+    if (k < i) {
+      hi = j;
+    }
+  }
+  return buf[k];
 }
 
 /* The median of a line (stride apart), numpy's way: mean of the two middle values if even. */
@@ -69,20 +94,17 @@ static double line_median(const double *a, int len, int stride, double *buf, dou
     top = buf[i] > top ? buf[i] : top;
   }
   *peak = top;
-  if (len > 24) {
-    qsort(buf, len, sizeof(double), cmp_double);
-  } else {
-    for (int i = 1; i < len; i++) {
-      double v = buf[i];
-      int j = i - 1;
-      for (; j >= 0 && buf[j] > v; j--) {
-        buf[j + 1] = buf[j];
-      }
-      buf[j + 1] = v;
-    }
+  int mid = (len - 1) / 2;
+  double lo = select_kth(buf, len, mid);
+  if (len % 2) {
+    return lo;
   }
-  double lo = buf[(len - 1) / 2];
-  return len % 2 ? lo : 0.5 * (lo + buf[len / 2]);
+  /* the next value up is the smallest of those the selection left above mid */
+  double hi = buf[mid + 1];
+  for (int i = mid + 2; i < len; i++) {
+    hi = buf[i] < hi ? buf[i] : hi;
+  }
+  return 0.5 * (lo + hi);
 }
 
 /* Take each line's leak (its median when that is far below its peak) out of both layers. */

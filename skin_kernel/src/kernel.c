@@ -195,7 +195,7 @@ int sk_finish(sk_kernel *k, const double *forces, double *out)
   return count;
 }
 
-int sk_scan(sk_kernel *k, const double *maps, double *out, int *status)
+int sk_scan(sk_kernel *k, const double *maps, int every_pair, double *out, int *status)
 {
   int n2 = 2 * k->n;
   for (int i = 0; i < n2; i++) {
@@ -217,16 +217,6 @@ int sk_scan(sk_kernel *k, const double *maps, double *out, int *status)
     sk_pair *p = &k->pairs[q];
     int m = p->h * p->w;
     sk_pair_window(k, q, k->fit);
-    double *scratch = k->fit + 4 * m;
-    if (k->method == SK_TAXEL_FIT) {
-      sk_taxel_fit(k->fit + 2 * m, k->fit, p->h, p->w, scratch, &p->dx, &p->dy, &p->confidence);
-    } else {
-      sk_centroid(k->fit, p->h, p->w, scratch, &p->dx, &p->dy, &p->confidence);
-    }
-    if (!(isfinite(p->dx) && isfinite(p->dy))) {
-      p->dx = p->dy = p->confidence = 0.0;
-    }
-    p->sigma = sk_sigma(k, p, k->fit, count == 1);
     p->censored = 0;
     for (int layer = 0; layer < 2; layer++) {
       double censor = k->reals[SK_CENSOR_TOP + layer], peak = 0.0;
@@ -238,6 +228,22 @@ int sk_scan(sk_kernel *k, const double *maps, double *out, int *status)
       }
     }
     censored |= p->censored;
+    p->dx = p->dy = p->confidence = 0.0;
+    p->sigma = INFINITY;
+    if (!every_pair && !p->censored && normal_force(k, p) < k->reals[SK_MIN_FORCE]) {
+      /* too light to report, and its force is final: its shift is never asked for */
+      continue;
+    }
+    double *scratch = k->fit + 4 * m;
+    if (k->method == SK_TAXEL_FIT) {
+      sk_taxel_fit(k->fit + 2 * m, k->fit, p->h, p->w, scratch, &p->dx, &p->dy, &p->confidence);
+    } else {
+      sk_centroid(k->fit, p->h, p->w, scratch, &p->dx, &p->dy, &p->confidence);
+    }
+    if (!(isfinite(p->dx) && isfinite(p->dy))) {
+      p->dx = p->dy = p->confidence = 0.0;
+    }
+    p->sigma = sk_sigma(k, p, k->fit, count == 1);
   }
   status[SK_STATUS_PAIRS] = count;
   status[SK_STATUS_CENSORED] = censored;

@@ -33,7 +33,7 @@ __all__ = ['METHODS', 'KernelSettings', 'Kernel', 'KernelMissing', 'load_library
 METHODS = {'centroid': 0, 'taxel_fit': 1}
 
 # skin_kernel.h's layout: bump both together.
-_ABI_VERSION = 1
+_ABI_VERSION = 2
 _INTS = 8
 _REALS = 15
 _NREC = 23
@@ -78,7 +78,8 @@ def load_library() -> ctypes.CDLL:
         raise KernelMissing(f'skin_kernel: {path} is another version than this skin_driver; '
                             f'{_FIX}')
     signatures = {'sk_new': (ptr, [ptr] * 8), 'sk_free': (None, [ptr]),
-                  'sk_scan': (ctypes.c_int, [ptr] * 4), 'sk_finish': (ctypes.c_int, [ptr] * 3),
+                  'sk_scan': (ctypes.c_int, [ptr, ptr, ctypes.c_int, ptr, ptr]),
+                  'sk_finish': (ctypes.c_int, [ptr] * 3),
                   'sk_window': (ctypes.c_int, [ptr, ctypes.c_int, ptr, ptr]),
                   'sk_dead': (None, [ptr, ptr])}
     for name, (restype, argtypes) in signatures.items():
@@ -140,14 +141,17 @@ class Kernel:
         self._out = np.zeros((max(min(settings.max_contacts, rows * cols), 1), _NREC))
         # A ctypes array: reading a word of it costs a tenth of reading a numpy scalar.
         self._status = (ctypes.c_int * _NSTATUS)()
-        self._scan_args = (self._handle, _address(self._maps), _address(self._out),
-                           ctypes.c_void_p(ctypes.addressof(self._status)))
+        outputs = (_address(self._out), ctypes.c_void_p(ctypes.addressof(self._status)))
+        # (reported contacts only, every contact): measure_shifts wants the light ones too.
+        self._scan_args = tuple((self._handle, _address(self._maps), every) + outputs
+                                for every in (0, 1))
         self._lock = threading.Lock()
 
-    def scan(self, top, bottom, imprint_forces=None) -> tuple:
+    def scan(self, top, bottom, imprint_forces=None, every_pair: bool = False) -> tuple:
         """
         Return (records, revived) of the raw maps: a list per contact, strongest first.
 
+        Without ``every_pair`` a contact too light to report (record[KEPT] 0) gets no shift.
         ``revived`` is None, or the dead-taxel marks after this scan revived some. Bad maps
         raise ValueError saying what is wrong. ``imprint_forces(window, censored, forces)``
         returns a saturated contact's (top, bottom) force sums from its (4, h, w) window (counts
@@ -160,7 +164,7 @@ class Kernel:
         with self._lock:
             np.copyto(self._maps[0], top)
             np.copyto(self._maps[1], bottom)
-            count = self._lib.sk_scan(*self._scan_args)
+            count = self._lib.sk_scan(*self._scan_args[every_pair])
             if count < 0:
                 check_pair(top, bottom, self.shape)
                 raise ValueError('top or bottom holds a value that is not a count')

@@ -10,14 +10,13 @@ raw counts (top, bottom) -> conditioning (tare, threshold, FSR model -> force pe
 Geometry and force: contacts, their windows and the shift are measured on the tared counts (the
 sensor's own readings, whatever its FSR curve); the force maps only give the contacts' forces.
 
-Uncertainty, from the contact's own data: each taxel's count noise (measured by the tare) gives
-the noise of each imprint's centroid; an
-imprint narrower than a taxel adds the pixel-locking error of its sampled centroid, whose size
-follows from the imprint's measured width (a Gaussian profile of variance ``v - 1/12`` sampled on
-unit cells has a first harmonic of amplitude ``exp(-2 pi^2 (v - 1/12)) / pi`` taxels); an imprint
-cut by the map's edge adds a fifth of a taxel; the calibration adds its own standard error.
-Their root sum of squares ``sigma`` (taxels) gives ``azimuth_sigma = atan2(sigma, |s|)``; a
-shift shorter than ``MIN_SNR`` sigmas is within the noise and carries no direction.
+Uncertainty, from the contact's own data (:mod:`uncertainty`): ``sigma`` (taxels, one axis of
+the shift) gives ``azimuth_sigma = atan2(sigma, |s|)``; a shift shorter than ``MIN_SNR`` sigmas
+is within the noise and carries no direction.
+
+Compiled: for the methods in :data:`kernel.METHODS` all of the above runs in the compiled kernel
+(package ``skin_kernel``), one call per scan; this module and the ones it calls are the
+algorithm's description, run with ``compiled=False``, and the tests hold the kernel to it.
 
 Normal force: the taxels sense only ``fill_factor**2`` of the skin area, so the summed taxel
 forces of a contact are divided by it. The bottom layer's sum is used because the elastic layer
@@ -34,7 +33,6 @@ tangential components point along the azimuth, the direction in which the top la
 from __future__ import annotations
 
 from dataclasses import dataclass, field, replace
-from functools import lru_cache
 import math
 import threading
 
@@ -46,16 +44,13 @@ from .conditioning import Conditioner, ConditioningConfig
 from .contacts import LayerPair, pair_layers
 from .fsr import FsrModel
 from .shift import DEFAULT_METHOD, get_method, Method, NO_SHIFT
+from .uncertainty import shift_sigma
 from .validate import check_int, check_number, check_pair
 
 __all__ = ['EstimatorConfig', 'Contact', 'ContactEstimator', 'MIN_SNR']
 
 # A shift shorter than this many standard deviations of its own noise has no direction.
 MIN_SNR = 3.0
-# Less load than this (counts) on a layer gives a contact no measurable shift.
-_MIN_MASS_COUNTS = 1.0
-# Extra shift uncertainty (taxels) of an imprint cut by the edge of the map.
-_BORDER_SIGMA = 0.2
 
 
 @dataclass(frozen=True)
@@ -121,16 +116,6 @@ class Contact:
     force_xyz_n: tuple
     confidence: float
     direction_valid: bool
-
-
-@lru_cache(maxsize=256)
-def _axis_basis(shape: tuple) -> np.ndarray:
-    """Return the (h * w, 5) columns 1, row, col, row**2, col**2 of a window's taxels."""
-    rr, cc = np.indices(shape, dtype=np.float64)
-    basis = np.stack((np.ones(rr.size), rr.ravel(), cc.ravel(), rr.ravel() ** 2,
-                      cc.ravel() ** 2), axis=1)
-    basis.flags.writeable = False
-    return basis
 
 
 def _force_window(pair: LayerPair, maps: np.ndarray, force: np.ndarray) -> np.ndarray:
@@ -274,42 +259,9 @@ class ContactEstimator:
                 est = method.function(pair.maps)
             if not (math.isfinite(est.dx) and math.isfinite(est.dy)):
                 est = NO_SHIFT
-            out.append((pair, est, self._sigma(pair, maps, noise, len(pairs) == 1)))
+            out.append((pair, est, shift_sigma(pair, maps, noise, len(pairs) == 1,
+                                               self._calibration_variance())))
         return out
-
-    def _sigma(self, pair: LayerPair, maps: np.ndarray, noise: np.ndarray,
-               alone: bool) -> float:
-        """Return the 1-sigma uncertainty of one axis of the pair's shift, taxels (docstring)."""
-        r0, c0 = pair.origin
-        h, w = pair.maps.shape[1:]
-        # Only the taxels over the threshold enter a centroid, with their noise.
-        err2 = np.where(pair.maps > 0, noise[:, r0:r0 + h, c0:c0 + w] ** 2, 0.0)
-        if not alone:
-            # A contact's share of a layer carries the same share of that layer's noise.
-            full = maps[:, r0:r0 + h, c0:c0 + w]
-            share = np.divide(pair.maps, full, out=np.zeros_like(full), where=full > 0)
-            err2 *= share * share
-        basis = _axis_basis((h, w))
-        moments = (pair.maps.reshape(2, -1) @ basis).tolist()
-        noises = (err2.reshape(2, -1) @ basis).tolist()
-        total = 0.0
-        for m, e in zip(moments, noises):
-            mass = m[0]
-            # A share of a few counts (a far neighbour's tail in the mixture) has no centroid.
-            if not mass > _MIN_MASS_COUNTS:
-                return math.inf
-            for first, second in ((1, 3), (2, 4)):
-                centre = m[first] / mass
-                var = max(m[second] / mass - centre * centre, 0.0)
-                # sum e^2 (x - c)^2 = sum e^2 x^2 - 2 c sum e^2 x + c^2 sum e^2
-                spread = (e[second] - 2.0 * centre * e[first] + centre * centre * e[0]) / (
-                    mass * mass)
-                lock = math.exp(-2.0 * math.pi ** 2 * max(var - 1.0 / 12.0, 0.0)) / math.pi
-                # Half of both axes: ``sigma`` stands for one axis of the shift.
-                total += 0.5 * (max(spread, 0.0) + 0.5 * lock * lock)
-        if pair.at_border:
-            total += _BORDER_SIGMA ** 2
-        return math.sqrt(total + self._calibration_variance())
 
     def _calibration_variance(self) -> float:
         """Return the calibration's share of sigma**2 (taxels**2): its standard error."""
@@ -337,7 +289,8 @@ class ContactEstimator:
         p = self.config.pitch_m
         if self._use_kernel:
             dx, dy = compiled_kernel.DX, compiled_kernel.DY
-            return [(r[dx] * p, r[dy] * p) for r in self._scan(top_counts, bottom_counts)]
+            return [(r[dx] * p, r[dy] * p)
+                    for r in self._scan(top_counts, bottom_counts, every_pair=True)]
         raw = sorted(self._raw(top_counts, bottom_counts),
                      key=lambda item: -self._normal_force(item[0]))
         return [(est.dx * p, est.dy * p) for _, est, _ in raw]
@@ -349,10 +302,11 @@ class ContactEstimator:
         kept, n = compiled_kernel.KEPT, compiled_kernel.CONTACT_FIELDS
         return [_contact(r[:n]) for r in self._scan(top_counts, bottom_counts) if r[kept]]
 
-    def _scan(self, top_counts, bottom_counts) -> list:
-        """Return the compiled kernel's records of every contact (kernel.scan)."""
+    def _scan(self, top_counts, bottom_counts, every_pair: bool = False) -> list:
+        """Return the compiled kernel's records of the contacts (kernel.Kernel.scan)."""
         kernel = self._kernel or self._build_kernel(top_counts, bottom_counts)
-        records, revived = kernel.scan(top_counts, bottom_counts, self._imprint_forces)
+        records, revived = kernel.scan(top_counts, bottom_counts, self._imprint_forces,
+                                       every_pair)
         if revived is not None:
             self.conditioner.set_dead(revived[0], revived[1])
         return records

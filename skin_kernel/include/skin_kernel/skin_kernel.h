@@ -18,7 +18,7 @@ extern "C" {
 #endif
 
 /* Bumped whenever a signature or a layout below changes; the binding checks it. */
-#define SK_ABI_VERSION 1
+#define SK_ABI_VERSION 2
 
 /* Integer settings, in this order. */
 enum {
@@ -74,9 +74,10 @@ void sk_free(sk_kernel *k);
 /*
  * Estimate the contacts of one scan: maps is the (2, rows, cols) raw counts. Writes one record
  * per contact found (at most max_contacts) to out and SK_NSTATUS words to status; returns the
- * number of records, or an SK_ERR_* when the maps hold a value that is not a count.
+ * number of records, or an SK_ERR_* when the maps hold a value that is not a count. Without
+ * every_pair, a contact too light to report (SK_KEPT 0) gets no shift (0) and no sigma (inf).
  */
-int sk_scan(sk_kernel *k, const double *maps, double *out, int *status);
+int sk_scan(sk_kernel *k, const double *maps, int every_pair, double *out, int *status);
 
 /*
  * Redo the contact figures of the last scan with other force sums per pair (top, bottom in pair
