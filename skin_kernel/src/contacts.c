@@ -186,7 +186,7 @@ static void share_bottom(sk_kernel *k, int kn, const double *bottom)
   int *loaded = k->iscratch;
   double *bv = k->scratch, *ks = k->scratch + n;
   double *mass = ks, *cr = ks + kn, *cc = ks + 2 * kn, *var = ks + 3 * kn, *lw = ks + 4 * kn;
-  double *m = ks + 5 * kn, *logp = ks + 9 * kn;
+  double *m = ks + 5 * kn, *logp = ks + 9 * kn, *lv = ks + 10 * kn, *norm = ks + 11 * kn;
   memset(k->fractions, 0, sizeof(double) * kn * n);
   int nl = 0;
   for (int i = 0; i < n; i++) {
@@ -235,16 +235,22 @@ static void share_bottom(sk_kernel *k, int kn, const double *bottom)
   }
   for (int it = 0; it < MIXTURE_ITERATIONS; it++) {
     memset(m, 0, sizeof(double) * 4 * kn);
+    for (int q = 0; q < kn; q++) {
+      /* per centre: its log weight less the log of its variance, and its squared norm */
+      lv[q] = lw[q] - log(var[q]);
+      norm[q] = cr[q] * cr[q] + cc[q] * cc[q];
+    }
     for (int j = 0; j < nl; j++) {
       double r = loaded[j] / cols, c = loaded[j] % cols, pos2 = r * r + c * c, top = -INFINITY;
       for (int q = 0; q < kn; q++) {
-        double d2 = pos2 - 2.0 * (cr[q] * r + cc[q] * c) + (cr[q] * cr[q] + cc[q] * cc[q]);
-        logp[q] = (lw[q] - log(var[q])) - 0.5 * d2 / var[q];
+        double d2 = pos2 - 2.0 * (cr[q] * r + cc[q] * c) + norm[q];
+        logp[q] = lv[q] - 0.5 * d2 / var[q];
         top = logp[q] > top ? logp[q] : top;
       }
       double total = 0.0;
       for (int q = 0; q < kn; q++) {
-        logp[q] = exp(logp[q] - top);
+        /* the likeliest centre's term is exp(0) = 1 exactly: no call needed */
+        logp[q] = logp[q] == top ? 1.0 : exp(logp[q] - top);
         total += logp[q];
       }
       for (int q = 0; q < kn; q++) {

@@ -157,8 +157,9 @@ static int fit_profiles(const double *profiles, int nn, const int *len, double *
         double jac[3] = {cdf1 - cdf0, amp[j] * (-(pdf1 - pdf0) / s[j]),
                          amp[j] * (-(updf1 - updf0) / s[j])};
         double residual = p[i] - amp[j] * jac[0];
+        /* symmetric: the lower half mirrors the upper one to the bit */
         for (int a = 0; a < 3; a++) {
-          for (int b = 0; b < 3; b++) {
+          for (int b = a; b < 3; b++) {
             normal[a][b] += jac[a] * jac[b];
           }
           rhs[a] += jac[a] * residual;
@@ -169,6 +170,9 @@ static int fit_profiles(const double *profiles, int nn, const int *len, double *
       }
       for (int a = 0; a < 3; a++) {
         normal[a][a] += 1e-12;
+        for (int b = 0; b < a; b++) {
+          normal[a][b] = normal[b][a];
+        }
       }
       solved = solve3(normal, rhs, step[j]);
     }

@@ -191,6 +191,9 @@ class ContactEstimator:
         self._compiled = compiled
         self._use_kernel = (compiled and shift is None
                             and self._method.name in compiled_kernel.METHODS)
+        if self._use_kernel:
+            # A missing kernel stops the estimator's maker (a node at start-up), not a scan.
+            compiled_kernel.load_library()
         self._kernel = None
         self._kernel_lock = threading.Lock()
 

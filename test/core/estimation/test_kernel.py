@@ -231,11 +231,14 @@ def test_methods_the_kernel_does_not_run_keep_the_python_path():
         assert_same(compiled, described, top, bottom)
 
 
-def test_a_missing_kernel_names_the_fix():
-    code = ('import numpy as np\n'
-            'from skin_driver.core.estimation.pipeline import ContactEstimator\n'
-            'ContactEstimator().process(np.zeros((4, 4)), np.zeros((4, 4)))\n')
+def test_a_missing_kernel_stops_the_estimators_maker_naming_the_fix():
+    # poc runs in Python and needs no kernel; the default does, and says how to build it.
+    code = ('from skin_driver.core.estimation.pipeline import ContactEstimator, '
+            'EstimatorConfig\n'
+            "ContactEstimator(EstimatorConfig(method='poc'))\n"
+            "print('poc made', flush=True)\n"
+            'ContactEstimator()\n')
     env = {**os.environ, 'AMENT_PREFIX_PATH': os.devnull}
     out = subprocess.run([sys.executable, '-c', code], capture_output=True, text=True, env=env)
-    assert out.returncode != 0
+    assert out.stdout == 'poc made\n' and out.returncode != 0
     assert 'KernelMissing' in out.stderr and 'make setup' in out.stderr
