@@ -227,13 +227,16 @@ void sk_touch_counts(sk_kernel *k, const double *maps)
   }
 }
 
-/* Force by linear interpolation in the layer's table at every integer count (_ForceTable). */
+/*
+ * Force by linear interpolation in the layer's table at every integer count (_ForceTable): the
+ * slope is the next entry less this one (numpy.diff), and 0 past the last count.
+ */
 void sk_force_of(sk_kernel *k)
 {
   int n = k->n, size = k->full_scale + 1;
   double last = (double)k->full_scale;
   for (int layer = 0; layer < 2; layer++) {
-    const double *table = k->table_force + layer * size, *slope = k->table_slope + layer * size;
+    const double *table = k->table_force + layer * size;
     const double *c = k->counts + layer * n;
     double *f = k->force + layer * n;
     const double *gain = k->has_gain ? k->gain + layer * n : NULL;
@@ -242,7 +245,8 @@ void sk_force_of(sk_kernel *k)
       if (c[i] != 0.0) {
         double x = c[i] < last ? c[i] : last;
         int j = (int)x;
-        v = slope[j] * (x - j) + table[j];
+        double slope = j + 1 < size ? table[j + 1] - table[j] : 0.0;
+        v = slope * (x - j) + table[j];
       }
       f[i] = gain ? v * gain[i] : v;
     }

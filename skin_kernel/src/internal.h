@@ -22,7 +22,7 @@ struct sk_kernel {
   unsigned char *dead;
   int any_dead[2];
   double *live, *live_count;        /* dead fill: live taxels and their count per 3 x 3 */
-  double *table_force, *table_slope; /* 2 x (full_scale + 1) */
+  double *table_force;              /* 2 x (full_scale + 1) */
   /* the last scan */
   double *counts, *force;           /* (2, n): tared counts, force */
   int npairs;

@@ -32,7 +32,7 @@ void sk_free(sk_kernel *k)
     return;
   }
   double *arrays[] = {k->baseline, k->threshold, k->noise, k->gain, k->live, k->live_count,
-                      k->table_force, k->table_slope, k->counts, k->force, k->tops, k->fractions,
+                      k->table_force, k->counts, k->force, k->tops, k->fractions,
                       k->scratch, k->fit};
   for (size_t i = 0; i < sizeof(arrays) / sizeof(arrays[0]); i++) {
     free(arrays[i]);
@@ -77,7 +77,6 @@ sk_kernel *sk_new(const int *ints, const double *reals, const double *baseline,
   k->live = copy_of(NULL, 2 * n);
   k->live_count = copy_of(NULL, 2 * n);
   k->table_force = copy_of(tables, 2 * size);
-  k->table_slope = copy_of(NULL, 2 * size);
   k->counts = copy_of(NULL, 2 * n);
   k->force = copy_of(NULL, 2 * n);
   k->pairs = calloc(kcap, sizeof(sk_pair));
@@ -88,22 +87,13 @@ sk_kernel *sk_new(const int *ints, const double *reals, const double *baseline,
   k->labels = malloc(sizeof(int) * n);
   k->iscratch = malloc(sizeof(int) * 4 * n);
   if (!k->baseline || !k->threshold || !k->noise || (gain && !k->gain) || !k->dead || !k->live
-      || !k->live_count || !k->table_force || !k->table_slope || !k->counts || !k->force
+      || !k->live_count || !k->table_force || !k->counts || !k->force
       || !k->pairs || !k->tops || !k->fractions || !k->scratch || !k->fit || !k->labels
       || !k->iscratch) {
     sk_free(k);
     return NULL;
   }
   memcpy(k->dead, dead, 2 * n);
-  for (int layer = 0; layer < 2; layer++) {
-    /* numpy.diff of the table, and a zero slope past the last count (_ForceTable) */
-    const double *f = k->table_force + layer * size;
-    double *slope = k->table_slope + layer * size;
-    for (size_t j = 0; j + 1 < size; j++) {
-      slope[j] = f[j + 1] - f[j];
-    }
-    slope[size - 1] = 0.0;
-  }
   sk_live_counts(k);
   return k;
 }
