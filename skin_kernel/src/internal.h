@@ -58,6 +58,11 @@ void sk_taxel_fit(const double *force, const double *counts, int h, int w, doubl
 void sk_centroid(const double *counts, int h, int w, double *scratch, double *dx, double *dy,
                  double *confidence);
 
+/* poc.c: the shift by band-limited phase correlation, and the scratch it needs (doubles) */
+void sk_poc(const double *maps, int h, int w, double *scratch, double *dx, double *dy,
+            double *confidence);
+int sk_poc_scratch(int h, int w);
+
 /* sigma.c: 1-sigma uncertainty of one axis of pair p's shift (taxels) */
 double sk_sigma(const sk_kernel *k, const sk_pair *p, const double *window, int alone);
 

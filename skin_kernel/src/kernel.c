@@ -83,7 +83,11 @@ sk_kernel *sk_new(const int *ints, const double *reals, const double *baseline,
   k->tops = copy_of(NULL, kcap * n);
   k->fractions = copy_of(NULL, kcap * n);
   k->scratch = copy_of(NULL, 4 * (size_t)n + 16 * kcap + 4 * ((size_t)line + 1));
-  k->fit = copy_of(NULL, 4 * (size_t)n + 8 * ((size_t)line + 1));
+  size_t shift_scratch = 8 * ((size_t)line + 1);
+  if (k->method == SK_POC) {
+    shift_scratch += (size_t)sk_poc_scratch(rows, cols);
+  }
+  k->fit = copy_of(NULL, 4 * (size_t)n + shift_scratch);
   k->labels = malloc(sizeof(int) * n);
   k->iscratch = malloc(sizeof(int) * 4 * n);
   if (!k->baseline || !k->threshold || !k->noise || (gain && !k->gain) || !k->dead || !k->live
@@ -227,6 +231,8 @@ int sk_scan(sk_kernel *k, const double *maps, int every_pair, double *out, int *
     double *scratch = k->fit + 4 * m;
     if (k->method == SK_TAXEL_FIT) {
       sk_taxel_fit(k->fit + 2 * m, k->fit, p->h, p->w, scratch, &p->dx, &p->dy, &p->confidence);
+    } else if (k->method == SK_POC) {
+      sk_poc(k->fit, p->h, p->w, scratch, &p->dx, &p->dy, &p->confidence);
     } else {
       sk_centroid(k->fit, p->h, p->w, scratch, &p->dx, &p->dy, &p->confidence);
     }

@@ -2,9 +2,9 @@
 The compiled per-scan estimation (package ``skin_kernel``, plain C) bound through ctypes.
 
 One call per scan does what :class:`pipeline.ContactEstimator` describes in Python:
-conditioning, contacts, each contact's shift (``taxel_fit`` or ``centroid``) and uncertainty, and
-the contact figures. The Python code stays the description of the algorithm; the tests run both
-side by side (test/core/estimation/test_kernel.py).
+conditioning, contacts, each contact's shift (any registered method: ``taxel_fit``, ``poc``,
+``centroid``) and uncertainty, and the contact figures. The Python code stays the description
+of the algorithm; the tests run both side by side (test/core/estimation/test_kernel.py).
 
 A :class:`Kernel` copies an estimator's state once (tare, gains, force tables, settings) and owns
 preallocated buffers, so a scan costs one copy of the maps into its buffer and one foreign call.
@@ -30,10 +30,10 @@ __all__ = ['METHODS', 'KernelSettings', 'Kernel', 'KernelMissing', 'load_library
            'CONTACT_FIELDS', 'KEPT', 'DX', 'DY']
 
 # Shift methods the kernel runs, by their registered names (skin_kernel.h: SK_CENTROID, ...).
-METHODS = {'centroid': 0, 'taxel_fit': 1}
+METHODS = {'centroid': 0, 'taxel_fit': 1, 'poc': 2}
 
 # skin_kernel.h's layout: bump both together.
-_ABI_VERSION = 2
+_ABI_VERSION = 3
 _INTS = 8
 _REALS = 15
 _NREC = 23

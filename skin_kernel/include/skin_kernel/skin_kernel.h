@@ -3,8 +3,8 @@
  *
  * One call per scan (sk_scan) turns the raw counts of both layers into contacts: conditioning
  * (tare, line-leak removal, threshold, dead-taxel fill, counts to force), contacts (components,
- * peak split, bottom-load mixture, windows), the layer shift of each contact (taxel_fit or
- * centroid), its uncertainty and the contact figures. The algorithm's description is the Python
+ * peak split, bottom-load mixture, windows), the layer shift of each contact (taxel_fit,
+ * poc or centroid), its uncertainty and the contact figures. The algorithm's description is the Python
  * package skin_driver.core.estimation, which the tests run side by side with this library.
  *
  * A kernel is built once per estimator from its state (tare, gains, force tables, settings) and
@@ -18,7 +18,7 @@ extern "C" {
 #endif
 
 /* Bumped whenever a signature or a layout below changes; the binding checks it. */
-#define SK_ABI_VERSION 2
+#define SK_ABI_VERSION 3
 
 /* Integer settings, in this order. */
 enum {
@@ -27,7 +27,7 @@ enum {
 };
 
 /* Shift methods. */
-enum { SK_CENTROID = 0, SK_TAXEL_FIT = 1 };
+enum { SK_CENTROID = 0, SK_TAXEL_FIT = 1, SK_POC = 2 };
 
 /* Real settings, in this order (SI units; the calibration's numbers included). */
 enum {

@@ -21,6 +21,7 @@ import pytest
 from skin_driver.core.estimation.calibration import Calibration
 from skin_driver.core.estimation.pipeline import ContactEstimator, EstimatorConfig
 from skin_driver.core.estimation.prepared import prepared_estimator
+from skin_driver.core.estimation.shift import REFERENCES
 from skin_driver.core.sim.experiments import add_calibration_frames, make_scene
 from skin_driver.core.sim.physics import Press, render, SkinModel
 from skin_driver.core.sim.skins import family_skin, skin_names
@@ -80,9 +81,11 @@ def test_finer_grids_give_the_same_contacts(skin):
         assert_same(compiled, described, top, bottom)
 
 
-@pytest.mark.parametrize('skin', ['crosstalk', 'noisy'])
-def test_centroid_method_gives_the_same_contacts(skin):
-    data, (compiled, described) = scene_estimators(skin, 'multi', 4, method='centroid')
+@pytest.mark.parametrize('skin', ['crosstalk', 'noisy', 'soft', 'default@32'])
+@pytest.mark.parametrize('method', ['centroid', 'poc'])
+@pytest.mark.parametrize('kind', ['multi', 'border'])
+def test_the_other_methods_give_the_same_contacts(skin, method, kind):
+    data, (compiled, described) = scene_estimators(skin, kind, 3, method=method)
     for top, bottom in zip(data.top, data.bottom):
         assert_same(compiled, described, top, bottom)
 
@@ -224,21 +227,22 @@ def test_nested_lists_are_maps_too():
     assert assert_same(compiled, described, top.tolist(), bottom.tolist())
 
 
-def test_methods_the_kernel_does_not_run_keep_the_python_path():
-    # poc is not compiled: the estimator runs its Python description (same results both ways).
-    data, (compiled, described) = scene_estimators('default', 'random', 2, method='poc')
+def test_a_reference_shift_keeps_the_python_path():
+    # The paper's method (a reference, never a node's) is not compiled: both ways run Python.
+    data = make_scene('random', 'default', np.random.default_rng(1), size=2)
+    est = ContactEstimator(EstimatorConfig(pitch_m=data.pitch_m), shift=REFERENCES['seed'])
+    compiled, described = both_ways(est.with_tare(data.tare_top, data.tare_bottom))
     for top, bottom in zip(data.top, data.bottom):
         assert_same(compiled, described, top, bottom)
 
 
 def test_a_missing_kernel_stops_the_estimators_maker_naming_the_fix():
-    # poc runs in Python and needs no kernel; the default does, and says how to build it.
-    code = ('from skin_driver.core.estimation.pipeline import ContactEstimator, '
-            'EstimatorConfig\n'
-            "ContactEstimator(EstimatorConfig(method='poc'))\n"
-            "print('poc made', flush=True)\n"
+    # The Python description needs no kernel; the runtime path does, and says how to build it.
+    code = ('from skin_driver.core.estimation.pipeline import ContactEstimator\n'
+            'ContactEstimator(compiled=False)\n'
+            "print('description made', flush=True)\n"
             'ContactEstimator()\n')
     env = {**os.environ, 'AMENT_PREFIX_PATH': os.devnull}
     out = subprocess.run([sys.executable, '-c', code], capture_output=True, text=True, env=env)
-    assert out.stdout == 'poc made\n' and out.returncode != 0
+    assert out.stdout == 'description made\n' and out.returncode != 0
     assert 'KernelMissing' in out.stderr and 'make setup' in out.stderr
