@@ -46,8 +46,12 @@ void sk_force_of(sk_kernel *k);
 
 /* contacts.c: fills k->pairs (geometry and forces), returns their number */
 int sk_pair_layers(sk_kernel *k);
+/* mixture.c: each of the kn tops' share (k->fractions) of the loaded bottom taxels */
+void sk_share_bottom(sk_kernel *k, int kn, const double *bottom);
 /* contacts.c: pair q's window, counts (top, bottom) then its share of the force maps */
 void sk_pair_window(const sk_kernel *k, int q, double *out);
+
+#define SK_PI 3.14159265358979323846
 
 /* Bottom load below this share of a contact's peak share is not part of its window. */
 #define WINDOW_SHARE 0.02

@@ -10,7 +10,6 @@
 
 /* pipeline.py's constant: a shift shorter than this many of its sigmas has no direction */
 #define MIN_SNR 3.0
-#define PI 3.14159265358979323846
 
 int sk_abi_version(void)
 {
@@ -138,7 +137,7 @@ static void contact(const sk_kernel *k, int q, double *rec)
   int valid = snr >= MIN_SNR && conf >= c[SK_MIN_CONFIDENCE] && c[SK_MIN_SHIFT] <= magnitude
     && hypot(p->dx, p->dy) <= reach;
   memset(rec, 0, sizeof(double) * SK_NREC);
-  rec[SK_AZIMUTH_SIGMA] = PI;
+  rec[SK_AZIMUTH_SIGMA] = SK_PI;
   if (valid) {
     double azimuth = atan2(sy, sx), tangential = magnitude / compliance;
     rec[SK_AZIMUTH] = azimuth;

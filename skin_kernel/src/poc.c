@@ -10,7 +10,6 @@
 /* shift.py's constants */
 #define BAND 0.2
 #define EPS 1e-12
-#define PI 3.14159265358979323846
 
 static int pad_size(int n)
 {
@@ -67,14 +66,14 @@ void sk_poc(const double *maps, int h, int w, double *scratch, double *dx, doubl
   double *ey_c = ub + pw, *ey_s = ey_c + nv * h, *ex_c = ey_s + nv * h, *ex_s = ex_c + w * nu;
   for (int a = 0; a < nv; a++) {
     for (int y = 0; y < h; y++) {
-      double t = -2.0 * PI * (vb[a] * y);
+      double t = -2.0 * SK_PI * (vb[a] * y);
       ey_c[a * h + y] = cos(t);
       ey_s[a * h + y] = sin(t);
     }
   }
   for (int x = 0; x < w; x++) {
     for (int b = 0; b < nu; b++) {
-      double t = -2.0 * PI * (x * ub[b]);
+      double t = -2.0 * SK_PI * (x * ub[b]);
       ex_c[x * nu + b] = cos(t);
       ex_s[x * nu + b] = sin(t);
     }
@@ -122,7 +121,7 @@ void sk_poc(const double *maps, int h, int w, double *scratch, double *dx, doubl
   if (start_x < 0 || start_y < 0) {
     return;
   }
-  double scale = -1.0 / (2 * PI);
+  double scale = -1.0 / (2 * SK_PI);
   double shift_x = atan2(cross_im[start_x], cross_re[start_x]) * pw * scale;
   double shift_y = atan2(cross_im[start_y], cross_re[start_y]) * ph * scale;
   /* weighted normal matrix of the plane's two slopes */
@@ -140,16 +139,16 @@ void sk_poc(const double *maps, int h, int w, double *scratch, double *dx, doubl
   if (det <= 1e-9 * most) {
     return;
   }
-  double two_pi = 2.0 * PI;
+  double two_pi = 2.0 * SK_PI;
   for (int j = 0; j < kept; j++) {
-    phase[j] = atan2(cross_im[j], cross_re[j]) + PI;
+    phase[j] = atan2(cross_im[j], cross_re[j]) + SK_PI;
   }
   for (int it = 0; it < 2; it++) {
     /* remove the current estimate so that the residual phase stays far from wrapping */
     double b1 = 0.0, b2 = 0.0;
     for (int j = 0; j < kept; j++) {
       double r = remainder_of(shift_x * (two_pi * bu[j]) + shift_y * (two_pi * bv[j])
-                              + phase[j], two_pi) - PI;
+                              + phase[j], two_pi) - SK_PI;
       b1 += weight[j] * bu[j] * r;
       b2 += weight[j] * bv[j] * r;
     }

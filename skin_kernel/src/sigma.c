@@ -10,7 +10,6 @@
 /* pipeline.py's constants */
 #define MIN_MASS_COUNTS 1.0
 #define BORDER_SIGMA 0.2
-#define PI 3.14159265358979323846
 
 double sk_sigma(const sk_kernel *k, const sk_pair *p, const double *window, int alone)
 {
@@ -50,7 +49,7 @@ double sk_sigma(const sk_kernel *k, const sk_pair *p, const double *window, int 
       double spread = (err[axis + 2] - 2.0 * centre * err[axis] + centre * centre * err[0])
         / (mass * mass);
       double excess = var - 1.0 / 12.0;
-      double lock = exp(-2.0 * (PI * PI) * (excess > 0.0 ? excess : 0.0)) / PI;
+      double lock = exp(-2.0 * (SK_PI * SK_PI) * (excess > 0.0 ? excess : 0.0)) / SK_PI;
       /* Half of both axes: sigma stands for one axis of the shift. */
       total += 0.5 * ((spread > 0.0 ? spread : 0.0) + 0.5 * lock * lock);
     }
