@@ -138,6 +138,7 @@ class Kernel:
         weakref.finalize(self, lib.sk_free, self._handle)
         self.shape = (rows, cols)
         self._maps = np.zeros((2, rows, cols))
+        self._top, self._bottom = self._maps
         self._out = np.zeros((max(min(settings.max_contacts, rows * cols), 1), _NREC))
         # A ctypes array: reading a word of it costs a tenth of reading a numpy scalar.
         self._status = (ctypes.c_int * _NSTATUS)()
@@ -162,8 +163,8 @@ class Kernel:
                 and top.dtype.kind in 'uif' and bottom.dtype.kind in 'uif'):
             top, bottom = check_pair(top, bottom, self.shape)
         with self._lock:
-            np.copyto(self._maps[0], top)
-            np.copyto(self._maps[1], bottom)
+            self._top[...] = top
+            self._bottom[...] = bottom
             count = self._lib.sk_scan(*self._scan_args[every_pair])
             if count < 0:
                 check_pair(top, bottom, self.shape)

@@ -302,8 +302,8 @@ class ContactEstimator:
         """Return the contacts in the two raw count maps, strongest (normal force) first."""
         if not self._use_kernel:
             return self._process_described(top_counts, bottom_counts)
-        kept, n = compiled_kernel.KEPT, compiled_kernel.CONTACT_FIELDS
-        return [_contact(r[:n]) for r in self._scan(top_counts, bottom_counts) if r[kept]]
+        kept = compiled_kernel.KEPT
+        return [_contact(r) for r in self._scan(top_counts, bottom_counts) if r[kept]]
 
     def _scan(self, top_counts, bottom_counts, every_pair: bool = False) -> list:
         """Return the compiled kernel's records of the contacts (kernel.Kernel.scan)."""
@@ -380,6 +380,6 @@ class ContactEstimator:
 
 
 def _contact(r: list) -> Contact:
-    """Return the Contact of a compiled record's fields (kernel.CONTACT_FIELDS)."""
+    """Return the Contact of a compiled record (its first kernel.CONTACT_FIELDS numbers)."""
     return Contact(r[0], r[1], r[2], r[3], (r[4], r[5]), r[6], r[7], r[8], (r[9], r[10], r[11]),
                    r[12], r[13] > 0)
