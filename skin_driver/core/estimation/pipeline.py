@@ -14,8 +14,8 @@ Uncertainty, from the contact's own data (:mod:`uncertainty`): ``sigma`` (taxels
 the shift) gives ``azimuth_sigma = atan2(sigma, |s|)``; a shift shorter than ``MIN_SNR`` sigmas
 is within the noise and carries no direction.
 
-Compiled: for the methods in :data:`kernel.METHODS` all of the above runs in the compiled kernel
-(package ``skin_kernel``), one call per scan; this module and the ones it calls are the
+Compiled: for the registered methods all of the above runs in the compiled kernel (package
+``skin_kernel``, :mod:`kernel`), one call per scan; this module and the ones it calls are the
 algorithm's description, run with ``compiled=False``, and the tests hold the kernel to it.
 
 Normal force: the taxels sense only ``fill_factor**2`` of the skin area, so the summed taxel
@@ -159,9 +159,9 @@ class ContactEstimator:
     """
     Estimate contacts (location, force, direction) from raw top and bottom count maps.
 
-    The methods the compiled kernel runs (:data:`kernel.METHODS`) run there, one call per scan;
-    the Python code of this module and the ones it calls describes that algorithm and runs with
-    ``compiled=False`` (the tests compare the two) and for the other methods.
+    The registered methods (:data:`kernel.METHODS`) run in the compiled kernel, one call per
+    scan; the Python code of this module and the ones it calls describes that algorithm and runs
+    with ``compiled=False`` (the tests compare the two) and with a reference ``shift``.
     """
 
     def __init__(self, config: EstimatorConfig = None, calibration: Calibration = None,
