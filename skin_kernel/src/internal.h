@@ -30,9 +30,9 @@ struct sk_kernel {
   /* (kmax, n): each contact's own top map and its share (0..1) of every bottom taxel */
   double *tops, *fractions;
   /* scratch */
-  double *scratch;                  /* 6 n + 4 * (max(rows, cols) + 1) */
+  double *scratch;                  /* 4 n + 16 kmax + 4 (max(rows, cols) + 1) */
   int *labels, *iscratch;           /* n, 4 n */
-  double *fit;                      /* 4 windows (4 n) for the shift */
+  double *fit;                      /* a contact's 4 windows (4 n), then the shift's scratch */
   int revived;
 };
 
