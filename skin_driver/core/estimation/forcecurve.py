@@ -3,28 +3,38 @@ A skin's own counts-to-force curve, fitted from presses of known normal force.
 
 The assumed :class:`fsr.FsrModel` is only a guess at a real skin's FSR film, divider and ADC. A
 press of known normal force ``F`` tells the sum of the curve over the taxels it loads:
-``sum_i gain_i * g(c_i) = F * fill_factor**2`` (the pipeline divides the sensed sum by
-``fill_factor**2``). The curve is ``g(c) = sum_k w_k h_k(u(c))``, where ``u`` is the force the
-assumed model gives the counts (without its saturation) and ``h_k(u) = clip(u - knot_k, 0,
-knot_{k+1} - knot_k)`` are clipped ramps (the last one unclipped). The weights, the slopes of
-the pieces, come from non-negative least squares, so no fit can decrease. The fit corrects the
-assumed curve: where the presses say little, at the rim of a contact, the assumed shape stays,
-and a skin that matches the assumption keeps it.
+``sum_i gain_i * g(c_i) + rim_load = F * fill_factor**2`` (the pipeline divides the sensed sum by
+``fill_factor**2``).
+
+The curve is ``g(c) = scale * u(c) ** exponent``, where ``u`` is the force the assumed model
+gives the counts (without its saturation). An FSR's conductance grows as a power of its force,
+and the divider and the ADC turn conductance into counts alike on every skin, so the force of
+one such film is the force the assumed film gives the same counts raised to a power and scaled,
+whatever the film's resistances, exponent and series resistor: two numbers to learn, which a
+few presses pin down over the whole range. A curve of many free pieces (the previous fit) bent
+to the calibration presses and missed the presses of other indenters; the power keeps the
+shape of the law between the presses and past them. It is monotone by construction.
+
+The rim load: the rim of every imprint carries load that no taxel reads, below the touch
+threshold or below the pressure at which a film turns on. For an imprint of a given shape, the
+part of its load under a pressure is about that pressure times the imprint's area, whatever the
+force: a constant per imprint, so one more non-negative number of the fit, added to every
+imprint's sum at run time (:meth:`ForceCurve.imprint_force`).
 
 Every taxel is evidence. A taxel whose film saturated (its counts at the layer's ceiling, which
 the heaviest presses pile up at) is censored: it tells a lower bound on its force, and the
 imprint's unsaturated rim tells the rest (:mod:`imprint`: a bump fitted to the rim, whose width
-the fit chooses with the curve). The sum of a press stays linear in the slopes, so censored and
-free taxels are fitted together. Whether the layer is censored at all, and with which bump, is
-chosen by the presses: the choice that fits them best.
+the fit chooses with the curve). The sum of a press stays linear in the scale and the rim load,
+so censored and free taxels are fitted together (non-negative least squares of relative
+errors, for each exponent of a search in log steps). Whether the layer is censored at all, and
+with which bump, is chosen by the presses: the choice that fits them best.
 
 The curve is stored as knots in counts up to the highest count pressed, with the censoring
-ceiling and the bump's width; past the knots the last slope goes on. The fit is refused, with
-a reason in newtons, when there are too few presses, when their forces do not span a range (the
-curve would be a guess outside one point), when a press loaded no taxel, or when no curve fits
-the presses within ``MAX_RELATIVE_RESIDUAL`` (the refusal names the press furthest off: a
-wrong known force, or a press that missed the skin). A flat first piece is merged into the
-next; other flat pieces keep a negligible slope.
+ceiling, the bump's width and the rim load; past the knots the last slope goes on. The fit is
+refused, with a reason in newtons, when there are too few presses, when their forces do not
+span a range (the curve would be a guess outside one point), when a press loaded no taxel, or
+when no curve fits the presses within ``MAX_RELATIVE_RESIDUAL`` (the refusal names the press
+furthest off: a wrong known force, or a press that missed the skin).
 """
 
 from __future__ import annotations
@@ -49,11 +59,12 @@ CENSOR_BAND = 0.02
 _SPREADS = 16
 # A censored fit is taken over an uncensored one when its relative misfit is this much smaller.
 CENSOR_GAIN = 0.8
-_PEAK_QUANTILES = (0.0, 0.5, 1.0)
-_POOLED_QUANTILES = (0.05, 0.1, 0.2, 0.35, 0.5, 0.75, 0.9)
-FLAT_SLOPE = 1e-6
+# The exponents searched: a coarse grid in log steps, then finer grids around the best.
+_EXPONENTS = np.geomspace(0.2, 5.0, 15)
+_REFINE_STEPS = 7
+_REFINE_ROUNDS = 6
 _GRID = 129
-_KEYS = ('counts', 'force_n', 'censor_counts', 'spread_taxels', 'bump_power')
+_KEYS = ('counts', 'force_n', 'censor_counts', 'spread_taxels', 'bump_power', 'rim_load_n')
 _POWERS = (2.0, 3.0, 4.0, 6.0)
 
 
@@ -64,7 +75,8 @@ class ForceCurve:
 
     ``censor_counts`` > 0: taxels reading that many counts or more saturated; their force is
     filled in by a bump of ``spread_taxels`` and ``bump_power`` (:func:`imprint.censored_force`).
-    0: none.
+    0: none. ``rim_load_n``: the sensed force at the rim of every imprint that no taxel reads,
+    added to each imprint's sum (module docstring).
     """
 
     counts: tuple
@@ -72,6 +84,7 @@ class ForceCurve:
     censor_counts: float = 0.0
     spread_taxels: float = 0.0
     bump_power: float = 2.0
+    rim_load_n: float = 0.0
 
     def __post_init__(self):
         """Reject curves that fall or do not start at (0, 0), and a censoring without bump."""
@@ -87,7 +100,7 @@ class ForceCurve:
             raise ValueError('force curve counts must increase')
         if (np.diff(f) < 0).any() or f[-1] <= 0:
             raise ValueError('force curve forces must not decrease (the curve must be monotone)')
-        for name in ('censor_counts', 'spread_taxels'):
+        for name in ('censor_counts', 'spread_taxels', 'rim_load_n'):
             v = getattr(self, name)
             if isinstance(v, bool) or not (np.isfinite(v) and v >= 0):
                 raise ValueError(f'force curve {name} must be a non-negative number, got {v!r}')
@@ -100,6 +113,12 @@ class ForceCurve:
         object.__setattr__(self, 'censor_counts', float(self.censor_counts))
         object.__setattr__(self, 'spread_taxels', float(self.spread_taxels))
         object.__setattr__(self, 'bump_power', float(self.bump_power))
+        object.__setattr__(self, 'rim_load_n', float(self.rim_load_n))
+
+    def adjusts(self, counts: np.ndarray) -> bool:
+        """Return whether an imprint of these counts sums to more than its taxels' forces."""
+        return bool(self.rim_load_n) or bool(self.censor_counts
+                                              and np.max(counts) >= self.censor_counts)
 
     def counts_to_force(self, counts) -> np.ndarray:
         """Return the sensed force of ``counts`` above baseline; the last slope goes on."""
@@ -110,9 +129,15 @@ class ForceCurve:
                         force[-1] + slope * (c - knots[-1]))
 
     def imprint_force(self, counts: np.ndarray, force: np.ndarray) -> float:
-        """Return one imprint's summed force (2-D maps of counts and taxel forces), censored."""
-        return censored_force(counts, force, self.censor_counts, self.spread_taxels,
+        """
+        Return one imprint's summed force (2-D maps of counts and taxel forces), censored.
+
+        The rim load is added, but never more than the imprint reads: a faint imprint (a few
+        taxels over the threshold, or noise) is no press, and must not become one.
+        """
+        read = censored_force(counts, force, self.censor_counts, self.spread_taxels,
                               self.bump_power)
+        return read + min(self.rim_load_n, read)
 
     def to_dict(self) -> dict:
         """Return the knots (and any censoring) as plain values (for YAML)."""
@@ -120,6 +145,8 @@ class ForceCurve:
         if self.censor_counts:
             out.update(censor_counts=self.censor_counts, spread_taxels=self.spread_taxels,
                        bump_power=self.bump_power)
+        if self.rim_load_n:
+            out['rim_load_n'] = self.rim_load_n
         return out
 
     @classmethod
@@ -127,7 +154,7 @@ class ForceCurve:
         """Build a curve from :meth:`to_dict` output."""
         if not isinstance(doc, dict) or not {'counts', 'force_n'} <= set(doc) <= set(_KEYS):
             raise ValueError('a force curve is a mapping with counts and force_n lists '
-                             '(and censor_counts, spread_taxels, bump_power)')
+                             '(and censor_counts, spread_taxels, bump_power, rim_load_n)')
         for key in ('counts', 'force_n'):
             values = doc[key]
             if not isinstance(values, list) or not all(
@@ -179,15 +206,6 @@ def _nnls(a: np.ndarray, b: np.ndarray, max_rounds: int = 100) -> np.ndarray:
     return x
 
 
-def _basis(u: np.ndarray, knots: np.ndarray) -> np.ndarray:
-    """Return the clipped ramps of u, one column per piece (last one unclipped)."""
-    lo = knots[:-1]
-    width = np.diff(knots)
-    ramps = np.clip(u[:, None] - lo[None, :], 0.0, None)
-    ramps[:, :-1] = np.minimum(ramps[:, :-1], width[None, :-1])
-    return ramps
-
-
 @dataclass(frozen=True)
 class _Press:
     """One press on one layer: its loaded taxels' counts, gains, assumed force and bump."""
@@ -196,9 +214,13 @@ class _Press:
     gains: np.ndarray
     assumed_n: np.ndarray
     map_counts: np.ndarray
+    bumps: dict
 
     def bump(self, shape: tuple) -> np.ndarray:
-        return bump(self.map_counts, *shape)[self.map_counts > 0]
+        """Return the unit bump of this shape over the loaded taxels (kept: asked often)."""
+        if shape not in self.bumps:
+            self.bumps[shape] = bump(self.map_counts, *shape)[self.map_counts > 0]
+        return self.bumps[shape]
 
 
 def _presses(press_counts, press_gains, assumed: FsrModel) -> list:
@@ -209,75 +231,72 @@ def _presses(press_counts, press_gains, assumed: FsrModel) -> list:
         if c.shape != g.shape:
             raise ValueError(f'press {k + 1}: counts {c.shape} and gains {g.shape} differ')
         loaded = c > 0
-        out.append(_Press(c[loaded], g[loaded],
-                          assumed.counts_to_force(c[loaded], saturate=False), c))
+        out.append(_Press(c[loaded], g[loaded], _power_part(assumed, c[loaded]), c, {}))
     return out
 
 
-def _row(press: _Press, knots: np.ndarray, censor: float, shape: tuple,
-         slopes: np.ndarray = None) -> np.ndarray:
+def _power_part(assumed: FsrModel, counts: np.ndarray) -> np.ndarray:
+    """Return the assumed force of the counts less its activation: the film's power law."""
+    return np.maximum(assumed.counts_to_force(counts, saturate=False) - assumed.activation_n,
+                      0.0)
+
+
+def _read(press: _Press, exponent: float, censor: float, shape: tuple) -> float:
     """
-    Return what each piece's slope adds to the press's sensed sum (linear in the slopes).
+    Return the press's sensed sum at unit scale (it is linear in the scale).
 
     A censored taxel adds the bump fitted to the free taxels, or its own reading where that is
-    larger under ``slopes`` (all take the bump when no slopes are given yet).
+    larger (both grow with the scale alike, so which is larger does not depend on it).
     """
-    taxels = press.gains[:, None] * _basis(press.assumed_n, knots)
+    taxels = press.gains * press.assumed_n ** exponent
     censored = press.counts >= censor if censor > 0 else np.zeros(press.counts.size, bool)
     if not censored.any():
-        return taxels.sum(axis=0)
+        return float(taxels.sum())
     free = ~censored
     phi = press.bump(shape)
     weight = float(phi[free] @ phi[free])
     if not weight > 0:
-        return taxels.sum(axis=0)
-    height = phi[free] @ taxels[free] / weight
-    filled = phi[censored][:, None] * height[None, :]
-    own = taxels[censored]
-    if slopes is not None:
-        filled = np.where((filled @ slopes > own @ slopes)[:, None], filled, own)
-    return taxels[free].sum(axis=0) + filled.sum(axis=0)
+        return float(taxels.sum())
+    height = float(phi[free] @ taxels[free]) / weight
+    return float(taxels[free].sum() + np.maximum(phi[censored] * height, taxels[censored]).sum())
 
 
-def _knots(presses: list, censor: float, n: int) -> np.ndarray:
-    """Return knots at quantiles of the free taxels' assumed forces and the presses' peaks."""
-    forces = [p.assumed_n[p.counts < censor] if censor > 0 else p.assumed_n for p in presses]
-    forces = [f for f in forces if f.size] or [p.assumed_n for p in presses]
-    peaks = np.array([float(np.max(f)) for f in forces])
-    inner = np.unique(np.concatenate((np.quantile(peaks, _PEAK_QUANTILES),
-                                      np.quantile(np.concatenate(forces), _POOLED_QUANTILES))))
-    inner = inner[inner > 0]
-    # Fewer pieces than presses: the presses pin every piece down.
-    pieces = max(3, n - 2)
-    if inner.size > pieces:
-        inner = inner[np.round(np.linspace(0, inner.size - 1, pieces)).astype(int)]
-    return np.concatenate(([0.0], inner))
+def _fit(presses: list, target: np.ndarray, censor: float, shape: tuple, exponent: float):
+    """
+    Return (scale, activation, rim load, fitted sensed sums) of one censoring and exponent.
 
-
-def _fit(presses: list, target: np.ndarray, censor: float, shape: tuple):
-    """Return (knots, slopes, fitted sensed sums) of one censoring choice, or None."""
-    knots = _knots(presses, censor, len(presses))
-    # Relative errors: a light press counts as much as a heavy one.
+    The sum of a press is linear in the three: the power of its taxels' forces, their number
+    (each conducting taxel carries the activation force) and the imprint's rim load.
+    """
+    read = np.array([_read(p, exponent, censor, shape) for p in presses])
+    design = np.stack((read, [p.counts.size for p in presses], np.ones(read.size)), axis=1)
+    # Relative errors: a light press counts as much as a heavy one. The columns are scaled so
+    # that the non-negative least squares weighs them alike.
     row_weight = 1.0 / target
-    while True:
-        slopes = None
-        for _ in range(3):  # the censored taxels that take the bump depend on the slopes
-            design = np.stack([_row(p, knots, censor, shape, slopes) for p in presses])
-            # Scale the columns so that NNLS weighs every piece alike.
-            scale = np.maximum(design.max(axis=0), 1e-12)
-            slopes = _nnls(design / scale * row_weight[:, None], target * row_weight) / scale
-        # A flat first piece would zero the rim of every imprint, which the shift between the
-        # layers is measured on: merge it into the next until the curve rises from 0.
-        if slopes[0] > FLAT_SLOPE * slopes.max() or knots.size <= 2:
-            break
-        knots = np.delete(knots, 1)
-    if not (slopes > 0).any():
-        return None
-    # A flat piece (an FSR that barely conducts reads counts but little force) keeps a slope
-    # too small to matter, so that the curve still rises strictly and can be stored.
-    slopes = np.maximum(slopes, FLAT_SLOPE * slopes.max())
-    design = np.stack([_row(p, knots, censor, shape, slopes) for p in presses])
-    return knots, slopes, design @ slopes
+    norm = np.maximum(design.max(axis=0), 1e-300)
+    scale, activation, rim = _nnls(design / norm * row_weight[:, None],
+                                   target * row_weight) / norm
+    taxels = design[:, :2] @ (scale, activation)
+    return scale, activation, rim, taxels + np.minimum(rim, taxels)
+
+
+def _misfit(fit, target: np.ndarray) -> float:
+    return float(np.sqrt(np.mean((fit[3] / target - 1.0) ** 2)))
+
+
+def _best_exponent(presses: list, target: np.ndarray, censor: float, shape: tuple):
+    """Return (misfit, exponent, fit) of the exponent that fits best: a grid, then finer ones."""
+    grid = _EXPONENTS
+    best = None
+    for _ in range(_REFINE_ROUNDS + 1):
+        for exponent in grid:
+            fit = _fit(presses, target, censor, shape, float(exponent))
+            misfit = _misfit(fit, target)
+            if best is None or misfit < best[0]:
+                best = (misfit, float(exponent), fit)
+        step = float(grid[1] / grid[0])
+        grid = np.geomspace(best[1] / step, best[1] * step, _REFINE_STEPS)
+    return best
 
 
 def _censoring_choices(presses: list, full_scale: int, shape: tuple) -> list:
@@ -321,9 +340,8 @@ def fit_force_curve(press_counts: Sequence[np.ndarray], press_gains: Sequence[np
     untouched; a 1-D array of loaded taxels has no geometry and is never censored),
     ``press_gains[k]`` the gains there, ``sensed_n[k]`` the force those taxels must sum to
     (known force times fill_factor**2) and ``known_n[k]`` the known force for messages. The
-    curve corrects ``assumed`` (default :class:`FsrModel`): it is a monotone piecewise linear
-    function of the assumed force, which keeps the assumed shape where the presses say little
-    (a contact's rim) and is the identity on a skin that matches the assumption.
+    curve is the force ``assumed`` (default :class:`FsrModel`) gives the counts, raised to a
+    power and scaled (module docstring): the identity on a skin that matches the assumption.
     """
     assumed = assumed or FsrModel()
     full_scale = assumed.full_scale if full_scale is None else int(full_scale)
@@ -337,18 +355,13 @@ def fit_force_curve(press_counts: Sequence[np.ndarray], press_gains: Sequence[np
     shape = presses[0].map_counts.shape
     best = None
     for censor, bump_shape in _censoring_choices(presses, full_scale, shape):
-        fit = _fit(presses, target, censor, bump_shape)
-        if fit is None:
-            continue
-        misfit = float(np.sqrt(np.mean((fit[2] / target - 1.0) ** 2)))
+        misfit, exponent, fit = _best_exponent(presses, target, censor, bump_shape)
         # Censoring adds a parameter (the bump): it must earn its keep.
         if censor:
             misfit /= CENSOR_GAIN
         if best is None or misfit < best[0]:
-            best = (misfit, censor, bump_shape, fit)
-    if best is None:
-        raise ValueError('no increasing force curve fits the presses; check the known forces')
-    _, censor, bump_shape, (knots, slopes, fitted_sensed) = best
+            best = (misfit, censor, bump_shape, exponent, fit)
+    _, censor, bump_shape, exponent, (scale, activation, rim_load, fitted_sensed) = best
     fitted = fitted_sensed * known / target
     residuals = fitted - known
     worst = int(np.argmax(np.abs(residuals) / known))
@@ -356,13 +369,12 @@ def fit_force_curve(press_counts: Sequence[np.ndarray], press_gains: Sequence[np
         raise ValueError(f'press {worst + 1} of {known[worst]:.2f} N is fitted as '
                          f'{fitted[worst]:.2f} N; the presses disagree with one curve '
                          '(a wrong known force, or two things touching?)')
-    # Stored in counts: the correction of the assumed force, sampled over the counts pressed;
-    # past them the curve goes on with its last slope.
+    # Stored in counts, sampled over the counts pressed; past them the last slope goes on.
     top = max(float(p.counts.max()) for p in presses)
     grid = np.linspace(0.0, min(top, full_scale), _GRID)
-    corrected = _basis(assumed.counts_to_force(grid, saturate=False), knots) @ slopes
-    curve = ForceCurve(tuple(grid), tuple(np.maximum.accumulate(corrected)), censor,
-                       *bump_shape)
+    forces = np.where(grid > 0, scale * _power_part(assumed, grid) ** exponent + activation, 0.0)
+    curve = ForceCurve(tuple(grid), tuple(np.maximum.accumulate(forces)), censor, *bump_shape,
+                       rim_load_n=rim_load)
     censored = sum(bool((p.counts >= censor).any()) for p in presses) if censor else 0
     return CurveFit(curve, tuple(float(v) for v in fitted),
                     tuple(float(v) for v in residuals), censored)

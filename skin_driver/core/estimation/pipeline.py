@@ -149,7 +149,7 @@ def _censored(pair: LayerPair, window: np.ndarray, curves) -> LayerPair:
     sums = [pair.top_force_n, pair.bottom_force_n]
     for layer, curve in enumerate(curves):
         own = pair.maps[layer]
-        if curve.censor_counts and own.max() >= curve.censor_counts:
+        if curve.adjusts(own):
             sums[layer] = curve.imprint_force(own, window[layer])
     return replace(pair, top_force_n=sums[0], bottom_force_n=sums[1])
 
@@ -222,7 +222,7 @@ class ContactEstimator:
         if not pairs:
             return []
         curves = self.calibration.force_curves
-        censoring = bool(curves) and any(c.censor_counts for c in curves)
+        censoring = bool(curves) and any(c.censor_counts or c.rim_load_n for c in curves)
         method = self._method
         noise = conditioner.count_noise()
         whole = None
