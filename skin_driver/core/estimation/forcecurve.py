@@ -6,14 +6,16 @@ press of known normal force ``F`` tells the sum of the curve over the taxels it 
 ``sum_i gain_i * g(c_i) + rim_load = F * fill_factor**2`` (the pipeline divides the sensed sum by
 ``fill_factor**2``).
 
-The curve is ``g(c) = scale * u(c) ** exponent``, where ``u`` is the force the assumed model
-gives the counts (without its saturation). An FSR's conductance grows as a power of its force,
-and the divider and the ADC turn conductance into counts alike on every skin, so the force of
-one such film is the force the assumed film gives the same counts raised to a power and scaled,
-whatever the film's resistances, exponent and series resistor: two numbers to learn, which a
-few presses pin down over the whole range. A curve of many free pieces (the previous fit) bent
-to the calibration presses and missed the presses of other indenters; the power keeps the
-shape of the law between the presses and past them. It is monotone by construction.
+The curve is ``g(c) = scale * u(c) ** exponent + activation`` on a conducting taxel, where
+``u`` is the force the assumed model gives the counts less its activation force (without its
+saturation). An FSR's conductance grows as a power of its force past the force at which it
+starts to conduct, and the divider and the ADC turn conductance into counts alike on every
+skin, so the force of one such film is the force the assumed film gives the same counts raised
+to a power and scaled, whatever the film's resistances, exponent and series resistor: three
+numbers to learn, which a few presses pin down over the whole range. A curve of many free
+pieces (the previous fit) bent to the calibration presses and missed the presses of other
+indenters; the power keeps the shape of the law between the presses and past them. It is
+monotone by construction.
 
 The rim load: the rim of every imprint carries load that no taxel reads, below the touch
 threshold or below the pressure at which a film turns on. For an imprint of a given shape, the
