@@ -119,8 +119,8 @@ class ForceCurve:
 
     def adjusts(self, counts: np.ndarray) -> bool:
         """Return whether an imprint of these counts sums to more than its taxels' forces."""
-        return bool(self.rim_load_n) or bool(self.censor_counts
-                                              and np.max(counts) >= self.censor_counts)
+        saturated = bool(self.censor_counts) and np.max(counts) >= self.censor_counts
+        return bool(self.rim_load_n) or bool(saturated)
 
     def counts_to_force(self, counts) -> np.ndarray:
         """Return the sensed force of ``counts`` above baseline; the last slope goes on."""
