@@ -61,10 +61,11 @@ CENSOR_BAND = 0.02
 _SPREADS = 16
 # A censored fit is taken over an uncensored one when its relative misfit is this much smaller.
 CENSOR_GAIN = 0.8
-# The exponents searched: a coarse grid in log steps, then finer grids around the best.
-_EXPONENTS = np.geomspace(0.2, 5.0, 15)
-_REFINE_STEPS = 7
-_REFINE_ROUNDS = 6
+# The exponents searched: a coarse grid in log steps, then halved steps either side of the best.
+_EXPONENTS = np.geomspace(0.2, 5.0, 13)
+_REFINE_ROUNDS = 8
+# Censoring choices refined after the coarse grid: the best few of it.
+_REFINED_CHOICES = 4
 _GRID = 129
 _KEYS = ('counts', 'force_n', 'censor_counts', 'spread_taxels', 'bump_power', 'rim_load_n')
 _POWERS = (2.0, 3.0, 4.0, 6.0)
@@ -183,29 +184,53 @@ class CurveFit:
     censored: int
 
 
-def _nnls(a: np.ndarray, b: np.ndarray, max_rounds: int = 100) -> np.ndarray:
-    """Return x >= 0 minimising |a x - b| (Lawson and Hanson's active set; a has few columns)."""
-    x = np.zeros(a.shape[1])
-    free = np.zeros(a.shape[1], dtype=bool)
-    for _ in range(max_rounds):
-        gradient = a.T @ (b - a @ x)
-        candidates = np.flatnonzero(~free & (gradient > 1e-12 * max(1.0, np.abs(b).max())))
-        if candidates.size == 0:
-            break
-        free[candidates[np.argmax(gradient[candidates])]] = True
-        while True:
-            z = np.zeros_like(x)
-            z[free] = np.linalg.lstsq(a[:, free], b, rcond=None)[0]
-            if (z[free] > 0).all():
-                x = z
-                break
-            # Step towards z until a free weight reaches 0, and hold that one at 0.
-            going = free & (z <= 0)
-            step = np.min(x[going] / np.maximum(x[going] - z[going], 1e-300))
-            x = x + step * (z - x)
-            free &= x > 1e-15
-            x[~free] = 0.0
-    return x
+def _solve(gram: list, c: list, cols: tuple):
+    """Return the least squares solution on ``cols`` (normal equations, Cramer), or None."""
+    g = [[gram[i][j] for j in cols] for i in cols]
+    r = [c[i] for i in cols]
+    if len(cols) == 1:
+        return [r[0] / g[0][0]] if g[0][0] > 0 else None
+    det = _det(g)
+    if not abs(det) > 1e-12 * max(abs(v) for row in g for v in row) ** len(cols):
+        return None
+    # Cramer's rule: column i replaced by the right-hand side.
+    return [_det([row[:i] + [v] + row[i + 1:] for row, v in zip(g, r)]) / det
+            for i in range(len(cols))]
+
+
+def _det(m: list) -> float:
+    """Return the determinant of a 2 x 2 or 3 x 3 matrix (nested lists)."""
+    if len(m) == 2:
+        return m[0][0] * m[1][1] - m[0][1] * m[1][0]
+    return (m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1])
+            - m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0])
+            + m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0]))
+
+
+def _nnls(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """
+    Return x >= 0 minimising |a x - b| for a few columns: the best of every subset's solution.
+
+    The optimum is the unconstrained least squares on its own non-zero columns, so the best
+    non-negative solution among all subsets of columns is it.
+    """
+    k = a.shape[1]
+    gram = (a.T @ a).tolist()
+    c = (a.T @ b).tolist()
+    best, best_cost = [0.0] * k, 0.0
+    for mask in range(1, 1 << k):
+        cols = tuple(j for j in range(k) if mask >> j & 1)
+        x = _solve(gram, c, cols)
+        if x is None or min(x) < 0:
+            continue
+        # |a x - b|^2 - |b|^2 = x' G x - 2 c' x, which at the subset's optimum is -c' x.
+        cost = -sum(c[j] * v for j, v in zip(cols, x))
+        if cost < best_cost:
+            best_cost = cost
+            best = [0.0] * k
+            for j, v in zip(cols, x):
+                best[j] = v
+    return np.array(best)
 
 
 @dataclass(frozen=True)
@@ -243,35 +268,58 @@ def _power_part(assumed: FsrModel, counts: np.ndarray) -> np.ndarray:
                       0.0)
 
 
-def _read(press: _Press, exponent: float, censor: float, shape: tuple) -> float:
+class _Layout:
     """
-    Return the press's sensed sum at unit scale (it is linear in the scale).
+    All presses' loaded taxels in one row, for one censoring choice: a sum per press is a count.
 
-    A censored taxel adds the bump fitted to the free taxels, or its own reading where that is
-    larger (both grow with the scale alike, so which is larger does not depend on it).
+    ``filled`` marks the censored taxels that take the bump (their press has free taxels under
+    the bump to fit its height to); the other censored taxels count as read.
     """
-    taxels = press.gains * press.assumed_n ** exponent
-    censored = press.counts >= censor if censor > 0 else np.zeros(press.counts.size, bool)
-    if not censored.any():
-        return float(taxels.sum())
-    free = ~censored
-    phi = press.bump(shape)
-    weight = float(phi[free] @ phi[free])
-    if not weight > 0:
-        return float(taxels.sum())
-    height = float(phi[free] @ taxels[free]) / weight
-    return float(taxels[free].sum() + np.maximum(phi[censored] * height, taxels[censored]).sum())
+
+    def __init__(self, presses: list, censor: float, shape: tuple):
+        self.n = len(presses)
+        self.press = np.concatenate([np.full(p.counts.size, k) for k, p in enumerate(presses)])
+        self.gains = np.concatenate([p.gains for p in presses])
+        with np.errstate(divide='ignore'):
+            self.log_force = np.log(np.concatenate([p.assumed_n for p in presses]))
+        censored = (np.concatenate([p.counts for p in presses]) >= censor if censor > 0
+                    else np.zeros(self.press.size, bool))
+        self.phi = np.concatenate([p.bump(shape) if censor > 0 and (p.counts >= censor).any()
+                                   else np.zeros(p.counts.size) for p in presses])
+        free = ~censored
+        self.weight = np.bincount(self.press[free], self.phi[free] ** 2, self.n)
+        self.filled = censored & (self.weight[self.press] > 0)
+        self.read = ~self.filled
+        self.fitted = free & (self.weight[self.press] > 0)
+
+    def sums(self, exponent: float) -> np.ndarray:
+        """
+        Return each press's sensed sum at unit scale (linear in the scale) for ``exponent``.
+
+        A censored taxel adds the bump fitted to its press's free taxels, or its own reading
+        where that is larger (both grow with the scale alike, so which does is fixed here).
+        """
+        taxels = self.gains * np.exp(exponent * self.log_force)
+        sums = np.bincount(self.press[self.read], taxels[self.read], self.n)
+        if self.filled.any():
+            fitted = self.fitted
+            height = np.bincount(self.press[fitted], (self.phi * taxels)[fitted], self.n)
+            height = np.divide(height, self.weight, out=np.zeros(self.n), where=self.weight > 0)
+            f = self.filled
+            sums += np.bincount(self.press[f], np.maximum(self.phi[f] * height[self.press[f]],
+                                                           taxels[f]), self.n)
+        return sums
 
 
-def _fit(presses: list, target: np.ndarray, censor: float, shape: tuple, exponent: float):
+def _fit(layout: _Layout, counts: np.ndarray, target: np.ndarray, exponent: float):
     """
     Return (scale, activation, rim load, fitted sensed sums) of one censoring and exponent.
 
     The sum of a press is linear in the three: the power of its taxels' forces, their number
-    (each conducting taxel carries the activation force) and the imprint's rim load.
+    (``counts``: each conducting taxel carries the activation force) and the imprint's rim load.
     """
-    read = np.array([_read(p, exponent, censor, shape) for p in presses])
-    design = np.stack((read, [p.counts.size for p in presses], np.ones(read.size)), axis=1)
+    read = layout.sums(exponent)
+    design = np.stack((read, counts, np.ones(read.size)), axis=1)
     # Relative errors: a light press counts as much as a heavy one. The columns are scaled so
     # that the non-negative least squares weighs them alike.
     row_weight = 1.0 / target
@@ -286,19 +334,46 @@ def _misfit(fit, target: np.ndarray) -> float:
     return float(np.sqrt(np.mean((fit[3] / target - 1.0) ** 2)))
 
 
-def _best_exponent(presses: list, target: np.ndarray, censor: float, shape: tuple):
-    """Return (misfit, exponent, fit) of the exponent that fits best: a grid, then finer ones."""
-    grid = _EXPONENTS
+def _best_exponent(layout: _Layout, counts: np.ndarray, target: np.ndarray, grid,
+                   rounds: int):
+    """Return (misfit, exponent, fit) of the exponent that fits best: a grid, then halvings."""
+    step = float(grid[1] / grid[0])
     best = None
-    for _ in range(_REFINE_ROUNDS + 1):
+    for _ in range(rounds + 1):
         for exponent in grid:
-            fit = _fit(presses, target, censor, shape, float(exponent))
+            fit = _fit(layout, counts, target, float(exponent))
             misfit = _misfit(fit, target)
             if best is None or misfit < best[0]:
                 best = (misfit, float(exponent), fit)
-        step = float(grid[1] / grid[0])
-        grid = np.geomspace(best[1] / step, best[1] * step, _REFINE_STEPS)
+        step = step ** 0.5
+        grid = (best[1] / step, best[1] * step)
     return best
+
+
+def _best_choice(presses: list, target: np.ndarray, full_scale: int) -> tuple:
+    """
+    Return (censor, bump shape, exponent, fit) of the censoring choice that fits best.
+
+    Every choice is tried on the coarse grid of exponents; the few best are refined.
+    """
+    shape = presses[0].map_counts.shape
+    counts = np.array([p.counts.size for p in presses], dtype=np.float64)
+    tried = []
+    for censor, bump_shape in _censoring_choices(presses, full_scale, shape):
+        layout = _Layout(presses, censor, bump_shape)
+        misfit = _best_exponent(layout, counts, target, _EXPONENTS, 0)[0]
+        # Censoring adds a parameter (the bump): it must earn its keep.
+        tried.append((misfit / CENSOR_GAIN if censor else misfit, censor, bump_shape, layout))
+    tried.sort(key=lambda t: t[0])
+    best = None
+    for _, censor, bump_shape, layout in tried[:_REFINED_CHOICES]:
+        misfit, exponent, fit = _best_exponent(layout, counts, target, _EXPONENTS,
+                                               _REFINE_ROUNDS)
+        if censor:
+            misfit /= CENSOR_GAIN
+        if best is None or misfit < best[0]:
+            best = (misfit, censor, bump_shape, exponent, fit)
+    return best[1:]
 
 
 def _censoring_choices(presses: list, full_scale: int, shape: tuple) -> list:
@@ -354,16 +429,8 @@ def fit_force_curve(press_counts: Sequence[np.ndarray], press_gains: Sequence[np
     empty = [k for k, p in enumerate(presses) if p.counts.size == 0]
     if empty:
         raise ValueError(f'press {empty[0] + 1} ({known[empty[0]]:.2f} N) loaded no taxel')
-    shape = presses[0].map_counts.shape
-    best = None
-    for censor, bump_shape in _censoring_choices(presses, full_scale, shape):
-        misfit, exponent, fit = _best_exponent(presses, target, censor, bump_shape)
-        # Censoring adds a parameter (the bump): it must earn its keep.
-        if censor:
-            misfit /= CENSOR_GAIN
-        if best is None or misfit < best[0]:
-            best = (misfit, censor, bump_shape, exponent, fit)
-    _, censor, bump_shape, exponent, (scale, activation, rim_load, fitted_sensed) = best
+    censor, bump_shape, exponent, (scale, activation, rim_load, fitted_sensed) = _best_choice(
+        presses, target, full_scale)
     fitted = fitted_sensed * known / target
     residuals = fitted - known
     worst = int(np.argmax(np.abs(residuals) / known))
