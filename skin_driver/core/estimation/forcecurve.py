@@ -306,8 +306,8 @@ class _Layout:
             height = np.bincount(self.press[fitted], (self.phi * taxels)[fitted], self.n)
             height = np.divide(height, self.weight, out=np.zeros(self.n), where=self.weight > 0)
             f = self.filled
-            sums += np.bincount(self.press[f], np.maximum(self.phi[f] * height[self.press[f]],
-                                                           taxels[f]), self.n)
+            fill = np.maximum(self.phi[f] * height[self.press[f]], taxels[f])
+            sums += np.bincount(self.press[f], fill, self.n)
         return sums
 
 
