@@ -221,6 +221,13 @@ int sk_scan(sk_kernel *k, const double *maps, int every_pair, double *out, int *
       }
     }
     censored |= p->censored;
+    /* A saturated layer's fill-in (Python, sk_finish) adds its rim load itself. */
+    if (!(p->censored & 1)) {
+      p->top_force += fmin(k->reals[SK_RIM_TOP], p->top_force);
+    }
+    if (!(p->censored & 2)) {
+      p->bottom_force += fmin(k->reals[SK_RIM_BOTTOM], p->bottom_force);
+    }
     p->dx = p->dy = p->confidence = 0.0;
     p->sigma = INFINITY;
     if (!every_pair && !p->censored && normal_force(k, p) < k->reals[SK_MIN_FORCE]) {

@@ -10,7 +10,8 @@ A :class:`Kernel` copies an estimator's state once (tare, gains, force tables, s
 preallocated buffers, so a scan costs one copy of the maps into its buffer and one foreign call.
 Two things stay in Python because they change elsewhere: a saturated imprint's force
 (``forcecurve.ForceCurve.imprint_force``, asked for only when a calibrated censoring curve meets a
-saturated taxel) and the dead-taxel marks a touch revives (handed back to the conditioner).
+saturated taxel; the kernel adds the curves' rim loads to the other imprints itself) and the
+dead-taxel marks a touch revives (handed back to the conditioner).
 """
 
 from __future__ import annotations
@@ -33,9 +34,9 @@ __all__ = ['METHODS', 'KernelSettings', 'Kernel', 'KernelMissing', 'load_library
 METHODS = {'centroid': 0, 'taxel_fit': 1, 'poc': 2}
 
 # skin_kernel.h's layout: bump both together.
-_ABI_VERSION = 3
+_ABI_VERSION = 4
 _INTS = 8
-_REALS = 15
+_REALS = 17
 _NREC = 23
 _NSTATUS = 3
 # A record's first CONTACT_FIELDS numbers are pipeline.Contact's fields in order, the shift and
@@ -96,7 +97,7 @@ class KernelSettings(NamedTuple):
     max_contacts: int
     remove_crosstalk: bool
     fill_dead: bool
-    reals: tuple         # skin_kernel.h's SK_PITCH ... SK_CENSOR_BOTTOM, in that order
+    reals: tuple         # skin_kernel.h's SK_PITCH ... SK_RIM_BOTTOM, in that order
     baseline: np.ndarray  # (2, rows, cols) each, like threshold, noise, gain (or None), dead
     threshold: np.ndarray
     noise: np.ndarray

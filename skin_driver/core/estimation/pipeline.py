@@ -138,16 +138,25 @@ def _imprint_sums(maps: np.ndarray, window: np.ndarray, saturated, sums, curves)
     Return a contact's force sums with each saturated layer's filled in from the rims (imprint).
 
     ``maps`` are the contact's counts, ``window`` its share of the force maps
-    (:func:`_force_window`), ``sums`` its (top, bottom) force sums as summed.
+    (:func:`_force_window`), ``sums`` its (top, bottom) force sums with their rim loads
+    (:func:`_rimmed`); a saturated layer's fill-in adds its rim load itself.
     """
     return [curve.imprint_force(own, force) if hit else float(total)
             for own, force, hit, total, curve in zip(maps, window, saturated, sums, curves)]
 
 
+def _rimmed(sums, curves, saturated) -> tuple:
+    """Return the force sums of a contact's unsaturated layers with their curves' rim loads."""
+    return tuple(total if hit else curve.with_rim(total)
+                 for total, curve, hit in zip(sums, curves, saturated))
+
+
 def _censored(pair: LayerPair, window: np.ndarray, curves) -> LayerPair:
-    """Return ``pair`` with its saturated taxels' force filled in (:func:`_imprint_sums`)."""
-    sums = _imprint_sums(pair.maps, window, _saturated(pair.maps, curves),
-                         (pair.top_force_n, pair.bottom_force_n), curves)
+    """Return ``pair`` with its rim loads and saturated taxels' force (:func:`_imprint_sums`)."""
+    saturated = _saturated(pair.maps, curves)
+    sums = _imprint_sums(pair.maps, window, saturated,
+                         _rimmed((pair.top_force_n, pair.bottom_force_n), curves, saturated),
+                         curves)
     return replace(pair, top_force_n=sums[0], bottom_force_n=sums[1])
 
 
@@ -242,7 +251,7 @@ class ContactEstimator:
         if not pairs:
             return []
         curves = self.calibration.force_curves
-        censoring = bool(curves) and any(c.censor_counts for c in curves)
+        censoring = bool(curves) and any(c.censor_counts or c.rim_load_n for c in curves)
         method = self._method
         noise = conditioner.count_noise()
         whole = None
@@ -325,7 +334,8 @@ class ContactEstimator:
                          cfg.min_confidence, cfg.min_shift_m, cfg.force_scale, cfg.fill_factor,
                          cal.x_p_m, cal.y_p_m, *cal.zero_slope_m_per_n, cal.zero_ref_n,
                          self._calibration_variance(),
-                         *(c.censor_counts if c is not None else 0.0 for c in curves))
+                         *(c.censor_counts if c is not None else 0.0 for c in curves),
+                         *(c.rim_load_n if c is not None else 0.0 for c in curves))
                 cond = self.conditioner.config
                 self._kernel = compiled_kernel.Kernel(compiled_kernel.KernelSettings(
                     self._method.name, cfg.max_contacts, cond.remove_crosstalk, cond.fill_dead,

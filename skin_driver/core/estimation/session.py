@@ -49,7 +49,8 @@ class PressRecord:
 
     ``shift_m`` is the raw layer shift (before the offset is removed), ``counts`` both layers'
     counts above baseline (2 x rows x cols, 0 where untouched), ``wrench_n`` the reference
-    sensor's mean force (x, y, z) in the skin frame when one was fed.
+    sensor's mean force (x, y, z) in the skin frame when one was fed, ``clipped_taxels`` how
+    many taxels read the ADC's full scale (their readings are cut).
     """
 
     peak_force_n: float
@@ -58,6 +59,7 @@ class PressRecord:
     looks_normal: bool = True
     shift_growth_m: float = 0.0
     wrench_n: Optional[tuple] = None
+    clipped_taxels: int = 0
 
 
 @dataclass(frozen=True)
@@ -172,18 +174,26 @@ class CalibrationSession:
         return self.add_press(PressRecord(
             peak_force_n=press.peak_force_n, shift_m=press.plateau_shift_m, counts=counts,
             looks_normal=press.looks_normal, shift_growth_m=press.shift_growth_m,
-            wrench_n=wrench))
+            wrench_n=wrench,
+            clipped_taxels=max(self._clipped(t, b) for t, b, _ in press.plateau)))
 
     def record(self, top_counts, bottom_counts, contacts, wrench_n=None) -> PressRecord:
         """Return the record of a press seen in one scan at full load (no stream needed)."""
         cal = self.estimator.calibration
         counts = self.estimator.conditioner.touch_counts(top_counts, bottom_counts)
+        clipped = self._clipped(top_counts, bottom_counts)
         if not contacts:
-            return PressRecord(0.0, (math.nan, math.nan), counts, wrench_n=wrench_n)
+            return PressRecord(0.0, (math.nan, math.nan), counts, wrench_n=wrench_n,
+                               clipped_taxels=clipped)
         c = contacts[0]
         zero = cal.zero_m(c.force_n)
         return PressRecord(c.force_n, (c.shift_m[0] + zero[0], c.shift_m[1] + zero[1]),
-                           counts, wrench_n=wrench_n)
+                           counts, wrench_n=wrench_n, clipped_taxels=clipped)
+
+    def _clipped(self, top_counts, bottom_counts) -> int:
+        """Return how many taxels of a scan read the ADC's full scale."""
+        full = self.estimator.conditioner.config.fsr.full_scale
+        return sum(int((np.asarray(m) >= full).sum()) for m in (top_counts, bottom_counts))
 
     def add_press(self, record: PressRecord) -> str:
         """Add one press; return a note saying whether it counts (for a person)."""
@@ -263,7 +273,7 @@ class CalibrationSession:
                                              known, self.estimator.conditioner.config.fsr)
             except ValueError as err:
                 if name == 'bottom':
-                    raise CalibrationRefused(f'{name} layer: {err}') from None
+                    raise CalibrationRefused(f'{name} layer: {err}{self._clipping()}') from None
                 fits[name] = fits['bottom']
                 notes += f'; the top layer takes the bottom curve ({err})'
         new = self._updated(
@@ -277,6 +287,15 @@ class CalibrationSession:
         return Outcome(new, n, bottom.fitted_n, bottom.residuals_n,
                        f'force curves from {n} presses over {known.min():.2f} to '
                        f'{known.max():.2f} N; residual rms {rms:.3f} N{saturated}{notes}')
+
+    def _clipping(self) -> str:
+        """Return a note naming the presses whose taxels read the ADC's full scale ('' if none)."""
+        clipped = [k + 1 for k, r in enumerate(self.accepted) if r.clipped_taxels]
+        if not clipped:
+            return ''
+        return (f'; press{"es" if len(clipped) > 1 else ""} {", ".join(map(str, clipped))} '
+                "drove taxels to the ADC's full scale, where readings are cut (crosstalk or an "
+                'overloaded film): press more lightly')
 
     def _known_loads(self) -> tuple:
         """Return (tangential, normal) known force per accepted press, newtons."""

@@ -18,7 +18,7 @@ extern "C" {
 #endif
 
 /* Bumped whenever a signature or a layout below changes; the binding checks it. */
-#define SK_ABI_VERSION 3
+#define SK_ABI_VERSION 4
 
 /* Integer settings, in this order. */
 enum {
@@ -35,6 +35,7 @@ enum {
   SK_FILL_FACTOR, SK_X_P, SK_Y_P, SK_SLOPE_X, SK_SLOPE_Y, SK_ZERO_REF,
   SK_CALIBRATION_VAR, /* the calibration's share of sigma**2, taxels**2 */
   SK_CENSOR_TOP, SK_CENSOR_BOTTOM, /* counts from which a taxel is saturated; 0: never */
+  SK_RIM_TOP, SK_RIM_BOTTOM, /* force at an imprint's rim that no taxel reads (forcecurve) */
   SK_NREALS
 };
 

@@ -89,3 +89,33 @@ def test_a_curve_must_rise_from_zero():
     assert ForceCurve.from_dict(censored.to_dict()) == censored
     with pytest.raises(ValueError, match='both'):
         ForceCurve((0.0, 100.0), (0.0, 2.0), 90.0, 0.0)
+
+
+def test_load_at_the_rims_that_no_taxel_reads_is_learned_per_imprint():
+    counts, gains, sensed, known = bumps(np.linspace(5.0, 60.0, 16), SKIN)
+    # The rim under the touch threshold (40 counts) is unread already; a film that turns on at
+    # a pressure leaves more of every imprint's rim unread: here 0.5 N of sensed force more per
+    # press (the imprints grow with the force, so a load per imprint is no load per taxel).
+    plain = fit_force_curve(counts, gains, sensed, known)
+    fit = fit_force_curve(counts, gains, sensed + 0.5, known + 0.5 / 0.81)
+    assert plain.curve.rim_load_n > 0
+    assert fit.curve.rim_load_n - plain.curve.rim_load_n == pytest.approx(0.5, rel=0.05)
+    assert max(abs(r) / f for r, f in zip(fit.residuals_n, known)) < 0.01
+    press = counts[4]
+    force = fit.curve.counts_to_force(press)
+    assert fit.curve.imprint_force(press, force) == pytest.approx(
+        force.sum() + fit.curve.rim_load_n)
+    # A faint imprint (one taxel over the threshold) is no press: at most twice what it reads.
+    faint = np.array([[60.0]])
+    read = float(fit.curve.counts_to_force(faint).sum())
+    assert fit.curve.imprint_force(faint, fit.curve.counts_to_force(faint)) == pytest.approx(
+        2 * read)
+
+
+def test_a_skin_whose_curve_matches_the_assumed_one_keeps_it():
+    fit = fit_force_curve(*presses(np.linspace(5.0, 60.0, 16), skin=FsrModel()))
+    # Over the counts pressed (past them the curve goes on straight).
+    counts = np.linspace(50.0, fit.curve.counts[-1], 30)
+    np.testing.assert_allclose(fit.curve.counts_to_force(counts),
+                               FsrModel().counts_to_force(counts), rtol=0.01)
+    assert fit.curve.rim_load_n == pytest.approx(0.0, abs=1e-3)

@@ -100,6 +100,21 @@ def test_calibrated_estimators_give_the_same_contacts(skin):
         assert_same(compiled, described, top, bottom)
 
 
+@pytest.mark.parametrize('skin', ['film', 'held_out:5', 'loaded'])
+def test_rim_loads_of_a_force_calibration_are_added_alike(skin):
+    # Force-calibrated from 16 normal presses of known force: these skins' curves learn a rim
+    # load (forcecurve) that the kernel adds itself to every unsaturated imprint.
+    member = family_skin(skin)
+    rng = np.random.default_rng(3)
+    data = add_calibration_frames(make_scene('random', member, rng, 4), member.model, rng)
+    est = prepared_estimator(data, 'taxel_fit')[0]
+    assert any(curve.rim_load_n > 0 for curve in est.calibration.force_curves)
+    compiled, described = both_ways(est)
+    scored = np.flatnonzero(data.split == 0)
+    for top, bottom in zip(data.top[scored], data.bottom[scored]):
+        assert_same(compiled, described, top, bottom)
+
+
 def test_a_censoring_force_curve_fills_in_the_saturated_imprint_alike():
     # 3 N a taxel saturates this film: presses of 15 to 50 N read the ceiling at their centre,
     # and the calibrated curve fills their force in from the rims (forcecurve, in Python).

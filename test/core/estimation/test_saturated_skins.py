@@ -23,4 +23,20 @@ def test_a_saturating_skin_is_calibrated_and_reads_heavy_presses(skin):
         # The calibration's own indenter (4 mm), at a place it never pressed.
         press = Press(centre + 0.0031, centre - 0.0047, force, radius_m=0.004)
         contact = est.process(*render(member.model, [press], rng))[0]
-        assert contact.force_n == pytest.approx(force, rel=0.06)
+        assert contact.force_n == pytest.approx(force, rel=0.08)
+
+
+def test_a_fine_saturating_skin_reads_the_presses_of_another_indenter():
+    # On 64 x 64 taxels the rim of a saturated imprint spans several taxels and tells the
+    # imprint's own width: a 1.5 mm indenter, whose rim carries a smaller share of the force
+    # than the calibration's 4 mm one, still reads within 15 % (the calibration's bump alone
+    # read it about a third low).
+    member = family_skin('saturating@64')
+    rng = np.random.default_rng(3)
+    data = add_calibration_frames(make_scene('random', member, rng, 5), member.model, rng)
+    est, _ = prepared_estimator(data, 'poc')
+    centre = 0.5 * (member.model.cols - 1) * member.model.pitch_m
+    for force in (15.0, 30.0, 50.0):
+        press = Press(centre + 0.0031, centre - 0.0047, force, radius_m=0.0015)
+        contact = est.process(*render(member.model, [press], rng))[0]
+        assert contact.force_n == pytest.approx(force, rel=0.15)

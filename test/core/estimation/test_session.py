@@ -127,6 +127,22 @@ def test_a_refused_force_session_leaves_the_calibration_in_force():
     np.testing.assert_array_equal(est.conditioner.condition(*probe), maps)
 
 
+def test_a_refusal_names_the_presses_that_drove_taxels_to_the_adc_full_scale():
+    est, rng = tared(5)
+    known = [5.0, 10.0, 20.0, 30.0, 45.0, 60.0]
+    session = CalibrationSession(est, 'force', forces_n=known)
+    for k, force in enumerate(known[::-1]):  # no curve fits these: the refusal must say more
+        top, bottom = render(SKIN, [Press(0.04, 0.04, force, radius_m=0.004)], rng)
+        if k >= 4:
+            # Crosstalk or an overloaded film pushes the centre of presses 5 and 6 to 4095.
+            bottom = bottom.copy()
+            bottom[8, 8] = 4095
+        session.add_press(session.record(top, bottom, est.process(top, bottom)))
+    with pytest.raises(CalibrationRefused, match="presses 5, 6 drove taxels to the ADC's full "
+                                                 'scale'):
+        session.finish()
+
+
 @pytest.mark.parametrize('kind, args, message', [
     ('force', {}, 'known force of each press'),
     ('force', {'forces_n': [5.0, -1.0]}, 'positive'),
