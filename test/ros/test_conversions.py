@@ -2,10 +2,14 @@
 
 import math
 
+from builtin_interfaces.msg import Time
+from geometry_msgs.msg import WrenchStamped
 import numpy as np
 import pytest
+from rclpy.serialization import deserialize_message
 from skin_driver.core.estimation.pipeline import Contact
 from skin_driver.ros import conversions
+from skin_msgs.msg import TactileContact, TactileContactArray
 from std_msgs.msg import Header
 from visualization_msgs.msg import Marker
 
@@ -121,3 +125,28 @@ def test_a_reused_array_carries_each_scan_exactly_as_a_new_one_would():
     second = writer.fill(HEADER, one, sequence=6, device_time_us=8)
     assert second == conversions.contacts_to_array(HEADER, one, 6, 8)
     assert writer.fill(HEADER, [], 7, 9).contacts == []
+
+
+@pytest.mark.parametrize('frame_id', ['', 's', 'skin_link', 'left_skin_link', 'arm/skin_ä'])
+def test_serialized_messages_read_back_as_the_messages_they_stand_for(frame_id):
+    serialized = conversions.SerializedMessages(frame_id)
+    assert serialized.usable
+    header = Header(stamp=Time(sec=12, nanosec=345), frame_id=frame_id)
+    # Three contacts: each starts at another offset, so each gets other padding.
+    contacts = [_contact(), _contact(x_m=0.01, direction_valid=False, force_n=3.0),
+                _contact(y_m=0.02, azimuth_rad=-1.0, force_xyz_n=(1.0, -2.0, -4.0))]
+    for count in range(len(contacts) + 1):
+        some = contacts[:count]
+        fields = [conversions.contact_fields(c) for c in some]
+        array = deserialize_message(serialized.contacts(12, 345, 2 ** 32 + 6, 2 ** 40, fields),
+                                    TactileContactArray)
+        assert array == conversions.contacts_to_array(header, some, 6, 2 ** 40)
+        wrench = deserialize_message(serialized.wrench(12, 345, some), WrenchStamped)
+        assert wrench == conversions.wrench_stamped(header, some)
+    contact = deserialize_message(serialized.contact(12, 345, fields[2]), TactileContact)
+    assert contact == conversions.contact_to_msg(header, contacts[2])
+
+
+def test_contact_fields_refuse_what_a_message_never_carries():
+    with pytest.raises(ValueError, match='NaN or inf'):
+        conversions.contact_fields(_contact(x_m=math.nan))

@@ -14,7 +14,7 @@ from dataclasses import dataclass
 import os
 import resource
 import time
-from typing import Callable
+from typing import Callable, Optional
 
 __all__ = ['NORMAL', 'Scheduling', 'schedule_this_thread', 'name_this_thread', 'StageCpu']
 
@@ -38,13 +38,12 @@ def _how_to_grant(priority: int) -> str:
             f"'--ulimit rtprio={max(priority, 98)}' or '--cap-add SYS_NICE'")
 
 
-def schedule_this_thread(priority: int,
-                         set_scheduler: Callable = os.sched_setscheduler) -> Scheduling:
+def schedule_this_thread(priority: int, set_scheduler: Optional[Callable] = None) -> Scheduling:
     """
     Put the calling thread at SCHED_FIFO ``priority`` (1..99); 0 leaves it at normal priority.
 
     Never raises for a refusal: the thread stays as it was and the returned Scheduling carries
-    the warning, for the caller to log. ``set_scheduler`` is os.sched_setscheduler's signature.
+    the warning, for the caller to log. ``set_scheduler``: os.sched_setscheduler unless given.
     """
     if not priority:
         return Scheduling(NORMAL)
@@ -54,7 +53,7 @@ def schedule_this_thread(priority: int,
                                   'reading at normal priority')
     try:
         # pid 0: the calling thread, not the whole process (Linux schedules threads).
-        set_scheduler(0, os.SCHED_FIFO, os.sched_param(priority))
+        (set_scheduler or os.sched_setscheduler)(0, os.SCHED_FIFO, os.sched_param(priority))
     except PermissionError:
         return Scheduling(NORMAL, f'SCHED_FIFO {priority} not permitted '
                                   f'({_how_to_grant(priority)}); reading at normal priority')
