@@ -84,10 +84,14 @@ class EstimationHost:
                                                    **quiet)
         self._pub_contact = node.create_publisher(TactileContact, 'contact', qos.stream(), **quiet)
         self._pub_wrench = node.create_publisher(WrenchStamped, 'wrench', qos.stream(), **quiet)
+        # The viz timer runs only while rviz's topics have subscribers: told by their matched
+        # events (three entities) rather than woken at viz_rate to ask.
+        self._viz_watchers = {}
         self._pub_heat = {layer: node.create_publisher(Image, f'{layer}/heatmap', qos.VIZ_DEPTH,
-                                                       **quiet)
+                                                       **self._viz_events(layer))
                           for layer in ('top', 'bottom')}
-        self._pub_markers = node.create_publisher(MarkerArray, 'markers', qos.VIZ_DEPTH, **quiet)
+        self._pub_markers = node.create_publisher(MarkerArray, 'markers', qos.VIZ_DEPTH,
+                                                  **self._viz_events('markers'))
         self._listened = Listened({'contacts': self._pub_contacts, 'contact': self._pub_contact,
                                    'wrench': self._pub_wrench, 'markers': self._pub_markers,
                                    **self._pub_heat})
@@ -282,12 +286,20 @@ class EstimationHost:
         return estimator
 
     # ---- rviz -------------------------------------------------------------------------------
+    def _viz_events(self, name: str) -> dict:
+        def matched(info) -> None:
+            self._viz_watchers[name] = info.current_count
+            self._start_viz_timer()
+        return {'event_callbacks': PublisherEventCallbacks(matched=matched,
+                                                           use_default_callbacks=False),
+                **qos.overridable()}
+
     def _start_viz_timer(self) -> None:
         if self._viz_timer is not None:
             self.node.destroy_timer(self._viz_timer)
             self._viz_timer = None
         rate = self._p('viz_rate')
-        if rate > 0:
+        if rate > 0 and any(self._viz_watchers.values()):
             self._viz_timer = self.node.create_timer(1.0 / rate, self._visualise)
 
     def _visualise(self) -> None:
