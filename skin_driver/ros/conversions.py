@@ -209,7 +209,7 @@ class _Layout:
 
 class SerializedMessages:
     """
-    The contacts, contact and wrench messages of one frame_id written straight as CDR bytes.
+    The frame, contacts, contact and wrench messages of one frame_id written as CDR bytes.
 
     Publisher.publish(bytes) sends them as they are: no message objects to fill and no
     conversion by rclpy (measured at about a third of a publish). ``usable`` says whether they
@@ -223,6 +223,7 @@ class SerializedMessages:
         head = _Layout(0).header(len(self._fid)).add('I', 4).add('Q', 8).add('I', 4)
         self._array_head, self._array_size = Struct(head.format), head.offset
         self._contact_at = {}
+        self._frame_at = {}
         self._wrench = Struct(_Layout(0).header(len(self._fid)).add('d', 8, 6).format)
         self.usable = self._same_as_rclpy()
 
@@ -255,6 +256,26 @@ class SerializedMessages:
         return _CDR_LE + self._contact(0)[0].pack(sec, nanosec, len(self._fid), self._fid,
                                                   *values)
 
+    def frame(self, sec: int, nanosec: int, sequence: int, device_time_us: int, pitch_m: float,
+              top: np.ndarray, bottom: np.ndarray) -> bytes:
+        """Return the SkinFrame of one scan (two C-contiguous uint16 maps of one shape)."""
+        rows, cols = top.shape
+        head, gap = self._frame_layout(rows * cols)
+        return b''.join((_CDR_LE, head.pack(sec, nanosec, len(self._fid), self._fid,
+                                            sequence & 0xFFFFFFFF, device_time_us, rows, cols,
+                                            pitch_m, rows * cols),
+                         top, gap.pack(rows * cols), bottom))
+
+    def _frame_layout(self, count: int) -> tuple:
+        """Return the Structs before each layer of a SkinFrame of ``count`` taxels."""
+        found = self._frame_at.get(count)
+        if found is None:
+            head = _Layout(0).header(len(self._fid)).add('I', 4).add('Q', 8).add('H', 2, 2)
+            head.add('f', 4).add('I', 4)
+            gap = _Layout(head.offset + 2 * count).add('I', 4)
+            found = self._frame_at[count] = (Struct(head.format), Struct(gap.format))
+        return found
+
     def wrench(self, sec: int, nanosec: int, contacts: Sequence) -> bytes:
         """Return the WrenchStamped of core contacts, as :func:`wrench_stamped` makes it."""
         return _CDR_LE + self._wrench.pack(sec, nanosec, len(self._fid), self._fid,
@@ -281,9 +302,20 @@ class SerializedMessages:
                                             TactileContact) == msgs[1]
                     and deserialize_message(_CDR_LE + self._wrench.pack(
                         *stamp, len(self._fid), self._fid, 1.5, -2.5, 3.25, 0.125, -4.0, 8.5),
-                        WrenchStamped) == wrench)
+                        WrenchStamped) == wrench
+                    and all(self._frame_reads_back(header, shape) for shape in ((3, 5), (4, 4))))
         except Exception:  # noqa: B902 - any failure to read them back means "not usable"
             return False
+
+    def _frame_reads_back(self, header: Header, shape: tuple) -> bool:
+        """Return whether a SkinFrame of this shape (odd or even taxel count) reads back."""
+        top = np.arange(np.prod(shape), dtype=np.uint16).reshape(shape)
+        bottom = top[::-1].copy()
+        pitch = 2.0 ** -7  # exact in the message's float32
+        data = self.frame(header.stamp.sec, header.stamp.nanosec, 7, 2 ** 40 + 3, pitch, top,
+                          bottom)
+        return deserialize_message(data, SkinFrame) == skin_frame_to_msg(
+            header, 7, 2 ** 40 + 3, pitch, top, bottom)
 
 
 def mount_transform(stamp: Time, parent: str, child: str, xyz: Sequence[float],

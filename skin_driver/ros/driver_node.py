@@ -175,6 +175,7 @@ class SkinDriverNode(Node):
             return TransitionCallbackReturn.FAILURE
         self._frame_id = self._p('frame_id').strip() or default_frame_id(self.get_namespace())
         self._pitch = float(self._p('pitch'))
+        self._serialized = conversions.SerializedMessages(self._frame_id)
         self._pubs['frame'] = self.create_lifecycle_publisher(SkinFrame, 'frame', qos.stream(),
                                                               **qos.overridable())
         if self._p('publish_images'):
@@ -261,15 +262,22 @@ class SkinDriverNode(Node):
                 cpu.mark('estimation')
             # Nobody listening (fused, nothing recording): no message to build and serialise.
             if listened['frame']:
-                self._pubs['frame'].publish(conversions.skin_frame_to_msg(
-                    header, frame.seq, frame.device_time_us, self._pitch, frame.top,
-                    frame.bottom))
+                self._pubs['frame'].publish(self._frame_message(header, frame))
                 cpu.mark('frame')
         if self._images is not None and (listened['top'] or listened['bottom']):
             self._images.offer((header, frames[-1], listened))
             cpu.mark('images')
         self._rate.add(len(frames))
         self._burst = max(self._burst, len(frames))
+
+    def _frame_message(self, header, frame):
+        """Return a scan's SkinFrame as CDR bytes, or as a message where those are not rmw's."""
+        serialized = self._serialized
+        if serialized.usable:
+            return serialized.frame(header.stamp.sec, header.stamp.nanosec, frame.seq,
+                                    frame.device_time_us, self._pitch, frame.top, frame.bottom)
+        return conversions.skin_frame_to_msg(header, frame.seq, frame.device_time_us,
+                                             self._pitch, frame.top, frame.bottom)
 
     def _now(self) -> Time:
         """Return the node's time now: the system clock's, read directly, unless sim time."""

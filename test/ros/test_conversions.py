@@ -9,7 +9,7 @@ import pytest
 from rclpy.serialization import deserialize_message
 from skin_driver.core.estimation.pipeline import Contact
 from skin_driver.ros import conversions
-from skin_msgs.msg import TactileContact, TactileContactArray
+from skin_msgs.msg import SkinFrame, TactileContact, TactileContactArray
 from std_msgs.msg import Header
 from visualization_msgs.msg import Marker
 
@@ -150,3 +150,16 @@ def test_serialized_messages_read_back_as_the_messages_they_stand_for(frame_id):
 def test_contact_fields_refuse_what_a_message_never_carries():
     with pytest.raises(ValueError, match='NaN or inf'):
         conversions.contact_fields(_contact(x_m=math.nan))
+
+
+@pytest.mark.parametrize('shape', [(16, 16), (3, 5), (1, 1)])
+def test_a_serialized_skin_frame_reads_back_as_the_message(shape):
+    serialized = conversions.SerializedMessages('left_skin_link')
+    rng = np.random.default_rng(3)
+    top, bottom = (rng.integers(0, 4096, shape).astype(np.uint16) for _ in range(2))
+    header = Header(stamp=Time(sec=3, nanosec=4), frame_id='left_skin_link')
+    frame = deserialize_message(serialized.frame(3, 4, 2 ** 32 + 9, 77, 0.005, top, bottom),
+                                SkinFrame)
+    assert frame == conversions.skin_frame_to_msg(header, 9, 77, frame.pitch, top, bottom)
+    assert frame.pitch == pytest.approx(0.005)
+    np.testing.assert_array_equal(conversions.skin_frame_layers(frame)[1], bottom)
