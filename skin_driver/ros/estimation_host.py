@@ -30,7 +30,7 @@ import numpy as np
 from rcl_interfaces.msg import SetParametersResult
 from rclpy.event_handler import PublisherEventCallbacks
 from sensor_msgs.msg import Image
-from skin_driver.core.estimation.heatmap import colour_map
+from skin_driver.core.estimation.heatmap import colour_map, grey_levels
 from skin_driver.core.estimation.pipeline import ContactEstimator, EstimatorConfig
 from skin_driver.core.estimation.shift import DEFAULT_METHOD, method_names
 from skin_driver.core.estimation.tare import RecentScans
@@ -99,6 +99,7 @@ class EstimationHost:
         self._diag = diagnostics.DiagnosticPublisher(node)
         node.create_timer(self._p('diagnostics_period'), self._report)
         self._viz_timer = None
+        self._grid = None  # conversions.GridMarkers of the latest skin seen
         self._start_viz_timer()
         node.add_on_set_parameters_callback(self._check_new_parameters)
         node.add_post_set_parameters_callback(self._apply_new_parameters)
@@ -317,8 +318,23 @@ class EstimationHost:
                 self._pub_heat[layer].publish(
                     conversions.rgb_to_image(header, colour_map(forces[layer], full)))
         if 'markers' in wanted:
-            self._pub_markers.publish(conversions.heatmap_markers(
-                header, forces['top'], float(pitch), contacts, full))
+            self._publish_markers(header, forces['top'], float(pitch), contacts, full)
+
+    def _publish_markers(self, header, force_map, pitch_m, contacts, full_scale_n) -> None:
+        """Publish the grid (as CDR bytes where they are rmw's), then the contacts' markers."""
+        grid = self._grid
+        if grid is None or grid.key != (header.frame_id, force_map.shape, pitch_m):
+            grid = self._grid = conversions.GridMarkers(header.frame_id, force_map.shape,
+                                                        pitch_m)
+        if grid.usable:
+            self._pub_markers.publish(grid.serialize(header.stamp.sec, header.stamp.nanosec,
+                                                     grey_levels(force_map, full_scale_n)))
+        else:
+            self._pub_markers.publish(MarkerArray(markers=conversions.grid_markers(
+                header, force_map, pitch_m, full_scale_n)))
+        if contacts:  # after the grid's message, whose first marker clears the old ones
+            self._pub_markers.publish(MarkerArray(
+                markers=conversions.contact_markers(header, contacts, pitch_m)))
 
     # ---- tare -------------------------------------------------------------------------------
     def _on_tare(self, request, response):

@@ -7,11 +7,12 @@ from geometry_msgs.msg import WrenchStamped
 import numpy as np
 import pytest
 from rclpy.serialization import deserialize_message
+from skin_driver.core.estimation.heatmap import grey_levels
 from skin_driver.core.estimation.pipeline import Contact
 from skin_driver.ros import conversions
 from skin_msgs.msg import SkinFrame, TactileContact, TactileContactArray
 from std_msgs.msg import Header
-from visualization_msgs.msg import Marker
+from visualization_msgs.msg import Marker, MarkerArray
 
 HEADER = Header(frame_id='skin_link')
 
@@ -163,3 +164,15 @@ def test_a_serialized_skin_frame_reads_back_as_the_message(shape):
     assert frame == conversions.skin_frame_to_msg(header, 9, 77, frame.pitch, top, bottom)
     assert frame.pitch == pytest.approx(0.005)
     np.testing.assert_array_equal(conversions.skin_frame_layers(frame)[1], bottom)
+
+
+@pytest.mark.parametrize('shape', [(16, 16), (3, 5), (1, 1)])
+def test_grid_markers_as_bytes_read_back_as_the_markers_they_stand_for(shape):
+    grid = conversions.GridMarkers('left_skin_link', shape, 0.004)
+    assert grid.usable
+    force = np.random.default_rng(5).uniform(0.0, 12.0, shape)
+    header = Header(stamp=Time(sec=8, nanosec=9), frame_id='left_skin_link')
+    markers = deserialize_message(grid.serialize(8, 9, grey_levels(force, 10.0)), MarkerArray)
+    assert markers == MarkerArray(markers=conversions.grid_markers(header, force, 0.004, 10.0))
+    assert markers == MarkerArray(markers=conversions.heatmap_markers(
+        header, force, 0.004, [], 10.0).markers)

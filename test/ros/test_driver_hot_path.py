@@ -9,6 +9,7 @@ from rosutil import spin_until
 from sensor_msgs.msg import Image
 from skin_driver.core.protocol.realtime import NORMAL
 from skin_driver.ros.conversions import status_values
+from visualization_msgs.msg import MarkerArray
 
 pytestmark = pytest.mark.ros
 
@@ -29,12 +30,16 @@ def test_raw_images_and_heatmaps_are_built_only_for_a_subscriber(tmp_path):
         assert spin_until(executor, lambda: len(probe.record.received_s) > 20, WAIT_S)
         # Nobody watches: the reader never hands an image over.
         assert float(_link_values(executor, probe)['reader CPU per scan, images [us]']) == 0.0
-        images = {'top/image_raw': [], 'top/heatmap': []}
+        images = {'top/image_raw': [], 'top/heatmap': [], 'markers': []}
         for topic, got in images.items():
-            probe.node.create_subscription(Image, topic, got.append, qos_profile_sensor_data)
+            probe.node.create_subscription(MarkerArray if topic == 'markers' else Image, topic,
+                                           got.append, qos_profile_sensor_data)
         assert spin_until(executor, lambda: all(len(got) >= 3 for got in images.values()),
                           WAIT_S)
         raw, heat = images['top/image_raw'][-1], images['top/heatmap'][-1]
+        # The grid (one message, clearing the old markers first), then the press's arrow.
+        kinds = [[m.ns for m in array.markers] for array in images['markers'][-2:]]
+        assert ['skin', 'taxels'] in kinds and ['force', 'label'] in kinds
         assert (raw.encoding, raw.height, raw.width) == ('mono16', 16, 16)
         assert (heat.encoding, heat.height, heat.width) == ('rgb8', 16, 16)
         # No namespace: the skin's frame is skin_link.

@@ -1,14 +1,8 @@
-"""
-Conversions between the ROS-free core's values and ROS messages, kept in one place.
-
-No node lives here (as in sensor_msgs_py): everything takes and returns plain values and messages,
-so the nodes stay thin and the conversions can be tested without a running ROS graph.
-"""
+"""Conversions between the ROS-free core's values and ROS message objects."""
 
 from array import array
 import functools
 import math
-from struct import Struct
 from typing import Iterable, Sequence, Tuple
 
 from builtin_interfaces.msg import Time
@@ -16,7 +10,6 @@ from diagnostic_msgs.msg import DiagnosticStatus
 from geometry_msgs.msg import (Point, Quaternion, Transform, TransformStamped, Vector3,
                                Wrench, WrenchStamped)
 import numpy as np
-from rclpy.serialization import deserialize_message
 from sensor_msgs.msg import Image
 from skin_driver.core.estimation.heatmap import colour_map, grey_levels
 from skin_driver.core.estimation.recording import layers_of
@@ -184,140 +177,6 @@ def _net_wrench_fields(contacts: Sequence) -> tuple:
     return (*(_finite(v, 'force') for v in force), *(_finite(v, 'torque') for v in torque))
 
 
-# ---- the hot path's messages as CDR bytes ----------------------------------------------------
-
-_CDR_LE = b'\x00\x01\x00\x00'  # encapsulation header: plain CDR, little-endian
-_CONTACT_DOUBLES = 19  # TactileContact after its header: 19 float64, then direction_valid
-
-
-class _Layout:
-    """The struct format of CDR fields from an offset on, with the padding they need."""
-
-    def __init__(self, offset: int):
-        self.format, self.offset = '<', offset
-
-    def add(self, code: str, size: int, count: int = 1) -> '_Layout':
-        pad = -self.offset % size
-        self.format += 'x' * pad + f'{count}{code}'
-        self.offset += pad + size * count
-        return self
-
-    def header(self, frame_id_size: int) -> '_Layout':
-        """Add std_msgs/Header: stamp sec, nanosec, then frame_id (length, bytes, NUL)."""
-        return self.add('i', 4).add('I', 4).add('I', 4).add('s', 1, frame_id_size)
-
-
-class SerializedMessages:
-    """
-    The frame, contacts, contact and wrench messages of one frame_id written as CDR bytes.
-
-    Publisher.publish(bytes) sends them as they are: no message objects to fill and no
-    conversion by rclpy (measured at about a third of a publish). ``usable`` says whether they
-    equal rclpy's own serialisation of the same messages, checked once here: a middleware that
-    serialises differently gets message objects from the caller instead.
-    """
-
-    def __init__(self, frame_id: str):
-        self.frame_id = frame_id
-        self._fid = frame_id.encode() + b'\0'
-        head = _Layout(0).header(len(self._fid)).add('I', 4).add('Q', 8).add('I', 4)
-        self._array_head, self._array_size = Struct(head.format), head.offset
-        self._contact_at = {}
-        self._frame_at = {}
-        self._wrench = Struct(_Layout(0).header(len(self._fid)).add('d', 8, 6).format)
-        self.usable = self._same_as_rclpy()
-
-    def _contact(self, offset: int) -> tuple:
-        """Return (Struct, size) of a TactileContact that starts at this offset."""
-        key = offset % 8  # the padding depends on nothing else
-        found = self._contact_at.get(key)
-        if found is None:
-            layout = _Layout(key).header(len(self._fid)).add('d', 8, _CONTACT_DOUBLES)
-            layout.add('?', 1)
-            found = self._contact_at[key] = (Struct(layout.format), layout.offset - key)
-        return found
-
-    def contacts(self, sec: int, nanosec: int, sequence: int, device_time_us: int,
-                 fields: Sequence[tuple]) -> bytes:
-        """Return a TactileContactArray of contacts given as :func:`contact_fields` tuples."""
-        fid = self._fid
-        parts = [_CDR_LE, self._array_head.pack(sec, nanosec, len(fid), fid,
-                                                sequence & 0xFFFFFFFF, device_time_us,
-                                                len(fields))]
-        offset = self._array_size
-        for values in fields:
-            layout, size = self._contact(offset)
-            parts.append(layout.pack(sec, nanosec, len(fid), fid, *values))
-            offset += size
-        return b''.join(parts)
-
-    def contact(self, sec: int, nanosec: int, values: tuple) -> bytes:
-        """Return a TactileContact of one :func:`contact_fields` tuple."""
-        return _CDR_LE + self._contact(0)[0].pack(sec, nanosec, len(self._fid), self._fid,
-                                                  *values)
-
-    def frame(self, sec: int, nanosec: int, sequence: int, device_time_us: int, pitch_m: float,
-              top: np.ndarray, bottom: np.ndarray) -> bytes:
-        """Return the SkinFrame of one scan (two C-contiguous uint16 maps of one shape)."""
-        rows, cols = top.shape
-        head, gap = self._frame_layout(rows * cols)
-        return b''.join((_CDR_LE, head.pack(sec, nanosec, len(self._fid), self._fid,
-                                            sequence & 0xFFFFFFFF, device_time_us, rows, cols,
-                                            pitch_m, rows * cols),
-                         top, gap.pack(rows * cols), bottom))
-
-    def _frame_layout(self, count: int) -> tuple:
-        """Return the Structs before each layer of a SkinFrame of ``count`` taxels."""
-        found = self._frame_at.get(count)
-        if found is None:
-            head = _Layout(0).header(len(self._fid)).add('I', 4).add('Q', 8).add('H', 2, 2)
-            head.add('f', 4).add('I', 4)
-            gap = _Layout(head.offset + 2 * count).add('I', 4)
-            found = self._frame_at[count] = (Struct(head.format), Struct(gap.format))
-        return found
-
-    def wrench(self, sec: int, nanosec: int, contacts: Sequence) -> bytes:
-        """Return the WrenchStamped of core contacts, as :func:`wrench_stamped` makes it."""
-        return _CDR_LE + self._wrench.pack(sec, nanosec, len(self._fid), self._fid,
-                                           *_net_wrench_fields(contacts))
-
-    def _same_as_rclpy(self) -> bool:
-        """Return whether rclpy reads these bytes back as the messages they stand for."""
-        # Padding bytes are left undefined by some middlewares: compare messages, not bytes.
-        header = Header(stamp=Time(sec=1_700_000_000, nanosec=123_456_789),
-                        frame_id=self.frame_id)
-        # location.z and shift.z (2 and 10) are 0 in every contact message.
-        fields = [tuple(0.0 if i in (2, 10) else 0.5 + i + k / 7
-                        for i in range(_CONTACT_DOUBLES)) + (k == 0,) for k in range(3)]
-        msgs = [_fill_contact(header, values) for values in fields]
-        array_msg = TactileContactArray(header=header, sequence=7, device_time_us=2 ** 40 + 3,
-                                        contacts=msgs)
-        wrench = WrenchStamped(header=header, wrench=Wrench(
-            force=Vector3(x=1.5, y=-2.5, z=3.25), torque=Vector3(x=0.125, y=-4.0, z=8.5)))
-        stamp = (header.stamp.sec, header.stamp.nanosec)
-        try:
-            return (deserialize_message(self.contacts(*stamp, 7, 2 ** 40 + 3, fields),
-                                        TactileContactArray) == array_msg
-                    and deserialize_message(self.contact(*stamp, fields[1]),
-                                            TactileContact) == msgs[1]
-                    and deserialize_message(_CDR_LE + self._wrench.pack(
-                        *stamp, len(self._fid), self._fid, 1.5, -2.5, 3.25, 0.125, -4.0, 8.5),
-                        WrenchStamped) == wrench
-                    and all(self._frame_reads_back(header, shape) for shape in ((3, 5), (4, 4))))
-        except Exception:  # noqa: B902 - any failure to read them back means "not usable"
-            return False
-
-    def _frame_reads_back(self, header: Header, shape: tuple) -> bool:
-        """Return whether a SkinFrame of this shape (odd or even taxel count) reads back."""
-        top = np.arange(np.prod(shape), dtype=np.uint16).reshape(shape)
-        bottom = top[::-1].copy()
-        pitch = 2.0 ** -7  # exact in the message's float32
-        data = self.frame(header.stamp.sec, header.stamp.nanosec, 7, 2 ** 40 + 3, pitch, top,
-                          bottom)
-        return deserialize_message(data, SkinFrame) == skin_frame_to_msg(
-            header, 7, 2 ** 40 + 3, pitch, top, bottom)
-
-
 def mount_transform(stamp: Time, parent: str, child: str, xyz: Sequence[float],
                     rpy: Sequence[float]) -> TransformStamped:
     """Return the pose of ``child`` on ``parent``: translation xyz, fixed-axis roll-pitch-yaw."""
@@ -332,14 +191,20 @@ def mount_transform(stamp: Time, parent: str, child: str, xyz: Sequence[float],
 
 
 def heatmap_markers(header: Header, force_map: np.ndarray, pitch_m: float, contacts: Iterable,
-                    full_scale_n: float, arrow_m_per_n: float = 0.002) -> MarkerArray:
+                    full_scale_n: float) -> MarkerArray:
     """
     Return rviz markers in the skin frame: the taxel grid coloured by force, and the contacts.
 
     Each contact gets an arrow along its force (ending at the contact, coming from where the
     push comes from) and a label with magnitude and azimuth.
     """
-    markers = [Marker(header=header, ns='skin', action=Marker.DELETEALL)]
+    return MarkerArray(markers=grid_markers(header, force_map, pitch_m, full_scale_n)
+                       + contact_markers(header, contacts, pitch_m))
+
+
+def grid_markers(header: Header, force_map: np.ndarray, pitch_m: float,
+                 full_scale_n: float) -> list:
+    """Return the markers that clear the skin's and draw the taxel grid coloured by force."""
     rows, cols = force_map.shape
     grid = Marker(header=header, ns='taxels', id=0, type=Marker.CUBE_LIST, action=Marker.ADD)
     grid.pose.orientation.w = 1.0
@@ -348,7 +213,13 @@ def heatmap_markers(header: Header, force_map: np.ndarray, pitch_m: float, conta
     grid.points = list(_grid_points(rows, cols, float(pitch_m)))
     palette = _palette()
     grid.colors = [palette[level] for level in grey_levels(force_map, full_scale_n).ravel()]
-    markers.append(grid)
+    return [Marker(header=header, ns='skin', action=Marker.DELETEALL), grid]
+
+
+def contact_markers(header: Header, contacts: Iterable, pitch_m: float,
+                    arrow_m_per_n: float = 0.002) -> list:
+    """Return an arrow along each contact's force and a label with its magnitude and azimuth."""
+    markers = []
     for i, contact in enumerate(contacts):
         tip = Point(x=float(contact.x_m), y=float(contact.y_m), z=0.0)
         fx, fy, fz = (float(v) for v in contact.force_xyz_n)
@@ -367,7 +238,7 @@ def heatmap_markers(header: Header, force_map: np.ndarray, pitch_m: float, conta
         if contact.direction_valid:
             label.text += f' β {math.degrees(contact.azimuth_rad):.0f}°'
         markers += [arrow, label]
-    return MarkerArray(markers=markers)
+    return markers
 
 
 @functools.lru_cache(maxsize=4)
@@ -379,8 +250,14 @@ def _grid_points(rows: int, cols: int, pitch_m: float) -> tuple:
 @functools.lru_cache(maxsize=1)
 def _palette() -> tuple:
     """Return the ColorRGBA of each grey level 0..255 of colour_map."""
+    return tuple(ColorRGBA(r=float(r), g=float(g), b=float(b), a=float(a))
+                 for r, g, b, a in palette_rgba())
+
+
+def palette_rgba() -> np.ndarray:
+    """Return colour_map's colour of each grey level 0..255 as 256 x 4 float32 RGBA in 0..1."""
     rgb = colour_map(np.arange(256, dtype=np.float64).reshape(1, -1), 255.0)[0] / 255.0
-    return tuple(ColorRGBA(r=float(r), g=float(g), b=float(b), a=1.0) for r, g, b in rgb)
+    return np.hstack([rgb, np.ones((256, 1))]).astype(np.float32)
 
 
 def status_values(status: DiagnosticStatus) -> dict:
