@@ -175,7 +175,11 @@ class GridMarkers:
             markers=grid_markers(header, levels, pitch_m, 255.0)))
         block = self._palette[levels.ravel()].tobytes()
         stamp = _STAMP.pack(*_MARK)
-        self._stamps = [i for i in range(len(template)) if template.startswith(stamp, i)]
+        self._stamps = []
+        at = template.find(stamp)
+        while at >= 0:
+            self._stamps.append(at)
+            at = template.find(stamp, at + 1)
         self._colours = template.find(block)
         self._size = len(block)
         self._template = template
