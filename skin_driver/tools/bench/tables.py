@@ -195,7 +195,8 @@ def _cells(threads) -> str:
 def _e2e_section(res, images) -> list:
     e = res['e2e']
     out = ['## 3. End to end through ROS: split against fused', '',
-           'Two layouts, measured one after the other in the same run (at each rate they take '
+           'Two layouts and the rclpy floor, measured one after the other in the same run (at '
+           'each rate they take '
            'turns, in alternating order), on the same simulated skin, scene and parameters:', '',
            '- **split**: `python -m skin_driver.ros.driver_node` (serial reader thread publishes '
            '`frame`) -> `python -m skin_driver.ros.direction_node` (subscribes to `frame`, '
@@ -229,7 +230,8 @@ def _e2e_section(res, images) -> list:
            '- **CPU per scan**: CPU seconds of each process over the measured window '
            '(/proc/<pid>/stat, user + system) divided by the scans that process handled in it '
            '(the simulator: sent; the driver: decoded; the direction node: estimated; the '
-           "probe: received), so that lost scans do not flatter it. The probe's own is shown "
+           'floor: the rate times the share of scans the board could write; the probe: '
+           "received), so that lost scans do not flatter it. The probe's own is shown "
            'for completeness.', '',
            f'Load average before the runs {e.get("load_before")}, after {e["load"]} '
            f'({e["cores"]} cores, shared with other jobs).', '',
