@@ -2,9 +2,8 @@
 What keeps work a lower rate would do off the per-scan path of the driver and the estimation.
 
 * :class:`Listened`: which publishers have subscribers, asked a few times a second instead of
-  on every scan (a count costs microseconds; at 2 kHz and five topics that is a per cent of a
-  core for an answer that changes when someone starts or stops listening). A new subscriber is
-  served within REFRESH_S.
+  on every scan (a count is a call into the middleware per topic and scan, for an answer that
+  changes when someone starts or stops listening). A new subscriber is served within REFRESH_S.
 * :class:`LatestOnly`: a thread of its own that runs a job on the newest item offered, dropping
   items it had no time for: raw images for a viewer never delay the next scan's read.
 """

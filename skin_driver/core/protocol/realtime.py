@@ -76,8 +76,8 @@ class StageCpu:
     Thread CPU time of the stages of a loop, measured on every ``every``-th pass.
 
     One pass: begin(), then mark(stage) at the end of each stage and frames(n) for the scans it
-    handled. A sample costs a few clock reads (under a microsecond each); sampling keeps that
-    off most passes. take() returns the mean CPU per scan of each stage since the last take.
+    handled. A sample costs a system call per stage; sampling keeps that off most passes.
+    take() returns the mean CPU per scan of each stage since the last take.
     """
 
     def __init__(self, stages, every: int = 8):

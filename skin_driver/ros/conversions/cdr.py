@@ -46,7 +46,7 @@ class SerializedMessages:
     The frame, contacts, contact and wrench messages of one frame_id written as CDR bytes.
 
     Publisher.publish(bytes) sends them as they are: no message objects to fill and no
-    conversion by rclpy (measured at about a third of a publish). ``usable`` says whether they
+    conversion by rclpy (docs/benchmarks.md, stage costs). ``usable`` says whether they
     equal rclpy's own serialisation of the same messages, checked once here: a middleware that
     serialises differently gets message objects from the caller instead.
     """
@@ -161,8 +161,8 @@ class GridMarkers:
     """
     The taxel grid of :func:`heatmap_markers` (clearing marker, coloured grid) as CDR bytes.
 
-    rclpy converts a grid's points and colours from Python objects at every publish (about
-    0.6 ms of GIL at 16 x 16, measured); here a MarkerArray serialised once by rclpy is copied
+    rclpy converts a grid's points and colours from Python objects at every publish, holding
+    the GIL throughout, in one call; here a MarkerArray serialised once by rclpy is copied
     and only its two stamps and its block of colours are written per publish.
     """
 
