@@ -269,11 +269,11 @@ class EstimationHost:
             known = self._serialized = conversions.SerializedMessages(frame_id)
         return known if known.usable else None
 
-    def reject(self, sequence: int, err: Exception) -> None:
+    def reject(self, sequence, err: Exception) -> None:
         """Count a scan that cannot be estimated and say why (at most every 5 s)."""
         self._bad_frames += 1
-        self.node.get_logger().warning(f'dropping frame {sequence}: {err}',
-                                       throttle_duration_sec=5.0)
+        which = 'a frame' if sequence is None else f'frame {sequence}'
+        self.node.get_logger().warning(f'dropping {which}: {err}', throttle_duration_sec=5.0)
 
     def _estimator_for(self, pitch_m: float) -> ContactEstimator:
         """Return the estimator, rebuilt first if the frames' taxel pitch has changed."""

@@ -6,7 +6,7 @@ from builtin_interfaces.msg import Time
 from geometry_msgs.msg import WrenchStamped
 import numpy as np
 import pytest
-from rclpy.serialization import deserialize_message
+from rclpy.serialization import deserialize_message, serialize_message
 from skin_driver.core.estimation.heatmap import grey_levels
 from skin_driver.core.estimation.pipeline import Contact
 from skin_driver.ros import conversions
@@ -176,3 +176,29 @@ def test_grid_markers_as_bytes_read_back_as_the_markers_they_stand_for(shape):
     assert markers == MarkerArray(markers=conversions.grid_markers(header, force, 0.004, 10.0))
     assert markers == MarkerArray(markers=conversions.heatmap_markers(
         header, force, 0.004, [], 10.0).markers)
+
+
+def test_skin_frame_bytes_are_read_into_the_scans_layers():
+    assert conversions.skin_frames_read_back()
+    rng = np.random.default_rng(4)
+    top, bottom = (rng.integers(0, 4096, (3, 5)).astype(np.uint16) for _ in range(2))
+    header = Header(stamp=Time(sec=3, nanosec=4), frame_id='arm/skin_ä')
+    data = serialize_message(conversions.skin_frame_to_msg(header, 9, 77, 0.0078125, top,
+                                                           bottom))
+    got = conversions.read_skin_frame(data)
+    assert got[:4] == (header, 9, 77, 0.0078125)
+    np.testing.assert_array_equal(got[4], top)
+    np.testing.assert_array_equal(got[5], bottom)
+    assert not got[4].flags.writeable
+
+
+def test_skin_frame_bytes_of_another_grid_or_cut_short_are_refused():
+    header = Header(stamp=Time(sec=3, nanosec=4), frame_id='skin_link')
+    msg = conversions.skin_frame_to_msg(header, 1, 2, 0.005, np.zeros((4, 4), np.uint16),
+                                        np.zeros((4, 4), np.uint16))
+    msg.rows = 5
+    with pytest.raises(ValueError, match='expected 20 each'):
+        conversions.read_skin_frame(serialize_message(msg))
+    msg.rows = 4
+    with pytest.raises(ValueError, match='not a whole SkinFrame'):
+        conversions.read_skin_frame(serialize_message(msg)[:60])

@@ -6,6 +6,7 @@ middleware that serialises otherwise than plain little-endian CDR gets message o
 caller instead (``usable`` is False).
 """
 
+import struct
 from struct import Struct
 from typing import Sequence
 
@@ -13,6 +14,7 @@ from builtin_interfaces.msg import Time
 from geometry_msgs.msg import Vector3, Wrench, WrenchStamped
 import numpy as np
 from rclpy.serialization import deserialize_message, serialize_message
+from skin_driver.core.estimation.recording import layers_of
 from skin_msgs.msg import SkinFrame, TactileContact, TactileContactArray
 from std_msgs.msg import Header
 from visualization_msgs.msg import MarkerArray
@@ -204,3 +206,64 @@ class GridMarkers:
                 markers=grid_markers(header, shuffled, pitch_m, 255.0))
         except Exception:  # noqa: B902 - any failure to read them back means "not usable"
             return False
+
+
+class _Cursor:
+    """Read CDR fields in order from bytes, aligned as the writer aligned them."""
+
+    def __init__(self, data: bytes):
+        self.data, self.offset = data, len(_CDR_LE)
+
+    def take(self, fmt: str, align: int) -> tuple:
+        self.offset += -(self.offset - len(_CDR_LE)) % align
+        values = struct.unpack_from('<' + fmt, self.data, self.offset)
+        self.offset += struct.calcsize('<' + fmt)
+        return values
+
+    def text(self) -> str:
+        (length,) = self.take('I', 4)  # with its NUL
+        start, self.offset = self.offset, self.offset + length
+        return self.data[start:self.offset - 1].decode()
+
+    def counts(self) -> np.ndarray:
+        (count,) = self.take('I', 4)
+        layer = np.frombuffer(self.data, '<u2', count, self.offset)
+        self.offset += 2 * count
+        return layer
+
+
+def read_skin_frame(data: bytes) -> tuple:
+    """
+    Return (header, sequence, device time, pitch, top, bottom) of a SkinFrame's CDR bytes.
+
+    The layers are read-only (rows, cols) views of ``data``. Raise ValueError for bytes that are
+    not a whole SkinFrame or whose layers do not match its grid, as skin_frame_layers does.
+    """
+    cursor = _Cursor(data)
+    try:
+        sec, nanosec = cursor.take('iI', 4)
+        frame_id = cursor.text()
+        (sequence,) = cursor.take('I', 4)
+        (device_time_us,) = cursor.take('Q', 8)
+        rows, cols = cursor.take('HH', 2)
+        (pitch,) = cursor.take('f', 4)
+        top, bottom = cursor.counts(), cursor.counts()
+    except (struct.error, ValueError) as err:  # UnicodeDecodeError is a ValueError
+        raise ValueError(f'not a whole SkinFrame: {err}') from None
+    header = Header(stamp=Time(sec=sec, nanosec=nanosec), frame_id=frame_id)
+    return (header, sequence, device_time_us, pitch) + layers_of(rows, cols, top, bottom)
+
+
+def skin_frames_read_back() -> bool:
+    """Return whether :func:`read_skin_frame` reads rclpy's own SkinFrame bytes right."""
+    top = np.arange(15, dtype=np.uint16).reshape(3, 5)
+    bottom = top[::-1].copy()
+    pitch = 2.0 ** -7  # exact in the message's float32
+    header = Header(stamp=Time(sec=3, nanosec=4), frame_id='abc')
+    try:
+        got = read_skin_frame(serialize_message(
+            skin_frame_to_msg(header, 7, 2 ** 40 + 3, pitch, top, bottom)))
+    except ValueError:
+        return False
+    return (got[:4] == (header, 7, 2 ** 40 + 3, pitch) and np.array_equal(got[4], top)
+            and np.array_equal(got[5], bottom))
