@@ -4,6 +4,7 @@ Bring up the skin: serial driver and direction node, optionally the simulated sk
     ros2 launch skin_driver skin.launch.py port:=/dev/ttyACM0   # a real skin
     ros2 launch skin_driver skin.launch.py sim:=true rviz:=true  # simulated skin + heatmap
     ros2 launch skin_driver skin.launch.py fused:=true          # estimate in the driver process
+    ros2 launch skin_driver skin.launch.py fused:=true realtime_priority:=80  # reader SCHED_FIFO
     ros2 launch skin_driver skin.launch.py namespace:=left parent_frame:=left_forearm_link \
         mount_z:=0.05 mount_pitch:=1.5708                      # mounted on a robot link
 
@@ -113,6 +114,12 @@ def generate_launch_description():
                               description='Estimate contacts inside the driver process, on its '
                                           'serial reader thread (1-2 kHz), instead of in a '
                                           'separate direction node.'),
+        DeclareLaunchArgument('realtime_priority', default_value='0',
+                              description="SCHED_FIFO priority (1..99) of the driver's serial "
+                                          'reader thread; 0: normal priority. Without '
+                                          'CAP_SYS_NICE or an rtprio limit the driver warns '
+                                          'and reads at normal priority (README, "Real-time '
+                                          'priority").'),
         DeclareLaunchArgument('frame_id', default_value='',
                               description="The skin's frame in every header; empty: "
                                           '<namespace>_skin_link (skin_link in the namespace '
@@ -133,6 +140,8 @@ def generate_launch_description():
     driver = LifecycleNode(
         package='skin_driver', executable='driver', name='skin_driver', namespace=namespace,
         parameters=[params_file, {'port': port, 'fused': fused,
+                                  'realtime_priority': ParameterValue(
+                                      LaunchConfiguration('realtime_priority'), value_type=int),
                                   # as a string even when empty (empty YAML would be null)
                                   'frame_id': ParameterValue(LaunchConfiguration('frame_id'),
                                                              value_type=str)}],

@@ -31,8 +31,21 @@ class DirectionNode(Node):
         super().__init__('skin_direction', **kwargs)
         self.host = EstimationHost(self)
         if subscribe:
-            self.create_subscription(SkinFrame, 'frame', self._on_frame, qos.stream(),
-                                     **qos.overridable())
+            # The scan's bytes as they arrive, read straight into the layers, where rclpy's
+            # own bytes read back right: no message object per scan.
+            raw = conversions.skin_frames_read_back()
+            self.create_subscription(SkinFrame, 'frame',
+                                     self._on_frame_bytes if raw else self._on_frame,
+                                     qos.stream(), raw=raw, **qos.overridable())
+
+    def _on_frame_bytes(self, data: bytes) -> None:
+        try:
+            header, sequence, device_time_us, pitch, top, bottom = conversions.read_skin_frame(
+                data)
+        except ValueError as err:
+            self.host.reject(None, err)  # its sequence number is not known for sure
+            return
+        self.host.process(header, sequence, device_time_us, pitch, top, bottom)
 
     def _on_frame(self, msg: SkinFrame) -> None:
         try:

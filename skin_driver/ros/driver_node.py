@@ -8,6 +8,12 @@ walks to active on its own, as a plain node would.
 Publishes (sensor-data QoS): frame (skin_msgs/SkinFrame), top/image_raw and bottom/image_raw
 (sensor_msgs/Image, mono16, raw counts). Diagnostics on /diagnostics once a second.
 
+The reader thread does only what each scan needs: read, decode, (fused) estimate and publish
+contacts, publish frame while someone subscribes to it. Raw images are built only while someone
+subscribes, on a thread of their own from the newest scan (a viewer may miss scans; the reader
+never waits for it). With realtime_priority the reader thread runs SCHED_FIFO at it when the
+process may, else at normal priority with a warning (README, "Real-time priority").
+
 Diagnostics: OK while frames arrive; WARN when the link is stalled or, within the last period,
 frames were dropped (sequence gaps, frames lost while the device was away) or corrupt frames
 were rejected (line noise); ERROR while the device is missing or when it only sends frames of
@@ -31,6 +37,7 @@ exact, so consumers use it for the interval between scans and for latency measur
 import threading
 import time
 
+from builtin_interfaces.msg import Time
 from rcl_interfaces.msg import SetParametersResult
 import rclpy
 from rclpy.lifecycle import Node, State, TransitionCallbackReturn
@@ -38,10 +45,12 @@ from sensor_msgs.msg import Image
 from skin_driver.core.protocol.health import LinkHealth
 from skin_driver.core.protocol.link import (CONNECTED, default_port, DISCONNECTED, SerialLink,
                                             STOPPED)
+from skin_driver.core.protocol.realtime import StageCpu
 from skin_driver.core.protocol.wire import FrameDecoder
 from skin_driver.ros import conversions, diagnostics, qos
 from skin_driver.ros.direction_node import DirectionNode
 from skin_driver.ros.frames import default_frame_id
+from skin_driver.ros.hot_path import LatestOnly, Listened
 from skin_driver.ros.params import accept_whole_numbers, declare
 from skin_driver.ros.spin import create_or_exit, spin_nodes
 from skin_msgs.msg import SkinFrame
@@ -52,6 +61,8 @@ START_UP_PARAMETERS = ('autostart', 'fused', 'use_sim_time')
 # Ctrl-C reaches a simulated board as well as the driver: a port lost within this long before the
 # context shuts down belongs to the shutdown, not to a fault.
 SHUTDOWN_GRACE_S = 0.25
+# The reader thread's stages whose CPU per scan /diagnostics reports (deliver: the rest).
+READER_STAGES = ('read', 'decode', 'estimation', 'frame', 'images', 'deliver')
 
 
 class SkinDriverNode(Node):
@@ -75,7 +86,10 @@ class SkinDriverNode(Node):
         self._diag = diagnostics.DiagnosticPublisher(self)
         self._diag_timer = self.create_timer(self._p('diagnostics_period'), self._report)
         self.estimation = None  # an EstimationHost fed on the reader thread when fused
+        self._listened = self._images = None
+        self._system_time = not self.get_clock().ros_time_is_active
         self.add_on_set_parameters_callback(self._check_new_parameters)
+        self.add_post_set_parameters_callback(self._follow_sim_time)
 
     @property
     def link(self):
@@ -105,7 +119,12 @@ class SkinDriverNode(Node):
                 'TF frame of the skin patch in every header; empty: from the namespace '
                 '(<namespace>_skin_link, skin_link in the namespace skin or none).')
         declare(self, 'publish_images', True,
-                'Also publish each layer as a mono16 image (costs time at kHz rates).')
+                'Offer each layer as a mono16 image, built only while someone subscribes, on a '
+                'thread of its own from the newest scan.')
+        declare(self, 'realtime_priority', 0,
+                'SCHED_FIFO priority of the serial reader thread (1..99), 0: normal priority. '
+                'Needs CAP_SYS_NICE or an rtprio limit at least as high; without either the '
+                'driver warns and reads at normal priority.', low=0, high=99)
         declare(self, 'read_timeout', 0.05,
                 'Seconds one read may block; bounds how fast the reader notices a stop.',
                 low=0.001, high=1.0)
@@ -126,6 +145,10 @@ class SkinDriverNode(Node):
 
     def _p(self, name):
         return self.get_parameter(name).value
+
+    def _follow_sim_time(self, params) -> None:
+        # rclpy's time source has taken the change already (an on-set callback).
+        self._system_time = not self.get_clock().ros_time_is_active
 
     def _port(self) -> str:
         return self._p('port').strip() or default_port(self.get_namespace())
@@ -152,17 +175,21 @@ class SkinDriverNode(Node):
             return TransitionCallbackReturn.FAILURE
         self._frame_id = self._p('frame_id').strip() or default_frame_id(self.get_namespace())
         self._pitch = float(self._p('pitch'))
+        self._serialized = conversions.SerializedMessages(self._frame_id)
         self._pubs['frame'] = self.create_lifecycle_publisher(SkinFrame, 'frame', qos.stream(),
                                                               **qos.overridable())
         if self._p('publish_images'):
             for layer in ('top', 'bottom'):
                 self._pubs[layer] = self.create_lifecycle_publisher(
                     Image, f'{layer}/image_raw', qos.stream(), **qos.overridable())
+            self._images = LatestOnly(self._publish_images, 'skin-images', self._images_failed)
+        self._listened = Listened(self._pubs)
         decoder = FrameDecoder(expected_shape=(self._p('rows'), self._p('cols')))
         self._link = SerialLink(
             self._port(), self._p('baud'), decoder, self._publish_frames, self._on_link_state,
             read_timeout_s=self._p('read_timeout'), stall_timeout_s=self._p('stall_timeout'),
-            backoff_min_s=self._p('reconnect_min'), backoff_max_s=self._p('reconnect_max'))
+            backoff_min_s=self._p('reconnect_min'), backoff_max_s=self._p('reconnect_max'),
+            priority=self._p('realtime_priority'), cpu=StageCpu(READER_STAGES))
         self._rate = diagnostics.RateMeter(time.monotonic())
         self._health = LinkHealth((self._p('rows'), self._p('cols')))
         self.destroy_timer(self._diag_timer)
@@ -177,6 +204,11 @@ class SkinDriverNode(Node):
         result = super().on_activate(state)
         self._lifecycle = 'active'
         self._link.start()
+        scheduling = self._link.scheduling
+        if scheduling.warning:
+            self.get_logger().warning(f'serial reader: {scheduling.warning}')
+        else:
+            self.get_logger().info(f'serial reader at {scheduling.policy}')
         return result
 
     def on_deactivate(self, state: State) -> TransitionCallbackReturn:
@@ -210,29 +242,58 @@ class SkinDriverNode(Node):
         if self._link is not None:
             self._link.stop()
             self._link = None
+        if self._images is not None:
+            self._images.stop()
+            self._images = None
         for pub in self._pubs.values():
             self.destroy_lifecycle_publisher(pub)
         self._pubs = {}
 
     # ---- data path (runs on the link's thread) ---------------------------------------------
     def _publish_frames(self, frames, receive_monotonic: float) -> None:
-        stamp = self.get_clock().now().to_msg()
-        header = conversions.make_header(stamp, self._frame_id)
+        header = conversions.make_header(self._now(), self._frame_id)
+        listened = self._listened(receive_monotonic)
+        cpu = self._link.cpu
         for frame in frames:
             if self.estimation is not None:
                 # Contacts first: they are what a controller waits for.
                 self.estimation.process(header, frame.seq, frame.device_time_us, self._pitch,
                                         frame.top, frame.bottom)
+                cpu.mark('estimation')
             # Nobody listening (fused, nothing recording): no message to build and serialise.
-            if self._pubs['frame'].get_subscription_count():
-                self._pubs['frame'].publish(conversions.skin_frame_to_msg(
-                    header, frame.seq, frame.device_time_us, self._pitch, frame.top,
-                    frame.bottom))
-            if 'top' in self._pubs:
-                self._pubs['top'].publish(conversions.counts_to_image(header, frame.top))
-                self._pubs['bottom'].publish(conversions.counts_to_image(header, frame.bottom))
+            if listened['frame']:
+                self._pubs['frame'].publish(self._frame_message(header, frame))
+                cpu.mark('frame')
+        if self._images is not None and (listened['top'] or listened['bottom']):
+            self._images.offer((header, frames[-1], listened))
+            cpu.mark('images')
         self._rate.add(len(frames))
         self._burst = max(self._burst, len(frames))
+
+    def _frame_message(self, header, frame):
+        """Return a scan's SkinFrame as CDR bytes, or as a message where those are not rmw's."""
+        serialized = self._serialized
+        if serialized.usable:
+            return serialized.frame(header.stamp.sec, header.stamp.nanosec, frame.seq,
+                                    frame.device_time_us, self._pitch, frame.top, frame.bottom)
+        return conversions.skin_frame_to_msg(header, frame.seq, frame.device_time_us,
+                                             self._pitch, frame.top, frame.bottom)
+
+    def _now(self) -> Time:
+        """Return the node's time now: the system clock's, read directly, unless sim time."""
+        if self._system_time:
+            sec, nanosec = divmod(time.time_ns(), 1_000_000_000)
+            return Time(sec=sec, nanosec=nanosec)
+        return self.get_clock().now().to_msg()
+
+    def _publish_images(self, item) -> None:
+        header, frame, listened = item
+        for layer, counts in (('top', frame.top), ('bottom', frame.bottom)):
+            if listened[layer]:
+                self._pubs[layer].publish(conversions.counts_to_image(header, counts))
+
+    def _images_failed(self, err: Exception) -> None:
+        self.get_logger().warning(f'raw image not published: {err}', throttle_duration_sec=5.0)
 
     def _on_link_state(self, state: str, detail: str) -> None:
         self._state_detail = detail
@@ -265,8 +326,12 @@ class SkinDriverNode(Node):
         rate, _ = self._rate.take(time.monotonic())
         burst, self._burst = self._burst, 0
         health = self._health.assess(self._link, self._state_detail)
+        cpu = {f'reader CPU per scan, {stage} [us]': round(us, 1)
+               for stage, us in self._link.cpu.take().items()}
         values = {'port': self._port(), 'frame rate [Hz]': rate,
-                  'largest burst [frames]': burst, **health.values}
+                  'largest burst [frames]': burst,
+                  'reader scheduling': self._link.scheduling.policy,
+                  **cpu, **health.values}
         self._diag.publish([diagnostics.make_status(
             f'{self.get_fully_qualified_name()}: skin link', self._port(), health.level,
             health.message, values)])

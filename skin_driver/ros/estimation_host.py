@@ -14,7 +14,9 @@ executor. The host is the one owner of the live estimator, which never changes o
 hot path takes no lock and reads it once per scan, and every change (tare, calibration,
 parameters, a new taxel pitch) builds a new estimator from the current one under a lock
 (:meth:`EstimationHost._swap`) and puts it in force by one reference assignment. Work a lower
-rate does as well (heatmaps, markers, diagnostics) runs on timers, on the latest scan only.
+rate does as well (heatmaps, markers, diagnostics) runs on timers, on the latest scan only, and
+heatmaps and markers only while someone subscribes to them. Contacts, contact and wrench leave
+as CDR bytes written directly (conversions.SerializedMessages), to topics that have subscribers.
 """
 
 from dataclasses import replace
@@ -28,14 +30,16 @@ import numpy as np
 from rcl_interfaces.msg import SetParametersResult
 from rclpy.event_handler import PublisherEventCallbacks
 from sensor_msgs.msg import Image
-from skin_driver.core.estimation.heatmap import colour_map
+from skin_driver.core.estimation.heatmap import colour_map, grey_levels
 from skin_driver.core.estimation.pipeline import ContactEstimator, EstimatorConfig
 from skin_driver.core.estimation.shift import DEFAULT_METHOD, method_names
 from skin_driver.core.estimation.tare import RecentScans
+from skin_driver.core.protocol.realtime import StageCpu
 from skin_driver.ros import conversions, diagnostics, qos
 from skin_driver.ros.calibration_services import CalibrationServices
 from skin_driver.ros.estimator_params import estimator_config, ESTIMATOR_PARAMETERS
 from skin_driver.ros.frames import default_frame_id
+from skin_driver.ros.hot_path import Listened
 from skin_driver.ros.params import accept_whole_numbers, check, declare, ParameterError
 from skin_msgs.msg import TactileContact, TactileContactArray
 from std_srvs.srv import Trigger
@@ -67,6 +71,8 @@ class EstimationHost:
         # scan, the frame its namespace gives).
         self._skin = default_frame_id(node.get_namespace())
         self._writer = conversions.ContactArrayWriter()
+        self._serialized = None
+        self._cpu = StageCpu(('estimate', 'publish', 'bookkeeping'))
         self._rate = diagnostics.RateMeter(time.monotonic())
         self._rebuilders = []
 
@@ -78,14 +84,22 @@ class EstimationHost:
                                                    **quiet)
         self._pub_contact = node.create_publisher(TactileContact, 'contact', qos.stream(), **quiet)
         self._pub_wrench = node.create_publisher(WrenchStamped, 'wrench', qos.stream(), **quiet)
+        # The viz timer runs only while rviz's topics have subscribers: told by their matched
+        # events (three entities) rather than woken at viz_rate to ask.
+        self._viz_watchers = {}
         self._pub_heat = {layer: node.create_publisher(Image, f'{layer}/heatmap', qos.VIZ_DEPTH,
-                                                       **quiet)
+                                                       **self._viz_events(layer))
                           for layer in ('top', 'bottom')}
-        self._pub_markers = node.create_publisher(MarkerArray, 'markers', qos.VIZ_DEPTH, **quiet)
+        self._pub_markers = node.create_publisher(MarkerArray, 'markers', qos.VIZ_DEPTH,
+                                                  **self._viz_events('markers'))
+        self._listened = Listened({'contacts': self._pub_contacts, 'contact': self._pub_contact,
+                                   'wrench': self._pub_wrench, 'markers': self._pub_markers,
+                                   **self._pub_heat})
         node.create_service(Trigger, '~/tare', self._on_tare)
         self._diag = diagnostics.DiagnosticPublisher(node)
         node.create_timer(self._p('diagnostics_period'), self._report)
         self._viz_timer = None
+        self._grid = None  # conversions.GridMarkers of the latest skin seen
         self._start_viz_timer()
         node.add_on_set_parameters_callback(self._check_new_parameters)
         node.add_post_set_parameters_callback(self._apply_new_parameters)
@@ -190,6 +204,8 @@ class EstimationHost:
     def process(self, header, sequence: int, device_time_us: int, pitch_m: float,
                 top: np.ndarray, bottom: np.ndarray) -> None:
         """Estimate the contacts of one scan and publish them; count a bad scan and go on."""
+        cpu = self._cpu
+        cpu.begin()
         try:
             if (top.shape, pitch_m) != self._skin_seen:
                 # A calibration made for another skin is refused before it is used.
@@ -199,20 +215,16 @@ class EstimationHost:
             start = time.perf_counter()
             contacts = estimator.process(top, bottom)
             cost = time.perf_counter() - start
+            cpu.mark('estimate')
             # Converting here means a non-finite value never reaches a publisher.
-            array = self._writer.fill(header, contacts, sequence, device_time_us)
+            fields = [conversions.contact_fields(c) for c in contacts]
         except ValueError as err:
             self.reject(sequence, err)
             return
-        # A topic nobody listens to costs a serialisation (10-30 us) for nothing: skipped, as
-        # image_transport skips its unwatched topics. A late subscriber gets the next scan.
-        if self._pub_contacts.get_subscription_count():
-            self._pub_contacts.publish(array)
-        if contacts and self._pub_contact.get_subscription_count():
-            # The array already holds the strongest contact's message: no second conversion.
-            self._pub_contact.publish(array.contacts[0])
-        if self._pub_wrench.get_subscription_count():
-            self._pub_wrench.publish(conversions.wrench_stamped(header, contacts))
+        now = time.monotonic()
+        self._publish(header, sequence, device_time_us, contacts, fields, self._listened(now))
+        cpu.mark('publish')
+        cpu.frames(1)
         self._frames += 1
         self._contacts += len(contacts)
         self._cost_sum += cost
@@ -220,16 +232,48 @@ class EstimationHost:
         if cost > self._cost_max:
             self._cost_max = cost
         self._rate.add()
-        self._recent.add(top, bottom, len(contacts), time.monotonic())
+        self._recent.add(top, bottom, len(contacts), now)
         self._latest = (header, pitch_m, top, bottom, contacts)
         self._skin = header.frame_id
         self.calibration.feed(top, bottom, contacts)
+        cpu.mark('bookkeeping')
 
-    def reject(self, sequence: int, err: Exception) -> None:
+    def _publish(self, header, sequence, device_time_us, contacts, fields, listened) -> None:
+        """Publish contacts, contact and wrench to those of them that have subscribers."""
+        # A topic nobody listens to costs a message and a publish for nothing: skipped, as
+        # image_transport skips its unwatched topics. A late subscriber is served within
+        # hot_path.REFRESH_S.
+        serialized = self._serialized_for(header.frame_id)
+        if serialized is not None:
+            sec, nanosec = header.stamp.sec, header.stamp.nanosec
+            contacts_msg = (lambda: serialized.contacts(sec, nanosec, sequence, device_time_us,
+                                                        fields))
+            contact_msg = (lambda: serialized.contact(sec, nanosec, fields[0]))
+            wrench_msg = (lambda: serialized.wrench(sec, nanosec, contacts))
+        else:  # a middleware that serialises otherwise than plain CDR: message objects
+            array = self._writer.fill(header, contacts, sequence, device_time_us)
+            contacts_msg = (lambda: array)
+            contact_msg = (lambda: array.contacts[0])
+            wrench_msg = (lambda: conversions.wrench_stamped(header, contacts))
+        if listened['contacts']:
+            self._pub_contacts.publish(contacts_msg())
+        if contacts and listened['contact']:
+            self._pub_contact.publish(contact_msg())
+        if listened['wrench']:
+            self._pub_wrench.publish(wrench_msg())
+
+    def _serialized_for(self, frame_id: str):
+        """Return the SerializedMessages of frame_id, or None if the middleware differs."""
+        known = self._serialized
+        if known is None or known.frame_id != frame_id:
+            known = self._serialized = conversions.SerializedMessages(frame_id)
+        return known if known.usable else None
+
+    def reject(self, sequence, err: Exception) -> None:
         """Count a scan that cannot be estimated and say why (at most every 5 s)."""
         self._bad_frames += 1
-        self.node.get_logger().warning(f'dropping frame {sequence}: {err}',
-                                       throttle_duration_sec=5.0)
+        which = 'a frame' if sequence is None else f'frame {sequence}'
+        self.node.get_logger().warning(f'dropping {which}: {err}', throttle_duration_sec=5.0)
 
     def _estimator_for(self, pitch_m: float) -> ContactEstimator:
         """Return the estimator, rebuilt first if the frames' taxel pitch has changed."""
@@ -244,27 +288,54 @@ class EstimationHost:
         return estimator
 
     # ---- rviz -------------------------------------------------------------------------------
+    def _viz_events(self, name: str) -> dict:
+        def matched(info) -> None:
+            self._viz_watchers[name] = info.current_count
+            self._start_viz_timer()
+        return {'event_callbacks': PublisherEventCallbacks(matched=matched,
+                                                           use_default_callbacks=False),
+                **qos.overridable()}
+
     def _start_viz_timer(self) -> None:
         if self._viz_timer is not None:
             self.node.destroy_timer(self._viz_timer)
             self._viz_timer = None
         rate = self._p('viz_rate')
-        if rate > 0:
+        if rate > 0 and any(self._viz_watchers.values()):
             self._viz_timer = self.node.create_timer(1.0 / rate, self._visualise)
 
     def _visualise(self) -> None:
         latest, self._latest = self._latest, None
-        if latest is None:
+        listened = self._listened(time.monotonic())
+        wanted = [name for name in ('top', 'bottom', 'markers') if listened[name]]
+        if latest is None or not wanted:
             return
         header, pitch, top, bottom, contacts = latest
         full = self._p('viz_full_scale')
-        top_force, bottom_force = self._estimator.conditioner.condition(top, bottom)
-        self._pub_heat['top'].publish(
-            conversions.rgb_to_image(header, colour_map(top_force, full)))
-        self._pub_heat['bottom'].publish(
-            conversions.rgb_to_image(header, colour_map(bottom_force, full)))
-        self._pub_markers.publish(conversions.heatmap_markers(
-            header, top_force, float(pitch), contacts, full))
+        forces = dict(zip(('top', 'bottom'),
+                          self._estimator.conditioner.condition(top, bottom)))
+        for layer in ('top', 'bottom'):
+            if layer in wanted:
+                self._pub_heat[layer].publish(
+                    conversions.rgb_to_image(header, colour_map(forces[layer], full)))
+        if 'markers' in wanted:
+            self._publish_markers(header, forces['top'], float(pitch), contacts, full)
+
+    def _publish_markers(self, header, force_map, pitch_m, contacts, full_scale_n) -> None:
+        """Publish the grid (as CDR bytes where they are rmw's), then the contacts' markers."""
+        grid = self._grid
+        if grid is None or grid.key != (header.frame_id, force_map.shape, pitch_m):
+            grid = self._grid = conversions.GridMarkers(header.frame_id, force_map.shape,
+                                                        pitch_m)
+        if grid.usable:
+            self._pub_markers.publish(grid.serialize(header.stamp.sec, header.stamp.nanosec,
+                                                     grey_levels(force_map, full_scale_n)))
+        else:
+            self._pub_markers.publish(MarkerArray(markers=conversions.grid_markers(
+                header, force_map, pitch_m, full_scale_n)))
+        if contacts:  # after the grid's message, whose first marker clears the old ones
+            self._pub_markers.publish(MarkerArray(
+                markers=conversions.contact_markers(header, contacts, pitch_m)))
 
     # ---- tare -------------------------------------------------------------------------------
     def _on_tare(self, request, response):
@@ -291,6 +362,8 @@ class EstimationHost:
             'contacts': self._contacts,
             'mean cost [us]': 1e6 * total / count if count else 0.0,
             'max cost [us]': 1e6 * worst,
+            **{f'CPU per scan, {stage} [us]': round(us, 1)
+               for stage, us in self._cpu.take().items()},
             **self.calibration.diagnostic_values(),
         }
         level, message = diagnostics.OK, self.calibration.note

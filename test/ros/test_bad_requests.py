@@ -14,15 +14,21 @@ import sys
 import textwrap
 import time
 
+from builtin_interfaces.msg import Time
+import numpy as np
 from pipeline import call, overrides, pipeline, scene, send_goal
 import pytest
 from rclpy.parameter import Parameter
-from rosutil import ros_context
+from rclpy.qos import qos_profile_sensor_data
+from rosutil import ros_context, spin_until
 from skin_driver.core.estimation import calibration as calib
+from skin_driver.ros import conversions
+from skin_driver.ros.conversions import status_values
 from skin_driver.ros.direction_node import DirectionNode
 from skin_driver.ros.driver_node import SkinDriverNode
 from skin_driver.ros.params import ParameterError
 from skin_msgs.action import Calibrate
+from skin_msgs.msg import SkinFrame
 from std_srvs.srv import Trigger
 
 NODES = {'driver': SkinDriverNode, 'direction': DirectionNode}
@@ -246,3 +252,23 @@ def test_calibration_file_survives_sigkill_at_random_moments(tmp_path):
     # target itself.
     assert sorted(p.name for p in tmp_path.iterdir() if not p.name.startswith('.')) == [
         'calibration.yaml']
+
+
+def test_a_frame_whose_layers_do_not_match_its_grid_is_counted_and_the_stream_goes_on(
+        tmp_path):
+    with pipeline(tmp_path, scene([])) as (_, _, direction, probe, executor):
+        assert spin_until(executor, lambda: len(probe.record.received_s) >= 5)
+        bad = conversions.skin_frame_to_msg(conversions.make_header(Time(), 'skin_link'), 1, 2,
+                                            0.005, np.zeros((4, 4), np.uint16),
+                                            np.zeros((4, 4), np.uint16))
+        bad.rows = 5
+        publisher = probe.node.create_publisher(SkinFrame, 'frame', qos_profile_sensor_data)
+        assert spin_until(executor, lambda: publisher.get_subscription_count() > 0)
+
+        def bad_frames():
+            status = probe.latest('contact estimation')
+            return status is not None and int(status_values(status)['bad frames']) >= 1
+        publisher.publish(bad)
+        assert spin_until(executor, bad_frames)
+        count = len(probe.record.received_s)
+        assert spin_until(executor, lambda: len(probe.record.received_s) >= count + 5)

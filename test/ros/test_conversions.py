@@ -2,12 +2,17 @@
 
 import math
 
+from builtin_interfaces.msg import Time
+from geometry_msgs.msg import WrenchStamped
 import numpy as np
 import pytest
+from rclpy.serialization import deserialize_message, serialize_message
+from skin_driver.core.estimation.heatmap import grey_levels
 from skin_driver.core.estimation.pipeline import Contact
 from skin_driver.ros import conversions
+from skin_msgs.msg import SkinFrame, TactileContact, TactileContactArray
 from std_msgs.msg import Header
-from visualization_msgs.msg import Marker
+from visualization_msgs.msg import Marker, MarkerArray
 
 HEADER = Header(frame_id='skin_link')
 
@@ -121,3 +126,79 @@ def test_a_reused_array_carries_each_scan_exactly_as_a_new_one_would():
     second = writer.fill(HEADER, one, sequence=6, device_time_us=8)
     assert second == conversions.contacts_to_array(HEADER, one, 6, 8)
     assert writer.fill(HEADER, [], 7, 9).contacts == []
+
+
+@pytest.mark.parametrize('frame_id', ['', 's', 'skin_link', 'left_skin_link', 'arm/skin_ä'])
+def test_serialized_messages_read_back_as_the_messages_they_stand_for(frame_id):
+    serialized = conversions.SerializedMessages(frame_id)
+    assert serialized.usable
+    header = Header(stamp=Time(sec=12, nanosec=345), frame_id=frame_id)
+    # Three contacts: each starts at another offset, so each gets other padding.
+    contacts = [_contact(), _contact(x_m=0.01, direction_valid=False, force_n=3.0),
+                _contact(y_m=0.02, azimuth_rad=-1.0, force_xyz_n=(1.0, -2.0, -4.0))]
+    for count in range(len(contacts) + 1):
+        some = contacts[:count]
+        fields = [conversions.contact_fields(c) for c in some]
+        array = deserialize_message(serialized.contacts(12, 345, 2 ** 32 + 6, 2 ** 40, fields),
+                                    TactileContactArray)
+        assert array == conversions.contacts_to_array(header, some, 6, 2 ** 40)
+        wrench = deserialize_message(serialized.wrench(12, 345, some), WrenchStamped)
+        assert wrench == conversions.wrench_stamped(header, some)
+    contact = deserialize_message(serialized.contact(12, 345, fields[2]), TactileContact)
+    assert contact == conversions.contact_to_msg(header, contacts[2])
+
+
+def test_contact_fields_refuse_what_a_message_never_carries():
+    with pytest.raises(ValueError, match='NaN or inf'):
+        conversions.contact_fields(_contact(x_m=math.nan))
+
+
+@pytest.mark.parametrize('shape', [(16, 16), (3, 5), (1, 1)])
+def test_a_serialized_skin_frame_reads_back_as_the_message(shape):
+    serialized = conversions.SerializedMessages('left_skin_link')
+    rng = np.random.default_rng(3)
+    top, bottom = (rng.integers(0, 4096, shape).astype(np.uint16) for _ in range(2))
+    header = Header(stamp=Time(sec=3, nanosec=4), frame_id='left_skin_link')
+    frame = deserialize_message(serialized.frame(3, 4, 2 ** 32 + 9, 77, 0.005, top, bottom),
+                                SkinFrame)
+    assert frame == conversions.skin_frame_to_msg(header, 9, 77, frame.pitch, top, bottom)
+    assert frame.pitch == pytest.approx(0.005)
+    np.testing.assert_array_equal(conversions.skin_frame_layers(frame)[1], bottom)
+
+
+@pytest.mark.parametrize('shape', [(16, 16), (3, 5), (1, 1)])
+def test_grid_markers_as_bytes_read_back_as_the_markers_they_stand_for(shape):
+    grid = conversions.GridMarkers('left_skin_link', shape, 0.004)
+    assert grid.usable
+    force = np.random.default_rng(5).uniform(0.0, 12.0, shape)
+    header = Header(stamp=Time(sec=8, nanosec=9), frame_id='left_skin_link')
+    markers = deserialize_message(grid.serialize(8, 9, grey_levels(force, 10.0)), MarkerArray)
+    assert markers == MarkerArray(markers=conversions.grid_markers(header, force, 0.004, 10.0))
+    assert markers == MarkerArray(markers=conversions.heatmap_markers(
+        header, force, 0.004, [], 10.0).markers)
+
+
+def test_skin_frame_bytes_are_read_into_the_scans_layers():
+    assert conversions.skin_frames_read_back()
+    rng = np.random.default_rng(4)
+    top, bottom = (rng.integers(0, 4096, (3, 5)).astype(np.uint16) for _ in range(2))
+    header = Header(stamp=Time(sec=3, nanosec=4), frame_id='arm/skin_ä')
+    data = serialize_message(conversions.skin_frame_to_msg(header, 9, 77, 0.0078125, top,
+                                                           bottom))
+    got = conversions.read_skin_frame(data)
+    assert got[:4] == (header, 9, 77, 0.0078125)
+    np.testing.assert_array_equal(got[4], top)
+    np.testing.assert_array_equal(got[5], bottom)
+    assert not got[4].flags.writeable
+
+
+def test_skin_frame_bytes_of_another_grid_or_cut_short_are_refused():
+    header = Header(stamp=Time(sec=3, nanosec=4), frame_id='skin_link')
+    msg = conversions.skin_frame_to_msg(header, 1, 2, 0.005, np.zeros((4, 4), np.uint16),
+                                        np.zeros((4, 4), np.uint16))
+    msg.rows = 5
+    with pytest.raises(ValueError, match='expected 20 each'):
+        conversions.read_skin_frame(serialize_message(msg))
+    msg.rows = 4
+    with pytest.raises(ValueError, match='not a whole SkinFrame'):
+        conversions.read_skin_frame(serialize_message(msg)[:60])

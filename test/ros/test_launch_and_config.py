@@ -109,8 +109,8 @@ def test_launch_file_declares_its_arguments_and_nodes():
     assert isinstance(description, LaunchDescription)
     names = {a.name for a in description.entities if isinstance(a, DeclareLaunchArgument)}
     assert names == {'port', 'params_file', 'namespace', 'sim', 'scene', 'sim_rate', 'rviz',
-                     'fused', 'frame_id', 'parent_frame', 'mount_x', 'mount_y', 'mount_z',
-                     'mount_roll', 'mount_pitch', 'mount_yaw'}
+                     'fused', 'realtime_priority', 'frame_id', 'parent_frame', 'mount_x',
+                     'mount_y', 'mount_z', 'mount_roll', 'mount_pitch', 'mount_yaw'}
     executables = [getattr(a, 'node_executable', None) for a in description.entities]
     assert {'driver', 'direction'} <= set(executables)
     # ExecuteProcess keeps its name as substitutions until launch performs them (nodes have

@@ -16,10 +16,14 @@ def to_unit(values: np.ndarray, full_scale: float) -> np.ndarray:
     return np.clip(unit, 0.0, 1.0)
 
 
+def grey_levels(values: np.ndarray, full_scale: float) -> np.ndarray:
+    """Return values as uint8 levels 0..255 with full_scale as 255 (the colour map's index)."""
+    return np.round(to_unit(values, full_scale) * 255.0).astype(np.uint8)
+
+
 def colour_map(values: np.ndarray, full_scale: float) -> np.ndarray:
     """Return a rows x cols x 3 uint8 RGB image of values (inferno: dark = none, yellow = full)."""
-    grey = np.round(to_unit(values, full_scale) * 255.0).astype(np.uint8)
-    bgr = cv2.applyColorMap(grey, cv2.COLORMAP_INFERNO)
+    bgr = cv2.applyColorMap(grey_levels(values, full_scale), cv2.COLORMAP_INFERNO)
     return np.ascontiguousarray(bgr[..., ::-1])
 
 

@@ -17,12 +17,15 @@ SAME_BOARD_TOLERANCE_S.
 
 from dataclasses import dataclass
 import os
+import select
 import threading
 import time
 from typing import Callable, List, Optional
 
 import serial
 
+from skin_driver.core.protocol.realtime import (name_this_thread, NORMAL, schedule_this_thread,
+                                                Scheduling, StageCpu)
 from skin_driver.core.protocol.wire import Frame, FrameDecoder, MAX_SEQ
 
 CONNECTING = 'connecting'
@@ -33,6 +36,8 @@ STOPPED = 'stopped'
 
 # How often a missing device path is looked for while the link waits to reopen it.
 PATH_POLL_S = 0.05
+# Most bytes one read takes: what a pty or a USB CDC buffer holds.
+READ_MAX = 65536
 # Slack between the device clock and the host clock across a reconnect (latency, backlog).
 SAME_BOARD_TOLERANCE_S = 1.0
 
@@ -72,6 +77,10 @@ class SerialLink:
 
     on_frames(frames, monotonic_receive_time) is called from the link's thread for every read
     that completed at least one frame; on_state(state, detail) whenever the link changes state.
+    With a priority (1..99) the thread asks for SCHED_FIFO at it (core.protocol.realtime);
+    ``scheduling`` says what it got once start() has returned. ``cpu`` (a StageCpu with at
+    least the stages read, decode and deliver) measures the thread's CPU per stage; on_frames
+    may mark stages of its own in it.
     """
 
     def __init__(self, port: str, baud: int, decoder: FrameDecoder,
@@ -79,8 +88,13 @@ class SerialLink:
                  on_state: Callable[[str, str], None] = lambda state, detail: None,
                  read_timeout_s: float = 0.05, stall_timeout_s: float = 1.0,
                  backoff_min_s: float = 0.1, backoff_max_s: float = 2.0,
-                 open_port: Optional[Callable[..., serial.SerialBase]] = None):
+                 open_port: Optional[Callable[..., serial.SerialBase]] = None,
+                 priority: int = 0, cpu: Optional[StageCpu] = None):
         self.port = port
+        self.cpu = cpu or StageCpu(('read', 'decode', 'deliver'))
+        self.priority = priority
+        self.scheduling = Scheduling(NORMAL)
+        self._scheduled = threading.Event()
         self.baud = baud
         self.decoder = decoder
         self.stats = LinkStats()
@@ -94,6 +108,7 @@ class SerialLink:
         self._stop = threading.Event()
         self._thread: Optional[threading.Thread] = None
         self._serial: Optional[serial.SerialBase] = None
+        self._read: Callable[[], bytes] = bytes
         self._last_frame: Optional[tuple] = None  # (seq, device time in us, host time in s)
         self._resumed = False
 
@@ -106,13 +121,15 @@ class SerialLink:
         return self._thread is not None and self._thread.is_alive()
 
     def start(self) -> None:
-        """Start reading in a daemon thread (idempotent)."""
+        """Start reading in a daemon thread (idempotent); return once it has its scheduling."""
         if self._thread is not None and self._thread.is_alive():
             return
         self._stop.clear()
+        self._scheduled.clear()
         self._thread = threading.Thread(target=self._run, name=f'skin-link {self.port}',
                                         daemon=True)
         self._thread.start()
+        self._scheduled.wait()
 
     def stop(self, timeout_s: float = 2.0) -> None:
         """Stop the thread and close the port."""
@@ -153,6 +170,7 @@ class SerialLink:
             self._set_state(DISCONNECTED if self.stats.connects else CONNECTING,
                             f'cannot open {self.port}: {err}')
             return False
+        self._read = reader(self._serial, self._read_timeout)
         self.stats.connects += 1
         self.stats.last_connect_s = time.monotonic()
         # Bytes buffered from the previous connection belong to a frame that will never finish.
@@ -162,6 +180,9 @@ class SerialLink:
         return True
 
     def _run(self) -> None:
+        name_this_thread('skin-reader')
+        self.scheduling = schedule_this_thread(self.priority)
+        self._scheduled.set()
         backoff = self._backoff[0]
         last_frame = time.monotonic()
         size_errors = self.decoder.stats.size_errors  # at the latest good frame
@@ -173,8 +194,10 @@ class SerialLink:
                     continue
                 backoff = self._backoff[0]
                 last_frame = time.monotonic()
+            cpu = self.cpu
+            cpu.begin()
             try:
-                data = self._serial.read(max(1, self._serial.in_waiting))
+                data = self._read()
             except (OSError, serial.SerialException, TypeError, AttributeError) as err:
                 # pyserial raises TypeError/AttributeError when the fd vanishes under a read.
                 self.stats.disconnects += 1
@@ -183,16 +206,20 @@ class SerialLink:
                 self._set_state(DISCONNECTED, f'lost {self.port}: {self.stats.last_error}')
                 continue
             now = time.monotonic()
+            cpu.mark('read')
             if data:
                 self.stats.bytes_read += len(data)
                 frames = self.decoder.feed(data)
+                cpu.mark('decode')
                 if frames:
+                    cpu.frames(len(frames))
                     self._follow_sequence(frames, now)
                     self.stats.frames += len(frames)
                     last_frame = now
                     size_errors = self.decoder.stats.size_errors
                     self._set_state(CONNECTED, f'reading {self.port}')
                     self._notify(self._on_frames, frames, now)
+                    cpu.mark('deliver')
             if now - last_frame > self._stall_timeout:
                 self._set_state(STALLED, self._stall_detail(now - last_frame, size_errors))
 
@@ -227,3 +254,34 @@ class SerialLink:
                 self.stats.frames_lost_reconnecting += step - 1
         last = frames[-1]
         self._last_frame = (last.seq, last.device_time_us, now)
+
+
+def reader(port: serial.SerialBase, timeout_s: float) -> Callable[[], bytes]:
+    """
+    Return a function that reads every byte the open port holds, waiting up to timeout_s.
+
+    A port with a file descriptor (a device, a pty) is read with one poll and one os.read of
+    all that is there: pyserial's read(in_waiting) takes two calls per frame when the first
+    byte of a frame is alone in the buffer. Pyserial URLs (socket://, loop://) keep its read.
+    A port that says it is ready but gives no byte is gone (pyserial says the same).
+    """
+    try:
+        fd = port.fileno()
+    except (AttributeError, OSError, ValueError):  # a URL handler has no descriptor
+        return lambda: port.read(max(1, port.in_waiting))
+    poller = select.poll()
+    poller.register(fd, select.POLLIN)
+    timeout_ms = max(1, round(1000 * timeout_s))
+
+    def read() -> bytes:
+        if not poller.poll(timeout_ms):
+            return b''
+        try:
+            data = os.read(fd, READ_MAX)
+        except BlockingIOError:  # pyserial opens ports non-blocking; someone else was quicker
+            return b''
+        if not data:
+            raise serial.SerialException(f'{port.port} reports readiness to read but returned '
+                                         'no data (device disconnected?)')
+        return data
+    return read

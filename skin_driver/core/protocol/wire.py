@@ -199,6 +199,13 @@ class FrameDecoder:
         """
         frames: list[Frame] = []
         view = memoryview(data).cast('B')
+        if not self._buf and type(data) is bytes:
+            # Nothing pending (the usual read of whole frames): decode in place, the layers are
+            # views of the caller's immutable bytes, and only an unfinished tail is kept. That
+            # tail is shorter than one frame, as _scan stops only inside a frame.
+            pos = self._scan(data, view, frames, copy=False)
+            self._buf += view[pos:]
+            return frames
         # Feeding in slices of one frame keeps the buffer below two frames whatever arrives.
         step = self._max_frame
         for start in range(0, len(view), step):
@@ -209,12 +216,16 @@ class FrameDecoder:
     def _parse(self, frames: list[Frame]) -> None:
         buf = self._buf
         with memoryview(buf) as view:
-            pos = self._scan(buf, view, frames)
+            pos = self._scan(buf, view, frames, copy=True)
         if pos:
             del buf[:pos]
 
-    def _scan(self, buf: bytearray, view: memoryview, frames: list[Frame]) -> int:
-        """Decode what the buffer holds and return how many leading bytes are used up."""
+    def _scan(self, buf, view: memoryview, frames: list[Frame], copy: bool) -> int:
+        """
+        Decode what buf (bytes or bytearray) holds; return how many leading bytes are used up.
+
+        copy: the layers are copied out of buf (a buffer that changes later), else they view it.
+        """
         stats = self.stats
         pos = 0
         end = len(buf)
@@ -259,7 +270,10 @@ class FrameDecoder:
                 stats.bytes_discarded += len(SYNC)
                 pos += len(SYNC)
                 continue
-            counts = np.frombuffer(bytes(view[pos + HEADER_SIZE:crc_at]), dtype=_COUNTS)
+            counts = np.frombuffer(buf, dtype=_COUNTS, count=2 * n, offset=pos + HEADER_SIZE)
+            if copy:
+                counts = counts.copy()
+                counts.flags.writeable = False
             if counts.max() > MAX_COUNT:
                 stats.crc_errors += 1
                 stats.bytes_discarded += len(SYNC)

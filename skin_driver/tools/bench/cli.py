@@ -4,6 +4,7 @@
 Usage::
 
     python -m skin_driver.tools.bench.cli [--quick] [--out DIR] [--skip-ros] [--no-profile]
+        [--e2e-only] [--e2e-seconds S] [--method M]
 
 Writes DIR/benchmarks.md, DIR/benchmarks.json and DIR/img/*.png (DIR defaults to docs/) from
 runs made on the spot, with the machine and versions they ran on. ``--quick`` takes about a
@@ -113,26 +114,8 @@ def run(args) -> dict:
     everything = os.sched_getaffinity(0)
     cpu = _pin()
     try:
-        methods = bench_core.bench_methods()
-        log('1. accuracy against speed')
-        rows = bench_core.accuracy_speed(cfg['grids'], cfg['shifts'], cfg['noises'],
-                                         cfg['frames'], methods, seed=args.seed, log=log)
-        res['accuracy'] = {'grids': cfg['grids'], 'shifts_taxels': cfg['shifts'],
-                           'noise_counts': cfg['noises'], 'frames': cfg['frames'],
-                           'methods': methods, 'skimage_upsample': bench_core.SKIMAGE_UPSAMPLE,
-                           'rows': rows,
-                           'summary': bench_core.pareto_summary(rows, methods, cfg['grids'])}
-        log("2. the seed's experiment")
-        res['seed'] = bench_core.seed_experiment(cfg['seed_repeats'], cfg['random_frames'],
-                                                 seed=args.seed)
-        log('5. the skin family')
-        res['family'] = bench_core.family(cfg['family_sizes'],
-                                          bench_core.family_methods(cfg['family_all_methods']),
-                                          seed=args.seed, log=log)
-        log('4. scale')
-        res['scaling'] = bench_core.scaling(cfg['scale_grids'], cfg['contacts'],
-                                            [DEFAULT_METHOD, 'seed'], cfg['scale_frames'],
-                                            cfg['scale_repeats'], seed=args.seed, log=log)
+        if not args.e2e_only:
+            _in_process(cfg, args, res, log)
     finally:
         # The ROS processes must not inherit the pin: they share the machine as deployed.
         os.sched_setaffinity(0, everything)
@@ -141,7 +124,10 @@ def run(args) -> dict:
         res['e2e'] = _e2e(cfg, args, log)
     res['how'] = {
         'command': 'python -m skin_driver.tools.bench.cli' + (' --quick' if args.quick else '')
-        + (' --skip-ros' if args.skip_ros else '') + ('' if args.profile else ' --no-profile'),
+        + (' --skip-ros' if args.skip_ros else '') + ('' if args.profile else ' --no-profile')
+        + (' --e2e-only' if args.e2e_only else '')
+        + (f' --e2e-seconds {args.e2e_seconds:g}' if args.e2e_seconds else '')
+        + (f' --method {args.method}' if args.method else ''),
         'pinned_cpu': cpu,
         'repetitions': (f'{cfg["frames"]} frames per accuracy cell; scale: '
                         f'{cfg["scale_frames"]} frames x {cfg["scale_repeats"]} repeats per '
@@ -157,25 +143,54 @@ def run(args) -> dict:
     return res
 
 
+def _in_process(cfg, args, res, log) -> None:
+    """Run the parts measured in this process (accuracy, seed, family, scale) into res."""
+    methods = bench_core.bench_methods()
+    log('1. accuracy against speed')
+    rows = bench_core.accuracy_speed(cfg['grids'], cfg['shifts'], cfg['noises'],
+                                     cfg['frames'], methods, seed=args.seed, log=log)
+    res['accuracy'] = {'grids': cfg['grids'], 'shifts_taxels': cfg['shifts'],
+                       'noise_counts': cfg['noises'], 'frames': cfg['frames'],
+                       'methods': methods, 'skimage_upsample': bench_core.SKIMAGE_UPSAMPLE,
+                       'rows': rows,
+                       'summary': bench_core.pareto_summary(rows, methods, cfg['grids'])}
+    log("2. the seed's experiment")
+    res['seed'] = bench_core.seed_experiment(cfg['seed_repeats'], cfg['random_frames'],
+                                             seed=args.seed)
+    log('5. the skin family')
+    res['family'] = bench_core.family(cfg['family_sizes'],
+                                      bench_core.family_methods(cfg['family_all_methods']),
+                                      seed=args.seed, log=log)
+    log('4. scale')
+    res['scaling'] = bench_core.scaling(cfg['scale_grids'], cfg['contacts'],
+                                        [DEFAULT_METHOD, 'seed'], cfg['scale_frames'],
+                                        cfg['scale_repeats'], seed=args.seed, log=log)
+
+
 def _e2e(cfg, args, log) -> dict:
     from skin_driver.tools.bench import end_to_end as bench_ros
     workdir = tempfile.mkdtemp(prefix='skin_bench_')
     try:
         load = [round(v, 2) for v in os.getloadavg()]
         runs = []
+        seconds = args.e2e_seconds or cfg['e2e_seconds']
         for priority in cfg['priorities']:
-            runs += bench_ros.end_to_end(cfg['rates'], cfg['e2e_seconds'], cfg['e2e_warmup'],
-                                         workdir, log=log, priority=priority)[0]
-        out = {'seconds': cfg['e2e_seconds'], 'warmup_s': cfg['e2e_warmup'], 'runs': runs,
+            # The rclpy floor is a reference at normal priority, beside both layouts.
+            layouts = bench_ros.LAYOUTS + (() if priority else (bench_ros.FLOOR,))
+            runs += bench_ros.end_to_end(cfg['rates'], seconds, cfg['e2e_warmup'], workdir,
+                                         layouts=layouts, log=log, priority=priority,
+                                         method=args.method)[0]
+        out = {'seconds': seconds, 'warmup_s': cfg['e2e_warmup'], 'runs': runs,
+               'method': args.method or DEFAULT_METHOD,
                'cores': os.cpu_count(), 'load_before': load,
                'load': [round(v, 2) for v in os.getloadavg()]}
         log('   stage costs')
         out['stage_costs_us'] = bench_ros.stage_costs(cfg['stage_repeats'])
         if args.profile:
             log('   profiled split run at 2 kHz')
-            _, profiles = bench_ros.end_to_end([2000.0], min(cfg['e2e_seconds'] / 2, 15.0), 1.0,
+            _, profiles = bench_ros.end_to_end([2000.0], min(seconds / 2, 15.0), 1.0,
                                                workdir, layouts=('split',), profile=True,
-                                               log=log)
+                                               log=log, method=args.method)
             out['profiles'] = profiles
         out['why'] = why_e2e(out)
         out['tradeoffs'] = tradeoffs(out)
@@ -247,6 +262,13 @@ def main(argv=None) -> int:
     parser.add_argument('--no-profile', dest='profile', action='store_false',
                         help='leave out the profiled 2 kHz run')
     parser.add_argument('--seed', type=int, default=0, help='random seed (0)')
+    parser.add_argument('--e2e-seconds', type=float, default=None,
+                        help='seconds measured per end-to-end run (default 60, --quick 3)')
+    parser.add_argument('--e2e-only', action='store_true',
+                        help='only the end-to-end part (layouts, floor, stage costs)')
+    parser.add_argument('--method', default=None,
+                        help='estimator of the end-to-end nodes and floor (default: the '
+                             "shipped config's)")
     parser.add_argument('--family-only', metavar='SKINS',
                         help='run only the skin family on these comma-separated skins (names or '
                              'held_out:N), every method and the oracle, and print its rows')

@@ -3,9 +3,15 @@ End-to-end part of the benchmark: simulated skin -> driver (-> direction node) -
 
 Two layouts, each process as in a deployment (and as ``make demo`` does): split (driver and
 direction node, scans over the frame topic) and fused (the driver estimates on its serial reader
-thread). The simulator prints ``SKIN_EPOCH``, the wall-clock instant of device time 0, so that
-each scan's device time becomes a host time; contacts messages carry the scan's sequence number
-and device time, so the probe counts losses by sequence and needs no frame subscription.
+thread), both with the shipped parameters; and beside them the rclpy floor
+(:mod:`skin_driver.tools.bench.floor`), measured the same way. The simulator prints
+``SKIN_EPOCH``, the wall-clock instant of device time 0, so that each scan's device time becomes
+a host time; contacts messages carry the scan's sequence number and device time, so the probe
+counts losses by sequence and needs no frame subscription.
+
+CPU per scan is split by thread (/proc/<pid>/task: the serial reader, the raw-image thread, the
+executor on the main thread, the middleware's threads) and, within the reader and the
+estimation, by stage (the nodes' own sampled thread-CPU figures on /diagnostics).
 """
 
 from __future__ import annotations
@@ -19,13 +25,14 @@ from geometry_msgs.msg import WrenchStamped
 import numpy as np
 from rclpy.node import Node
 from rclpy.qos import qos_profile_sensor_data
+from skin_driver.core.estimation.shift import DEFAULT_METHOD
 from skin_driver.core.protocol.wire import encode_frame, FrameDecoder
 from skin_driver.core.sim.physics import Press, render, SkinModel
 from skin_driver.ros import conversions
 from skin_driver.ros.direction_node import DirectionNode
 from skin_driver.ros.estimation_host import EstimationHost
 from skin_driver.tools.harness import (
-    overrides, ros_args, ros_session, spin_for, start_nodes, start_sim, stop, wait_for,
+    overrides, ros_args, ros_session, spawn, spin_for, start_nodes, start_sim, stop, wait_for,
     write_params)
 from skin_driver.tools.probe import Probe
 from skin_msgs.msg import SkinFrame, TactileContact, TactileContactArray
@@ -44,9 +51,46 @@ def cpu_seconds(pid: int) -> float:
     return (int(fields[11]) + int(fields[12])) / _TICK
 
 
+# The threads a node names (core.protocol.link, ros.driver_node); the main thread spins the
+# executor; every other thread is the middleware's (or rclpy's).
+THREAD_ROLES = {'skin-reader': 'reader', 'skin-images': 'images'}
+
+
+def thread_cpu(pid: int) -> dict:
+    """Return CPU seconds of a process's threads by role (reader, images, executor, middleware)."""
+    out = {}
+    try:
+        tids = os.listdir(f'/proc/{pid}/task')
+    except OSError:
+        return out
+    for tid in tids:
+        try:
+            with open(f'/proc/{pid}/task/{tid}/stat') as f:
+                stat = f.read()
+        except OSError:  # the thread ended meanwhile
+            continue
+        name = stat[stat.index('(') + 1:stat.rindex(')')]
+        fields = stat.rsplit(')', 1)[1].split()
+        role = 'executor' if tid == str(pid) else THREAD_ROLES.get(name, 'middleware')
+        out[role] = out.get(role, 0.0) + (int(fields[11]) + int(fields[12])) / _TICK
+    return out
+
+
+def stage_means(probe, suffix: str, prefix: str, start: float, end: float) -> dict:
+    """Return the mean of each '<prefix><stage> [us]' value of the statuses in the window."""
+    reports = [conversions.status_values(status) for t, status in probe.statuses
+               if start < t <= end and status.name.endswith(suffix)]
+    if not reports:
+        return {}
+    keys = [k for k in reports[-1] if k.startswith(prefix)]
+    return {k[len(prefix):-len(' [us]')]: float(np.mean([float(r[k]) for r in reports if k in r]))
+            for k in keys}
+
+
 # The scene the board plays, looped (skin_driver/scenes/bench.yaml).
 SCENE = 'bench'
 LAYOUTS = ('split', 'fused')
+FLOOR = 'floor'
 
 
 def realtime_prefix(priority: int) -> list:
@@ -62,12 +106,16 @@ def _run(executor, probe, layout, nodes, rate, seconds, warmup, port, log, prior
     spin_for(executor, warmup)
     pids = {'sim': sim.process.pid, **{k: p.pid for k, p in nodes.items()}, 'probe': os.getpid()}
     cpu0 = {k: cpu_seconds(p) for k, p in pids.items()}
+    threads0 = {k: thread_cpu(p.pid) for k, p in nodes.items()}
     wall0 = time.monotonic()
     spin_for(executor, seconds)
     wall = time.monotonic() - wall0
     cpu = {k: cpu_seconds(p) - cpu0[k] for k, p in pids.items()}
+    threads = {k: {role: v - threads0[k].get(role, 0.0)
+                   for role, v in thread_cpu(p.pid).items()} for k, p in nodes.items()}
     driver = probe.counters('skin link', wall0, wall0 + wall)
     direction = probe.counters('contact estimation', wall0, wall0 + wall)
+    window = (wall0, wall0 + wall + 0.3)
     spin_for(executor, 0.3)
     sent, dropped = sim.stop()
     expected = int(round(seconds * rate))
@@ -75,7 +123,10 @@ def _run(executor, probe, layout, nodes, rate, seconds, warmup, port, log, prior
     decoded_hz = driver.get('frames', 0) / driver['span_s'] if driver else None
     estimated_hz = direction.get('frames', 0) / direction['span_s'] if direction else None
     # CPU per scan each process handled: the scans it never saw cost it nothing.
-    handled_hz = {'sim': rate, 'driver': decoded_hz or rate,
+    # The floor counts nothing itself: it read what the board could write (the board drops
+    # what does not fit into the pty), over the whole run.
+    written = sent / (sent + dropped) if sent else 1.0
+    handled_hz = {'sim': rate, 'driver': decoded_hz or rate, FLOOR: rate * written,
                   'direction': estimated_hz or rate, 'probe': seen['received'] / seconds or rate}
     return {
         'layout': layout, 'priority': priority, 'rate_hz': rate, 'seconds': seconds,
@@ -90,6 +141,12 @@ def _run(executor, probe, layout, nodes, rate, seconds, warmup, port, log, prior
         'scans_with_contact': seen['with_contact'] / max(seen['received'], 1),
         'cpu_percent': {k: 100.0 * v / wall for k, v in cpu.items()},
         'cpu_us_per_scan': {k: 1e6 * v / (handled_hz[k] * wall) for k, v in cpu.items()},
+        'threads_us_per_scan': {k: {role: 1e6 * v / (handled_hz[k] * wall)
+                                    for role, v in sorted(roles.items())}
+                                for k, roles in threads.items()},
+        'reader_stages_us': stage_means(probe, 'skin link', 'reader CPU per scan, ', *window),
+        'estimation_stages_us': stage_means(probe, 'contact estimation', 'CPU per scan, ',
+                                            *window),
         'driver_decoded_hz': decoded_hz,
         'driver_sequence_gaps': driver.get('sequence gaps') if driver else None,
         'estimated_hz': estimated_hz,
@@ -99,21 +156,24 @@ def _run(executor, probe, layout, nodes, rate, seconds, warmup, port, log, prior
 
 
 def end_to_end(rates, seconds, warmup, workdir, layouts=LAYOUTS, profile=False, log=print,
-               priority=0):
+               priority=0, method=None):
     """
     Run every layout at every rate, one after the other, and return one result per run.
 
-    The layouts take turns at each rate (in alternating order), so that both see the same
-    machine: other jobs share it, and only a side-by-side comparison means anything. With a
-    priority, the simulated board, the nodes and this subscriber run SCHED_FIFO at it, as a
-    force-control deployment runs its loop (the board is hardware: it never waits for a core).
+    The layouts take turns at each rate (in alternating order), so that all see the same
+    machine: other jobs share it, and only a side-by-side comparison means anything. Layouts:
+    'split', 'fused' and FLOOR (the rclpy floor). The nodes run the shipped parameters
+    (config/skin.yaml's: raw images, heatmaps and markers offered, nobody subscribing to them),
+    with ``method`` for the estimator if given. With a priority, the driver's serial reader runs
+    SCHED_FIFO at it (its parameter realtime_priority), and so do the simulated board (hardware
+    never waits for a core) and this subscriber, as a force-control deployment runs its loop.
     """
     port = os.path.join(workdir, 'skin0')
-    # Heatmaps and markers off: they are rviz's, at 15 Hz, and off the hot path anyway.
     params = write_params(workdir, driver={'reconnect_min': 0.02, 'reconnect_max': 0.1,
-                                           'publish_images': False},
-                          direction={'viz_rate': 0.0}, name='bench_params.yaml')
-    node_log = open(os.path.join(workdir, 'nodes.log'), 'w')
+                                           'realtime_priority': priority},
+                          direction={'method': method} if method else {},
+                          name=f'bench_params_{priority}.yaml')
+    node_log = open(os.path.join(workdir, 'nodes.log'), 'a')
     if priority:
         # Before rclpy.init: the middleware's threads inherit the policy.
         os.sched_setscheduler(0, os.SCHED_FIFO, os.sched_param(priority))
@@ -125,11 +185,12 @@ def end_to_end(rates, seconds, warmup, workdir, layouts=LAYOUTS, profile=False, 
                 for layout in order:
                     prof = os.path.join(workdir, f'{layout}.prof') if profile else None
                     results.append(_layout_run(executor, layout, rate, seconds, warmup, params,
-                                               port, node_log, prof, priority))
+                                               port, node_log, prof, priority,
+                                               method or DEFAULT_METHOD))
                     r = results[-1]
                     log(f'  {layout} (priority {priority}) {rate:g} Hz: '
                         f'{r["received_rate_hz"]:.0f} Hz received, '
-                        f'{r["lost"]} lost, p99 {r["latency_ms"]["p99"]} ms, CPU/scan '
+                        f'{r["lost"]} lost, p99 {_ms(r["latency_ms"]["p99"])} ms, CPU/scan '
                         + ', '.join(f'{k} {v:.0f} us' for k, v in r['cpu_us_per_scan'].items()))
                     if prof and os.path.exists(prof):
                         profiles[f'{layout} direction node at {rate:g} Hz'] = top_functions(prof)
@@ -140,19 +201,30 @@ def end_to_end(rates, seconds, warmup, workdir, layouts=LAYOUTS, profile=False, 
     return results, profiles
 
 
+def _ms(value) -> str:
+    return '-' if value is None else f'{value:.2f}'
+
+
 def _layout_run(executor, layout, rate, seconds, warmup, params, port, log, profile_to,
-                priority) -> dict:
-    """Start one layout's nodes, measure them at one rate, stop them; return the figures."""
+                priority, method) -> dict:
+    """Start one layout's processes, measure them at one rate, stop them; return the figures."""
     ns = f'/skin_bench_{os.getpid()}_{layout}_{int(rate)}_{priority}'
-    nodes = start_nodes(layout == 'fused', ros_args(ns, params), log, profile_to,
-                        realtime_prefix(priority))
+    if layout == FLOOR:
+        nodes = {FLOOR: spawn(['-m', 'skin_driver.tools.bench.floor', port, ns, method,
+                               '16', '16'], log)}
+    else:
+        nodes = start_nodes(layout == 'fused', ros_args(ns, params), log, profile_to)
     node = Node('skin_bench_probe', namespace=ns)
     executor.add_node(node)
-    probe = Probe(node)
+    probe = Probe(node, diagnostics=2000)
     tare = node.create_client(Trigger, 'skin_direction/tare')
     try:
-        wait_for(executor, tare.service_is_ready, 30.0, f'the {layout} layout to come up',
-                 nodes.values())
+        if layout == FLOOR:
+            wait_for(executor, lambda: node.count_publishers(f'{ns}/contacts') > 0, 30.0,
+                     'the rclpy floor to come up', nodes.values())
+        else:
+            wait_for(executor, tare.service_is_ready, 30.0, f'the {layout} layout to come up',
+                     nodes.values())
         return _run(executor, probe, layout, nodes, rate, seconds, warmup, port, log, priority)
     finally:
         executor.remove_node(node)
@@ -208,6 +280,9 @@ def stage_costs(repeats=500) -> dict:
         header = conversions.make_header(node.get_clock().now().to_msg(), 'skin_link')
         array = conversions.contacts_to_array(header, contacts)
         msg = conversions.skin_frame_to_msg(header, 1, 1000, 0.005, top, bottom)
+        cdr = conversions.SerializedMessages('skin_link')
+        fields = [conversions.contact_fields(c) for c in contacts]
+        stamp = (header.stamp.sec, header.stamp.nanosec)
         out = {
             'sim: physics.render (press on)': _per_call(lambda: render(model, press, rng),
                                                         repeats),
@@ -218,6 +293,9 @@ def stage_costs(repeats=500) -> dict:
             'driver: skin_frame_to_msg + publish SkinFrame': _per_call(
                 lambda: pub_frame.publish(conversions.skin_frame_to_msg(
                     header, 1, 1000, 0.005, top, bottom)), repeats),
+            'driver: SkinFrame as CDR bytes + publish': _per_call(
+                lambda: pub_frame.publish(cdr.frame(*stamp, 1, 1000, 0.005, top, bottom)),
+                repeats),
             'direction (split): skin_frame_layers': _per_call(
                 lambda: conversions.skin_frame_layers(msg), repeats),
             'estimator.process (1 contact)': _per_call(lambda: est.process(top, bottom),
@@ -225,10 +303,12 @@ def stage_costs(repeats=500) -> dict:
             'contacts_to_array (new messages) + publish': _per_call(
                 lambda: pub_contacts.publish(conversions.contacts_to_array(header, contacts)),
                 repeats),
+            'contacts as CDR bytes + publish': _per_call(
+                lambda: pub_contacts.publish(cdr.contacts(*stamp, 1, 1000, fields)), repeats),
             'publish contact + wrench': _per_call(
                 lambda: (pub_contact.publish(array.contacts[0]), pub_wrench.publish(
                     conversions.wrench_stamped(header, contacts))), repeats),
-            'EstimationHost.process (estimate + publish all three, reused messages)': _per_call(
+            'EstimationHost.process (estimate; no subscriber, nothing published)': _per_call(
                 lambda: host.process(header, 1, 1000, 0.005, top, bottom), repeats),
         }
         node.destroy_node()

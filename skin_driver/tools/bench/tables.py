@@ -184,10 +184,19 @@ def _ms(d) -> str:
     return ' / '.join(figure(d[k], '.2f') for k in ('p50', 'p99', 'max'))
 
 
+def _stages(stages) -> str:
+    return ', '.join(f'{k} {v:.0f}' for k, v in (stages or {}).items()) or '-'
+
+
+def _cells(threads) -> str:
+    return '; '.join(f'{process}: {_stages(roles)}' for process, roles in threads.items()) or '-'
+
+
 def _e2e_section(res, images) -> list:
     e = res['e2e']
     out = ['## 3. End to end through ROS: split against fused', '',
-           'Two layouts, measured one after the other in the same run (at each rate they take '
+           'Two layouts and the rclpy floor, measured one after the other in the same run (at '
+           'each rate they take '
            'turns, in alternating order), on the same simulated skin, scene and parameters:', '',
            '- **split**: `python -m skin_driver.ros.driver_node` (serial reader thread publishes '
            '`frame`) -> `python -m skin_driver.ros.direction_node` (subscribes to `frame`, '
@@ -197,7 +206,14 @@ def _e2e_section(res, images) -> list:
            'and `wrench`, then `frame` if anyone subscribes; the skin_direction node in the '
            'same process serves parameters, `~/tare`, `~/calibrate` and diagnostics from the '
            'executor).', '',
-           'Both with `publish_images:=false` and `viz_rate:=0.0`. Simulated skin: `python -m '
+           '- **rclpy floor**: `python -m skin_driver.tools.bench.floor` (one poll + `os.read`, '
+           'CRC-32 and `np.frombuffer`, the same estimator, one reused TactileContactArray '
+           'published; nothing else), at normal priority: the least an rclpy process spends '
+           'per scan, the reference of the CPU target.', '',
+           f'Both layouts with the shipped parameters (raw images, heatmaps and markers offered, '
+           f'nobody subscribing to them), estimator `{e.get("method", "taxel_fit")}`; at a '
+           'SCHED_FIFO priority the driver reads at it (parameter `realtime_priority`), and the '
+           'simulated board and the subscriber run at it too. Simulated skin: `python -m '
            'skin_driver.tools.sim --rate R --loop` on a pseudo-terminal (a tilted 10 N press on '
            "the skin ~90 % of the time; above 500 Hz it writes every 2 ms, as a USB board's "
            'packets would come). Subscriber: `skin_driver.tools.probe.Probe` in the bench '
@@ -214,7 +230,8 @@ def _e2e_section(res, images) -> list:
            '- **CPU per scan**: CPU seconds of each process over the measured window '
            '(/proc/<pid>/stat, user + system) divided by the scans that process handled in it '
            '(the simulator: sent; the driver: decoded; the direction node: estimated; the '
-           "probe: received), so that lost scans do not flatter it. The probe's own is shown "
+           'floor: the rate times the share of scans the board could write; the probe: '
+           "received), so that lost scans do not flatter it. The probe's own is shown "
            'for completeness.', '',
            f'Load average before the runs {e.get("load_before")}, after {e["load"]} '
            f'({e["cores"]} cores, shared with other jobs).', '',
@@ -237,6 +254,14 @@ def _e2e_section(res, images) -> list:
                   [(label(r), f'{r["rate_hz"]:g}', figure(r['driver_decoded_hz']),
                     figure(r['driver_sequence_gaps'], '.0f'), figure(r['estimated_hz']),
                     figure(r['estimator_mean_us']), figure(r['sim_frames_dropped'], '.0f'))
+                   for r in e['runs']])
+    out += ['', 'CPU per scan by thread (/proc/<pid>/task: the serial reader, the raw-image '
+            'thread, the executor on the main thread, the middleware) and, within the reader and '
+            'the estimation, by stage (the thread CPU the nodes sample and report on '
+            '/diagnostics, averaged over the window), us:', '']
+    out += _table(['layout', 'rate [Hz]', 'threads', 'reader stages', 'estimation stages'],
+                  [(label(r), f'{r["rate_hz"]:g}', _cells(r.get('threads_us_per_scan', {})),
+                    _stages(r.get('reader_stages_us')), _stages(r.get('estimation_stages_us')))
                    for r in e['runs']])
     out += ['', 'Per-scan cost of each stage at 16 x 16 with one press, measured in the bench '
             'process (least mean of five rounds of repeats: the machine is shared):', '']

@@ -1,10 +1,15 @@
 """What the link says when no usable frame arrives: silence, or frames of another grid size."""
 
+import os
+import pty
 import threading
 import time
+import tty
 
 import numpy as np
-from skin_driver.core.protocol.link import SerialLink, STALLED
+import pytest
+import serial
+from skin_driver.core.protocol.link import reader, SerialLink, STALLED
 from skin_driver.core.protocol.wire import encode_frame, FrameDecoder
 
 # Generous: only bounds a hung test on a loaded machine.
@@ -58,3 +63,33 @@ def test_a_board_sending_only_another_grid_size_is_not_called_silent():
     detail = _stall_detail((8, 12))
     assert 'no frame' not in detail
     assert detail.startswith('only frames of the wrong grid size 8x12 from fake for')
+
+
+def test_a_device_gives_every_waiting_byte_in_one_read_and_a_hangup_is_an_error():
+    master, slave = pty.openpty()
+    tty.setraw(slave)
+    port = serial.Serial(os.ttyname(slave), timeout=0.05)
+    try:
+        read = reader(port, 0.05)
+        counts = np.ones((16, 16), np.uint16)
+        burst = b''.join(encode_frame(i, i * 1000, counts, counts) for i in range(3))
+        os.write(master, burst)
+        time.sleep(0.1)  # the pty passes the bytes on asynchronously
+        assert read() == burst
+        assert read() == b''  # nothing within the timeout
+        os.close(master)
+        with pytest.raises((OSError, serial.SerialException)):
+            read()
+    finally:
+        port.close()
+        os.close(slave)
+
+
+def test_a_pyserial_url_without_a_descriptor_keeps_pyserials_read():
+    port = serial.serial_for_url('loop://', timeout=0.05)
+    try:
+        port.write(b'\xa5\x5a\x01')
+        read = reader(port, 0.05)
+        assert read() + read() == b'\xa5\x5a\x01'
+    finally:
+        port.close()

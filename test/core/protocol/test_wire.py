@@ -74,6 +74,21 @@ def test_round_trip_returns_equal_read_only_maps():
     assert dec.stats == DecoderStats(frames=1)
 
 
+def test_frames_keep_their_counts_whatever_is_fed_after_them():
+    top, bottom = layers((16, 16))
+    first, second = encode_frame(1, 10, top, bottom), encode_frame(2, 20, bottom, top)
+    dec = FrameDecoder(expected_shape=(16, 16))
+    # Whole frames are decoded from the bytes given, split ones from the decoder's buffer.
+    (whole,) = dec.feed(first)
+    assert dec.feed(second[:700]) == []
+    (split,) = dec.feed(bytearray(second[700:]) + first[:300])
+    dec.feed(b'\x00' * 5000 + first)
+    np.testing.assert_array_equal(whole.top, top)
+    np.testing.assert_array_equal(split.top, bottom)
+    np.testing.assert_array_equal(split.bottom, top)
+    assert not split.top.flags.writeable
+
+
 def test_extreme_header_values_and_non_square_shapes():
     top, bottom = layers((1, 128))
     dec = FrameDecoder()

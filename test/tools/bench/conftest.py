@@ -33,16 +33,21 @@ def _e2e_run(layout, rate, lost, p99, cpu):
             'latency_from_device_time_ms': latency, 'board_to_driver_ms': latency,
             'scans_with_contact': 0.9, 'cpu_percent': {}, 'cpu_us_per_scan': cpu,
             'driver_decoded_hz': rate, 'driver_sequence_gaps': 0, 'estimated_hz': rate,
-            'estimator_mean_us': 80.0}
+            'estimator_mean_us': 80.0,
+            'threads_us_per_scan': {name: {'executor': 10.0, 'reader': cpu[name] - 10}
+                                    for name in ('driver', 'floor') if name in cpu},
+            'reader_stages_us': {'read': 10.0, 'decode': 8.0}, 'estimation_stages_us': {}}
 
 
 @pytest.fixture
 def e2e():
-    """Return end-to-end results of both layouts at 1 kHz: split loses scans, fused does not."""
+    """Return both layouts and the rclpy floor at 1 kHz: split loses scans, fused does not."""
     return {'seconds': 60.0, 'warmup_s': 3.0, 'cores': 2, 'load': [1, 1, 1],
             'load_before': [1, 1, 1],
             'stage_costs_us': {'estimator.process (1 contact)': 80.0},
             'runs': [_e2e_run('split', 1000.0, 12, 3.0,
                               {'sim': 150, 'driver': 90, 'direction': 400, 'probe': 120}),
                      _e2e_run('fused', 1000.0, 0, 1.5,
-                              {'sim': 150, 'driver': 200, 'probe': 120})]}
+                              {'sim': 150, 'driver': 140, 'probe': 120}),
+                     _e2e_run('floor', 1000.0, 0, 1.2,
+                              {'sim': 150, 'floor': 100, 'probe': 120})]}

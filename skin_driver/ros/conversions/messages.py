@@ -1,11 +1,7 @@
-"""
-Conversions between the ROS-free core's values and ROS messages, kept in one place.
-
-No node lives here (as in sensor_msgs_py): everything takes and returns plain values and messages,
-so the nodes stay thin and the conversions can be tested without a running ROS graph.
-"""
+"""Conversions between the ROS-free core's values and ROS message objects."""
 
 from array import array
+import functools
 import math
 from typing import Iterable, Sequence, Tuple
 
@@ -15,7 +11,7 @@ from geometry_msgs.msg import (Point, Quaternion, Transform, TransformStamped, V
                                Wrench, WrenchStamped)
 import numpy as np
 from sensor_msgs.msg import Image
-from skin_driver.core.estimation.heatmap import colour_map
+from skin_driver.core.estimation.heatmap import colour_map, grey_levels
 from skin_driver.core.estimation.recording import layers_of
 from skin_driver.core.estimation.wrench import net_wrench, torque_about_origin
 from skin_msgs.action import Calibrate, CalibrateCompliance, CalibrateForce, CalibrateGains
@@ -73,14 +69,14 @@ def _finite(value: float, name: str) -> float:
     return value
 
 
-def contact_to_msg(header: Header, contact, out: TactileContact = None) -> TactileContact:
+def contact_fields(contact) -> tuple:
     """
-    Convert a core Contact (:mod:`skin_driver.core.estimation.pipeline`) into a message.
+    Return a core Contact's message fields in TactileContact's order, after the header.
 
-    With ``out`` the message is filled in place and returned: publish() serialises at once, so
-    one message can carry scan after scan. A refused contact leaves ``out`` as it was.
-    Fields a contact never sets (location.z, shift.z) stay 0; the torque is r x F about the
-    frame origin.
+    location x, y, z; magnitude; normal_force; azimuth; azimuth_sigma; polar; shift x, y, z;
+    force x, y, z; torque x, y, z; area; confidence; direction_valid. Raise ValueError for a
+    non-finite value: a contact message never carries NaN or inf. Fields a contact never sets
+    (location.z, shift.z) are 0; the torque is r x F about the frame origin.
     """
     fx, fy, fz = (_finite(v, 'force') for v in contact.force_xyz_n)
     sx, sy = (_finite(v, 'shift') for v in contact.shift_m)
@@ -95,17 +91,35 @@ def contact_to_msg(header: Header, contact, out: TactileContact = None) -> Tacti
         polar = _finite(contact.alpha_rad, 'polar')
     else:
         azimuth, sigma, polar = 0.0, math.pi, 0.0
+    return (x, y, 0.0, math.sqrt(fx * fx + fy * fy + fz * fz), normal_force, azimuth, sigma,
+            polar, sx, sy, 0.0, fx, fy, fz, *torque_about_origin(x, y, (fx, fy, fz)), area,
+            confidence, direction_valid)
+
+
+def contact_to_msg(header: Header, contact, out: TactileContact = None) -> TactileContact:
+    """
+    Convert a core Contact (:mod:`skin_driver.core.estimation.pipeline`) into a message.
+
+    With ``out`` the message is filled in place and returned: publish() serialises at once, so
+    one message can carry scan after scan. A refused contact leaves ``out`` as it was.
+    """
+    return _fill_contact(header, contact_fields(contact), out)
+
+
+def _fill_contact(header: Header, fields: tuple, out: TactileContact = None) -> TactileContact:
+    (x, y, _, magnitude, normal_force, azimuth, sigma, polar, sx, sy, _, fx, fy, fz, tx, ty, tz,
+     area, confidence, direction_valid) = fields
     msg = TactileContact() if out is None else out
     msg.header = header
     msg.location.x, msg.location.y = x, y
-    msg.magnitude = math.sqrt(fx * fx + fy * fy + fz * fz)
+    msg.magnitude = magnitude
     msg.normal_force = normal_force
     msg.azimuth, msg.azimuth_sigma, msg.polar = azimuth, sigma, polar
     msg.shift.x, msg.shift.y = sx, sy
     force = msg.wrench.force
     force.x, force.y, force.z = fx, fy, fz
     torque = msg.wrench.torque
-    torque.x, torque.y, torque.z = torque_about_origin(x, y, (fx, fy, fz))
+    torque.x, torque.y, torque.z = tx, ty, tz
     msg.area = area
     msg.confidence = confidence
     msg.direction_valid = direction_valid
@@ -153,11 +167,14 @@ def wrench_stamped(header: Header, contacts: Sequence) -> WrenchStamped:
     frame origin; zero when nothing touches. Two fingers pinching report what the skin carries,
     not the strongest finger.
     """
-    force, torque = net_wrench(contacts)
-    fx, fy, fz = (_finite(v, 'force') for v in force)
-    tx, ty, tz = (_finite(v, 'torque') for v in torque)
+    fx, fy, fz, tx, ty, tz = _net_wrench_fields(contacts)
     return WrenchStamped(header=header, wrench=Wrench(force=Vector3(x=fx, y=fy, z=fz),
                                                       torque=Vector3(x=tx, y=ty, z=tz)))
+
+
+def _net_wrench_fields(contacts: Sequence) -> tuple:
+    force, torque = net_wrench(contacts)
+    return (*(_finite(v, 'force') for v in force), *(_finite(v, 'torque') for v in torque))
 
 
 def mount_transform(stamp: Time, parent: str, child: str, xyz: Sequence[float],
@@ -174,24 +191,35 @@ def mount_transform(stamp: Time, parent: str, child: str, xyz: Sequence[float],
 
 
 def heatmap_markers(header: Header, force_map: np.ndarray, pitch_m: float, contacts: Iterable,
-                    full_scale_n: float, arrow_m_per_n: float = 0.002) -> MarkerArray:
+                    full_scale_n: float) -> MarkerArray:
     """
     Return rviz markers in the skin frame: the taxel grid coloured by force, and the contacts.
 
     Each contact gets an arrow along its force (ending at the contact, coming from where the
     push comes from) and a label with magnitude and azimuth.
     """
-    markers = [Marker(header=header, ns='skin', action=Marker.DELETEALL)]
+    return MarkerArray(markers=grid_markers(header, force_map, pitch_m, full_scale_n)
+                       + contact_markers(header, contacts, pitch_m))
+
+
+def grid_markers(header: Header, force_map: np.ndarray, pitch_m: float,
+                 full_scale_n: float) -> list:
+    """Return the markers that clear the skin's and draw the taxel grid coloured by force."""
     rows, cols = force_map.shape
     grid = Marker(header=header, ns='taxels', id=0, type=Marker.CUBE_LIST, action=Marker.ADD)
     grid.pose.orientation.w = 1.0
     grid.scale = Vector3(x=pitch_m * 0.9, y=pitch_m * 0.9, z=pitch_m * 0.1)
-    rgb = colour_map(force_map, full_scale_n).reshape(-1, 3) / 255.0
-    ys, xs = np.mgrid[0:rows, 0:cols]
-    grid.points = [Point(x=float(x) * pitch_m, y=float(y) * pitch_m, z=0.0)
-                   for x, y in zip(xs.ravel(), ys.ravel())]
-    grid.colors = [ColorRGBA(r=float(r), g=float(g), b=float(b), a=1.0) for r, g, b in rgb]
-    markers.append(grid)
+    # Points and colours are shared, never changed, so rviz's 15 Hz costs no object per taxel.
+    grid.points = list(_grid_points(rows, cols, float(pitch_m)))
+    palette = _palette()
+    grid.colors = [palette[level] for level in grey_levels(force_map, full_scale_n).ravel()]
+    return [Marker(header=header, ns='skin', action=Marker.DELETEALL), grid]
+
+
+def contact_markers(header: Header, contacts: Iterable, pitch_m: float,
+                    arrow_m_per_n: float = 0.002) -> list:
+    """Return an arrow along each contact's force and a label with its magnitude and azimuth."""
+    markers = []
     for i, contact in enumerate(contacts):
         tip = Point(x=float(contact.x_m), y=float(contact.y_m), z=0.0)
         fx, fy, fz = (float(v) for v in contact.force_xyz_n)
@@ -210,7 +238,26 @@ def heatmap_markers(header: Header, force_map: np.ndarray, pitch_m: float, conta
         if contact.direction_valid:
             label.text += f' β {math.degrees(contact.azimuth_rad):.0f}°'
         markers += [arrow, label]
-    return MarkerArray(markers=markers)
+    return markers
+
+
+@functools.lru_cache(maxsize=4)
+def _grid_points(rows: int, cols: int, pitch_m: float) -> tuple:
+    return tuple(Point(x=c * pitch_m, y=r * pitch_m, z=0.0)
+                 for r in range(rows) for c in range(cols))
+
+
+@functools.lru_cache(maxsize=1)
+def _palette() -> tuple:
+    """Return the ColorRGBA of each grey level 0..255 of colour_map."""
+    return tuple(ColorRGBA(r=float(r), g=float(g), b=float(b), a=float(a))
+                 for r, g, b, a in palette_rgba())
+
+
+def palette_rgba() -> np.ndarray:
+    """Return colour_map's colour of each grey level 0..255 as 256 x 4 float32 RGBA in 0..1."""
+    rgb = colour_map(np.arange(256, dtype=np.float64).reshape(1, -1), 255.0)[0] / 255.0
+    return np.hstack([rgb, np.ones((256, 1))]).astype(np.float32)
 
 
 def status_values(status: DiagnosticStatus) -> dict:
