@@ -40,7 +40,11 @@ SIM = 'skin_driver.tools.sim'
 
 # ---- child processes --------------------------------------------------------------------------
 
-def _die_with_parent() -> None:
+def _child_setup() -> None:
+    # A parent started in the background (nohup, cron, `make bench &`) ignores Ctrl-C, and so
+    # would its children, which then could only be killed: give them the default back, so that
+    # stop() interrupts them as it says.
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
     if sys.platform.startswith('linux'):
         ctypes.CDLL(None, use_errno=True).prctl(PR_SET_PDEATHSIG, signal.SIGTERM)
 
@@ -53,7 +57,7 @@ def spawn(argv: List[str], log, profile_to: Optional[str] = None, prefix: Iterab
         head += ['-m', 'cProfile', '-o', profile_to]
     popen.setdefault('stdout', log)
     popen.setdefault('stderr', subprocess.STDOUT)
-    return subprocess.Popen(head + argv, start_new_session=True, preexec_fn=_die_with_parent,
+    return subprocess.Popen(head + argv, start_new_session=True, preexec_fn=_child_setup,
                             **popen)
 
 

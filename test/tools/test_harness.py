@@ -1,6 +1,7 @@
 """The harness that starts the pipeline for the demo, the soak, the benchmark and the tests."""
 
 import os
+import signal
 import subprocess
 
 import pytest
@@ -74,6 +75,22 @@ def test_stop_interrupts_then_kills_what_ignores_the_interrupt(tmp_path):
     # The interrupt ends the one (KeyboardInterrupt), the kill the other.
     assert polite.returncode not in (0, -9)
     assert stubborn.returncode == -9
+
+
+def test_a_background_parent_still_interrupts_its_children(tmp_path):
+    # Started in the background (nohup, cron), a parent ignores SIGINT and its children would
+    # inherit that: stop() could then only kill them (-9).
+    old = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    try:
+        with open(tmp_path / 'child.log', 'w') as log:
+            child = harness.spawn(['-c', 'print("ready", flush=True); import time; '
+                                   'time.sleep(60)'], log, stdout=subprocess.PIPE, text=True)
+            assert child.stdout.readline() == 'ready\n'
+            harness.stop([child], timeout_s=10.0)
+    finally:
+        signal.signal(signal.SIGINT, old)
+    # An uncaught KeyboardInterrupt ends Python by SIGINT (not by the kill).
+    assert child.returncode == -signal.SIGINT
 
 
 def test_a_child_runs_in_a_session_of_its_own(tmp_path):
