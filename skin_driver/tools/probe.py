@@ -17,7 +17,7 @@ from typing import Callable, Optional
 from diagnostic_msgs.msg import DiagnosticArray
 import numpy as np
 from rclpy.qos import HistoryPolicy, QoSProfile, ReliabilityPolicy
-from skin_driver.ros.conversions import status_values
+from skin_driver.ros.conversions import read_contacts_head, status_values
 from skin_msgs.msg import SkinFrame, TactileContactArray
 
 SEQ_MODULUS = 2 ** 32
@@ -79,7 +79,13 @@ class Probe:
         self._on_status_hook = on_status
         qos = QoSProfile(depth=depth or 5, history=HistoryPolicy.KEEP_LAST,
                          reliability=ReliabilityPolicy.BEST_EFFORT)
-        node.create_subscription(TactileContactArray, 'contacts', self._on_contacts, qos)
+        if keep_messages or on_contacts is not None:
+            node.create_subscription(TactileContactArray, 'contacts', self._on_contacts, qos)
+        else:
+            # Counting alone needs the head of each message: its bytes, not a message object
+            # (the probe shares the benchmark's cores with the pipeline it measures).
+            node.create_subscription(TactileContactArray, 'contacts', self._on_contacts_raw, qos,
+                                     raw=True)
         if frames or on_frame is not None:
             node.create_subscription(SkinFrame, 'frame', self._on_frame, qos)
         node.create_subscription(DiagnosticArray, '/diagnostics', self._on_diagnostics, 50)
@@ -97,6 +103,16 @@ class Probe:
             self.contacts.append(msg)
         if self._on_contacts_hook is not None:
             self._on_contacts_hook(msg)
+
+    def _on_contacts_raw(self, data: bytes) -> None:
+        now = time.time()
+        sec, nanosec, sequence, device_us, count = read_contacts_head(data)
+        r = self.record
+        r.received_s.append(now)
+        r.stamp_s.append(sec + nanosec * 1e-9)
+        r.sequence.append(sequence)
+        r.device_us.append(device_us)
+        r.contacts.append(count)
 
     def _on_frame(self, msg: SkinFrame) -> None:
         self.frame_count += 1

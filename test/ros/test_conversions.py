@@ -202,3 +202,16 @@ def test_skin_frame_bytes_of_another_grid_or_cut_short_are_refused():
     msg.rows = 4
     with pytest.raises(ValueError, match='not a whole SkinFrame'):
         conversions.read_skin_frame(serialize_message(msg)[:60])
+
+
+@pytest.mark.parametrize('frame_id', ['', 'skin_link', 'arm/skin_ä'])
+@pytest.mark.parametrize('count', [0, 1, 3])
+def test_the_head_of_contacts_bytes_is_read_without_the_contacts(frame_id, count):
+    # Every frame_id length pads the fields after it differently.
+    msg = TactileContactArray(header=Header(stamp=Time(sec=-3, nanosec=4), frame_id=frame_id),
+                              sequence=2 ** 32 - 1, device_time_us=2 ** 40 + 5,
+                              contacts=[TactileContact() for _ in range(count)])
+    data = serialize_message(msg)
+    assert conversions.read_contacts_head(data) == (-3, 4, 2 ** 32 - 1, 2 ** 40 + 5, count)
+    with pytest.raises(ValueError, match='not a TactileContactArray'):
+        conversions.read_contacts_head(data[:20])

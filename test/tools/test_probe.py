@@ -1,7 +1,11 @@
 """The probe counts lost scans by sequence and reports latency percentiles."""
 
+from builtin_interfaces.msg import Time
 import pytest
+from rclpy.serialization import serialize_message
 from skin_driver.tools.probe import percentiles_ms, Probe, Record, unwrap
+from skin_msgs.msg import TactileContact, TactileContactArray
+from std_msgs.msg import Header
 
 
 class _Node:
@@ -9,9 +13,13 @@ class _Node:
 
     def __init__(self):
         self.topics = []
+        self.raw = {}
+        self.callbacks = {}
 
-    def create_subscription(self, kind, topic, callback, qos):
+    def create_subscription(self, kind, topic, callback, qos, raw=False):
         self.topics.append(topic)
+        self.raw[topic] = raw
+        self.callbacks[topic] = callback
 
 
 def _probe_with(rows):
@@ -77,3 +85,17 @@ def test_the_probe_listens_to_frames_only_when_asked():
     node = _Node()
     Probe(node, frames=True)
     assert 'frame' in node.topics
+
+
+def test_a_counting_probe_reads_the_contacts_bytes_and_a_keeping_one_the_messages():
+    node = _Node()
+    probe = Probe(node)
+    assert node.raw['contacts']
+    msg = TactileContactArray(header=Header(stamp=Time(sec=5, nanosec=250000000)),
+                              sequence=7, device_time_us=9000, contacts=[TactileContact()] * 2)
+    node.callbacks['contacts'](serialize_message(msg))
+    r = probe.record
+    assert (r.stamp_s, r.sequence, r.device_us, r.contacts) == ([5.25], [7], [9000], [2])
+    node = _Node()
+    Probe(node, keep_messages=True)
+    assert not node.raw['contacts']

@@ -6,7 +6,8 @@ so the nodes stay thin and the conversions can be tested without a running ROS g
 objects: :mod:`.messages`; the hot path's messages as CDR bytes: :mod:`.cdr`.
 """
 
-from .cdr import GridMarkers, read_skin_frame, SerializedMessages, skin_frames_read_back
+from .cdr import (GridMarkers, read_contacts_head, read_skin_frame, SerializedMessages,
+                  skin_frames_read_back)
 from .messages import (
     calibration_feedback, contact_fields, contact_markers, contact_to_msg, ContactArrayWriter,
     contacts_to_array, counts_to_image, fill_compliance_result, fill_force_result,
@@ -19,6 +20,7 @@ __all__ = [
     'ContactArrayWriter', 'contacts_to_array', 'counts_to_image', 'fill_compliance_result',
     'fill_force_result', 'fill_gains_result', 'fill_offset_result', 'grid_markers',
     'GridMarkers', 'heatmap_markers', 'make_header',
-    'mount_transform', 'read_skin_frame', 'rgb_to_image', 'SerializedMessages',
+    'mount_transform', 'read_contacts_head', 'read_skin_frame', 'rgb_to_image',
+    'SerializedMessages',
     'skin_frame_layers', 'skin_frame_to_msg', 'skin_frames_read_back', 'status_values',
     'wrench_stamped']

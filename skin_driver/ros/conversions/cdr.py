@@ -232,6 +232,25 @@ class _Cursor:
         return layer
 
 
+def read_contacts_head(data: bytes) -> tuple:
+    """
+    Return (stamp sec, nanosec, sequence, device time, contacts) of TactileContactArray bytes.
+
+    The contacts are counted, not read (a counting subscriber). Raise ValueError for bytes too
+    short to hold those fields.
+    """
+    cursor = _Cursor(data)
+    try:
+        sec, nanosec, length = cursor.take('iIi', 4)
+        cursor.offset += length  # the frame_id, NUL included
+        (sequence,) = cursor.take('I', 4)
+        (device_time_us,) = cursor.take('Q', 8)
+        (count,) = cursor.take('I', 4)
+    except struct.error as err:
+        raise ValueError(f'not a TactileContactArray: {err}') from None
+    return sec, nanosec, sequence, device_time_us, count
+
+
 def read_skin_frame(data: bytes) -> tuple:
     """
     Return (header, sequence, device time, pitch, top, bottom) of a SkinFrame's CDR bytes.
