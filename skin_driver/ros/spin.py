@@ -2,6 +2,7 @@
 
 import rclpy
 from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
+from skin_driver.core.estimation.kernel import KernelMissing
 from skin_driver.ros.params import ParameterError
 
 
@@ -10,14 +11,17 @@ def create_or_exit(create, name: str):
     Return ``create()`` (the nodes of an executable, after rclpy.init).
 
     A parameter it refuses stops the process with status 1 and one fatal line, logged by the
-    node that refused it with its namespace ([left.skin_direction]), else by ``name``.
+    node that refused it with its namespace ([left.skin_direction]), else by ``name``; so does
+    a compiled kernel that is not built (one line naming the fix).
     """
     try:
         return create()
     except ParameterError as err:
         err.log_fatal(name)
-        rclpy.try_shutdown()
-        raise SystemExit(1)
+    except KernelMissing as err:
+        rclpy.logging.get_logger(name).fatal(str(err))
+    rclpy.try_shutdown()
+    raise SystemExit(1)
 
 
 def spin_nodes(nodes, before_spin=None) -> None:

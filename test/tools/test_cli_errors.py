@@ -1,5 +1,9 @@
 """Every bad input of the evaluator and the simulator is one clear line, and creates nothing."""
 
+import os
+import subprocess
+import sys
+
 import pytest
 from skin_driver.core.sim.scene import bundled_scene_names
 from skin_driver.tools import sim
@@ -70,3 +74,13 @@ def test_the_simulators_help_lists_its_scenes(capsys):
     assert _run(sim.main, ['--help']) == 0
     out = ' '.join(capsys.readouterr().out.split())
     assert ', '.join(bundled_scene_names()) in out and 'two_finger' in out
+
+
+def test_the_evaluator_without_its_compiled_kernel_says_so_in_one_line(tmp_path):
+    data = str(tmp_path / 'seed.npz')
+    assert _run(evaluate.main, ['--generate', 'paper', data]) == 0
+    out = subprocess.run([sys.executable, '-m', 'skin_driver.evaluate', data],
+                         capture_output=True, text=True, timeout=60,
+                         env={**os.environ, 'AMENT_PREFIX_PATH': os.devnull})
+    assert out.returncode == 2
+    assert out.stderr.startswith('error: skin_kernel') and len(out.stderr.splitlines()) == 1

@@ -30,6 +30,7 @@ import numpy as np
 
 from skin_driver.core.estimation.atomic import check_writable
 from skin_driver.core.estimation.dataset import load_dataset, save_dataset
+from skin_driver.core.estimation.kernel import KernelMissing
 from skin_driver.core.estimation.pipeline import EstimatorConfig
 from skin_driver.core.estimation.shift import DEFAULT_METHOD, method_names, REFERENCES
 from skin_driver.core.sim.experiments import add_calibration_frames, make_scene, SCENE_KINDS
@@ -165,7 +166,11 @@ def main(argv=None) -> int:
         return 2
     method = args.method or DEFAULT_METHOD
     runs = {}
-    report = evaluate(data, method, config, runs, truth)
+    try:
+        report = evaluate(data, method, config, runs, truth)
+    except KernelMissing as exc:
+        print(f'error: {exc}', file=sys.stderr)
+        return 2
     if args.contacts:
         rows = write_contacts(args.contacts, runs[method], data.scored_frames())
         print(f'wrote {rows} contacts of {method} to {args.contacts}', file=sys.stderr)
