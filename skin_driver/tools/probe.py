@@ -91,14 +91,9 @@ class Probe:
         node.create_subscription(DiagnosticArray, '/diagnostics', self._on_diagnostics, 50)
 
     def _on_contacts(self, msg: TactileContactArray) -> None:
-        now = time.time()
         stamp = msg.header.stamp
-        r = self.record
-        r.received_s.append(now)
-        r.stamp_s.append(stamp.sec + stamp.nanosec * 1e-9)
-        r.sequence.append(msg.sequence)
-        r.device_us.append(msg.device_time_us)
-        r.contacts.append(len(msg.contacts))
+        self._add(time.time(), stamp.sec, stamp.nanosec, msg.sequence, msg.device_time_us,
+                  len(msg.contacts))
         if self.keep:
             self.contacts.append(msg)
         if self._on_contacts_hook is not None:
@@ -106,13 +101,15 @@ class Probe:
 
     def _on_contacts_raw(self, data: bytes) -> None:
         now = time.time()
-        sec, nanosec, sequence, device_us, count = read_contacts_head(data)
+        self._add(now, *read_contacts_head(data))
+
+    def _add(self, received_s, sec, nanosec, sequence, device_us, contacts) -> None:
         r = self.record
-        r.received_s.append(now)
+        r.received_s.append(received_s)
         r.stamp_s.append(sec + nanosec * 1e-9)
         r.sequence.append(sequence)
         r.device_us.append(device_us)
-        r.contacts.append(count)
+        r.contacts.append(contacts)
 
     def _on_frame(self, msg: SkinFrame) -> None:
         self.frame_count += 1
