@@ -7,18 +7,22 @@ some skins to rise above the touch threshold and join presses that lie on one li
 the same for every taxel of a row (and of a column), while presses cover only a few taxels of
 each line. So the median of a line is its leak: one sweep of median polish (rows, then columns)
 takes the row and column terms out of the tared counts without knowing the skin's leak factor.
-A load that covers most of a line (a palm, a uniform weight for the gain calibration) has a
-median close to its peak and is left alone.
+
+A leak is a few per cent of the load on its line: a median that is more than ``MAX_LEAK`` of
+what the line carries above it is a load that covers most of the line (a palm, a uniform weight
+for the gain calibration), and is left alone. The peak is no measure of it: on a fine grid a
+press covers dozens of taxels of a line, whose leak then reaches a third of the peak, and more
+where the ADC cut the peak.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-__all__ = ['remove_line_leak', 'LEAK_SHARE']
+__all__ = ['remove_line_leak', 'MAX_LEAK']
 
-# Largest median, as a share of the line's highest reading, that is taken for leak.
-LEAK_SHARE = 0.25
+# Largest median, as a share of the line's load above it, that is taken for leak.
+MAX_LEAK = 0.05
 
 
 def remove_line_leak(counts: np.ndarray, threshold: np.ndarray) -> None:
@@ -41,10 +45,10 @@ def remove_line_leak(counts: np.ndarray, threshold: np.ndarray) -> None:
 def _leak(counts: np.ndarray, axis: int) -> np.ndarray:
     median = _median(counts, axis)
     # A negative median is the noise of an untouched line: leak only ever adds counts. A median
-    # near the line's peak is a load spread along the line (a palm, a uniform weight), not a
-    # leak, which is a few per cent of the line's load.
+    # that is not a small share of the line's load above it is a load spread along the line.
     leak = np.maximum(median, 0.0)
-    leak[median > LEAK_SHARE * counts.max(axis=axis)] = 0.0
+    above = counts.sum(axis=axis) - counts.shape[axis] * median
+    leak[median > MAX_LEAK * above] = 0.0
     return leak
 
 
