@@ -9,6 +9,8 @@
 
 /* Largest median, as a share of the line's load above it, taken for leak (crosstalk.py). */
 #define MAX_LEAK 0.05
+/* A line is lifted by leak when most of its taxels read this many noise sigmas or more. */
+#define LEAK_SIGMAS 3.0
 
 /*
  * Unnormalised 3 x 3 box sum with a zero border, in OpenCV's order (boxFilter: three-term row
@@ -124,18 +126,18 @@ static void remove_line_leak(sk_kernel *k)
   double half = 0.5 * (rows < cols ? rows : cols);
   int lifted = 0;
   for (int layer = 0; layer < 2 && !lifted; layer++) {
-    const double *c = k->counts + layer * n, *thr = k->threshold + layer * n;
+    const double *c = k->counts + layer * n, *noise = k->noise + layer * n;
     for (int r = 0; r < rows && !lifted; r++) {
       int over = 0;
       for (int j = 0; j < cols; j++) {
-        over += c[r * cols + j] >= thr[r * cols + j];
+        over += c[r * cols + j] >= LEAK_SIGMAS * noise[r * cols + j];
       }
       lifted = over >= half;
     }
     for (int j = 0; j < cols && !lifted; j++) {
       int over = 0;
       for (int r = 0; r < rows; r++) {
-        over += c[r * cols + j] >= thr[r * cols + j];
+        over += c[r * cols + j] >= LEAK_SIGMAS * noise[r * cols + j];
       }
       lifted = over >= half;
     }

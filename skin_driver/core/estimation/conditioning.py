@@ -323,7 +323,7 @@ class Conditioner:
         np.subtract(t, st.baseline[0], out=c[0])
         np.subtract(b, st.baseline[1], out=c[1])
         if self.config.remove_crosstalk:
-            remove_line_leak(c, st.threshold)
+            remove_line_leak(c, st.noise)
         c[c < st.threshold] = 0.0
         self._level_clipped(c, t, b)
         if st.dead:

@@ -19,21 +19,24 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ['remove_line_leak', 'MAX_LEAK']
+__all__ = ['remove_line_leak', 'MAX_LEAK', 'LEAK_SIGMAS']
 
 # Largest median, as a share of the line's load above it, that is taken for leak.
 MAX_LEAK = 0.05
+# A line is lifted by leak when most of its taxels read this many noise sigmas or more.
+LEAK_SIGMAS = 3.0
 
 
-def remove_line_leak(counts: np.ndarray, threshold: np.ndarray) -> None:
+def remove_line_leak(counts: np.ndarray, noise: np.ndarray) -> None:
     """
     Subtract from a (layers, rows, cols) stack of tared counts, in place, each line's leak.
 
-    Only a leak that lifts lines over the touch ``threshold`` (same shape) matters; below it
-    the threshold zeroes the leak anyway, so scans where no line is mostly over it are left as
-    they are, at the cost of one comparison.
+    ``noise`` (same shape) is each taxel's 1-sigma count noise. A leak under the touch
+    threshold still adds to every loaded taxel of its lines, so a scan is cleaned as soon as
+    one line is mostly ``LEAK_SIGMAS`` over its noise; scans where none is are left as they
+    are, at the cost of one comparison.
     """
-    over = counts >= threshold
+    over = counts >= LEAK_SIGMAS * noise
     half = 0.5 * min(counts.shape[1:])
     if not ((over.sum(axis=2) >= half).any() or (over.sum(axis=1) >= half).any()):
         return
