@@ -119,7 +119,43 @@ static double line_leak(double median, double sum, int len)
   return median > 0.0 ? median : 0.0;
 }
 
-/* Take each line's leak (its median when that is far below its peak) out of both layers. */
+/* A line's leak as a share of its load (0 on a line without load), MAX_LEAK at most. */
+static double leak_share(double leak, double load)
+{
+  double share = load > 0 ? leak / load : 0.0;
+  return share < MAX_LEAK ? share : MAX_LEAK;
+}
+
+/*
+ * A taxel leaks onto the others of its lines, not onto itself: the lines' leak took a share of
+ * its own count too much, which is given back (crosstalk.py). The shares are turned into the
+ * leak arrays in place.
+ */
+static void give_back_own_leak(double *c, int rows, int cols, double *row_leak,
+                               double *col_leak)
+{
+  for (int r = 0; r < rows; r++) {
+    double load = 0.0;
+    for (int j = 0; j < cols; j++) {
+      load += c[r * cols + j];
+    }
+    row_leak[r] = leak_share(row_leak[r], load);
+  }
+  for (int j = 0; j < cols; j++) {
+    double load = 0.0;
+    for (int r = 0; r < rows; r++) {
+      load += c[r * cols + j];
+    }
+    col_leak[j] = leak_share(col_leak[j], load);
+  }
+  for (int r = 0; r < rows; r++) {
+    for (int j = 0; j < cols; j++) {
+      c[r * cols + j] /= 1.0 - row_leak[r] - col_leak[j];
+    }
+  }
+}
+
+/* Take each line's leak (its median when a small share of its load) out of both layers. */
 static void remove_line_leak(sk_kernel *k)
 {
   int rows = k->rows, cols = k->cols, n = k->n;
@@ -145,32 +181,30 @@ static void remove_line_leak(sk_kernel *k)
   if (!lifted) {
     return;
   }
-  double *buf = k->scratch;
-  double *leak = k->scratch + (rows > cols ? rows : cols);
-  /* Rows first, then columns: the leak is a row term plus a column term. */
+  int line = rows > cols ? rows : cols;
+  double *buf = k->scratch, *row_leak = k->scratch + line, *col_leak = k->scratch + 2 * line;
+  /* Rows first, then columns: the leak is a row term plus a column term (layers apart). */
   for (int layer = 0; layer < 2; layer++) {
     double *c = k->counts + layer * n;
     for (int r = 0; r < rows; r++) {
       double sum, median = line_median(c + r * cols, cols, 1, buf, &sum);
-      leak[r] = line_leak(median, sum, cols);
+      row_leak[r] = line_leak(median, sum, cols);
     }
     for (int r = 0; r < rows; r++) {
       for (int j = 0; j < cols; j++) {
-        c[r * cols + j] -= leak[r];
+        c[r * cols + j] -= row_leak[r];
       }
     }
-  }
-  for (int layer = 0; layer < 2; layer++) {
-    double *c = k->counts + layer * n;
     for (int j = 0; j < cols; j++) {
       double sum, median = line_median(c + j, rows, cols, buf, &sum);
-      leak[j] = line_leak(median, sum, rows);
+      col_leak[j] = line_leak(median, sum, rows);
     }
     for (int r = 0; r < rows; r++) {
       for (int j = 0; j < cols; j++) {
-        c[r * cols + j] -= leak[j];
+        c[r * cols + j] -= col_leak[j];
       }
     }
+    give_back_own_leak(c, rows, cols, row_leak, col_leak);
   }
 }
 

@@ -41,8 +41,14 @@ def remove_line_leak(counts: np.ndarray, noise: np.ndarray) -> None:
     if not ((over.sum(axis=2) >= half).any() or (over.sum(axis=1) >= half).any()):
         return
     # The leak is a sum of a row term and a column term: one sweep of each removes both.
+    leaks = []
     for axis in (2, 1):
-        counts -= np.expand_dims(_leak(counts, axis), axis)
+        leaks.append(_leak(counts, axis))
+        counts -= np.expand_dims(leaks[-1], axis)
+    # A taxel leaks onto the others of its lines, not onto itself: the lines' leak took a share
+    # (the line's leak over its load) of its own count too much, which is given back.
+    share = [_share(leak, counts.sum(axis=axis)) for leak, axis in zip(leaks, (2, 1))]
+    counts /= 1.0 - share[0][:, :, None] - share[1][:, None, :]
 
 
 def _leak(counts: np.ndarray, axis: int) -> np.ndarray:
@@ -53,6 +59,12 @@ def _leak(counts: np.ndarray, axis: int) -> np.ndarray:
     above = counts.sum(axis=axis) - counts.shape[axis] * median
     leak[median > MAX_LEAK * above] = 0.0
     return leak
+
+
+def _share(leak: np.ndarray, load: np.ndarray) -> np.ndarray:
+    """Return each line's leak as a share of its load (0 on a line without either)."""
+    share = np.divide(leak, load, out=np.zeros_like(leak), where=load > 0)
+    return np.minimum(share, MAX_LEAK)
 
 
 def _median(a: np.ndarray, axis: int) -> np.ndarray:
