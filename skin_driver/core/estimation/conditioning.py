@@ -8,10 +8,11 @@ by the optional per-taxel gain, and replace dead or stuck taxels by the mean of 
 neighbours so that a dead taxel inside a contact does not fake a shift between the layers.
 
 A taxel read at the ADC's full scale was cut there: its tared count (the raw one less baseline
-and line leak) is a lower bound on its load, not a value, whatever was taken off it. It keeps
-that count for the imprint's shape (the nearest thing to its neighbours' level); for the force
-it is censored: :func:`mark_clipped` puts it at full scale, at or past the ceiling of every
-force curve, where a curve that censors is flat (:mod:`forcecurve`).
+and line leak) is a lower bound on its load, not a value, whatever was taken off it, and the
+lines with most load lose most leak, so a cut plateau would come out as a crater. For the
+imprint's shape it takes the layer's highest tared count (a level plateau, as high as anything
+read); for the force it is censored: :func:`mark_clipped` puts it at full scale, at or past the
+ceiling of every force curve, where a fitted curve is flat (:mod:`forcecurve`).
 """
 
 from __future__ import annotations
@@ -311,10 +312,11 @@ class Conditioner:
         """
         Return the tared counts of both layers as a new (2, rows, cols) array (maps checked).
 
-        Line leak removed, readings under the touch threshold zeroed, dead taxels filled from
-        their neighbours. These are the sensor's own readings, free of any assumption about the
-        FSR curve: the shape of an imprint, hence its location and the layer shift, is measured
-        on them, and a force calibration fits its curve to them.
+        Line leak removed, readings under the touch threshold zeroed, taxels the ADC cut at
+        the layer's highest count (module docstring), dead taxels filled from their neighbours.
+        These are the sensor's own readings, free of any assumption about the FSR curve: the
+        shape of an imprint, hence its location and the layer shift, is measured on them, and
+        a force calibration fits its curve to them (with the cut taxels marked, :meth:`clipped`).
         """
         if self._shape != t.shape:
             self._ensure(t.shape)

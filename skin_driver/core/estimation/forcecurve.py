@@ -29,7 +29,9 @@ imprint's unsaturated rim tells the rest (:mod:`imprint`: a bump fitted to the r
 the fit chooses with the curve). The sum of a press stays linear in the scale and the rim load,
 so censored and free taxels are fitted together (non-negative least squares of relative
 errors, for each exponent of a search in log steps). Whether the layer is censored at all, and
-with which bump, is chosen by the presses: the choice that fits them best.
+with which bump, is chosen by the presses: the choice that fits them best. A taxel the ADC cut
+(the conditioning puts it at full scale) is a lower bound whatever fits best: once a press has
+one, the layer is censored, and the curve is flat from the highest count read under the cut.
 
 The curve is stored as knots in counts up to the highest count pressed, with the censoring
 ceiling, the bump's width and the rim load; past the knots the last slope goes on. The fit is
