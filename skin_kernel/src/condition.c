@@ -1,13 +1,16 @@
 /*
- * Conditioning: raw counts to tared touch counts (baseline, line leak, threshold, dead taxels)
- * and touch counts to force. Python description: conditioning.py and crosstalk.py.
+ * Conditioning: raw counts to tared touch counts (baseline, line leak, threshold, dead taxels),
+ * the taxels the ADC cut, and touch counts to force. Python description: conditioning.py and
+ * crosstalk.py.
  */
 #include <string.h>
 
 #include "internal.h"
 
-/* Largest median, as a share of the line's highest reading, taken for leak (crosstalk.py). */
-#define LEAK_SHARE 0.25
+/* Largest median, as a share of the line's load above it, taken for leak (crosstalk.py). */
+#define MAX_LEAK 0.05
+/* A line is lifted by leak when most of its taxels read this many noise sigmas or more. */
+#define LEAK_SIGMAS 3.0
 
 /*
  * Unnormalised 3 x 3 box sum with a zero border, in OpenCV's order (boxFilter: three-term row
@@ -86,14 +89,14 @@ static double select_kth(double *buf, int len, int k)
 }
 
 /* The median of a line (stride apart), numpy's way: mean of the two middle values if even. */
-static double line_median(const double *a, int len, int stride, double *buf, double *peak)
+static double line_median(const double *a, int len, int stride, double *buf, double *sum)
 {
-  double top = a[0];
+  double total = 0.0;
   for (int i = 0; i < len; i++) {
     buf[i] = a[i * stride];
-    top = buf[i] > top ? buf[i] : top;
+    total += buf[i];
   }
-  *peak = top;
+  *sum = total;
   int mid = (len - 1) / 2;
   double lo = select_kth(buf, len, mid);
   if (len % 2) {
@@ -107,25 +110,70 @@ static double line_median(const double *a, int len, int stride, double *buf, dou
   return 0.5 * (lo + hi);
 }
 
-/* Take each line's leak (its median when that is far below its peak) out of both layers. */
+/* A line's leak: its median, unless that is not a small share of the load above it. */
+static double line_leak(double median, double sum, int len)
+{
+  if (median > MAX_LEAK * (sum - len * median)) {
+    return 0.0;
+  }
+  return median > 0.0 ? median : 0.0;
+}
+
+/* A line's leak as a share of its load (0 on a line without load), MAX_LEAK at most. */
+static double leak_share(double leak, double load)
+{
+  double share = load > 0 ? leak / load : 0.0;
+  return share < MAX_LEAK ? share : MAX_LEAK;
+}
+
+/*
+ * A taxel leaks onto the others of its lines, not onto itself: the lines' leak took a share of
+ * its own count too much, which is given back (crosstalk.py). The shares are turned into the
+ * leak arrays in place.
+ */
+static void give_back_own_leak(double *c, int rows, int cols, double *row_leak,
+                               double *col_leak)
+{
+  for (int r = 0; r < rows; r++) {
+    double load = 0.0;
+    for (int j = 0; j < cols; j++) {
+      load += c[r * cols + j];
+    }
+    row_leak[r] = leak_share(row_leak[r], load);
+  }
+  for (int j = 0; j < cols; j++) {
+    double load = 0.0;
+    for (int r = 0; r < rows; r++) {
+      load += c[r * cols + j];
+    }
+    col_leak[j] = leak_share(col_leak[j], load);
+  }
+  for (int r = 0; r < rows; r++) {
+    for (int j = 0; j < cols; j++) {
+      c[r * cols + j] /= 1.0 - row_leak[r] - col_leak[j];
+    }
+  }
+}
+
+/* Take each line's leak (its median when a small share of its load) out of both layers. */
 static void remove_line_leak(sk_kernel *k)
 {
   int rows = k->rows, cols = k->cols, n = k->n;
   double half = 0.5 * (rows < cols ? rows : cols);
   int lifted = 0;
   for (int layer = 0; layer < 2 && !lifted; layer++) {
-    const double *c = k->counts + layer * n, *thr = k->threshold + layer * n;
+    const double *c = k->counts + layer * n, *noise = k->noise + layer * n;
     for (int r = 0; r < rows && !lifted; r++) {
       int over = 0;
       for (int j = 0; j < cols; j++) {
-        over += c[r * cols + j] >= thr[r * cols + j];
+        over += c[r * cols + j] >= LEAK_SIGMAS * noise[r * cols + j];
       }
       lifted = over >= half;
     }
     for (int j = 0; j < cols && !lifted; j++) {
       int over = 0;
       for (int r = 0; r < rows; r++) {
-        over += c[r * cols + j] >= thr[r * cols + j];
+        over += c[r * cols + j] >= LEAK_SIGMAS * noise[r * cols + j];
       }
       lifted = over >= half;
     }
@@ -133,32 +181,30 @@ static void remove_line_leak(sk_kernel *k)
   if (!lifted) {
     return;
   }
-  double *buf = k->scratch;
-  double *leak = k->scratch + (rows > cols ? rows : cols);
-  /* Rows first, then columns: the leak is a row term plus a column term. */
+  int line = rows > cols ? rows : cols;
+  double *buf = k->scratch, *row_leak = k->scratch + line, *col_leak = k->scratch + 2 * line;
+  /* Rows first, then columns: the leak is a row term plus a column term (layers apart). */
   for (int layer = 0; layer < 2; layer++) {
     double *c = k->counts + layer * n;
     for (int r = 0; r < rows; r++) {
-      double peak, median = line_median(c + r * cols, cols, 1, buf, &peak);
-      leak[r] = median > LEAK_SHARE * peak ? 0.0 : (median > 0.0 ? median : 0.0);
+      double sum, median = line_median(c + r * cols, cols, 1, buf, &sum);
+      row_leak[r] = line_leak(median, sum, cols);
     }
     for (int r = 0; r < rows; r++) {
       for (int j = 0; j < cols; j++) {
-        c[r * cols + j] -= leak[r];
+        c[r * cols + j] -= row_leak[r];
       }
     }
-  }
-  for (int layer = 0; layer < 2; layer++) {
-    double *c = k->counts + layer * n;
     for (int j = 0; j < cols; j++) {
-      double peak, median = line_median(c + j, rows, cols, buf, &peak);
-      leak[j] = median > LEAK_SHARE * peak ? 0.0 : (median > 0.0 ? median : 0.0);
+      double sum, median = line_median(c + j, rows, cols, buf, &sum);
+      col_leak[j] = line_leak(median, sum, rows);
     }
     for (int r = 0; r < rows; r++) {
       for (int j = 0; j < cols; j++) {
-        c[r * cols + j] -= leak[j];
+        c[r * cols + j] -= col_leak[j];
       }
     }
+    give_back_own_leak(c, rows, cols, row_leak, col_leak);
   }
 }
 
@@ -208,12 +254,34 @@ static void dead_taxels(sk_kernel *k)
   }
 }
 
+/* Put the taxels the ADC cut at their layer's highest tared count (conditioning.py). */
+static void level_clipped(sk_kernel *k)
+{
+  int n = k->n;
+  for (int layer = 0; layer < 2; layer++) {
+    double *c = k->counts + layer * n, top = 0.0;
+    const unsigned char *clipped = k->clipped + layer * n;
+    for (int i = 0; i < n; i++) {
+      top = c[i] > top ? c[i] : top;
+    }
+    for (int i = 0; i < n; i++) {
+      if (clipped[i] && c[i] > 0) {
+        c[i] = top;
+      }
+    }
+  }
+}
+
 void sk_touch_counts(sk_kernel *k, const double *maps)
 {
-  int n2 = 2 * k->n;
+  int n2 = 2 * k->n, any_clipped = 0;
+  double full = (double)k->full_scale;
   for (int i = 0; i < n2; i++) {
     k->counts[i] = maps[i] - k->baseline[i];
+    k->clipped[i] = maps[i] >= full;
+    any_clipped |= k->clipped[i];
   }
+  k->any_clipped = any_clipped;
   if (k->crosstalk) {
     remove_line_leak(k);
   }
@@ -222,9 +290,36 @@ void sk_touch_counts(sk_kernel *k, const double *maps)
       k->counts[i] = 0.0;
     }
   }
+  if (any_clipped) {
+    level_clipped(k);
+  }
   if (k->any_dead[0] || k->any_dead[1]) {
     dead_taxels(k);
   }
+}
+
+int sk_clipped_window(const sk_kernel *k, const sk_pair *p, double *window, int mark)
+{
+  if (!k->any_clipped) {
+    return 0;
+  }
+  int m = p->h * p->w, layers = 0;
+  for (int layer = 0; layer < 2; layer++) {
+    const unsigned char *clipped = k->clipped + layer * k->n;
+    double *counts = window + layer * m;
+    for (int r = 0; r < p->h; r++) {
+      for (int c = 0; c < p->w; c++) {
+        int j = r * p->w + c;
+        if (counts[j] > 0 && clipped[(p->r0 + r) * k->cols + p->c0 + c]) {
+          layers |= 1 << layer;
+          if (mark) {
+            counts[j] = (double)k->full_scale;
+          }
+        }
+      }
+    }
+  }
+  return layers;
 }
 
 /*
@@ -238,12 +333,14 @@ void sk_force_of(sk_kernel *k)
   for (int layer = 0; layer < 2; layer++) {
     const double *table = k->table_force + layer * size;
     const double *c = k->counts + layer * n;
+    const unsigned char *clipped = k->clipped + layer * n;
     double *f = k->force + layer * n;
     const double *gain = k->has_gain ? k->gain + layer * n : NULL;
     for (int i = 0; i < n; i++) {
       double v = 0.0;
       if (c[i] != 0.0) {
-        double x = c[i] < last ? c[i] : last;
+        /* a reading the ADC cut reads the force at full scale (conditioning.py) */
+        double x = c[i] < last && !clipped[i] ? c[i] : last;
         int j = (int)x;
         double slope = j + 1 < size ? table[j + 1] - table[j] : 0.0;
         v = slope * (x - j) + table[j];

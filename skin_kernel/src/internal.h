@@ -21,6 +21,8 @@ struct sk_kernel {
   double *baseline, *threshold, *noise, *gain;
   unsigned char *dead;
   int any_dead[2];
+  unsigned char *clipped;           /* (2, n): the last scan's raw count at the ADC's full scale */
+  int any_clipped;
   double *live, *live_count;        /* dead fill: live taxels and their count per 3 x 3 */
   double *table_force;              /* 2 x (full_scale + 1) */
   /* the last scan */
@@ -43,6 +45,9 @@ double sk_sum(const double *a, int n);
 void sk_live_counts(sk_kernel *k);
 void sk_touch_counts(sk_kernel *k, const double *maps);
 void sk_force_of(sk_kernel *k);
+/* pair p's layers (bits 0, 1) holding a loaded taxel the ADC cut; with mark, such taxels of its
+ * window (sk_pair_window) are put at full scale, where a force curve censors them */
+int sk_clipped_window(const sk_kernel *k, const sk_pair *p, double *window, int mark);
 
 /* contacts.c: fills k->pairs (geometry and forces), returns their number */
 int sk_pair_layers(sk_kernel *k);

@@ -37,6 +37,7 @@ void sk_free(sk_kernel *k)
     free(arrays[i]);
   }
   free(k->dead);
+  free(k->clipped);
   free(k->pairs);
   free(k->labels);
   free(k->iscratch);
@@ -73,6 +74,7 @@ sk_kernel *sk_new(const int *ints, const double *reals, const double *baseline,
   k->noise = copy_of(noise, 2 * n);
   k->gain = gain ? copy_of(gain, 2 * n) : NULL;
   k->dead = malloc(2 * n);
+  k->clipped = calloc(2 * n, 1);
   k->live = copy_of(NULL, 2 * n);
   k->live_count = copy_of(NULL, 2 * n);
   k->table_force = copy_of(tables, 2 * size);
@@ -89,7 +91,7 @@ sk_kernel *sk_new(const int *ints, const double *reals, const double *baseline,
   k->fit = copy_of(NULL, 4 * (size_t)n + shift_scratch);
   k->labels = malloc(sizeof(int) * n);
   k->iscratch = malloc(sizeof(int) * 4 * n);
-  if (!k->baseline || !k->threshold || !k->noise || (gain && !k->gain) || !k->dead || !k->live
+  if (!k->baseline || !k->threshold || !k->noise || (gain && !k->gain) || !k->dead || !k->clipped || !k->live
       || !k->live_count || !k->table_force || !k->counts || !k->force
       || !k->pairs || !k->tops || !k->fractions || !k->scratch || !k->fit || !k->labels
       || !k->iscratch) {
@@ -211,12 +213,14 @@ int sk_scan(sk_kernel *k, const double *maps, int every_pair, double *out, int *
     int m = p->h * p->w;
     sk_pair_window(k, q, k->fit);
     p->censored = 0;
+    /* a loaded taxel the ADC cut is censored whatever its tared counts (conditioning.py) */
+    int clipped = sk_clipped_window(k, p, k->fit, 0);
     for (int layer = 0; layer < 2; layer++) {
       double censor = k->reals[SK_CENSOR_TOP + layer], peak = 0.0;
       for (int j = 0; j < m; j++) {
         peak = k->fit[layer * m + j] > peak ? k->fit[layer * m + j] : peak;
       }
-      if (censor > 0 && peak >= censor) {
+      if (censor > 0 && (peak >= censor || clipped >> layer & 1)) {
         p->censored |= 1 << layer;
       }
     }
@@ -264,6 +268,7 @@ int sk_window(const sk_kernel *k, int pair, double *out, int *shape)
   shape[2] = p->h;
   shape[3] = p->w;
   sk_pair_window(k, pair, out);
+  sk_clipped_window(k, p, out, 1);
   return 0;
 }
 

@@ -6,6 +6,13 @@ the remaining counts to force through the FSR divider model (:class:`fsr.FsrMode
 skin's own fitted curve (:class:`forcecurve.ForceCurve`, set by a force calibration), multiply
 by the optional per-taxel gain, and replace dead or stuck taxels by the mean of their live
 neighbours so that a dead taxel inside a contact does not fake a shift between the layers.
+
+A taxel read at the ADC's full scale was cut there: its tared count (the raw one less baseline
+and line leak) is a lower bound on its load, not a value, whatever was taken off it, and the
+lines with most load lose most leak, so a cut plateau would come out as a crater. For the
+imprint's shape it takes the layer's highest tared count (a level plateau, as high as anything
+read); for the force it is censored: :func:`mark_clipped` puts it at full scale, at or past the
+ceiling of every force curve, where a fitted curve is flat (:mod:`forcecurve`).
 """
 
 from __future__ import annotations
@@ -20,7 +27,7 @@ from .crosstalk import remove_line_leak
 from .fsr import FsrModel
 from .validate import check_map, check_number, check_pair, check_stack
 
-__all__ = ['ConditioningConfig', 'Conditioner', 'ConditionerState']
+__all__ = ['ConditioningConfig', 'Conditioner', 'ConditionerState', 'mark_clipped']
 
 
 @dataclass(frozen=True)
@@ -44,6 +51,18 @@ class ConditioningConfig:
         """Validate the thresholds."""
         check_number(self.threshold_counts, 'threshold_counts', non_negative=True)
         check_number(self.noise_sigmas, 'noise_sigmas', non_negative=True)
+
+
+def mark_clipped(counts: np.ndarray, clipped: np.ndarray, full_scale: float) -> np.ndarray:
+    """
+    Return touch ``counts`` with their loaded ``clipped`` taxels at ``full_scale``.
+
+    What a force curve censors (:mod:`forcecurve`): a cut reading sits at or above any curve's
+    ceiling. ``clipped`` (same shape, :meth:`Conditioner.clipped`) None: ``counts`` itself.
+    """
+    if clipped is None:
+        return counts
+    return np.where(clipped & (counts > 0), float(full_scale), counts)
 
 
 class _Layer:
@@ -286,17 +305,18 @@ class Conditioner:
     def condition(self, top_counts, bottom_counts) -> tuple:
         """Return (top, bottom) per-taxel force maps in newtons (float64, new arrays)."""
         t, b = check_pair(top_counts, bottom_counts)
-        force = self.force_of(self.touch_counts(t, b))
+        force = self.force_of(self.touch_counts(t, b), self.clipped(t, b))
         return force[0], force[1]
 
     def touch_counts(self, t: np.ndarray, b: np.ndarray) -> np.ndarray:
         """
         Return the tared counts of both layers as a new (2, rows, cols) array (maps checked).
 
-        Line leak removed, readings under the touch threshold zeroed, dead taxels filled from
-        their neighbours. These are the sensor's own readings, free of any assumption about the
-        FSR curve: the shape of an imprint, hence its location and the layer shift, is measured
-        on them, and a force calibration fits its curve to them.
+        Line leak removed, readings under the touch threshold zeroed, taxels the ADC cut at
+        the layer's highest count (module docstring), dead taxels filled from their neighbours.
+        These are the sensor's own readings, free of any assumption about the FSR curve: the
+        shape of an imprint, hence its location and the layer shift, is measured on them, and
+        a force calibration fits its curve to them (with the cut taxels marked, :meth:`clipped`).
         """
         if self._shape != t.shape:
             self._ensure(t.shape)
@@ -305,14 +325,31 @@ class Conditioner:
         np.subtract(t, st.baseline[0], out=c[0])
         np.subtract(b, st.baseline[1], out=c[1])
         if self.config.remove_crosstalk:
-            remove_line_leak(c, st.threshold)
+            remove_line_leak(c, st.noise)
         c[c < st.threshold] = 0.0
+        self._level_clipped(c, t, b)
         if st.dead:
             self._revive(c, st)
             st = self._stacked()
             for i, fill in st.dead:
                 c[i] = fill(c[i])
         return c
+
+    def _level_clipped(self, c: np.ndarray, t: np.ndarray, b: np.ndarray) -> None:
+        """Put the taxels the ADC cut at their layer's highest tared count, in place."""
+        full = self.config.fsr.full_scale
+        for layer, raw in enumerate((t, b)):
+            if raw.max() >= full:
+                cut = raw >= full
+                c[layer][cut & (c[layer] > 0)] = c[layer].max()
+
+    def clipped(self, top_counts, bottom_counts) -> np.ndarray:
+        """Return where raw maps read the ADC's full scale, (2, rows, cols), or None if nowhere."""
+        full = self.config.fsr.full_scale
+        t, b = np.asarray(top_counts), np.asarray(bottom_counts)
+        if t.max() < full and b.max() < full:
+            return None
+        return np.stack((t >= full, b >= full))
 
     def _revive(self, c: np.ndarray, st: _Stacked) -> None:
         """Unmark taxels taken for dead that read a touch: they only rest below zero counts."""
@@ -322,8 +359,13 @@ class Conditioner:
                 self._layers[i].dead = fill.dead & ~alive
                 self._stack = None
 
-    def force_of(self, counts: np.ndarray) -> np.ndarray:
-        """Return the per-taxel force (N, gains applied) of a (2, rows, cols) touch-count stack."""
+    def force_of(self, counts: np.ndarray, clipped: np.ndarray = None) -> np.ndarray:
+        """
+        Return the per-taxel force (N, gains applied) of a (2, rows, cols) touch-count stack.
+
+        The taxels ``clipped`` marks (:meth:`clipped`, or None) read the force at full scale.
+        """
+        counts = mark_clipped(counts, clipped, self.config.fsr.full_scale)
         st = self._stacked()
         # Most taxels are untouched: only the loaded ones are converted, the rest keep the force
         # of zero counts, which the FSR model defines as 0.

@@ -7,45 +7,64 @@ some skins to rise above the touch threshold and join presses that lie on one li
 the same for every taxel of a row (and of a column), while presses cover only a few taxels of
 each line. So the median of a line is its leak: one sweep of median polish (rows, then columns)
 takes the row and column terms out of the tared counts without knowing the skin's leak factor.
-A load that covers most of a line (a palm, a uniform weight for the gain calibration) has a
-median close to its peak and is left alone.
+
+A leak is a few per cent of the load on its line: a median that is more than ``MAX_LEAK`` of
+what the line carries above it is a load that covers most of the line (a palm, a uniform weight
+for the gain calibration), and is left alone. The peak is no measure of it: on a fine grid a
+press covers dozens of taxels of a line, whose leak then reaches a third of the peak, and more
+where the ADC cut the peak.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-__all__ = ['remove_line_leak', 'LEAK_SHARE']
+__all__ = ['remove_line_leak', 'MAX_LEAK', 'LEAK_SIGMAS']
 
-# Largest median, as a share of the line's highest reading, that is taken for leak.
-LEAK_SHARE = 0.25
+# Largest median, as a share of the line's load above it, that is taken for leak.
+MAX_LEAK = 0.05
+# A line is lifted by leak when most of its taxels read this many noise sigmas or more.
+LEAK_SIGMAS = 3.0
 
 
-def remove_line_leak(counts: np.ndarray, threshold: np.ndarray) -> None:
+def remove_line_leak(counts: np.ndarray, noise: np.ndarray) -> None:
     """
     Subtract from a (layers, rows, cols) stack of tared counts, in place, each line's leak.
 
-    Only a leak that lifts lines over the touch ``threshold`` (same shape) matters; below it
-    the threshold zeroes the leak anyway, so scans where no line is mostly over it are left as
-    they are, at the cost of one comparison.
+    ``noise`` (same shape) is each taxel's 1-sigma count noise. A leak under the touch
+    threshold still adds to every loaded taxel of its lines, so a scan is cleaned as soon as
+    one line is mostly ``LEAK_SIGMAS`` over its noise; scans where none is are left as they
+    are, at the cost of one comparison.
     """
-    over = counts >= threshold
+    over = counts >= LEAK_SIGMAS * noise
     half = 0.5 * min(counts.shape[1:])
     if not ((over.sum(axis=2) >= half).any() or (over.sum(axis=1) >= half).any()):
         return
     # The leak is a sum of a row term and a column term: one sweep of each removes both.
+    leaks = []
     for axis in (2, 1):
-        counts -= np.expand_dims(_leak(counts, axis), axis)
+        leaks.append(_leak(counts, axis))
+        counts -= np.expand_dims(leaks[-1], axis)
+    # A taxel leaks onto the others of its lines, not onto itself: the lines' leak took a share
+    # (the line's leak over its load) of its own count too much, which is given back.
+    share = [_share(leak, counts.sum(axis=axis)) for leak, axis in zip(leaks, (2, 1))]
+    counts /= 1.0 - share[0][:, :, None] - share[1][:, None, :]
 
 
 def _leak(counts: np.ndarray, axis: int) -> np.ndarray:
     median = _median(counts, axis)
     # A negative median is the noise of an untouched line: leak only ever adds counts. A median
-    # near the line's peak is a load spread along the line (a palm, a uniform weight), not a
-    # leak, which is a few per cent of the line's load.
+    # that is not a small share of the line's load above it is a load spread along the line.
     leak = np.maximum(median, 0.0)
-    leak[median > LEAK_SHARE * counts.max(axis=axis)] = 0.0
+    above = counts.sum(axis=axis) - counts.shape[axis] * median
+    leak[median > MAX_LEAK * above] = 0.0
     return leak
+
+
+def _share(leak: np.ndarray, load: np.ndarray) -> np.ndarray:
+    """Return each line's leak as a share of its load (0 on a line without either)."""
+    share = np.divide(leak, load, out=np.zeros_like(leak), where=load > 0)
+    return np.minimum(share, MAX_LEAK)
 
 
 def _median(a: np.ndarray, axis: int) -> np.ndarray:

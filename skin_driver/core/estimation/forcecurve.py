@@ -29,7 +29,9 @@ imprint's unsaturated rim tells the rest (:mod:`imprint`: a bump fitted to the r
 the fit chooses with the curve). The sum of a press stays linear in the scale and the rim load,
 so censored and free taxels are fitted together (non-negative least squares of relative
 errors, for each exponent of a search in log steps). Whether the layer is censored at all, and
-with which bump, is chosen by the presses: the choice that fits them best.
+with which bump, is chosen by the presses: the choice that fits them best. A taxel the ADC cut
+(the conditioning puts it at full scale) is a lower bound whatever fits best: once a press has
+one, the layer is censored, and the curve is flat from the highest count read under the cut.
 
 The curve is stored as knots in counts up to the highest count pressed, with the censoring
 ceiling, the bump's width and the rim load; past the knots the last slope goes on. The fit is
@@ -248,7 +250,23 @@ class _Press:
         return self.bumps[shape]
 
 
-def _presses(press_counts, press_gains, assumed: FsrModel) -> list:
+def _highest_read(press_counts, full_scale: int) -> float:
+    """
+    Return the highest count read under full scale when a press reached it, else inf.
+
+    A taxel at full scale was cut by the ADC (the conditioning puts every such taxel there): its
+    reading tells no more than the highest count any uncut taxel read, which it takes, so the
+    curve is flat from there to full scale instead of running off along the assumed law.
+    """
+    counts = [np.asarray(c, dtype=np.float64) for c in press_counts]
+    if not any(c.size and c.max() >= full_scale for c in counts):
+        return np.inf
+    return max((float(c[c < full_scale].max()) for c in counts if (c < full_scale).any()),
+               default=0.0)
+
+
+def _presses(press_counts, press_gains, assumed: FsrModel, highest: float) -> list:
+    """Return the presses' loaded taxels, each read at ``highest`` counts at most."""
     out = []
     for k, (c, g) in enumerate(zip(press_counts, press_gains)):
         c = np.atleast_2d(np.asarray(c, dtype=np.float64))
@@ -256,7 +274,8 @@ def _presses(press_counts, press_gains, assumed: FsrModel) -> list:
         if c.shape != g.shape:
             raise ValueError(f'press {k + 1}: counts {c.shape} and gains {g.shape} differ')
         loaded = c > 0
-        out.append(_Press(c[loaded], g[loaded], _power_part(assumed, c[loaded]), c, {}))
+        out.append(_Press(c[loaded], g[loaded],
+                          _power_part(assumed, np.minimum(c[loaded], highest)), c, {}))
     return out
 
 
@@ -376,17 +395,27 @@ def _best_choice(presses: list, target: np.ndarray, full_scale: int) -> tuple:
 
 def _censoring_choices(presses: list, full_scale: int, shape: tuple) -> list:
     """
-    Return (censor counts, (bump spread, power)) choices: none, and a ceiling presses pile up at.
+    Return (censor counts, (bump spread, power)) choices: none, and the ceilings presses reach.
 
-    The ceiling is the highest count read less a band for noise; it is a saturation only when
-    two or more presses reach it (one press's peak is just the highest reading).
+    A ceiling is the highest count read less a band for noise; it is a saturation only when
+    two or more presses reach it (one press's peak is just the highest reading). A taxel at
+    full scale was cut by the ADC (the conditioning puts every such taxel there): a lower bound
+    for certain, so once a press has one, every choice censors it (none is no choice), and the
+    film's own ceiling below the cut, the highest count read under full scale, is tried too.
     """
-    choices = [(0.0, (0.0, 2.0))]
-    ceiling = max(float(p.counts.max()) for p in presses) - CENSOR_BAND * full_scale
-    if sum(bool((p.counts >= ceiling).any()) for p in presses) >= 2:
-        widest = max(1.0, 0.25 * max(shape))
-        choices += [(ceiling, (float(s), p)) for p in _POWERS
-                    for s in np.geomspace(0.3, widest, _SPREADS)]
+    band = CENSOR_BAND * full_scale
+    top = max(float(p.counts.max()) for p in presses)
+    clipped = top >= full_scale
+    choices = [] if clipped else [(0.0, (0.0, 2.0))]
+    ceilings = [top - band]
+    highest = _highest_read([p.counts for p in presses], full_scale)
+    if clipped and highest > band:
+        ceilings.insert(0, highest - band)
+    widest = max(1.0, 0.25 * max(shape))
+    for ceiling in ceilings:
+        if clipped or sum(bool((p.counts >= ceiling).any()) for p in presses) >= 2:
+            choices += [(ceiling, (float(s), p)) for p in _POWERS
+                        for s in np.geomspace(0.3, widest, _SPREADS)]
     return choices
 
 
@@ -423,7 +452,8 @@ def fit_force_curve(press_counts: Sequence[np.ndarray], press_gains: Sequence[np
     known = np.asarray(known_n, dtype=np.float64)
     target = np.asarray(sensed_n, dtype=np.float64)
     check_known_forces(known)
-    presses = _presses(press_counts, press_gains, assumed)
+    highest = _highest_read(press_counts, full_scale)
+    presses = _presses(press_counts, press_gains, assumed, highest)
     empty = [k for k, p in enumerate(presses) if p.counts.size == 0]
     if empty:
         raise ValueError(f'press {empty[0] + 1} ({known[empty[0]]:.2f} N) loaded no taxel')
@@ -436,10 +466,12 @@ def fit_force_curve(press_counts: Sequence[np.ndarray], press_gains: Sequence[np
         raise ValueError(f'press {worst + 1} of {known[worst]:.2f} N is fitted as '
                          f'{fitted[worst]:.2f} N; the presses disagree with one curve '
                          '(a wrong known force, or two things touching?)')
-    # Stored in counts, sampled over the counts pressed; past them the last slope goes on.
+    # Stored in counts, sampled over the counts pressed; past them the last slope goes on (flat
+    # past the highest count read under a cut: _presses).
     top = max(float(p.counts.max()) for p in presses)
     grid = np.linspace(0.0, min(top, full_scale), _GRID)
-    forces = np.where(grid > 0, scale * _power_part(assumed, grid) ** exponent + activation, 0.0)
+    power = _power_part(assumed, np.minimum(grid, highest))
+    forces = np.where(grid > 0, scale * power ** exponent + activation, 0.0)
     curve = ForceCurve(tuple(grid), tuple(np.maximum.accumulate(forces)), censor, *bump_shape,
                        rim_load_n=rim_load)
     censored = sum(bool((p.counts >= censor).any()) for p in presses) if censor else 0

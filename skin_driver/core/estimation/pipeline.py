@@ -40,7 +40,7 @@ import numpy as np
 
 from . import kernel as compiled_kernel
 from .calibration import Calibration
-from .conditioning import Conditioner, ConditioningConfig
+from .conditioning import Conditioner, ConditioningConfig, mark_clipped
 from .contacts import LayerPair, pair_layers
 from .fsr import FsrModel
 from .shift import DEFAULT_METHOD, get_method, Method, NO_SHIFT
@@ -151,10 +151,21 @@ def _rimmed(sums, curves, saturated) -> tuple:
                  for total, curve, hit in zip(sums, curves, saturated))
 
 
-def _censored(pair: LayerPair, window: np.ndarray, curves) -> LayerPair:
-    """Return ``pair`` with its rim loads and saturated taxels' force (:func:`_imprint_sums`)."""
-    saturated = _saturated(pair.maps, curves)
-    sums = _imprint_sums(pair.maps, window, saturated,
+def _censored(pair: LayerPair, window: np.ndarray, curves, clipped: np.ndarray = None,
+              full_scale: float = 0.0) -> LayerPair:
+    """
+    Return ``pair`` with its rim loads and saturated taxels' force (:func:`_imprint_sums`).
+
+    ``clipped`` marks the taxels of the whole maps read at the ADC's full scale (or None):
+    censored whatever their tared counts (:func:`conditioning.mark_clipped`).
+    """
+    maps = pair.maps
+    if clipped is not None:
+        r0, c0 = pair.origin
+        h, w = maps.shape[1:]
+        maps = mark_clipped(maps, clipped[:, r0:r0 + h, c0:c0 + w], full_scale)
+    saturated = _saturated(maps, curves)
+    sums = _imprint_sums(maps, window, saturated,
                          _rimmed((pair.top_force_n, pair.bottom_force_n), curves, saturated),
                          curves)
     return replace(pair, top_force_n=sums[0], bottom_force_n=sums[1])
@@ -245,7 +256,8 @@ class ContactEstimator:
         conditioner = self.conditioner
         maps = conditioner.touch_counts(t, b)
         dead = conditioner.dead_masks()[0]
-        force = conditioner.force_of(maps)
+        clipped = conditioner.clipped(t, b)
+        force = conditioner.force_of(maps, clipped)
         pairs = pair_layers(maps, cfg.max_contacts,
                             dead if dead is not None and dead.any() else None, force)
         if not pairs:
@@ -262,7 +274,7 @@ class ContactEstimator:
             window = (_force_window(pair, maps, force) if censoring or method.linear
                       else None)
             if censoring:
-                pair = _censored(pair, window, curves)
+                pair = _censored(pair, window, curves, clipped, conditioner.config.fsr.full_scale)
             if whole is not None:
                 est = whole
             elif method.linear:

@@ -28,6 +28,7 @@ from typing import Optional, Sequence
 import numpy as np
 
 from .calibration import calibrate_zero, Calibration, compliance_from_presses, SkinIdentity
+from .conditioning import mark_clipped
 from .forcecurve import check_known_forces, fit_force_curve
 from .gains import gains_from_force_sums, limits_note
 from .presses import PressSegmenter
@@ -49,8 +50,9 @@ class PressRecord:
 
     ``shift_m`` is the raw layer shift (before the offset is removed), ``counts`` both layers'
     counts above baseline (2 x rows x cols, 0 where untouched), ``wrench_n`` the reference
-    sensor's mean force (x, y, z) in the skin frame when one was fed, ``clipped_taxels`` how
-    many taxels read the ADC's full scale (their readings are cut).
+    sensor's mean force (x, y, z) in the skin frame when one was fed, ``clipped`` where the
+    raw counts read the ADC's full scale (2 x rows x cols, None where no taxel did): those
+    readings are cut, and a force fit censors them.
     """
 
     peak_force_n: float
@@ -59,7 +61,7 @@ class PressRecord:
     looks_normal: bool = True
     shift_growth_m: float = 0.0
     wrench_n: Optional[tuple] = None
-    clipped_taxels: int = 0
+    clipped: Optional[np.ndarray] = None
 
 
 @dataclass(frozen=True)
@@ -167,33 +169,30 @@ class CalibrationSession:
             press = self._segmenter.add(0.0, None)
         if press is None:
             return ''
-        counts = np.mean([self.estimator.conditioner.touch_counts(t, b)
-                          for t, b, _ in press.plateau], axis=0)
+        conditioner = self.estimator.conditioner
+        counts = np.mean([conditioner.touch_counts(t, b) for t, b, _ in press.plateau], axis=0)
+        clipped = [m for m in (conditioner.clipped(t, b) for t, b, _ in press.plateau)
+                   if m is not None]
         wrenches = [w for _, _, w in press.plateau if w is not None]
         wrench = tuple(np.mean(wrenches, axis=0)) if wrenches else None
         return self.add_press(PressRecord(
             peak_force_n=press.peak_force_n, shift_m=press.plateau_shift_m, counts=counts,
             looks_normal=press.looks_normal, shift_growth_m=press.shift_growth_m,
-            wrench_n=wrench,
-            clipped_taxels=max(self._clipped(t, b) for t, b, _ in press.plateau)))
+            wrench_n=wrench, clipped=np.any(clipped, axis=0) if clipped else None))
 
     def record(self, top_counts, bottom_counts, contacts, wrench_n=None) -> PressRecord:
         """Return the record of a press seen in one scan at full load (no stream needed)."""
         cal = self.estimator.calibration
-        counts = self.estimator.conditioner.touch_counts(top_counts, bottom_counts)
-        clipped = self._clipped(top_counts, bottom_counts)
+        conditioner = self.estimator.conditioner
+        counts = conditioner.touch_counts(top_counts, bottom_counts)
+        clipped = conditioner.clipped(top_counts, bottom_counts)
         if not contacts:
             return PressRecord(0.0, (math.nan, math.nan), counts, wrench_n=wrench_n,
-                               clipped_taxels=clipped)
+                               clipped=clipped)
         c = contacts[0]
         zero = cal.zero_m(c.force_n)
         return PressRecord(c.force_n, (c.shift_m[0] + zero[0], c.shift_m[1] + zero[1]),
-                           counts, wrench_n=wrench_n, clipped_taxels=clipped)
-
-    def _clipped(self, top_counts, bottom_counts) -> int:
-        """Return how many taxels of a scan read the ADC's full scale."""
-        full = self.estimator.conditioner.config.fsr.full_scale
-        return sum(int((np.asarray(m) >= full).sum()) for m in (top_counts, bottom_counts))
+                           counts, wrench_n=wrench_n, clipped=clipped)
 
     def add_press(self, record: PressRecord) -> str:
         """Add one press; return a note saying whether it counts (for a person)."""
@@ -261,16 +260,20 @@ class CalibrationSession:
                                      'were made')
         known = self.forces_n[:n]
         fill = self.estimator.config.fill_factor
-        gains = self.estimator.conditioner.gain_maps()
+        conditioner = self.estimator.conditioner
+        gains = conditioner.gain_maps()
+        full_scale = conditioner.config.fsr.full_scale
+        # A reading the ADC cut is censored whatever its tared counts (conditioning module).
+        marked = [mark_clipped(r.counts, r.clipped, full_scale) for r in self.accepted]
         fits = {}
         notes = ''
         # The normal force is the bottom layer's sum: its curve must fit. The top layer (the
         # same film) may borrow it when its own presses do not make a curve.
         for layer, name in ((1, 'bottom'), (0, 'top')):
-            counts = [r.counts[layer] for r in self.accepted]
+            counts = [m[layer] for m in marked]
             try:
                 fits[name] = fit_force_curve(counts, [gains[layer]] * n, known * fill * fill,
-                                             known, self.estimator.conditioner.config.fsr)
+                                             known, conditioner.config.fsr)
             except ValueError as err:
                 if name == 'bottom':
                     raise CalibrationRefused(f'{name} layer: {err}{self._clipping()}') from None
@@ -290,7 +293,8 @@ class CalibrationSession:
 
     def _clipping(self) -> str:
         """Return a note naming the presses whose taxels read the ADC's full scale ('' if none)."""
-        clipped = [k + 1 for k, r in enumerate(self.accepted) if r.clipped_taxels]
+        clipped = [k + 1 for k, r in enumerate(self.accepted)
+                   if r.clipped is not None and r.clipped.any()]
         if not clipped:
             return ''
         return (f'; press{"es" if len(clipped) > 1 else ""} {", ".join(map(str, clipped))} '

@@ -89,6 +89,7 @@ int sk_finish(sk_kernel *k, const double *forces, double *out);
 /*
  * Copy pair i's window of the last scan: counts (top, bottom) then its share of the force maps
  * (top, bottom), each h x w, to out; shape gets (r0, c0, h, w). Returns 0, or -1 for no such pair.
+ * A loaded taxel whose raw count was the ADC's full scale has full scale counts there (censored).
  */
 int sk_window(const sk_kernel *k, int pair, double *out, int *shape);
 

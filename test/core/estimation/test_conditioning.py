@@ -5,6 +5,7 @@ import pytest
 from skin_driver.core.estimation.conditioning import Conditioner, ConditioningConfig
 from skin_driver.core.estimation.fsr import FsrModel
 from skin_driver.core.sim.physics import Press, render, SkinModel
+from skin_driver.core.sim.skins import family_skin
 
 
 def _tared(model=None, rng=None):
@@ -125,3 +126,39 @@ def test_stacked_maps_match_the_pair_with_gain_and_dead_taxels():
     loaded[6:9, 7:10] = False
     assert loaded.any()
     np.testing.assert_array_equal(tf[loaded], 1.5 * raw_top[loaded])
+
+
+def test_a_heavy_press_on_a_fine_grid_leaves_no_line_of_leak_and_its_cut_taxels_censored():
+    # 128 x 128 taxels with 1.1 % crosstalk: a 50 N press leaks several hundred counts onto
+    # every taxel of its rows and columns, about a third of its peak, and drives its centre to
+    # the ADC's full scale. The leak comes off (no stripe of loaded taxels across the map);
+    # the cut taxels keep a level shape, the layer's highest count, and read the force at full
+    # scale (a lower bound, which a censoring force curve fills in).
+    model = family_skin('held_out:2@128').model
+    rng = np.random.default_rng(1)
+    frames = [render(model, [], rng) for _ in range(5)]
+    cond = Conditioner()
+    cond.tare(np.stack([t for t, _ in frames]), np.stack([b for _, b in frames]))
+    top, bottom = render(model, [Press(0.04, 0.04, 50.0, radius_m=0.003)], rng)
+    counts = cond.touch_counts(top, bottom)
+    clipped = cond.clipped(top, bottom)
+    assert clipped[1].sum() > 50
+    rows, cols = np.nonzero(counts[1])
+    assert np.ptp(rows) < 40 and np.ptp(cols) < 40
+    assert (counts[1][clipped[1]] == counts[1].max()).all()
+    force = cond.force_of(counts, clipped)
+    full_scale_force = cond.force_of(np.full(counts.shape, float(model.fsr.full_scale)))
+    np.testing.assert_array_equal(force[clipped], full_scale_force[clipped])
+    assert cond.clipped(*render(model, [], rng)) is None
+
+
+def test_a_leak_under_the_touch_threshold_comes_off_the_loaded_taxels():
+    # 0.6 % crosstalk lifts the lines through a press by 20-40 counts, under the 40-count
+    # threshold but well over the noise: left on, it adds to every loaded taxel of those lines.
+    plain, leaky = SkinModel(noise_counts=4.0), SkinModel(noise_counts=4.0, crosstalk=0.006)
+    press = [Press(0.0412, 0.0388, 25.0, radius_m=0.004)]
+    read = []
+    for model in (plain, leaky):
+        cond, _, rng = _tared(model)
+        read.append(sum(f.sum() for f in cond.condition(*render(model, press, rng))))
+    assert read[1] == pytest.approx(read[0], rel=0.02)

@@ -119,3 +119,24 @@ def test_a_skin_whose_curve_matches_the_assumed_one_keeps_it():
     np.testing.assert_allclose(fit.curve.counts_to_force(counts),
                                FsrModel().counts_to_force(counts), rtol=0.01)
     assert fit.curve.rim_load_n == pytest.approx(0.0, abs=1e-3)
+
+
+def test_taxels_cut_at_full_scale_are_always_censored_and_read_the_highest_uncut_count():
+    # The ADC cut the centre of the heavier presses (crosstalk on top of the film): the
+    # conditioning puts those taxels at full scale. They are lower bounds: the fit censors
+    # them whatever fits best, and the curve is flat from the highest count read under the cut
+    # (the assumed law run on to full scale would give them hundreds of newtons).
+    skin = FsrModel(r_min_ohm=150.0, r_max_ohm=6000.0, force_at_r_min_n=40.0)
+    counts, gains, sensed, known = bumps(np.linspace(5.0, 60.0, 16), skin, spread=1.5)
+    full = skin.full_scale
+    cut = 0.8 * max(c.max() for c in counts)
+    counts = [np.where(c >= cut, float(full), c) for c in counts]
+    fit = fit_force_curve(counts, gains, sensed, known)
+    highest = max(c[c < full].max() for c in counts)
+    assert 0 < fit.curve.censor_counts < full and fit.censored >= 4
+    # Flat past the knot after the highest uncut count (the knots are 1/128 of the range apart).
+    assert fit.curve.counts_to_force(full) == pytest.approx(
+        fit.curve.counts_to_force(highest + full / 128), abs=1e-12)
+    assert fit.curve.counts_to_force(full) == pytest.approx(
+        fit.curve.counts_to_force(highest), rel=0.02)
+    assert max(abs(r) / f for r, f in zip(fit.residuals_n, known)) < 0.1

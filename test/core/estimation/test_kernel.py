@@ -100,7 +100,7 @@ def test_calibrated_estimators_give_the_same_contacts(skin):
         assert_same(compiled, described, top, bottom)
 
 
-@pytest.mark.parametrize('skin', ['film', 'held_out:5', 'loaded'])
+@pytest.mark.parametrize('skin', ['film', 'held_out:6', 'loaded'])
 def test_rim_loads_of_a_force_calibration_are_added_alike(skin):
     # Force-calibrated from 16 normal presses of known force: these skins' curves learn a rim
     # load (forcecurve) that the kernel adds itself to every unsaturated imprint.
@@ -128,6 +128,26 @@ def test_a_censoring_force_curve_fills_in_the_saturated_imprint_alike():
         press = Press(0.0431, 0.0353, force, radius_m=0.004)
         (contact,) = assert_same(compiled, described, *render(member.model, [press], rng))
         assert contact.force_n == pytest.approx(force, rel=0.1)
+
+
+def test_taxels_the_adc_cut_are_censored_alike():
+    # 1.1 % crosstalk on a 64 x 64 grid drives the centre of heavier presses to the ADC's full
+    # scale, calibration presses and scored ones alike: those taxels keep a level shape, read
+    # the force at full scale and are filled in by the censoring curves, both ways.
+    member = family_skin('held_out:2@64')
+    rng = np.random.default_rng(3)
+    data = add_calibration_frames(make_scene('random', member, rng, 4), member.model, rng)
+    est, notes = prepared_estimator(data, 'taxel_fit')
+    assert all(curve.censor_counts > 0 for curve in est.calibration.force_curves)
+    compiled, described = both_ways(est)
+    scored = np.flatnonzero(data.split == 0)
+    cut = [i for i in scored if (data.bottom[i] >= 4095).any()]
+    assert cut
+    for i in scored:
+        (contact,) = assert_same(compiled, described, data.top[i], data.bottom[i])
+        if i in cut:
+            force = math.sqrt(sum(v * v for v in contact.force_xyz_n))
+            assert force == pytest.approx(data.force_n[i], rel=0.05)
 
 
 def test_gains_scale_the_force_alike():
