@@ -42,7 +42,8 @@ class DirectionNode(Node):
             raw = conversions.skin_frames_read_back()
             self._frames = TakenOnThread(
                 self, SkinFrame, 'frame', self._on_frame_bytes if raw else self._on_frame,
-                qos.stream(), 'skin-frames', self._frame_failed, raw=raw, **qos.overridable())
+                qos.stream(qos.EVERY_SCAN_DEPTH), 'skin-frames', self._frame_failed, raw=raw,
+                **qos.overridable())
 
     def destroy_node(self):
         """Stop taking frames, then destroy the node."""
