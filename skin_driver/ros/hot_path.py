@@ -161,6 +161,10 @@ class TakenOnThread:
                     self._take_all(sub)
         except InvalidHandle:  # the node was destroyed under the thread: nothing left to take
             pass
+        except _rclpy.RCLError:
+            if context.ok():
+                raise
+            # The context was shut down under the thread (Ctrl-C before or during a wait).
         finally:
             wake.destroy()
 
