@@ -40,10 +40,11 @@ class DirectionNode(Node):
             # The scan's bytes as they arrive, read straight into the layers, where rclpy's
             # own bytes read back right: no message object per scan.
             raw = conversions.skin_frames_read_back()
-            self._frames = TakenOnThread(
-                self, SkinFrame, 'frame', self._on_frame_bytes if raw else self._on_frame,
-                qos.stream(qos.EVERY_SCAN_DEPTH), 'skin-frames', self._frame_failed, raw=raw,
-                **qos.overridable())
+            self._frames = TakenOnThread(self, 'skin-frames', self._frame_failed)
+            self._frames.subscribe(SkinFrame, 'frame',
+                                   self._on_frame_bytes if raw else self._on_frame,
+                                   qos.stream(qos.EVERY_SCAN_DEPTH), raw=raw, **qos.overridable())
+            self._frames.start()
 
     def destroy_node(self):
         """Stop taking frames, then destroy the node."""

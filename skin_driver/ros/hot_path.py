@@ -6,13 +6,15 @@ What keeps work a lower rate would do off the per-scan path of the driver and th
   changes when someone starts or stops listening). A new subscriber is served within REFRESH_S.
 * :class:`LatestOnly`: a thread of its own that runs a job on the newest item offered, dropping
   items it had no time for: raw images for a viewer never delay the next scan's read.
-* :class:`TakenOnThread`: a subscription whose messages a thread of its own takes as they arrive,
+* :class:`TakenOnThread`: subscriptions whose messages a thread of its own takes as they arrive,
   every waiting one per wake-up, instead of the node's executor: the split direction node's
-  frames, the benchmark's subscriber. rclpy's executor rebuilds its wait set from every entity of
-  its nodes on each wake-up (~0.4 ms of Python per scan, measured); this thread waits on the one
-  subscription and a stop signal, and the executor keeps parameters, services and timers.
+  frames, the benchmark's subscriber (its two subscriptions on one thread: no GIL hand-over).
+  rclpy's executor rebuilds its wait set from every entity of its nodes on each wake-up (the
+  split direction node's executor cost ~0.4 ms per scan); this thread waits on its
+  subscriptions and a stop signal alone, and the executor keeps parameters, services and timers.
 """
 
+import contextlib
 import threading
 from typing import Callable, Dict
 
@@ -106,38 +108,50 @@ class NoExecutor(CallbackGroup):
 
 
 class TakenOnThread:
-    """One subscription of a node, whose messages a thread of its own hands to ``callback``."""
+    """Subscriptions of a node whose messages a thread of its own takes and hands on."""
 
-    def __init__(self, node, msg_type, topic: str, callback: Callable, qos_profile, name: str,
-                 on_error: Callable = lambda err: None, raw: bool = False, **kwargs):
+    def __init__(self, node, name: str, on_error: Callable = lambda err: None):
         """
-        Subscribe ``node`` to topic and start the thread (OS name ``name``).
+        Prepare the thread (OS name ``name``) for subscriptions of node; start() starts it.
+
+        ``on_error(err)`` hears of a callback that raised (the next message is still served).
+        """
+        self._node = node
+        self._name = name
+        self._on_error = on_error
+        self._context = node.context
+        self._subscriptions = []  # (rclpy Subscription, callback), served in this order
+        self._wake = GuardCondition(None, None, context=self._context)
+        self._stopped = False
+        self._thread = None
+
+    def subscribe(self, msg_type, topic: str, callback: Callable, qos_profile, raw: bool = False,
+                  **kwargs):
+        """
+        Subscribe the node to topic (before start()); return the rclpy Subscription.
 
         The subscription is the node's own (graph, QoS overrides in kwargs), but in a callback
         group no executor runs. ``callback(msg)`` runs on the thread for every message taken;
-        ``on_error(err)`` hears of one that raised (the next message is still served). With
-        ``raw`` the messages are their CDR bytes.
+        with ``raw`` the messages are their CDR bytes.
         """
         kwargs.setdefault('event_callbacks',
                           SubscriptionEventCallbacks(use_default_callbacks=False))
-        self._callback = callback
-        self._on_error = on_error
-        self._name = name
-        self._context = node.context
-        self.subscription = node.create_subscription(
-            msg_type, topic, callback, qos_profile, callback_group=NoExecutor(), raw=raw,
-            **kwargs)
-        self._wake = GuardCondition(None, None, context=self._context)
-        self._stopped = False
+        sub = self._node.create_subscription(msg_type, topic, callback, qos_profile,
+                                             callback_group=NoExecutor(), raw=raw, **kwargs)
+        self._subscriptions.append((sub, callback))
+        return sub
+
+    def start(self) -> None:
+        """Start taking messages."""
         self._context.on_shutdown(self._on_shutdown)
-        self._thread = threading.Thread(target=self._run, name=name, daemon=True)
+        self._thread = threading.Thread(target=self._run, name=self._name, daemon=True)
         self._thread.start()
 
     def stop(self, timeout_s: float = 2.0) -> None:
-        """Stop the thread after the message in hand; the node destroys the subscription."""
+        """Stop the thread after the message in hand; the node destroys the subscriptions."""
         self._stopped = True
         self._on_shutdown()
-        if self._thread is not threading.current_thread():
+        if self._thread is not None and self._thread is not threading.current_thread():
             self._thread.join(timeout_s)
 
     def _on_shutdown(self) -> None:
@@ -148,17 +162,23 @@ class TakenOnThread:
 
     def _run(self) -> None:
         name_this_thread(self._name)
-        sub, wake, context = self.subscription, self._wake, self._context
+        wake, context = self._wake, self._context
         try:
             with context.handle:
-                wait_set = _rclpy.WaitSet(1, 1, 0, 0, 0, 0, context.handle)
+                wait_set = _rclpy.WaitSet(len(self._subscriptions), 1, 0, 0, 0, 0,
+                                          context.handle)
             while not self._stopped and context.ok():
-                with sub.handle, wake.handle:
+                with contextlib.ExitStack() as handles:
+                    for sub, _ in self._subscriptions:
+                        handles.enter_context(sub.handle)
+                    handles.enter_context(wake.handle)
                     wait_set.clear_entities()
-                    wait_set.add_subscription(sub.handle)
+                    for sub, _ in self._subscriptions:
+                        wait_set.add_subscription(sub.handle)
                     wait_set.add_guard_condition(wake.handle)
                     wait_set.wait(WAIT_NS)
-                    self._take_all(sub)
+                    for sub, callback in self._subscriptions:
+                        self._take_all(sub, callback)
         except InvalidHandle:  # the node was destroyed under the thread: nothing left to take
             pass
         except _rclpy.RCLError:
@@ -168,7 +188,7 @@ class TakenOnThread:
         finally:
             wake.destroy()
 
-    def _take_all(self, sub) -> None:
+    def _take_all(self, sub, callback) -> None:
         """Hand every waiting message to the callback (one wake-up for all that arrived)."""
         take, msg_type, raw = sub.handle.take_message, sub.msg_type, sub.raw
         while not self._stopped:
@@ -176,6 +196,6 @@ class TakenOnThread:
             if taken is None:
                 return
             try:
-                self._callback(taken[0])
+                callback(taken[0])
             except Exception as err:  # noqa: B902 - reported; the next message is still served
                 self._on_error(err)

@@ -86,7 +86,7 @@ class Probe:
         self.frame_count = 0
         self.statuses = collections.deque(maxlen=diagnostics)
         self.audit = Record()
-        self._threads = []
+        self._taker = None
         self._on_contacts_hook = on_contacts
         self._on_frame_hook = on_frame
         self._on_status_hook = on_status
@@ -97,11 +97,16 @@ class Probe:
         else:
             # Counting alone needs the head of each message: its bytes, not a message object
             # (the probe shares the benchmark's cores with the pipeline it measures).
-            self._count('contacts', self._on_contacts_raw, qos, own_thread, 'skin-probe')
+            # On its own thread, the audit shares it: one thread, no GIL to hand over.
+            taker = TakenOnThread(node, 'skin-probe') if own_thread else None
+            self._count(taker, self._on_contacts_raw, qos)
             if audit_depth:
                 deep = QoSProfile(depth=audit_depth, history=HistoryPolicy.KEEP_LAST,
                                   reliability=ReliabilityPolicy.BEST_EFFORT)
-                self._count('contacts', self._on_audit_raw, deep, own_thread, 'skin-audit')
+                self._count(taker, self._on_audit_raw, deep)
+            if taker is not None:
+                taker.start()
+                self._taker = taker
         if frames or on_frame is not None:
             node.create_subscription(SkinFrame, 'frame', self._on_frame, qos)
         node.create_subscription(DiagnosticArray, '/diagnostics', self._on_diagnostics, 50)
@@ -115,17 +120,15 @@ class Probe:
         if self._on_contacts_hook is not None:
             self._on_contacts_hook(msg)
 
-    def _count(self, topic, callback, qos, own_thread: bool, name: str) -> None:
-        if own_thread:
-            self._threads.append(TakenOnThread(self.node, TactileContactArray, topic, callback,
-                                               qos, name, raw=True))
-        else:
-            self.node.create_subscription(TactileContactArray, topic, callback, qos, raw=True)
+    def _count(self, taker, callback, qos) -> None:
+        """Count contacts from their bytes, on the taker's thread or else the node's executor."""
+        subscribe = self.node.create_subscription if taker is None else taker.subscribe
+        subscribe(TactileContactArray, 'contacts', callback, qos, raw=True)
 
     def close(self) -> None:
-        """Stop the probe's own threads (before its node is destroyed)."""
-        for thread in self._threads:
-            thread.stop()
+        """Stop the probe's own thread (before its node is destroyed)."""
+        if self._taker is not None:
+            self._taker.stop()
 
     def _on_contacts_raw(self, data: bytes) -> None:
         now = time.time()

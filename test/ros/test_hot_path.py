@@ -81,8 +81,9 @@ def test_a_subscription_taken_on_its_own_thread_gets_every_message_and_no_execut
             taken.append(msg.data)
 
         errors = []
-        sub = TakenOnThread(node, UInt32, 'numbers', on_message, 100, 'skin-test-take',
-                            errors.append)
+        sub = TakenOnThread(node, 'skin-test-take', errors.append)
+        sub.subscribe(UInt32, 'numbers', on_message, 100)
+        sub.start()
         pub = node.create_publisher(UInt32, 'numbers', 100)
         try:
             assert spin_until(executor, lambda: pub.get_subscription_count() == 1, 10.0)
