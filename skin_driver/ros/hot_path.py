@@ -6,14 +6,30 @@ What keeps work a lower rate would do off the per-scan path of the driver and th
   changes when someone starts or stops listening). A new subscriber is served within REFRESH_S.
 * :class:`LatestOnly`: a thread of its own that runs a job on the newest item offered, dropping
   items it had no time for: raw images for a viewer never delay the next scan's read.
+* :class:`TakenOnThread`: subscriptions whose messages a thread of its own takes as they arrive,
+  every waiting one per wake-up, instead of the node's executor: the split direction node's
+  frames, the benchmark's subscriber (its two subscriptions on one thread: no GIL hand-over).
+  rclpy's executor rebuilds its wait set from every entity of its nodes on each wake-up (the
+  split direction node's executor cost ~0.4 ms per scan); this thread waits on its
+  subscriptions and a stop signal alone, and the executor keeps parameters, services and timers.
 """
 
+import contextlib
 import threading
 from typing import Callable, Dict
 
+from rclpy.callback_groups import CallbackGroup
+from rclpy.event_handler import SubscriptionEventCallbacks
+from rclpy.exceptions import InvalidHandle
+from rclpy.guard_condition import GuardCondition
+# The wait set of rclpy's C extension, the one its executors wait on; rclpy has no public one.
+from rclpy.impl.implementation_singleton import rclpy_implementation as _rclpy
 from skin_driver.core.protocol.realtime import name_this_thread
 
 REFRESH_S = 0.1
+# How often a waiting TakenOnThread looks whether its context is still up (a shutdown wakes it
+# as well; this only bounds a wake-up that a shutdown under way could miss).
+WAIT_NS = 100_000_000
 
 
 class Listened:
@@ -73,4 +89,113 @@ class LatestOnly:
             try:
                 self._job(item)
             except Exception as err:  # noqa: B902 - reported; the next item is still served
+                self._on_error(err)
+
+
+class NoExecutor(CallbackGroup):
+    """A callback group that no executor runs: its entities are served by a thread of their own."""
+
+    def can_execute(self, entity) -> bool:
+        """Return False: executors leave the entity out of their wait sets."""
+        return False
+
+    def beginning_execution(self, entity) -> bool:
+        """Return False: never run by an executor."""
+        return False
+
+    def ending_execution(self, entity) -> None:
+        """Do nothing (never run by an executor)."""
+
+
+class TakenOnThread:
+    """Subscriptions of a node whose messages a thread of its own takes and hands on."""
+
+    def __init__(self, node, name: str, on_error: Callable = lambda err: None):
+        """
+        Prepare the thread (OS name ``name``) for subscriptions of node; start() starts it.
+
+        ``on_error(err)`` hears of a callback that raised (the next message is still served).
+        """
+        self._node = node
+        self._name = name
+        self._on_error = on_error
+        self._context = node.context
+        self._subscriptions = []  # (rclpy Subscription, callback), served in this order
+        self._wake = GuardCondition(None, None, context=self._context)
+        self._stopped = False
+        self._thread = None
+
+    def subscribe(self, msg_type, topic: str, callback: Callable, qos_profile, raw: bool = False,
+                  **kwargs):
+        """
+        Subscribe the node to topic (before start()); return the rclpy Subscription.
+
+        The subscription is the node's own (graph, QoS overrides in kwargs), but in a callback
+        group no executor runs. ``callback(msg)`` runs on the thread for every message taken;
+        with ``raw`` the messages are their CDR bytes.
+        """
+        kwargs.setdefault('event_callbacks',
+                          SubscriptionEventCallbacks(use_default_callbacks=False))
+        sub = self._node.create_subscription(msg_type, topic, callback, qos_profile,
+                                             callback_group=NoExecutor(), raw=raw, **kwargs)
+        self._subscriptions.append((sub, callback))
+        return sub
+
+    def start(self) -> None:
+        """Start taking messages."""
+        self._context.on_shutdown(self._on_shutdown)
+        self._thread = threading.Thread(target=self._run, name=self._name, daemon=True)
+        self._thread.start()
+
+    def stop(self, timeout_s: float = 2.0) -> None:
+        """Stop the thread after the message in hand; the node destroys the subscriptions."""
+        self._stopped = True
+        self._on_shutdown()
+        if self._thread is not None and self._thread is not threading.current_thread():
+            self._thread.join(timeout_s)
+
+    def _on_shutdown(self) -> None:
+        try:
+            self._wake.trigger()
+        except (InvalidHandle, RuntimeError):  # the context is down already: the thread sees it
+            pass
+
+    def _run(self) -> None:
+        name_this_thread(self._name)
+        wake, context = self._wake, self._context
+        try:
+            with context.handle:
+                wait_set = _rclpy.WaitSet(len(self._subscriptions), 1, 0, 0, 0, 0,
+                                          context.handle)
+            while not self._stopped and context.ok():
+                with contextlib.ExitStack() as handles:
+                    for sub, _ in self._subscriptions:
+                        handles.enter_context(sub.handle)
+                    handles.enter_context(wake.handle)
+                    wait_set.clear_entities()
+                    for sub, _ in self._subscriptions:
+                        wait_set.add_subscription(sub.handle)
+                    wait_set.add_guard_condition(wake.handle)
+                    wait_set.wait(WAIT_NS)
+                    for sub, callback in self._subscriptions:
+                        self._take_all(sub, callback)
+        except InvalidHandle:  # the node was destroyed under the thread: nothing left to take
+            pass
+        except _rclpy.RCLError:
+            if context.ok():
+                raise
+            # The context was shut down under the thread (Ctrl-C before or during a wait).
+        finally:
+            wake.destroy()
+
+    def _take_all(self, sub, callback) -> None:
+        """Hand every waiting message to the callback (one wake-up for all that arrived)."""
+        take, msg_type, raw = sub.handle.take_message, sub.msg_type, sub.raw
+        while not self._stopped:
+            taken = take(msg_type, raw)
+            if taken is None:
+                return
+            try:
+                callback(taken[0])
+            except Exception as err:  # noqa: B902 - reported; the next message is still served
                 self._on_error(err)

@@ -3,6 +3,9 @@ The QoS of the skin's topics, and ROS 2's standard way for a user to change it.
 
 Streams (frame, images, contacts, contact, wrench) keep the sensor-data profile: best effort,
 keep last 5, so a late or slow reader costs the publisher nothing and never sees stale scans.
+The direction node, which must estimate every scan, reads frame best effort too but keeps the
+last EVERY_SCAN_DEPTH: five scans are 2.5 ms at 2 kHz, shorter than a thread may wait for a core
+on a busy machine (the benchmark's split layout lost scans there at depth 5).
 The rviz topics and /diagnostics are reliable, keep last 5 and 10. Every publisher and
 subscription takes ROS 2's QoS overrides, parameters read once at start-up, e.g.
 
@@ -15,14 +18,16 @@ from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPo
 from rclpy.qos_overriding_options import QoSOverridingOptions
 
 VIZ_DEPTH = 5
+STREAM_DEPTH = 5
+EVERY_SCAN_DEPTH = 50  # 25 ms of scans at 2 kHz
 DIAGNOSTICS_DEPTH = 10
 
 
-def stream() -> QoSProfile:
+def stream(depth: int = STREAM_DEPTH) -> QoSProfile:
     """Return a fresh sensor-data profile (rclpy's qos_profile_sensor_data) for one stream."""
     # A fresh one each time: rclpy applies a topic's overrides to the profile object it is given,
     # and on the shared qos_profile_sensor_data they would leak to every later stream.
-    return QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=5,
+    return QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=depth,
                       reliability=ReliabilityPolicy.BEST_EFFORT,
                       durability=DurabilityPolicy.VOLATILE)
 

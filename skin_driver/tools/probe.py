@@ -6,6 +6,12 @@ message with its receive time (host clock), its header stamp (when the driver re
 byte), the scan's sequence number and device time; counts the scans lost by sequence; and reports
 latency percentiles. On request it also keeps the messages themselves, the raw frames and the
 diagnostics statuses of the pipeline's nodes.
+
+The benchmark's probe takes contacts on a thread of its own (own_thread), as cheaply as rclpy
+can, so that measuring costs the shared cores little; and, beside the subscription a controller
+would have (sensor-data QoS, depth 5), it can keep an audit subscription with a deep queue
+(audit_depth): a scan the audit has and the controller-like one lacks was dropped at the
+subscriber's queue, not by the driver.
 """
 
 from __future__ import annotations
@@ -18,6 +24,7 @@ from diagnostic_msgs.msg import DiagnosticArray
 import numpy as np
 from rclpy.qos import HistoryPolicy, QoSProfile, ReliabilityPolicy
 from skin_driver.ros.conversions import read_contacts_head, status_values
+from skin_driver.ros.hot_path import TakenOnThread
 from skin_msgs.msg import SkinFrame, TactileContactArray
 
 SEQ_MODULUS = 2 ** 32
@@ -59,13 +66,17 @@ class Probe:
     def __init__(self, node, *, keep_messages: bool = False, frames: bool = False,
                  depth: Optional[int] = None, diagnostics: int = 200,
                  on_contacts: Optional[Callable] = None, on_frame: Optional[Callable] = None,
-                 on_status: Optional[Callable] = None):
+                 on_status: Optional[Callable] = None, own_thread: bool = False,
+                 audit_depth: int = 0):
         """
         Subscribe on node: contacts always, frame if asked (or given on_frame), /diagnostics.
 
         keep_messages keeps every message (tests); depth deepens the best-effort queue (the
         default is the sensor-data QoS a controller would use); on_contacts, on_frame and
-        on_status are called with each message (status) after it is recorded.
+        on_status are called with each message (status) after it is recorded. A counting probe
+        (none of keep_messages, on_contacts) with own_thread takes contacts on threads of its
+        own (close() stops them); audit_depth > 0 adds the audit subscription, recorded in
+        ``audit``.
         """
         self.node = node
         self.keep = keep_messages
@@ -74,6 +85,8 @@ class Probe:
         self.frames = []
         self.frame_count = 0
         self.statuses = collections.deque(maxlen=diagnostics)
+        self.audit = Record()
+        self._taker = None
         self._on_contacts_hook = on_contacts
         self._on_frame_hook = on_frame
         self._on_status_hook = on_status
@@ -84,8 +97,16 @@ class Probe:
         else:
             # Counting alone needs the head of each message: its bytes, not a message object
             # (the probe shares the benchmark's cores with the pipeline it measures).
-            node.create_subscription(TactileContactArray, 'contacts', self._on_contacts_raw, qos,
-                                     raw=True)
+            # On its own thread, the audit shares it: one thread, no GIL to hand over.
+            taker = TakenOnThread(node, 'skin-probe') if own_thread else None
+            self._count(taker, self._on_contacts_raw, qos)
+            if audit_depth:
+                deep = QoSProfile(depth=audit_depth, history=HistoryPolicy.KEEP_LAST,
+                                  reliability=ReliabilityPolicy.BEST_EFFORT)
+                self._count(taker, self._on_audit_raw, deep)
+            if taker is not None:
+                taker.start()
+                self._taker = taker
         if frames or on_frame is not None:
             node.create_subscription(SkinFrame, 'frame', self._on_frame, qos)
         node.create_subscription(DiagnosticArray, '/diagnostics', self._on_diagnostics, 50)
@@ -99,12 +120,27 @@ class Probe:
         if self._on_contacts_hook is not None:
             self._on_contacts_hook(msg)
 
+    def _count(self, taker, callback, qos) -> None:
+        """Count contacts from their bytes, on the taker's thread or else the node's executor."""
+        subscribe = self.node.create_subscription if taker is None else taker.subscribe
+        subscribe(TactileContactArray, 'contacts', callback, qos, raw=True)
+
+    def close(self) -> None:
+        """Stop the probe's own thread (before its node is destroyed)."""
+        if self._taker is not None:
+            self._taker.stop()
+
     def _on_contacts_raw(self, data: bytes) -> None:
         now = time.time()
         self._add(now, *read_contacts_head(data))
 
-    def _add(self, received_s, sec, nanosec, sequence, device_us, contacts) -> None:
-        r = self.record
+    def _on_audit_raw(self, data: bytes) -> None:
+        now = time.time()
+        self._add(now, *read_contacts_head(data), record=self.audit)
+
+    def _add(self, received_s, sec, nanosec, sequence, device_us, contacts,
+             record: Optional[Record] = None) -> None:
+        r = self.record if record is None else record
         r.received_s.append(received_s)
         r.stamp_s.append(sec + nanosec * 1e-9)
         r.sequence.append(sequence)
@@ -127,7 +163,7 @@ class Probe:
 
     def reset(self) -> None:
         """Forget everything recorded so far."""
-        self.record = Record()
+        self.record, self.audit = Record(), Record()
         self.contacts, self.frames, self.frame_count = [], [], 0
         self.statuses.clear()
 
@@ -168,7 +204,7 @@ class Probe:
 
     # ---- summary ----------------------------------------------------------------------------
     def summary(self, device_window_s=None, expected: Optional[int] = None,
-                epoch_s: Optional[float] = None) -> dict:
+                epoch_s: Optional[float] = None, record: Optional[Record] = None) -> dict:
         """
         Return scans received and lost, and latency percentiles (ms).
 
@@ -177,9 +213,9 @@ class Probe:
         number of scans sent in the window is known. Latency 'from last byte' runs from the
         header stamp (the driver's host time for the scan's last byte) to arrival here; with
         epoch_s (host time of device time 0) also 'from device time', which adds the board's
-        own wait before it sent the scan.
+        own wait before it sent the scan. ``record`` summarises another record (the audit).
         """
-        r = self.record
+        r = self.record if record is None else record
         received = np.asarray(r.received_s, dtype=np.float64)
         stamp = np.asarray(r.stamp_s, dtype=np.float64)
         device = np.asarray(r.device_us, dtype=np.float64) * 1e-6

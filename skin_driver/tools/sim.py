@@ -38,6 +38,9 @@ def _parser() -> argparse.ArgumentParser:
     parser.add_argument('--duration', type=float, default=None,
                         help='stop after this many seconds (default: run until Ctrl-C)')
     parser.add_argument('--loop', action='store_true', help='replay the scene when it ends')
+    parser.add_argument('--replay', action='store_true',
+                        help='with --loop: render one pass before starting and send those scans '
+                             'again on every pass (next to no CPU per scan; a benchmark board)')
     parser.add_argument('--seed', type=int, default=0, help='noise seed, 0 or more (0)')
     parser.add_argument('--export', metavar='OUT.npz', default=None,
                         help='render the scene into a dataset file and exit, without a pty')
@@ -75,7 +78,7 @@ def main(argv=None) -> int:
             args.link = default_port()
             os.makedirs(os.path.dirname(args.link), exist_ok=True)
         skin = SimulatedSkin(scene, rate_hz=args.rate, link_path=args.link, seed=args.seed,
-                             loop=args.loop)
+                             loop=args.loop, replay=args.replay)
         port = skin.start()
     except (ValueError, OSError) as err:
         print(f'sim: error: {err}', file=sys.stderr)

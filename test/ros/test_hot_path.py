@@ -61,3 +61,39 @@ def test_latest_only_serves_the_newest_item_and_survives_a_failing_job():
         worker.stop()
     assert seen == ['block', 'last']
     assert errors == ['viewer gone']
+
+
+def test_a_subscription_taken_on_its_own_thread_gets_every_message_and_no_executor_runs_it():
+    import rclpy
+    from rosutil import ros_context, spin_until
+    from skin_driver.ros.hot_path import TakenOnThread
+    from std_msgs.msg import UInt32
+
+    with ros_context() as (context, executor):
+        node = rclpy.create_node('taken_on_thread', context=context)
+        executor.add_node(node)
+        threads, taken = set(), []
+
+        def on_message(msg):
+            threads.add(threading.current_thread().name)
+            if msg.data == 3:
+                raise ValueError('a bad message')
+            taken.append(msg.data)
+
+        errors = []
+        sub = TakenOnThread(node, 'skin-test-take', errors.append)
+        sub.subscribe(UInt32, 'numbers', on_message, 100)
+        sub.start()
+        pub = node.create_publisher(UInt32, 'numbers', 100)
+        try:
+            assert spin_until(executor, lambda: pub.get_subscription_count() == 1, 10.0)
+            for i in range(50):
+                pub.publish(UInt32(data=i))
+            # The executor spins meanwhile and must not take a single one of them.
+            assert spin_until(executor, lambda: len(taken) == 49, 10.0)
+        finally:
+            sub.stop()
+            node.destroy_node()
+        assert taken == [i for i in range(50) if i != 3]  # in order; the bad one is reported
+        assert [str(e) for e in errors] == ['a bad message']
+        assert threads == {'skin-test-take'}

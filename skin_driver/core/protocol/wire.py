@@ -110,18 +110,35 @@ def encode_frame(seq: int, device_time_us: int, top: np.ndarray, bottom: np.ndar
     Raise ValueError when seq is outside uint32, the time outside uint64, the layers differ in
     shape, are not 2-D integer arrays of at most 255 x 255, or hold counts outside 0..4095.
     """
-    seq = _check_int('seq', seq, MAX_SEQ)
-    device_time_us = _check_int('device_time_us', device_time_us, MAX_DEVICE_TIME_US)
+    return frame_with_counts(seq, device_time_us, *encode_counts(top, bottom))
+
+
+def encode_counts(top: np.ndarray, bottom: np.ndarray) -> tuple:
+    """
+    Return (rows, cols, the counts of both layers as a frame carries them), checked.
+
+    A board that sends the same scan again (a replay) encodes its counts once and each frame
+    with :func:`frame_with_counts`. Raises ValueError as :func:`encode_frame` does.
+    """
     top = _check_layer('top', top)
     bottom = _check_layer('bottom', bottom)
     if top.shape != bottom.shape:
         raise ValueError(f'top and bottom must have the same shape, got {top.shape} and '
                          f'{bottom.shape}')
     rows, cols = top.shape
+    counts = (np.ascontiguousarray(top, dtype=_COUNTS).tobytes()
+              + np.ascontiguousarray(bottom, dtype=_COUNTS).tobytes())
+    return rows, cols, counts
+
+
+def frame_with_counts(seq: int, device_time_us: int, rows: int, cols: int,
+                      counts: bytes) -> bytes:
+    """Return the frame of counts from :func:`encode_counts` with this sequence and time."""
+    seq = _check_int('seq', seq, MAX_SEQ)
+    device_time_us = _check_int('device_time_us', device_time_us, MAX_DEVICE_TIME_US)
     body = bytearray(HEADER.pack(SYNC, PROTOCOL_VERSION, 0, seq, device_time_us, rows, cols))
     body += HEADER_CHECK.pack(header_crc(body))
-    body += np.ascontiguousarray(top, dtype=_COUNTS).tobytes()
-    body += np.ascontiguousarray(bottom, dtype=_COUNTS).tobytes()
+    body += counts
     body += _CRC.pack(zlib.crc32(body))
     return bytes(body)
 

@@ -7,7 +7,10 @@ on and the reader sees a sequence gap.
 
 Faults for reliability tests: unplug/replug, stall (the board stops for a while), burst (frames
 held back and sent in one clump), line noise (damaged frames and junk between frames), sequence
-gaps and frames of another grid size.  Every frame that leaves the board has exactly one fate the
+gaps and frames of another grid size.  A looped board may replay (``replay``): it renders one pass
+of the scene before it starts and sends those scans again with new sequence numbers and device
+times, so that it costs next to nothing per scan (the benchmark's board shares the cores it
+measures).  Every frame that leaves the board has exactly one fate the
 board can name: intact, damaged by the line, of the wrong size, or still unread in the pty when
 the cable was pulled (see the frames_* counters).
 """
@@ -32,7 +35,7 @@ from . import physics
 from .line import damage, point_link, remove_link
 from .scene import load_scene, Scene
 from ..estimation.validate import check_int, check_number
-from ..protocol.wire import encode_frame, frame_size, MAX_SEQ
+from ..protocol.wire import encode_counts, encode_frame, frame_size, frame_with_counts, MAX_SEQ
 
 # Below this period frames are written in batches: one wake-up per BATCH_S instead of per frame.
 BATCH_S = 0.002
@@ -56,6 +59,18 @@ class FrameTruth:
     press_indices: tuple = ()
 
 
+@dataclass(frozen=True)
+class _Scan:
+    """One rendered scan: its scene time, presses, layers and counts as a frame carries them."""
+
+    scene_time_s: float
+    presses: tuple
+    press_indices: tuple
+    top: np.ndarray
+    bottom: np.ndarray
+    counts: tuple  # (rows, cols, bytes) of wire.encode_counts
+
+
 def _as_scene(scene) -> Scene:
     return scene if isinstance(scene, Scene) else load_scene(scene)
 
@@ -70,13 +85,22 @@ class SimulatedSkin:
     """A virtual skin board on a pseudo-terminal, streaming frames rendered from a scene."""
 
     def __init__(self, scene, rate_hz: float = 100.0, link_path: str | None = None,
-                 seed: int = 0, loop: bool = False, truth_capacity: int = 10_000):
-        """Prepare a board for a Scene (or a bundled scene name or YAML path); start() runs it."""
+                 seed: int = 0, loop: bool = False, truth_capacity: int = 10_000,
+                 replay: bool = False):
+        """
+        Prepare a board for a Scene (or a bundled scene name or YAML path); start() runs it.
+
+        replay (looped boards only): render one pass of the scene at start() and replay it.
+        """
         self.scene = _as_scene(scene)
         self.rate_hz = check_number(rate_hz, 'rate_hz', positive=True, high=20_000)
         check_int(truth_capacity, 'truth_capacity', low=1)
         self.link_path = os.path.abspath(link_path) if link_path else None
         self.loop = bool(loop)
+        if replay and not self.loop:
+            raise ValueError('replay needs loop: only a looped scene repeats its scans')
+        self._replay = bool(replay)
+        self._replayed = None  # the scans of one pass, with replay
         self._rng = np.random.default_rng(seed)
         self._truth: dict = {}
         self._truth_order: deque = deque()
@@ -143,6 +167,9 @@ class SimulatedSkin:
         """Open the pty, start streaming and return the port path (the link if one was asked)."""
         if self._thread is not None:
             raise RuntimeError('SimulatedSkin already started')
+        if self._replay and self._replayed is None:
+            passes = max(1, round(self.scene.duration_s * self.rate_hz))
+            self._replayed = [self._render(i / self.rate_hz) for i in range(passes)]
         self._plug()
         self._stop.clear()
         self._t0 = time.monotonic()
@@ -320,19 +347,22 @@ class SimulatedSkin:
         if not (plugged and room):
             self.frames_dropped += 1
             return
-        t = self._scene_time(seconds)
-        active = self.scene.active_at(t)
-        presses = tuple(p for _, p in active)
-        top, bottom = physics.render(self.scene.model, presses, self._rng)
+        if self._replayed:
+            scan = self._replayed[index % len(self._replayed)]
+        else:
+            scan = self._render(self._scene_time(seconds))
+        top, bottom = scan.top, scan.bottom
         wire_shape = self._wire_shape
         wrong_shape = wire_shape is not None and wire_shape != top.shape
         if wrong_shape:
             top, bottom = _reshape(top, wire_shape), _reshape(bottom, wire_shape)
-        top.flags.writeable = False
-        bottom.flags.writeable = False
-        raw = encode_frame(seq, device_time_us, top, bottom)
-        truth = FrameTruth(seq, device_time_us, top, bottom, presses, t,
-                           tuple(i for i, _ in active))
+            top.flags.writeable = False
+            bottom.flags.writeable = False
+            raw = encode_frame(seq, device_time_us, top, bottom)
+        else:
+            raw = frame_with_counts(seq, device_time_us, *scan.counts)
+        truth = FrameTruth(seq, device_time_us, top, bottom, scan.presses, scan.scene_time_s,
+                           scan.press_indices)
         junk, wire, damaged = b'', raw, False
         if self._noise and self._noise_rng.random() < self._noise:
             wire = damage(raw, self._noise_rng)
@@ -356,6 +386,16 @@ class SimulatedSkin:
             if self.first_seq_since_plug is None:
                 self.first_seq_since_plug = seq
             self._frame_ends.append((self._queued_bytes, damaged, wrong_shape))
+
+    def _render(self, t: float) -> _Scan:
+        """Render the scan of scene time t."""
+        active = self.scene.active_at(t)
+        presses = tuple(p for _, p in active)
+        top, bottom = physics.render(self.scene.model, presses, self._rng)
+        top.flags.writeable = False
+        bottom.flags.writeable = False
+        return _Scan(t, presses, tuple(i for i, _ in active), top, bottom,
+                     encode_counts(top, bottom))
 
     def _remember(self, truth: FrameTruth) -> None:
         if truth.seq in self._truth:

@@ -53,7 +53,7 @@ def cpu_seconds(pid: int) -> float:
 
 # The threads a node names (core.protocol.link, ros.driver_node); the main thread spins the
 # executor; every other thread is the middleware's (or rclpy's).
-THREAD_ROLES = {'skin-reader': 'reader', 'skin-images': 'images'}
+THREAD_ROLES = {'skin-reader': 'reader', 'skin-images': 'images', 'skin-frames': 'frames'}
 
 
 def thread_cpu(pid: int) -> dict:
@@ -91,6 +91,26 @@ def stage_means(probe, suffix: str, prefix: str, start: float, end: float) -> di
 SCENE = 'bench'
 LAYOUTS = ('split', 'fused')
 FLOOR = 'floor'
+# The probe's audit queue: deep enough for every scan of a few seconds at 2 kHz, so that only a
+# scan never published (or lost by the middleware) is missing from it.
+AUDIT_DEPTH = 10000
+
+
+def where_lost(lost: int, audit_lost: int, never_decoded) -> dict:
+    """
+    Return where the lost scans of a run went, by stage.
+
+    ``lost``: scans the controller-like subscriber (depth 5) lacks; ``audit_lost``: those the
+    audit subscriber (deep queue) lacks as well; ``never_decoded``: the driver's sequence gaps
+    over the window (None when the process has no counters, the floor). What the audit has and
+    the depth-5 subscriber lacks was dropped at that subscriber's queue.
+    """
+    at_queue = max(lost - audit_lost, 0)
+    if never_decoded is None:
+        return {'not delivered': audit_lost, 'subscriber queue': at_queue}
+    never_decoded = min(max(int(never_decoded), 0), audit_lost)
+    return {'never decoded': never_decoded, 'not delivered': audit_lost - never_decoded,
+            'subscriber queue': at_queue}
 
 
 def realtime_prefix(priority: int) -> list:
@@ -98,9 +118,12 @@ def realtime_prefix(priority: int) -> list:
     return ['chrt', '-f', str(priority)] if priority else []
 
 
-def _run(executor, probe, layout, nodes, rate, seconds, warmup, port, log, priority=0):
+def _run(executor, probe, layout, nodes, rate, seconds, warmup, port, log, priority, ns):
     """Measure one layout at one rate; return its figures."""
-    sim = start_sim(executor, SCENE, port, rate, log, loop=True,
+    # /diagnostics is one topic for every skin on the machine: this run's nodes only.
+    link, estimation = f'{ns}/skin_driver: skin link', f'{ns}/skin_direction: contact estimation'
+
+    sim = start_sim(executor, SCENE, port, rate, log, loop=True, replay=True,
                     prefix=realtime_prefix(priority))
     probe.reset()
     spin_for(executor, warmup)
@@ -108,18 +131,22 @@ def _run(executor, probe, layout, nodes, rate, seconds, warmup, port, log, prior
     cpu0 = {k: cpu_seconds(p) for k, p in pids.items()}
     threads0 = {k: thread_cpu(p.pid) for k, p in nodes.items()}
     wall0 = time.monotonic()
-    spin_for(executor, seconds)
+    # The probe takes contacts on its own thread; the executor here only gathers /diagnostics,
+    # so it wakes for those, not 200 times a second to look at the clock (each wake-up rebuilds
+    # rclpy's wait set under the GIL the probe's thread needs).
+    spin_for(executor, seconds, period_s=0.1)
     wall = time.monotonic() - wall0
     cpu = {k: cpu_seconds(p) - cpu0[k] for k, p in pids.items()}
     threads = {k: {role: v - threads0[k].get(role, 0.0)
                    for role, v in thread_cpu(p.pid).items()} for k, p in nodes.items()}
-    driver = probe.counters('skin link', wall0, wall0 + wall)
-    direction = probe.counters('contact estimation', wall0, wall0 + wall)
+    driver = probe.counters(link, wall0, wall0 + wall)
+    direction = probe.counters(estimation, wall0, wall0 + wall)
     window = (wall0, wall0 + wall + 0.3)
     spin_for(executor, 0.3)
     sent, dropped = sim.stop()
     expected = int(round(seconds * rate))
     seen = probe.summary((warmup, warmup + seconds), expected=expected, epoch_s=sim.epoch)
+    audit = probe.summary((warmup, warmup + seconds), expected=expected, record=probe.audit)
     decoded_hz = driver.get('frames', 0) / driver['span_s'] if driver else None
     estimated_hz = direction.get('frames', 0) / direction['span_s'] if direction else None
     # CPU per scan each process handled: the scans it never saw cost it nothing.
@@ -133,6 +160,9 @@ def _run(executor, probe, layout, nodes, rate, seconds, warmup, port, log, prior
         'expected_scans': expected,
         'sim_frames_sent': sent, 'sim_frames_dropped': dropped,
         'received': seen['received'], 'lost': seen['lost'],
+        'audit_lost': audit['lost'], 'audit_depth': AUDIT_DEPTH,
+        'lost_where': where_lost(seen['lost'], audit['lost'],
+                                 driver.get('frames dropped') if driver else None),
         'sequence_gaps': seen['sequence_gaps'],
         'received_rate_hz': seen['received'] / seconds,
         'latency_ms': seen['latency_from_last_byte_ms'],
@@ -144,8 +174,8 @@ def _run(executor, probe, layout, nodes, rate, seconds, warmup, port, log, prior
         'threads_us_per_scan': {k: {role: 1e6 * v / (handled_hz[k] * wall)
                                     for role, v in sorted(roles.items())}
                                 for k, roles in threads.items()},
-        'reader_stages_us': stage_means(probe, 'skin link', 'reader CPU per scan, ', *window),
-        'estimation_stages_us': stage_means(probe, 'contact estimation', 'CPU per scan, ',
+        'reader_stages_us': stage_means(probe, link, 'reader CPU per scan, ', *window),
+        'estimation_stages_us': stage_means(probe, estimation, 'CPU per scan, ',
                                             *window),
         'driver_decoded_hz': decoded_hz,
         'driver_sequence_gaps': driver.get('sequence gaps') if driver else None,
@@ -216,7 +246,7 @@ def _layout_run(executor, layout, rate, seconds, warmup, params, port, log, prof
         nodes = start_nodes(layout == 'fused', ros_args(ns, params), log, profile_to)
     node = Node('skin_bench_probe', namespace=ns)
     executor.add_node(node)
-    probe = Probe(node, diagnostics=2000)
+    probe = Probe(node, diagnostics=2000, own_thread=True, audit_depth=AUDIT_DEPTH)
     tare = node.create_client(Trigger, 'skin_direction/tare')
     try:
         if layout == FLOOR:
@@ -225,8 +255,10 @@ def _layout_run(executor, layout, rate, seconds, warmup, params, port, log, prof
         else:
             wait_for(executor, tare.service_is_ready, 30.0, f'the {layout} layout to come up',
                      nodes.values())
-        return _run(executor, probe, layout, nodes, rate, seconds, warmup, port, log, priority)
+        return _run(executor, probe, layout, nodes, rate, seconds, warmup, port, log, priority,
+                    ns)
     finally:
+        probe.close()
         executor.remove_node(node)
         node.destroy_node()
         stop(nodes.values(), 10.0)

@@ -137,7 +137,11 @@ def e2e_targets(e2e) -> list:
         lost = r['lost']
         out.append(_target(f'{name}: scans lost in {r["seconds"]:g} s', lost, '0', lost == 0,
                            f'of {r["expected_scans"]} ({100 * lost / r["expected_scans"]:.2f} %)'
-                           if lost else '', '.0f'))
+                           f'; {_where(r)}' if lost else 'subscriber at depth 5', '.0f'))
+        if 'audit_lost' in r:
+            own = r['audit_lost']
+            out.append(_target(f'{name}: scans never delivered (subscriber at depth '
+                               f'{r["audit_depth"]})', own, '0', own == 0, '', '.0f'))
         p99 = r['latency_ms']['p99']
         out.append(_target(f'{name}: p99 latency, last byte -> subscriber', p99,
                            f'<= {P99_MS:g} ms', p99 is not None and p99 <= P99_MS,
@@ -229,11 +233,16 @@ def _f(v, spec='.2f') -> str:
     return '-' if v is None else format(v, spec)
 
 
+def _where(r) -> str:
+    """Return where the lost scans of one run went, by stage ('' before loss accounting)."""
+    return ', '.join(f'{k} {v}' for k, v in r.get('lost_where', {}).items())
+
+
 def _losses(r) -> str:
     """Return where the lost scans of one run went, from the nodes' own counters."""
     if not r['lost']:
         return 'Nothing lost.'
-    parts = [f'{r["lost"]} scans lost']
+    parts = [f'{r["lost"]} scans lost' + (f' ({_where(r)})' if r.get('lost_where') else '')]
     if r['sim_frames_dropped']:
         parts.append(f'the simulator could not write {r["sim_frames_dropped"]} (pty full: the '
                      'driver did not read in time)')

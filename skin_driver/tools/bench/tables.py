@@ -199,8 +199,9 @@ def _e2e_section(res, images) -> list:
            'each rate they take '
            'turns, in alternating order), on the same simulated skin, scene and parameters:', '',
            '- **split**: `python -m skin_driver.ros.driver_node` (serial reader thread publishes '
-           '`frame`) -> `python -m skin_driver.ros.direction_node` (subscribes to `frame`, '
-           'estimates in its executor, publishes `contacts`, `contact`, `wrench`);',
+           '`frame`) -> `python -m skin_driver.ros.direction_node` (takes `frame` on a thread of '
+           'its own, every waiting scan at each wake-up, estimates and publishes `contacts`, '
+           '`contact`, `wrench`; its executor serves parameters, services and timers);',
            '- **fused**: `python -m skin_driver.ros.driver_node --ros-args -p fused:=true` (the '
            'reader thread decodes each scan, estimates it and publishes `contacts`, `contact` '
            'and `wrench`, then `frame` if anyone subscribes; the skin_direction node in the '
@@ -214,15 +215,27 @@ def _e2e_section(res, images) -> list:
            f'nobody subscribing to them), estimator `{e.get("method", "taxel_fit")}`; at a '
            'SCHED_FIFO priority the driver reads at it (parameter `realtime_priority`), and the '
            'simulated board and the subscriber run at it too. Simulated skin: `python -m '
-           'skin_driver.tools.sim --rate R --loop` on a pseudo-terminal (a tilted 10 N press on '
-           "the skin ~90 % of the time; above 500 Hz it writes every 2 ms, as a USB board's "
-           'packets would come). Subscriber: `skin_driver.tools.probe.Probe` in the bench '
-           'process, on `contacts` only, sensor-data QoS (best effort, depth 5), as a controller '
-           "would subscribe. Each contacts message carries its scan's sequence number and device "
-           f'time. Per run: {e["warmup_s"]:g} s warm-up, then {e["seconds"]:g} s measured.', '',
+           'skin_driver.tools.sim --rate R --loop --replay` on a pseudo-terminal (a tilted 10 N '
+           'press on the skin ~90 % of the time; above 500 Hz it writes every 2 ms, as a USB '
+           "board's packets would come; it renders one 4 s pass of the scene before it starts "
+           'and replays it, so that the fake board costs the shared cores next to nothing per '
+           'scan). Subscriber: `skin_driver.tools.probe.Probe` in the bench process, on '
+           '`contacts` only, taking them on a thread of its own (as cheap as rclpy allows: it '
+           'shares the cores it measures), with two subscriptions: the one a controller would '
+           'have, sensor-data QoS (best effort, depth 5), whose losses are the target; and an '
+           'audit, best effort with a deep queue (depth '
+           f'{e["runs"][0].get("audit_depth", "-") if e["runs"] else "-"}), that tells the '
+           "driver's own losses apart from those of a subscriber not scheduled in time (depth 5 "
+           'holds 5 ms of scans at 1 kHz, 2.5 ms at 2 kHz). Each contacts message carries its '
+           "scan's sequence number and device time. Per run: "
+           f'{e["warmup_s"]:g} s warm-up, then {e["seconds"]:g} s measured.', '',
            '- **lost**: scans of the measured window (by device time) with no contacts message '
-           "at the subscriber, wherever they were lost (the simulator's pty, the driver, the "
-           'frame topic, the contacts topic).',
+           'at the depth-5 subscriber, wherever they were lost, and where: **never decoded** '
+           "(the driver's sequence gaps: the simulator's pty full or a scan the driver did not "
+           'read), **not delivered** (decoded but missing from the audit as well: the frame '
+           'topic or the direction node in the split layout, or not published), **subscriber '
+           "queue** (in the audit, not at depth 5: the subscriber's queue overflowed while it "
+           'waited for a core).',
            "- **latency**: from the scan's last byte (the header stamp: the driver's host time "
            'when its read returned the scan) to the contacts message at the subscriber. The '
            "board's own part, from the scan's device time to its last byte at the driver, "
@@ -239,12 +252,13 @@ def _e2e_section(res, images) -> list:
     rows = []
     for r in e['runs']:
         cpu = r['cpu_us_per_scan']
+        where = ', '.join(f'{k} {v}' for k, v in r.get('lost_where', {}).items() if v)
         rows.append((label(r), f'{r["rate_hz"]:g}', r['expected_scans'],
-                     r['received'], r['lost'], _ms(r['latency_ms']),
+                     r['received'], r['lost'], where or '-', _ms(r['latency_ms']),
                      _ms(r['board_to_driver_ms']), _ms(r['latency_from_device_time_ms']),
                      ' / '.join(f'{k} {v:.0f}' for k, v in cpu.items())))
-    out += _table(['layout', 'rate [Hz]', 'scans sent', 'contacts received', 'lost',
-                   'last byte -> subscriber p50 / p99 / max [ms]',
+    out += _table(['layout', 'rate [Hz]', 'scans sent', 'contacts received', 'lost (depth 5)',
+                   'where lost', 'last byte -> subscriber p50 / p99 / max [ms]',
                    'device time -> last byte [ms]', 'device time -> subscriber [ms]',
                    'CPU per scan [us]'], rows)
     out += ['', "The nodes' own counters over the same window (/diagnostics):", '']
@@ -256,7 +270,8 @@ def _e2e_section(res, images) -> list:
                     figure(r['estimator_mean_us']), figure(r['sim_frames_dropped'], '.0f'))
                    for r in e['runs']])
     out += ['', 'CPU per scan by thread (/proc/<pid>/task: the serial reader, the raw-image '
-            'thread, the executor on the main thread, the middleware) and, within the reader and '
+            "thread, the direction node's frame thread, the executor on the main thread, the "
+            'middleware) and, within the reader and '
             'the estimation, by stage (the thread CPU the nodes sample and report on '
             '/diagnostics, averaged over the window), us:', '']
     out += _table(['layout', 'rate [Hz]', 'threads', 'reader stages', 'estimation stages'],

@@ -119,15 +119,21 @@ def test_unplug_and_replug_on_the_link_is_survived(tmp_path):
     assert not os.path.lexists(link)
 
 
-def test_ground_truth_is_bounded_and_stop_is_idempotent():
-    sim = SimulatedSkin('two_finger', rate_hz=RATE_HZ, truth_capacity=7)
+def frames_of(sim, count):
+    """Start the board, read count frames, stop it; return the frames."""
     reader = Reader(sim.start())
     try:
-        reader.read_frames(20)
+        reader.read_frames(count)
     finally:
         reader.close()
         sim.stop()
-        sim.stop()
+    return reader.frames
+
+
+def test_ground_truth_is_bounded_and_stop_is_idempotent():
+    sim = SimulatedSkin('two_finger', rate_hz=RATE_HZ, truth_capacity=7)
+    frames_of(sim, 20)
+    sim.stop()
     truth = sim.ground_truth
     assert len(truth) == 7
     assert max(truth) >= 19 and sim.frames_sent >= 20
@@ -147,3 +153,27 @@ def test_bad_arguments_are_rejected(tmp_path):
     with pytest.raises(ValueError, match='not a symlink'):
         sim.start()
     assert occupied.read_text() == 'keep me'
+
+
+def test_a_replaying_board_sends_its_first_pass_again_under_new_numbers():
+    # A 0.1 s scene at 200 Hz: 20 scans to a pass; 60 frames are three passes.
+    scene = scene_from_dict({'presses': [{
+        'time_s': 0.02, 'x_m': 0.0375, 'y_m': 0.0375, 'force_n': 10.0, 'alpha_deg': 45.0,
+        'beta_deg': 90.0, 'radius_m': 0.004, 'duration_s': 0.05, 'ramp_s': 0.0}],
+        'period_s': 0.1})
+    sim = SimulatedSkin(scene, rate_hz=RATE_HZ, seed=3, loop=True, replay=True)
+    frames = frames_of(sim, 60)
+    assert_equal_to_truth(sim, frames)
+    assert_no_frame_lost(sim, frames)
+    by_seq = {f.seq: f for f in frames}
+    pairs = [(by_seq[s], by_seq[s + 20]) for s in by_seq if s + 20 in by_seq]
+    assert len(pairs) >= 20
+    for first, again in pairs:
+        np.testing.assert_array_equal(first.top, again.top)  # the same scan, noise and all
+        assert again.device_time_us - first.device_time_us == 100_000
+    assert any(int(f.top.max()) > 1000 for f in frames)  # the press is in the pass
+
+
+def test_only_a_looped_board_replays():
+    with pytest.raises(ValueError, match='replay needs loop'):
+        SimulatedSkin('seed', replay=True)

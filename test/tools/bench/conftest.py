@@ -24,12 +24,14 @@ def results():
     }
 
 
-def _e2e_run(layout, rate, lost, p99, cpu):
+def _e2e_run(layout, rate, lost, p99, cpu, where=None):
     latency = {'p50': p99 / 2, 'p99': p99, 'max': p99 * 2}
+    where = where or {'never decoded': 0, 'not delivered': 0, 'subscriber queue': lost}
     return {'layout': layout, 'rate_hz': rate, 'seconds': 60.0, 'expected_scans': int(60 * rate),
             'sim_frames_sent': int(60 * rate), 'sim_frames_dropped': 0, 'received':
             int(60 * rate) - lost, 'lost': lost, 'sequence_gaps': lost,
-            'received_rate_hz': rate, 'latency_ms': latency,
+            'audit_lost': lost - where['subscriber queue'], 'audit_depth': 10000,
+            'lost_where': where, 'received_rate_hz': rate, 'latency_ms': latency,
             'latency_from_device_time_ms': latency, 'board_to_driver_ms': latency,
             'scans_with_contact': 0.9, 'cpu_percent': {}, 'cpu_us_per_scan': cpu,
             'driver_decoded_hz': rate, 'driver_sequence_gaps': 0, 'estimated_hz': rate,
@@ -46,7 +48,8 @@ def e2e():
             'load_before': [1, 1, 1],
             'stage_costs_us': {'estimator.process (1 contact)': 80.0},
             'runs': [_e2e_run('split', 1000.0, 12, 3.0,
-                              {'sim': 150, 'driver': 90, 'direction': 400, 'probe': 120}),
+                              {'sim': 150, 'driver': 90, 'direction': 400, 'probe': 120},
+                              {'never decoded': 1, 'not delivered': 3, 'subscriber queue': 8}),
                      _e2e_run('fused', 1000.0, 0, 1.5,
                               {'sim': 150, 'driver': 140, 'probe': 120}),
                      _e2e_run('floor', 1000.0, 0, 1.2,

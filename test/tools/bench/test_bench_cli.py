@@ -39,7 +39,10 @@ def test_end_to_end_section_shows_both_layouts_and_where_the_prose_lives(results
     bench.write(res, str(tmp_path))
     text = (tmp_path / 'benchmarks.md').read_text()
     assert '## 3. End to end through ROS: split against fused' in text
-    assert '| fused | 1000 | 60000 | 60000 | 0 | 0.75 / 1.50 / 3.00 |' in text
+    assert '| fused | 1000 | 60000 | 60000 | 0 | - | 0.75 / 1.50 / 3.00 |' in text
+    # Each lost scan is placed: the split run lost 12, four of them before the subscriber.
+    assert ('| split | 1000 | 60000 | 59988 | 12 | never decoded 1, not delivered 3, '
+            'subscriber queue 8 |') in text
     assert '### Which layout when' in text and '"Split or fused: which to use when"' in text
     assert 'docs/estimation.md, "Where the family targets fall short"' in text
 

@@ -26,6 +26,17 @@ def test_end_to_end_targets_judge_each_layout_at_each_rate(e2e):
     assert any('12 scans lost' in line for line in scoring.why_e2e(e2e))
 
 
+def test_each_lost_scan_is_placed_and_the_drivers_own_losses_are_judged_apart(e2e):
+    targets = {t['name']: t for t in scoring.e2e_targets(e2e)}
+    lost = targets['split at 1 kHz: scans lost in 60 s']
+    assert lost['note'] == ('of 60000 (0.02 %); never decoded 1, not delivered 3, '
+                            'subscriber queue 8')
+    # Four of the twelve never reached the deep-queue subscriber either: the layout's own.
+    own = targets['split at 1 kHz: scans never delivered (subscriber at depth 10000)']
+    assert (own['measured'], own['met']) == ('4', False)
+    assert targets['fused at 1 kHz: scans never delivered (subscriber at depth 10000)']['met']
+
+
 def test_the_compiled_cost_is_judged_back_to_back_and_compared_with_its_description():
     rows = [{'grid': 16, 'method': 'taxel_fit', 'median_us': 40.0, 'alone_median_us': 25.0},
             {'grid': 16, 'method': 'taxel_fit_python', 'median_us': 1200.0}]
