@@ -198,4 +198,8 @@ class TakenOnThread:
             try:
                 callback(taken[0])
             except Exception as err:  # noqa: B902 - reported; the next message is still served
+                if not self._context.ok():
+                    # Ctrl-C under the callback: its publish failed on the dead context, which
+                    # is the end of the process, not a fault.
+                    return
                 self._on_error(err)

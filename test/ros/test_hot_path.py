@@ -1,6 +1,7 @@
 """Subscriber counts asked at a low rate, and work for viewers kept off the reader's thread."""
 
 import threading
+import time
 
 from skin_driver.ros.hot_path import LatestOnly, Listened, REFRESH_S
 
@@ -97,3 +98,36 @@ def test_a_subscription_taken_on_its_own_thread_gets_every_message_and_no_execut
         assert taken == [i for i in range(50) if i != 3]  # in order; the bad one is reported
         assert [str(e) for e in errors] == ['a bad message']
         assert threads == {'skin-test-take'}
+
+
+def test_a_callback_failing_because_ctrl_c_shut_the_context_is_not_reported():
+    import rclpy
+    from rosutil import ros_context, spin_until
+    from skin_driver.ros.hot_path import TakenOnThread
+    from std_msgs.msg import UInt32
+
+    with ros_context() as (context, executor):
+        node = rclpy.create_node('taken_at_shutdown', context=context)
+        executor.add_node(node)
+        errors, calls = [], []
+
+        def on_message(msg):
+            calls.append(msg.data)
+            # What Ctrl-C does under the callback: the publish it makes then fails.
+            rclpy.shutdown(context=context)
+            raise RuntimeError('Failed to publish: context is invalid')
+
+        sub = TakenOnThread(node, 'skin-test-shutdown', errors.append)
+        sub.subscribe(UInt32, 'numbers', on_message, 10)
+        sub.start()
+        pub = node.create_publisher(UInt32, 'numbers', 10)
+        try:
+            assert spin_until(executor, lambda: pub.get_subscription_count() == 1, 10.0)
+            pub.publish(UInt32(data=1))
+            deadline = time.monotonic() + 10.0
+            while not calls and time.monotonic() < deadline:
+                time.sleep(0.01)
+        finally:
+            sub.stop()
+        assert calls == [1]
+        assert errors == []
