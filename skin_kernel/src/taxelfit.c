@@ -14,7 +14,7 @@
 #define MIN_EXPLAINED 0.5
 #define WIDE 1.5
 #define PLATEAU 1e-9
-#define PAST_EDGE 2.0
+#define PAST_EDGE 2.0 /* widths */
 #define INV_SQRT2PI 0.3989422804014327
 /* Abramowitz and Stegun 7.1.26: erf to 1.5e-7, far below the counts' noise */
 static const double AS_P = 0.3275911;
@@ -254,8 +254,9 @@ static int cut_by_edge(const double *profiles, int nn, const int *len, const dou
     int other = (j + 2) % 4;
     cut->fixed[j] = (first[j] || last[j]) && !(first[other] || last[other]);
     any |= cut->fixed[j];
-    cut->low[j] = first[j] ? -0.5 - PAST_EDGE : -0.5;
-    cut->high[j] = last[j] ? (len[j] - 0.5) + PAST_EDGE : len[j] - 0.5;
+    double reach = PAST_EDGE * width[other];
+    cut->low[j] = first[j] ? -0.5 - reach : -0.5;
+    cut->high[j] = last[j] ? (len[j] - 0.5) + reach : len[j] - 0.5;
     cut->width[j] = width[other];
     cut->mu[j] = clip(mu[j], cut->low[j], cut->high[j]);
   }

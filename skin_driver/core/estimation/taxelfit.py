@@ -38,8 +38,8 @@ _MIN_WIDTH = 0.25
 _MIN_EXPLAINED = 0.5
 # Profiles at least this wide (taxels, from the second moment) keep their centroid.
 _WIDE = 1.5
-# How far past the map's edge (taxels) a cut profile's centre may lie: a press up to half a
-# taxel off the map whose bottom imprint a tilt moves out by a taxel or so more.
+# How far past the map's edge a cut profile's centre may lie, in its widths: two leave 2 % of
+# the imprint on the map, and less is too little to place it (a fit would trade centre for mass).
 _PAST_EDGE = 2.0
 # Taxels within this share of a layer's peak force sit on one plateau: the curve's cap.
 _PLATEAU = 1e-9
@@ -143,8 +143,9 @@ def _cut_by_edge(profiles: np.ndarray, mask: np.ndarray, mu: np.ndarray, width: 
     fixed = cut & ~cut[other]
     if not fixed.any():
         return None
-    low = np.where(first, -0.5 - _PAST_EDGE, -0.5)
-    high = np.where(last, length - 0.5 + _PAST_EDGE, length - 0.5)
+    reach = _PAST_EDGE * width[other]
+    low = np.where(first, -0.5 - reach, -0.5)
+    high = np.where(last, (length - 0.5) + reach, length - 0.5)
     return (np.where(fixed, width[other], np.nan), np.clip(mu, low, high), low, high)
 
 
