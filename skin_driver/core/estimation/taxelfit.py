@@ -18,6 +18,9 @@ force curve ends, is fitted on its counts instead):
   Gauss-Newton from the centroid and the second moment;
 * the shift is the difference of the fitted bottom and top centres.
 
+A profile cut by the map's edge keeps the width of the same layer's whole profile along the
+other axis, and its centre may lie past the edge (:func:`_cut_by_edge`).
+
 Integrating the model over the cells is what removes the sampling bias: the fitted centre is a
 continuous parameter of the profile, not a weighted mean of cell positions. The four fits
 (two layers, two axes) are independent three-parameter problems, solved together.
