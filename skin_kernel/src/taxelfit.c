@@ -3,6 +3,7 @@
  * difference. Python description: taxelfit.py and shift.centroid.
  */
 #include <math.h>
+#include <stddef.h>
 
 #include "internal.h"
 
@@ -13,6 +14,7 @@
 #define MIN_EXPLAINED 0.5
 #define WIDE 1.5
 #define PLATEAU 1e-9
+#define PAST_EDGE 2.0 /* widths */
 #define INV_SQRT2PI 0.3989422804014327
 /* Abramowitz and Stegun 7.1.26: erf to 1.5e-7, far below the counts' noise */
 static const double AS_P = 0.3275911;
@@ -113,14 +115,21 @@ static void cells_of(double mu, double s, int len, double *cells)
   }
 }
 
+/* Profiles cut by the map's edge (taxelfit._cut_by_edge): a fixed width, start and bounds. */
+struct cut {
+  int fixed[4];
+  double width[4], mu[4], low[4], high[4];
+};
+
 /*
  * Fit cell-integrated Gaussians to 4 profiles of nn cells (the first len[j] real); returns 0
- * when a profile has no load, else the centres and explained shares (fit_cell_profiles).
+ * when a profile has no load, else the centres, widths and explained shares
+ * (fit_cell_profiles); ``cut`` (or NULL) holds the widths of cut profiles fixed.
  */
-static int fit_profiles(const double *profiles, int nn, const int *len, double *scratch,
-                        double *centre, double *explained)
+static int fit_profiles(const double *profiles, int nn, const int *len, const struct cut *cut,
+                        double *scratch, double *centre, double *width, double *explained)
 {
-  double mass[4], mu[4], s[4], amp[4], start[4], start_width[4], high[4];
+  double mass[4], mu[4], s[4], amp[4], start[4], start_width[4], low[4], high[4], free[4];
   double *cells = scratch, *tmp = scratch + nn;
   for (int j = 0; j < 4; j++) {
     const double *p = profiles + j * nn;
@@ -141,7 +150,16 @@ static int fit_profiles(const double *profiles, int nn, const int *len, double *
     start[j] = mu[j];
     start_width[j] = s[j];
     /* the centre stays within the cells the profile has */
+    low[j] = -0.5;
     high[j] = len[j] - 0.5;
+    free[j] = 1.0;
+    if (cut && cut->fixed[j]) {
+      s[j] = cut->width[j];
+      mu[j] = cut->mu[j];
+      low[j] = cut->low[j];
+      high[j] = cut->high[j];
+      free[j] = 0.0;
+    }
   }
   for (int it = 0; it < ITERATIONS; it++) {
     double step[4][3];
@@ -154,8 +172,9 @@ static int fit_profiles(const double *profiles, int nn, const int *len, double *
       for (int i = 0; i < len[j]; i++) {
         double u1 = ((i + 1) - 0.5 - mu[j]) / s[j];
         double pdf1 = exp(-0.5 * u1 * u1) * INV_SQRT2PI, cdf1 = normal_cdf(u1), updf1 = u1 * pdf1;
+        /* a fixed width has no column: its normal equation is the regulariser's, its step 0 */
         double jac[3] = {cdf1 - cdf0, amp[j] * (-(pdf1 - pdf0) / s[j]),
-                         amp[j] * (-(updf1 - updf0) / s[j])};
+                         amp[j] * (-(updf1 - updf0) / s[j] * free[j])};
         double residual = p[i] - amp[j] * jac[0];
         /* symmetric: the lower half mirrors the upper one to the bit */
         for (int a = 0; a < 3; a++) {
@@ -183,7 +202,7 @@ static int fit_profiles(const double *profiles, int nn, const int *len, double *
     for (int j = 0; j < 4; j++) {
       /* Damped: a step never moves the centre by more than a taxel nor the width by half. */
       amp[j] = amp[j] + step[j][0];
-      mu[j] = clip(mu[j] + clip(step[j][1], -1.0, 1.0), -0.5, high[j]);
+      mu[j] = clip(mu[j] + clip(step[j][1], -1.0, 1.0), low[j], high[j]);
       double w = s[j] + clip(step[j][2], -0.5 * s[j], 0.5 * s[j]);
       s[j] = w < MIN_WIDTH ? MIN_WIDTH : w;
       small &= fabs(step[j][1]) < TOLERANCE;
@@ -208,12 +227,40 @@ static int fit_profiles(const double *profiles, int nn, const int *len, double *
      * A fit that explains little of its profile keeps the centroid it started from; so does a
      * profile a taxel and a half wide, whose centroid has no sampling bias to speak of.
      */
-    int keep = isfinite(mu[j]) && e >= MIN_EXPLAINED && start_width[j] < WIDE;
-    centre[j] = keep ? mu[j] : start[j];
+    int keep = isfinite(mu[j]) && e >= MIN_EXPLAINED && (start_width[j] < WIDE || free[j] == 0.0);
+    centre[j] = keep ? mu[j] : (free[j] == 0.0 ? cut->mu[j] : start[j]);
+    width[j] = s[j];
     e = isfinite(e) ? e : 0.0;
     explained[j] = e > 0.0 ? e : 0.0;
   }
   return 1;
+}
+
+/*
+ * Profiles loaded in their first or last cell were cut by the map's edge (the window has an
+ * empty cell around its load elsewhere): each takes the width of the same layer's profile along
+ * the other axis when that one is whole, and its centre may lie past the edge. Returns whether
+ * any was (taxelfit._cut_by_edge). Rows 0, 1: top and bottom along x; 2, 3 along y.
+ */
+static int cut_by_edge(const double *profiles, int nn, const int *len, const double *mu,
+                       const double *width, struct cut *cut)
+{
+  int first[4], last[4], any = 0;
+  for (int j = 0; j < 4; j++) {
+    first[j] = profiles[j * nn] > 0;
+    last[j] = profiles[j * nn + len[j] - 1] > 0;
+  }
+  for (int j = 0; j < 4; j++) {
+    int other = (j + 2) % 4;
+    cut->fixed[j] = (first[j] || last[j]) && !(first[other] || last[other]);
+    any |= cut->fixed[j];
+    double reach = PAST_EDGE * width[other];
+    cut->low[j] = first[j] ? -0.5 - reach : -0.5;
+    cut->high[j] = last[j] ? (len[j] - 0.5) + reach : len[j] - 0.5;
+    cut->width[j] = width[other];
+    cut->mu[j] = clip(mu[j], cut->low[j], cut->high[j]);
+  }
+  return any;
 }
 
 static int plateau(const double *layer, int m)
@@ -256,10 +303,21 @@ void sk_taxel_fit(const double *force, const double *counts, int h, int w, doubl
     const double *maps = plateau(force + layer * m, m) ? counts + layer * m : force + layer * m;
     profiles_of(maps, h, w, nn, profiles + layer * nn, profiles + (2 + layer) * nn);
   }
-  double centre[4], explained[4];
-  if (!fit_profiles(profiles, nn, len, scratch + 4 * nn, centre, explained)) {
+  double centre[4], width[4], explained[4];
+  if (!fit_profiles(profiles, nn, len, NULL, scratch + 4 * nn, centre, width, explained)) {
     *dx = *dy = *confidence = NAN;
     return;
+  }
+  struct cut cut;
+  if (cut_by_edge(profiles, nn, len, centre, width, &cut)) {
+    double again[4], again_width[4], share[4];
+    fit_profiles(profiles, nn, len, &cut, scratch + 4 * nn, again, again_width, share);
+    for (int j = 0; j < 4; j++) {
+      if (cut.fixed[j]) {
+        centre[j] = again[j];
+        explained[j] = share[j];
+      }
+    }
   }
   *dx = centre[1] - centre[0];
   *dy = centre[3] - centre[2];

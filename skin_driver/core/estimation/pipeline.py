@@ -288,12 +288,19 @@ class ContactEstimator:
         return out
 
     def _calibration_variance(self) -> float:
-        """Return the calibration's share of sigma**2 (taxels**2): its standard error."""
+        """
+        Return the calibration's share of sigma**2 (taxels**2): the zero a new press meets.
+
+        The normal presses' spread about the zero (``std_x_m``, ``std_y_m``) is what the zero is
+        off by at another spot and force (sampling bias that follows the imprint's place and
+        size), so a new press meets that spread as well as the zero's standard error.
+        """
         cal = self.calibration
         if cal.presses <= 0:
             return 0.0
         pitch = self.config.pitch_m
-        return (cal.std_x_m ** 2 + cal.std_y_m ** 2) / (2.0 * cal.presses * pitch * pitch)
+        return ((cal.std_x_m ** 2 + cal.std_y_m ** 2) * (1.0 + 1.0 / cal.presses)
+                / (2.0 * pitch * pitch))
 
     def _normal_force(self, pair: LayerPair) -> float:
         """Return the contact's normal force: sensed sum / fill_factor**2 (module docstring)."""

@@ -18,6 +18,9 @@ force curve ends, is fitted on its counts instead):
   Gauss-Newton from the centroid and the second moment;
 * the shift is the difference of the fitted bottom and top centres.
 
+A profile cut by the map's edge keeps the width of the same layer's whole profile along the
+other axis, and its centre may lie past the edge (:func:`_cut_by_edge`).
+
 Integrating the model over the cells is what removes the sampling bias: the fitted centre is a
 continuous parameter of the profile, not a weighted mean of cell positions. The four fits
 (two layers, two axes) are independent three-parameter problems, solved together.
@@ -38,6 +41,9 @@ _MIN_WIDTH = 0.25
 _MIN_EXPLAINED = 0.5
 # Profiles at least this wide (taxels, from the second moment) keep their centroid.
 _WIDE = 1.5
+# How far past the map's edge a cut profile's centre may lie, in its widths: two leave 2 % of
+# the imprint on the map, and less is too little to place it (a fit would trade centre for mass).
+_PAST_EDGE = 2.0
 # Taxels within this share of a layer's peak force sit on one plateau: the curve's cap.
 _PLATEAU = 1e-9
 _INV_SQRT2PI = 1.0 / math.sqrt(2.0 * math.pi)
@@ -55,12 +61,14 @@ def _normal_cdf(u: np.ndarray) -> np.ndarray:
     return np.where(u >= 0, 1.0 - half, half)
 
 
-def fit_cell_profiles(profiles: np.ndarray, mask: np.ndarray) -> tuple:
+def fit_cell_profiles(profiles: np.ndarray, mask: np.ndarray, cut: tuple = None) -> tuple:
     """
     Fit cell-integrated Gaussians to K marginal profiles (K x n; ``mask`` marks real cells).
 
     Returns (centres, widths, explained share of each profile's energy), cell units, centre 0 at
-    the first cell's middle. A profile with no load gives NaN.
+    the first cell's middle. A profile with no load gives NaN. ``cut``: (widths, centres, low,
+    high), K each, for profiles cut by the map's edge: a finite width is held fixed (the centre
+    and mass are fitted, from the given centre, within ``low``..``high``).
     """
     idx = np.arange(profiles.shape[1], dtype=np.float64)[None, :]
     # Cell i spans edges i and i + 1: one CDF per edge gives every cell's share.
@@ -73,13 +81,21 @@ def fit_cell_profiles(profiles: np.ndarray, mask: np.ndarray) -> tuple:
     amp = mass.copy()
     start, start_width = mu.copy(), s.copy()
     # The centre stays within the cells the profile has (its loaded span and half a cell).
-    low, high = -0.5, mask.sum(axis=1) - 0.5
+    low, high = np.full(mu.shape, -0.5), mask.sum(axis=1) - 0.5
+    free = np.ones(mu.shape)
+    if cut is not None:
+        fixed = np.isfinite(cut[0])
+        s = np.where(fixed, cut[0], s)
+        mu = np.where(fixed, cut[1], mu)
+        low, high = np.where(fixed, cut[2], low), np.where(fixed, cut[3], high)
+        free = np.where(fixed, 0.0, 1.0)
     for _ in range(_ITERATIONS):
         u = (edges - mu[:, None]) / s[:, None]
         pdf = np.exp(-0.5 * u * u) * _INV_SQRT2PI
         cells = np.diff(_normal_cdf(u), axis=1) * mask
         d_mu = -np.diff(pdf, axis=1) * mask / s[:, None]
-        d_s = -np.diff(u * pdf, axis=1) * mask / s[:, None]
+        # A fixed width has no column: its normal equation is the regulariser's, its step 0.
+        d_s = -np.diff(u * pdf, axis=1) * mask / s[:, None] * free[:, None]
         residual = profiles - amp[:, None] * cells
         jac = np.stack((cells, amp[:, None] * d_mu, amp[:, None] * d_s), axis=2)
         normal = np.einsum('kni,knj->kij', jac, jac) + 1e-12 * np.eye(3)
@@ -102,12 +118,38 @@ def fit_cell_profiles(profiles: np.ndarray, mask: np.ndarray) -> tuple:
     # step) keeps the centroid it started from. So does a profile a taxel and a half wide: its
     # centroid's sampling bias, exp(-2 pi^2 s^2) / pi taxel, is nil, and the centroid takes
     # every cell as it is, where a Gaussian would misfit a flat or skewed imprint.
-    keep = np.isfinite(mu) & (explained >= _MIN_EXPLAINED) & (start_width < _WIDE)
-    mu = np.where(keep, mu, start)
+    keep = np.isfinite(mu) & (explained >= _MIN_EXPLAINED) & ((start_width < _WIDE) | (free == 0))
+    mu = np.where(keep, mu, start if cut is None else np.where(free == 0, cut[1], start))
     explained = np.where(np.isfinite(explained), explained, 0.0)
     bad = ~(mass > 0)
     mu = np.where(bad, np.nan, mu)
     return mu, s, np.where(bad, 0.0, np.maximum(explained, 0.0))
+
+
+def _cut_by_edge(profiles: np.ndarray, mask: np.ndarray, mu: np.ndarray, width: np.ndarray):
+    """
+    Return the ``cut`` of :func:`fit_cell_profiles` for profiles cut by the map's edge, or None.
+
+    A contact's window has an empty cell around its load except where the map ends, so a profile
+    loaded in its first or last cell lost the rest of its imprint there: its width and centre
+    trade against each other on the cells that are left (at the border the bottom imprint was
+    0.3-0.7 taxel off, 1 sigma). The same layer's profile along the other axis is whole and
+    gives the width (an imprint about as wide both ways); the centre is then fitted, and may lie
+    past the edge (a press just off the map, a bottom imprint shifted out). Rows 0, 1 are the
+    top and bottom along x, rows 2, 3 along y; a corner (both axes cut) is left as fitted.
+    """
+    length = mask.sum(axis=1).astype(int)
+    first = profiles[:, 0] > 0
+    last = profiles[np.arange(4), length - 1] > 0
+    cut = first | last
+    other = np.array([2, 3, 0, 1])
+    fixed = cut & ~cut[other]
+    if not fixed.any():
+        return None
+    reach = _PAST_EDGE * width[other]
+    low = np.where(first, -0.5 - reach, -0.5)
+    high = np.where(last, (length - 0.5) + reach, length - 0.5)
+    return (np.where(fixed, width[other], np.nan), np.clip(mu, low, high), low, high)
 
 
 def _plateau(layer: np.ndarray) -> bool:
@@ -139,8 +181,14 @@ def cell_fit_shift(maps: np.ndarray, counts: np.ndarray = None):
     profiles[2:, :h] = maps.sum(axis=2)
     mask[:2, :w] = 1.0
     mask[2:, :h] = 1.0
-    mu, _, explained = fit_cell_profiles(profiles, mask)
+    mu, width, explained = fit_cell_profiles(profiles, mask)
     if not np.isfinite(mu).all():
         return None
+    cut = _cut_by_edge(profiles, mask, mu, width)
+    if cut is not None:
+        again, _, share = fit_cell_profiles(profiles, mask, cut)
+        fixed = np.isfinite(cut[0])
+        mu = np.where(fixed, again, mu)
+        explained = np.where(fixed, share, explained)
     return (float(mu[1] - mu[0]), float(mu[3] - mu[2]),
             float(min(max(explained.min(), 0.0), 1.0)))

@@ -5,7 +5,8 @@ Each taxel's count noise (measured by the tare) gives the noise of each imprint'
 imprint narrower than a taxel adds the pixel-locking error of its sampled centroid, whose size
 follows from the imprint's measured width (a Gaussian profile of variance ``v - 1/12`` sampled on
 unit cells has a first harmonic of amplitude ``exp(-2 pi^2 (v - 1/12)) / pi`` taxels); an imprint
-cut by the map's edge adds a fifth of a taxel; the calibration adds its own standard error. The
+cut by the map's edge adds a fifth of a taxel; the calibration adds the spread of its zero about
+the normal presses and its standard error (the zero a new press meets, :mod:`pipeline`). The
 root sum of squares is ``sigma``, one axis of the shift (see :mod:`pipeline`). The compiled
 kernel's ``sigma.c`` does the same; the tests hold it to this.
 """

@@ -139,3 +139,22 @@ def test_a_shift_of_five_taxels_keeps_its_direction():
     contacts = est.process(*render(model, [press], rng))
     assert len(contacts) == 1 and contacts[0].direction_valid
     assert math.degrees(contacts[0].azimuth_rad) == pytest.approx(30.0, abs=2.0)
+
+
+def test_sigma_holds_the_spread_of_the_zero_however_many_presses_made_it():
+    # The normal presses scattered by 0.1 taxel about the zero: a new press at another spot
+    # meets that scatter, which a thousand presses do not average away. Expected: the sigma of
+    # a zero scattered by 0.1 taxel is at least 0.1 taxel (azimuth sigma >= atan(0.1 / |s|)),
+    # and larger than that of a zero without scatter, on the same frame.
+    est, model, rng = make()
+    frame = render(model, [Press(0.037, 0.038, 10.0, math.radians(45), 1.0, 0.0025)], rng)
+    pitch = model.pitch_m
+    sigmas = []
+    for std in (0.0, 0.1 * pitch):
+        cal = Calibration(std_x_m=std, std_y_m=std, presses=1000)
+        c = est.with_calibration(cal).process(*frame)[0]
+        assert c.direction_valid
+        sigmas.append(c.azimuth_sigma_rad)
+        shift_taxels = math.hypot(*c.shift_m) / pitch
+    assert sigmas[1] > sigmas[0]
+    assert sigmas[1] >= math.atan2(0.1, shift_taxels)

@@ -60,3 +60,27 @@ def test_empty_layer_gives_no_shift_and_odd_shapes_fall_back_to_the_centroid():
     dx, dy, _ = cell_fit_shift(ring)
     assert dx == pytest.approx(0.0, abs=1e-9) and dy == pytest.approx(0.0, abs=1e-9)
     assert get_method('taxel_fit').linear
+
+
+def _cell_gaussian(centre: float, width: float, cells: int) -> np.ndarray:
+    """Return a unit-mass Gaussian of ``centre`` and ``width`` integrated over ``cells`` cells."""
+    from statistics import NormalDist
+    nd = NormalDist(centre, width)
+    return np.array([nd.cdf(i + 0.5) - nd.cdf(i - 0.5) for i in range(cells)])
+
+
+def test_an_imprint_cut_by_the_map_edge_keeps_its_centre_past_the_edge():
+    # A round bottom imprint of width 1.1 taxels centred a taxel past the map's left edge
+    # (column -1.0): only its right tail is on the map, cells under 0.5 % of its load read
+    # nothing (the touch threshold). Its profile along y is whole and tells the width.
+    # Expected: the bottom's centre at -1.0, the shift 4.0 taxels to the left of the top at
+    # column 3.0 (a free fit of the cut profile trades width for centre: a shift of -2.7 that
+    # explains the cells as well).
+    h, w = 7, 7
+    maps = np.zeros((2, h, w))
+    maps[0] = np.outer(_cell_gaussian(3.0, 0.6, h), _cell_gaussian(3.0, 0.6, w))
+    maps[1] = np.outer(_cell_gaussian(3.0, 1.1, h), _cell_gaussian(-1.0, 1.1, w))
+    maps[maps < 0.005] = 0.0
+    dx, dy, explained = cell_fit_shift(maps)
+    assert dx == pytest.approx(-4.0, abs=0.05) and dy == pytest.approx(0.0, abs=0.02)
+    assert explained > 0.95
