@@ -178,6 +178,38 @@ static int split_peaks(sk_kernel *k, const double *top, int count)
   return next - 1;
 }
 
+/* First index of the largest of n sums (numpy's argmax). */
+static int strongest(const double *sums, int n)
+{
+  int best = 0;
+  for (int i = 1; i < n; i++) {
+    best = sums[i] > sums[best] ? i : best;
+  }
+  return best;
+}
+
+/*
+ * Whether the strongest row or column of the window's bottom share (b over the cut) is the map's
+ * edge line (contacts._cut_at_edge); the line sums in the same order. sums: h + w doubles.
+ */
+static int cut_at_edge(const sk_kernel *k, const sk_pair *p, const double *b, double cut,
+                       double *sums)
+{
+  double *row_sums = sums, *col_sums = sums + p->h;
+  memset(sums, 0, sizeof(double) * (p->h + p->w));
+  for (int r = 0; r < p->h; r++) {
+    for (int c = 0; c < p->w; c++) {
+      int i = (p->r0 + r) * k->cols + p->c0 + c;
+      double share = b[i] * (p->peak > 0 && b[i] > cut ? 1.0 : 0.0);
+      row_sums[r] += share;
+      col_sums[c] += share;
+    }
+  }
+  int row = strongest(row_sums, p->h), col = strongest(col_sums, p->w);
+  return (p->r0 == 0 && row == 0) || (p->r0 + p->h == k->rows && row == p->h - 1)
+         || (p->c0 == 0 && col == 0) || (p->c0 + p->w == k->cols && col == p->w - 1);
+}
+
 /* Window, centroid and force sums of contact q (contacts._pair). */
 static void make_pair(sk_kernel *k, int q, sk_pair *p)
 {
@@ -231,6 +263,7 @@ static void make_pair(sk_kernel *k, int q, sk_pair *p)
     }
   }
   p->bottom_force = sk_sum(tmp, m);
+  p->bottom_cut = cut_at_edge(k, p, b, cut, k->scratch + 2 * n);
 }
 
 /* Copy pair p's window: counts (top, bottom) then its share of the force maps (_force_window). */

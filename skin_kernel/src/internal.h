@@ -11,6 +11,7 @@ typedef struct {
   double peak;            /* highest share of a bottom taxel, counts */
   double top_force, bottom_force;
   int taxels, at_border, censored;
+  int bottom_cut;          /* the bottom share's strongest line is the map's edge line */
   double dx, dy, confidence, sigma;
 } sk_pair;
 

@@ -108,11 +108,11 @@ static double finite_or_zero(double v)
   return isfinite(v) ? v : 0.0;
 }
 
-/* Normal force: the sensed sum (bottom, or the larger one at the edge) / fill_factor**2. */
+/* Normal force: the sensed sum (bottom, or the larger one when it is cut) / fill_factor**2. */
 static double normal_force(const sk_kernel *k, const sk_pair *p)
 {
-  double sensed = p->at_border ? (p->top_force >= p->bottom_force ? p->top_force
-                                  : p->bottom_force) : p->bottom_force;
+  double sensed = p->bottom_cut ? (p->top_force >= p->bottom_force ? p->top_force
+                                   : p->bottom_force) : p->bottom_force;
   if (sensed <= 0) {
     sensed = p->top_force;
   }

@@ -43,7 +43,9 @@ class LayerPair:
     map inside the window whose top-left taxel is ``origin`` (row, col). ``top_force_n`` and
     ``bottom_force_n`` are the contact's force sums on the two layers; ``row``/``col`` the top
     centroid in the full map; ``taxels`` the loaded top taxels; ``at_border`` is True when either
-    imprint reaches the edge of the map (part of it may be cut off).
+    imprint reaches the edge of the map (part of it may be cut off); ``bottom_cut`` when the
+    bottom imprint's strongest line (row or column of its share) is the map's edge line: its
+    centre is on or past the edge, so a real part of it is cut off (:func:`_cut_at_edge`).
     """
 
     maps: np.ndarray
@@ -54,6 +56,7 @@ class LayerPair:
     bottom_force_n: float
     taxels: int
     at_border: bool
+    bottom_cut: bool = False
 
 
 def pair_layers(maps: np.ndarray, max_contacts: int = 32, dead: np.ndarray = None,
@@ -225,5 +228,29 @@ def _pair(t: np.ndarray, b: np.ndarray, tf: np.ndarray, bf: np.ndarray) -> Layer
     window[0] = t[r0:r1, c0:c1]
     np.multiply(b[r0:r1, c0:c1], kept, out=window[1])
     bottom_force = float((bf[r0:r1, c0:c1] * kept).sum())
+    cut = _cut_at_edge(window[1], (r0, c0), (r1 == rows, c1 == cols))
     return LayerPair(window, (r0, c0), row, col, float(tf.sum()), bottom_force,
-                     int(touched.size), bool(border))
+                     int(touched.size), bool(border), cut)
+
+
+def _cut_at_edge(share: np.ndarray, origin: tuple, at_end: tuple) -> bool:
+    """
+    Return True when the strongest line of a window's bottom share is the map's edge line.
+
+    An imprint that only reaches the edge with its rim has lost a sliver; one whose strongest
+    line is the edge has its centre there or past it and has lost a real part. The line sums are
+    accumulated in order, line by line (the kernel does alike).
+    """
+    h, w = share.shape
+    row_sums = np.zeros(h)
+    for c in range(w):
+        row_sums += share[:, c]
+    col_sums = np.zeros(w)
+    for r in range(h):
+        col_sums += share[r]
+    for sums, start, end in ((row_sums, origin[0] == 0, at_end[0]),
+                             (col_sums, origin[1] == 0, at_end[1])):
+        strongest = int(np.argmax(sums))  # the first of equal ones, as the kernel
+        if (start and strongest == 0) or (end and strongest == sums.size - 1):
+            return True
+    return False

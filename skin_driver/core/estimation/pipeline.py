@@ -23,7 +23,11 @@ forces of a contact are divided by it. The bottom layer's sum is used because th
 spreads the pressure over several taxels, which makes the sensed share independent of where the
 contact sits (within 1 % in simulation); the top layer's share varies by +-5 % with the sub-taxel
 position of a small indenter. At the map edge, where the wider bottom imprint is cut first, the
-larger of the two sums is used.
+larger of the two sums is used when the bottom imprint's strongest line is the edge line (its
+centre on or past the edge: a real part of it is cut off); an imprint that reaches the edge only
+with its rim keeps the bottom sum, since the top sum's wider press-to-press scatter would
+otherwise win the larger of the two there and read high (on a film that turns on at a
+pressure, docs/estimation.md).
 
 Skin frame: x along columns, y along rows, z out of the skin. Pressing into the skin is a force
 along -z, so ``force_xyz_n[2] = -force_n`` (``force_n`` is the normal magnitude, >= 0). The
@@ -305,7 +309,7 @@ class ContactEstimator:
     def _normal_force(self, pair: LayerPair) -> float:
         """Return the contact's normal force: sensed sum / fill_factor**2 (module docstring)."""
         cfg = self.config
-        sensed = (max(pair.top_force_n, pair.bottom_force_n) if pair.at_border
+        sensed = (max(pair.top_force_n, pair.bottom_force_n) if pair.bottom_cut
                   else pair.bottom_force_n)
         if sensed <= 0:
             sensed = pair.top_force_n

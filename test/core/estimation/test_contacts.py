@@ -86,6 +86,19 @@ def test_two_separate_contacts_and_the_border_flag():
     assert sum(p.bottom_force_n for p in pairs) == pytest.approx(top.sum(), rel=1e-6)
 
 
+def test_a_bottom_imprint_is_cut_only_when_its_strongest_line_is_the_edge():
+    # Top imprint at row 2; the wider bottom imprint reaches row 0 with its rim only: not cut.
+    top = _blob((16, 16), 2, 8)
+    rim_only = pair_layers(np.stack((top, _gauss((16, 16), 2, 8, 1.2))))[0]
+    assert rim_only.at_border and not rim_only.bottom_cut
+    # The bottom imprint pushed to the edge column (centre half a taxel past it): cut.
+    past = pair_layers(np.stack((_blob((16, 16), 8, 14), _gauss((16, 16), 8, 15.5, 1.2))))[0]
+    assert past.at_border and past.bottom_cut
+    # Away from the edge nothing is cut.
+    inside = pair_layers(np.stack((_blob((16, 16), 8, 8), _gauss((16, 16), 8, 8, 1.2))))[0]
+    assert not inside.at_border and not inside.bottom_cut
+
+
 def test_the_contact_limit_keeps_the_strongest_and_no_load_has_no_contact():
     top = _blob((16, 16), 3, 3, 1.0) + _blob((16, 16), 11, 12, 2.0)
     maps = np.stack((top, top))
