@@ -100,6 +100,21 @@ def test_calibrated_estimators_give_the_same_contacts(skin):
         assert_same(compiled, described, top, bottom)
 
 
+@pytest.mark.parametrize('x_m, radius_m', [(0.0, 0.004), (0.005, 0.002)])
+def test_the_normal_force_at_the_edge_is_chosen_alike(x_m, radius_m):
+    # Centred on the edge column, the bottom imprint is cut (the larger layer sum is taken); a
+    # taxel inside, a 2 mm tip's bottom imprint reaches the edge with its rim only (the bottom
+    # sum, 10 % below the top one on the default skin).
+    model = family_skin('default').model
+    compiled, described = both_ways(ContactEstimator(EstimatorConfig(pitch_m=model.pitch_m)))
+    top, bottom = render(model, [Press(x_m, 0.04, 20.0, radius_m=radius_m)],
+                         np.random.default_rng(0))
+    (contact,) = assert_same(compiled, described, top, bottom)
+    if x_m > 0:
+        # The bottom sum reads the press within 2 %; the top one would read it 9 % high.
+        assert contact.force_n == pytest.approx(20.0, rel=0.02)
+
+
 @pytest.mark.parametrize('skin', ['film', 'held_out:6', 'loaded'])
 def test_rim_loads_of_a_force_calibration_are_added_alike(skin):
     # Force-calibrated from 16 normal presses of known force: these skins' curves learn a rim
