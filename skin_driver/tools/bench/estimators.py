@@ -312,6 +312,9 @@ def family(sizes: dict, methods: list, skins: list = None, seed: int = 0, log=pr
     scored too, as method ``oracle``.
     """
     rng = np.random.default_rng(seed)
+    # The order of the methods is drawn apart, so that the scenes are the same draws however
+    # many frames each one scores.
+    order = rng.spawn(1)[0]
     rows, costs, sigma, notes = [], [], [], []
     for skin in skins or skin_names():
         per_skin = {m: [] for m in methods}
@@ -333,7 +336,7 @@ def family(sizes: dict, methods: list, skins: list = None, seed: int = 0, log=pr
             contacts = {m: [] for m in methods}
             times = {m: [] for m in methods}
             for i in range(data.frames):
-                for m in rng.permutation(methods):
+                for m in order.permutation(methods):
                     elapsed, found = _timed(ests[m], data.top[i], data.bottom[i])
                     times[m].append(elapsed)
                     contacts[m].append(found)
