@@ -165,7 +165,7 @@ def _family_headline(fam) -> list:
 def _family_section(fam, images) -> list:
     out = ['## 5. The skin family', '',
            'Skins (`skin_driver.core.sim.skins`; `python -m skin_driver.evaluate --skin NAME '
-           '--scene KIND` renders and scores any of them):', '']
+           '--scene KIND --calibration-frames` renders and scores any of them as here):', '']
     out += [f'- `{name}`: {text}' for name, text in fam['skins'].items()]
     out += ['', f'Scenes per skin (`core.sim.experiments`, sizes {fam["sizes"]}): the '
             "paper's protocol at the skin's own force, random spots (alpha 15-60 deg, 3-7 mm "
