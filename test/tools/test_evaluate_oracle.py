@@ -24,6 +24,27 @@ def test_evaluator_scores_the_oracle_beside_the_methods(capsys):
     assert 'oracle' not in json.loads(capsys.readouterr().out)['methods']
 
 
+def test_the_paper_scene_after_calibration_frames_scores_the_tilted_presses_against_the_oracle(
+        capsys, tmp_path):
+    args = ['--skin', 'film', '--scene', 'paper', '--size', '1', '--calibration-frames']
+    assert cli.main(args + ['--json']) == 0
+    report = json.loads(capsys.readouterr().out)
+    # 32 calibration frames and the paper's normal press, which re-takes the offset at its spot.
+    assert report['calibration_frames'] == 33 and report['tilted_frames'] == 8
+    assert report['methods']['oracle']['summary']['valid_share'] == 1.0
+    notes = report['methods']['taxel_fit']['calibration_notes']
+    assert notes[-1].startswith('offset: offset from 1 normal presses')
+    # The file written by --generate holds the same frames: the evaluator scores it alike.
+    path = tmp_path / 'paper.npz'
+    assert cli.main(['--generate', 'paper', str(path), '--skin', 'film', '--size', '1',
+                     '--calibration-frames']) == 0
+    capsys.readouterr()
+    assert cli.main([str(path), '--json']) == 0
+    again = json.loads(capsys.readouterr().out)['methods']['taxel_fit']
+    assert again['summary'] == report['methods']['taxel_fit']['summary'] | {
+        'us_per_frame': again['summary']['us_per_frame']}
+
+
 def test_contacts_are_numbered_by_their_frame_in_the_dataset(tmp_path):
     rng = np.random.default_rng(0)
     data = add_calibration_frames(make_scene('random', 'default', rng, 6),

@@ -5,8 +5,10 @@ The evaluator and the benchmark score an estimator on a dataset (:mod:`dataset`)
 run it on that skin: tared from the dataset's no-touch frames, then calibrated through the same
 :class:`session.CalibrationSession` that the live calibrations run. With a ``split`` (dataset
 format 2) the split = 1 frames calibrate fully: alpha = 0 frames give (x_p, y_p) and, with
-``force_n``, the force curves; tilted ones with ``force_n`` the compliance. Without a split the
-single normal presses give (x_p, y_p); with none, the layers are taken as aligned.
+``force_n``, the force curves; tilted ones with ``force_n`` the compliance. Then the split = 2
+frames, normal presses where the scored presses are made (the paper's protocol takes (x_p, y_p)
+at its own spot), re-take (x_p, y_p) alone, in the newtons of the curves just fitted. Without a
+split the single normal presses give (x_p, y_p); with none, the layers are taken as aligned.
 """
 
 from __future__ import annotations
@@ -83,6 +85,10 @@ def prepared_estimator(data: Dataset, method: str, config: EstimatorConfig = Non
         est = est.with_tare(data.tare_top, data.tare_bottom)
     if data.split is not None:
         est, notes = calibrate_from_frames(est, data, np.flatnonzero(data.split == 1))
+        at_use = np.flatnonzero(data.split == 2)
+        if at_use.size:
+            est, offset_notes = calibrate_from_frames(est, data, at_use, full=False)
+            notes += [f'{note} (at the place of use)' for note in offset_notes]
     else:
         single_normal = np.flatnonzero((data.alpha_deg == 0) & (data.press_counts() == 1))
         est, notes = calibrate_from_frames(est, data, single_normal, full=False)

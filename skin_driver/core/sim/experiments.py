@@ -32,8 +32,8 @@ from ..estimation.validate import check_int
 
 __all__ = ['SCENE_KINDS', 'PAPER_ALPHA_DEG', 'PAPER_BETAS_DEG', 'paper_presses', 'make_scene',
            'make_seed_experiment', 'make_random_experiment', 'make_border_experiment',
-           'make_multi_experiment', 'add_calibration_frames', 'render_scene',
-           'press_for_shift']
+           'make_multi_experiment', 'add_calibration_frames', 'calibrated_scene',
+           'render_scene', 'press_for_shift']
 
 PAPER_ALPHA_DEG = 45.0
 PAPER_BETAS_DEG = tuple(float(b) for b in range(0, 360, 45))
@@ -290,7 +290,8 @@ def add_calibration_frames(data: Dataset, model: SkinModel, rng: np.random.Gener
                            normal_force_range_n: tuple = (5.0, 60.0),
                            tilted_force_range_n: tuple = (5.0, 15.0),
                            alpha_range_deg: tuple = (20.0, 45.0), radius_m: float = 0.004,
-                           border_m: float = 0.015) -> Dataset:
+                           border_m: float = 0.015, at_use: np.ndarray = None,
+                           truth_out: list = None) -> Dataset:
     """
     Return ``data`` with calibration frames of ``model`` in front (dataset format 2 ``split``).
 
@@ -298,7 +299,10 @@ def add_calibration_frames(data: Dataset, model: SkinModel, rng: np.random.Gener
     presses straight down with forces spread evenly over ``normal_force_range_n``, then
     ``tilted`` presses of known force and alpha at random azimuths, all at random places at
     least ``border_m`` inside the skin with an indenter of ``radius_m``. ``data``'s frames keep
-    their order and become the scored frames (split 0); its tare frames are kept.
+    their order and become the scored frames (split 0), except those marked in ``at_use``
+    (normal presses where the scored ones are made), which re-take the offset (split 2); its tare
+    frames are kept. ``truth_out``, when given, is extended by the calibration frames' presses
+    (one list per frame, in the dataset's order).
     """
     rng = rng if rng is not None else np.random.default_rng(0)
     width = (model.cols - 1) * model.pitch_m
@@ -320,6 +324,11 @@ def add_calibration_frames(data: Dataset, model: SkinModel, rng: np.random.Gener
         azimuths.append(beta)
     maps = [render(model, [p], rng) for p in presses]
     k = len(presses)
+    if truth_out is not None:
+        truth_out.extend([p] for p in presses)
+    own_split = np.zeros(data.frames, np.uint8)
+    if at_use is not None:
+        own_split[np.asarray(at_use, dtype=bool)] = 2
 
     def joined(name, values):
         own = getattr(data, name)
@@ -344,7 +353,7 @@ def add_calibration_frames(data: Dataset, model: SkinModel, rng: np.random.Gener
         force_n=joined('force_n', [p.force_n for p in presses]),
         x_m=joined('x_m', [p.x_m for p in presses]), y_m=joined('y_m', [p.y_m for p in presses]),
         tare_top=data.tare_top, tare_bottom=data.tare_bottom,
-        split=np.concatenate([np.ones(k, dtype=np.uint8), np.zeros(data.frames, np.uint8)]),
+        split=np.concatenate([np.ones(k, dtype=np.uint8), own_split]),
         press_x_m=press_truth('press_x_m', [p.x_m for p in presses]),
         press_y_m=press_truth('press_y_m', [p.y_m for p in presses]),
         press_force_n=press_truth('press_force_n', [p.force_n for p in presses]),
@@ -353,6 +362,30 @@ def add_calibration_frames(data: Dataset, model: SkinModel, rng: np.random.Gener
                                     [math.degrees(p.alpha_rad) for p in presses]),
         press_shift_m=press_truth('press_shift_m', [model.compliance_m_per_n
                                                     * p.tangential_force_n for p in presses]))
+
+
+def calibrated_scene(kind: str, skin, rng: np.random.Generator = None, size: int = None,
+                     truth_out: list = None) -> Dataset:
+    """
+    Render scene ``kind`` (:func:`make_scene`) after the user's calibration frames.
+
+    The calibration frames (:func:`add_calibration_frames`, split 1) calibrate force curves,
+    offset and compliance. In ``paper`` the scene's own normal presses at its spot re-take the
+    offset (split 2): the paper's protocol takes (x_p, y_p) where it presses. ``truth_out``,
+    when given, is extended by the presses of every frame in the dataset's order.
+    """
+    member = skin if isinstance(skin, FamilySkin) else family_skin(skin)
+    rng = rng if rng is not None else np.random.default_rng(0)
+    scene_truth, calibration_truth = [], []
+    data = make_scene(kind, member, rng, size, scene_truth)
+    at_use = data.alpha_deg == 0 if kind == 'paper' else None
+    # A child generator for the calibration frames: ``rng`` goes on as after make_scene alone,
+    # so a run draws the same scenes with and without calibration frames.
+    data = add_calibration_frames(data, member.model, rng.spawn(1)[0], at_use=at_use,
+                                  truth_out=calibration_truth)
+    if truth_out is not None:
+        truth_out.extend(calibration_truth + scene_truth)
+    return data
 
 
 def render_scene(scene, seed: int = 0, samples_per_press: int = 1) -> Dataset:

@@ -18,7 +18,8 @@ from skin_driver.core.estimation.shift import (
     centroid, DEFAULT_METHOD, Method, method_names, NO_SHIFT, REFERENCES, resolve,
     ShiftEstimate)
 from skin_driver.core.sim.experiments import (
-    make_random_experiment, make_scene, make_seed_experiment, press_for_shift, SCENE_KINDS)
+    calibrated_scene, make_random_experiment, make_seed_experiment, press_for_shift,
+    SCENE_KINDS)
 from skin_driver.core.sim.oracle import ORACLE, oracle_run
 from skin_driver.core.sim.physics import Press, render, SkinModel
 from skin_driver.core.sim.skins import family_skin, PATCH_M, skin_for_grid, skin_names
@@ -249,12 +250,13 @@ def family_methods(everything: bool = True) -> list:
     return first + ([m for m in method_names() if m not in first] if everything else [])
 
 
-def plain_centroid_estimator(data, threshold_counts: float = 40.0) -> ContactEstimator:
+def plain_centroid_estimator(data, threshold_counts: float = 40.0) -> tuple:
     """
-    Return an estimator whose shift is the plain centroid difference of the tared counts.
+    Return (an estimator whose shift is the plain centroid difference of the tared counts, notes).
 
-    The pipeline around it (contacts, force, calibration, validity) is the default's; only the
-    shift is replaced, computed on the whole maps less the mean tare frame, counts under
+    The pipeline around it (contacts, force, calibration, validity) is the default's, prepared
+    and calibrated as every method is (:func:`prepared.prepared_estimator`); only the shift is
+    replaced, computed on the whole maps less the mean tare frame, counts under
     ``threshold_counts`` zeroed.
     """
     baseline = (np.stack((data.tare_top.mean(axis=0), data.tare_bottom.mean(axis=0)))
@@ -266,7 +268,7 @@ def plain_centroid_estimator(data, threshold_counts: float = 40.0) -> ContactEst
         return centroid(counts)
 
     plain = Method(PLAIN_CENTROID, shift, True, 'centroid difference of the tared count maps')
-    return prepared_estimator(data, DEFAULT_METHOD, shift=plain)[0]
+    return prepared_estimator(data, DEFAULT_METHOD, shift=plain)
 
 
 def _family_row(skin, kind, data, run, costs) -> dict:
@@ -285,10 +287,11 @@ def _family_row(skin, kind, data, run, costs) -> dict:
             'median_us': 1e6 * float(np.median(costs)), 'mean_us': 1e6 * float(np.mean(costs))}
 
 
-def _family_estimator(data, method: str) -> ContactEstimator:
+def _family_estimator(data, method: str) -> tuple:
+    """Return (estimator ``method`` prepared for ``data``, its calibration notes)."""
     if method == PLAIN_CENTROID:
         return plain_centroid_estimator(data)
-    return prepared_estimator(data, method)[0]
+    return prepared_estimator(data, method)
 
 
 def family(sizes: dict, methods: list, skins: list = None, seed: int = 0, log=print,
@@ -296,28 +299,44 @@ def family(sizes: dict, methods: list, skins: list = None, seed: int = 0, log=pr
     """
     Score every method on every scene of every skin of the family, side by side.
 
-    Each frame goes to every method in a fresh shuffled order (timed, contacts included, on
-    the core the process is pinned to). Returns per (skin, scene, method) rows, the cost per
-    (skin, method) over all the skin's frames, and the default's (reported azimuth sigma,
-    measured error) pairs. With ``oracle`` the floor (:mod:`core.sim.oracle`, the simulator's
-    own model fitted to each frame from the truth) is scored too, as method ``oracle``.
+    Each scene comes after the user's calibration (:func:`experiments.calibrated_scene`, the
+    evaluator's ``--calibration-frames``): every method, the plain centroid included, calibrates
+    force curves, offset and compliance from the same calibration frames through the live
+    calibration sessions (:func:`prepared.prepared_estimator`), and in the paper's protocol
+    re-takes the offset at its spot. Only the scored frames (split 0) are scored and timed, each
+    going to every method in a fresh shuffled order (contacts included, on the core the process
+    is pinned to). Returns per (skin, scene, method) rows, the cost per (skin, method) over all
+    the skin's scored frames, each method's calibration notes per (skin, scene), and the
+    default's (reported azimuth sigma, measured error) pairs. With ``oracle`` the floor
+    (:mod:`core.sim.oracle`, the simulator's own model fitted to each frame from the truth) is
+    scored too, as method ``oracle``.
     """
     rng = np.random.default_rng(seed)
-    rows, costs, sigma = [], [], []
+    # The order of the methods is drawn apart, so that the scenes are the same draws however
+    # many frames each one scores.
+    order = rng.spawn(1)[0]
+    rows, costs, sigma, notes = [], [], [], []
     for skin in skins or skin_names():
         per_skin = {m: [] for m in methods}
         oracle_us = []
         for kind in SCENE_KINDS:
-            presses = []
-            data = make_scene(kind, skin, rng, sizes[kind], presses)
-            ests = {m: _family_estimator(data, m) for m in methods if m != PYTHON_DEFAULT}
+            truth = []
+            data = calibrated_scene(kind, skin, rng, sizes[kind], truth)
+            prepared = {m: _family_estimator(data, m) for m in methods if m != PYTHON_DEFAULT}
+            notes += [{'skin': skin, 'scene': kind, 'method': m, 'notes': list(n)}
+                      for m, (_, n) in prepared.items()]
+            ests = {m: est for m, (est, _) in prepared.items()}
             if PYTHON_DEFAULT in methods:
-                compiled = ests.get(DEFAULT_METHOD) or _family_estimator(data, DEFAULT_METHOD)
+                compiled = ests.get(DEFAULT_METHOD) or _family_estimator(data,
+                                                                         DEFAULT_METHOD)[0]
                 ests[PYTHON_DEFAULT] = compiled.with_compiled(False)
+            scored_frames = data.scored_frames()
+            presses = [truth[i] for i in scored_frames]
+            data = data.select(scored_frames)
             contacts = {m: [] for m in methods}
             times = {m: [] for m in methods}
             for i in range(data.frames):
-                for m in rng.permutation(methods):
+                for m in order.permutation(methods):
                     elapsed, found = _timed(ests[m], data.top[i], data.bottom[i])
                     times[m].append(elapsed)
                     contacts[m].append(found)
@@ -344,7 +363,8 @@ def family(sizes: dict, methods: list, skins: list = None, seed: int = 0, log=pr
     methods = list(methods) + ([ORACLE] if oracle else [])
     return {'skins': {s: family_skin(s).description for s in (skins or skin_names())},
             'sizes': sizes, 'methods': methods, 'rows': rows, 'costs': costs,
-            'sigma_vs_error': sigma, 'worst': family_worst(rows, costs, methods)}
+            'calibration_notes': notes, 'sigma_vs_error': sigma,
+            'worst': family_worst(rows, costs, methods)}
 
 
 def _worst(rows, key, lowest: bool):

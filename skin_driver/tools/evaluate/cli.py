@@ -13,7 +13,8 @@ The single normal presses calibrate (x_p, y_p); every single tilted press's stro
 compared with the ground-truth azimuth; frames with several presses are matched press by press
 (docs/dataset.md). With a ``split`` array (dataset format 2) only the calibration frames
 (split = 1) calibrate, and more fully: alpha = 0 frames with ``force_n`` give (x_p, y_p) and the
-force curves, tilted ones with ``force_n`` the compliance; only split = 0 frames are scored.
+force curves, tilted ones with ``force_n`` the compliance; split = 2 frames (normal presses at
+the place of use) then re-take (x_p, y_p); only split = 0 frames are scored.
 ``--calibration-frames`` adds such frames to a generated dataset (or to the --skin data). With
 ``--skin`` the oracle (:mod:`core.sim.oracle`, the simulator's forward model fitted to each
 frame, started at the truth) is scored beside the methods, and each method's error is given in
@@ -33,7 +34,7 @@ from skin_driver.core.estimation.dataset import load_dataset, save_dataset
 from skin_driver.core.estimation.kernel import KernelMissing
 from skin_driver.core.estimation.pipeline import EstimatorConfig
 from skin_driver.core.estimation.shift import DEFAULT_METHOD, method_names, REFERENCES
-from skin_driver.core.sim.experiments import add_calibration_frames, make_scene, SCENE_KINDS
+from skin_driver.core.sim.experiments import calibrated_scene, make_scene, SCENE_KINDS
 from skin_driver.core.sim.skins import family_skin, GRID, HELD_OUT, skin_names
 from skin_driver.ros.estimator_params import estimator_config, load_direction_parameters
 from skin_driver.tools.evaluate.scoring import evaluate
@@ -70,7 +71,8 @@ def _parser() -> argparse.ArgumentParser:
     parser.add_argument('--calibration-frames', action='store_true',
                         help='with --generate or --skin: put 16 normal presses over 5-60 N and '
                         '16 tilted presses of known load in front, as calibration frames '
-                        '(split = 1)')
+                        '(split = 1); in the paper scene its normal presses at its spot '
+                        're-take the offset (split = 2)')
     parser.add_argument('--no-oracle', action='store_true',
                         help='with --skin: do not fit the oracle (the forward model, a few ms '
                         'to tens of ms per frame)')
@@ -133,10 +135,8 @@ def main(argv=None) -> int:
             parser.error(f'--generate KIND must be one of {", ".join(SCENE_KINDS)}, got {kind!r}')
         try:
             check_writable(out)
-            data = make_scene(kind, args.skin or 'default', rng, args.size)
-            if args.calibration_frames:
-                data = add_calibration_frames(data, family_skin(args.skin or 'default').model,
-                                              rng)
+            scene = calibrated_scene if args.calibration_frames else make_scene
+            data = scene(kind, args.skin or 'default', rng, args.size)
             save_dataset(out, data)
         except (OSError, ValueError) as exc:
             print(f'error: {exc}', file=sys.stderr)
@@ -152,11 +152,11 @@ def main(argv=None) -> int:
         truth = None
         if args.skin:
             presses = []
-            data = make_scene(args.scene, args.skin, rng, args.size, presses)
+            scene = calibrated_scene if args.calibration_frames else make_scene
+            data = scene(args.scene, args.skin, rng, args.size, presses)
             model = family_skin(args.skin).model
-            if args.calibration_frames:
-                data = add_calibration_frames(data, model, rng)
-            truth = None if args.no_oracle else (model, presses)
+            scored = [presses[i] for i in data.scored_frames()]
+            truth = None if args.no_oracle else (model, scored)
             source = f'skin {args.skin}, scene {args.scene}, seed {args.seed}'
         else:
             data = load_dataset(args.data)

@@ -334,6 +334,6 @@ def evaluate(data: Dataset, method: str = DEFAULT_METHOD, config: EstimatorConfi
         'normal_frames': int(((scored.alpha_deg == 0) & single).sum()),
         'tilted_frames': int(((scored.alpha_deg > 0) & single).sum()),
         'multi_press_frames': int((~single).sum()),
-        'calibration_frames': 0 if data.split is None else int(data.split.sum()),
+        'calibration_frames': 0 if data.split is None else int((data.split > 0).sum()),
         'methods': methods,
     }

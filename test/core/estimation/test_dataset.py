@@ -61,7 +61,7 @@ def test_minimal_file_without_optional_arrays(tmp_path):
     ({'alpha_deg': np.array([0.0, 95.0, 45.0])}, 'alpha_deg'),
     ({'azimuth_deg': np.array([math.nan, math.nan, 90.0])}, 'azimuth_deg is NaN'),
     ({'force_n': np.array([1.0, -1.0, 1.0])}, 'force_n must be non-negative'),
-    ({'split': np.array([0, 2, 1])}, 'split must be'),
+    ({'split': np.array([0, 3, 1])}, 'split must be'),
     ({'split': np.array([0, 1])}, 'split must be'),
 ])
 def test_validation(change, message):
@@ -96,11 +96,13 @@ def test_format_1_loads_and_format_2_keeps_the_split(tmp_path):
     np.savez(old, format_version=np.int64(1), **small())
     assert load_dataset(old).split is None
     path = tmp_path / 'v2.npz'
-    save_dataset(path, Dataset(**small(), split=np.array([1, 0, 0])))
+    # 2: a normal press at the place of use, which re-takes the offset; never scored.
+    save_dataset(path, Dataset(**small(), split=np.array([1, 2, 0])))
     with np.load(path) as npz:
         assert int(npz['format_version']) == 2
     back = load_dataset(path)
-    assert back.split.dtype == np.uint8 and back.split.tolist() == [1, 0, 0]
+    assert back.split.dtype == np.uint8 and back.split.tolist() == [1, 2, 0]
+    assert back.scored_frames().tolist() == [2]
     np.savez(tmp_path / 'v3.npz', format_version=np.int64(3), **small())
     with pytest.raises(ValueError, match='unsupported format_version 3'):
         load_dataset(tmp_path / 'v3.npz')

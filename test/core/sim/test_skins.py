@@ -6,8 +6,9 @@ import numpy as np
 import pytest
 
 from skin_driver.core.estimation.dataset import Dataset, load_dataset, save_dataset
+from skin_driver.core.estimation.prepared import prepared_estimator
 from skin_driver.core.sim.experiments import (
-    make_scene, PAPER_BETAS_DEG, press_for_shift, SCENE_KINDS)
+    calibrated_scene, make_scene, PAPER_BETAS_DEG, press_for_shift, SCENE_KINDS)
 from skin_driver.core.sim.physics import (
     layer_shift_m, Press, render, render_force, SkinModel, taxel_spread)
 from skin_driver.core.sim.skins import family_skin, get_skin, skin_for_grid, skin_names
@@ -111,6 +112,37 @@ def test_every_scene_carries_per_press_truth_with_the_strongest_first():
         assert (np.diff(forces, axis=1) <= 0).all()
         # Every scene gives the evaluator normal presses to calibrate from.
         assert (data.alpha_deg == 0).any()
+
+
+@pytest.mark.parametrize('kind', SCENE_KINDS)
+def test_a_calibrated_scene_is_the_same_scene_after_the_users_calibration_frames(kind):
+    size = 1 if kind == 'paper' else 10
+    scene = make_scene(kind, 'film', np.random.default_rng(4), size)
+    truth = []
+    data = calibrated_scene(kind, 'film', np.random.default_rng(4), size, truth)
+    assert len(truth) == data.frames == 32 + scene.frames
+    assert data.split[:32].tolist() == [1] * 32
+    own = data.split[32:]
+    # The scene's frames are the very draws of the scene alone.
+    assert np.array_equal(data.top[32:], scene.top)
+    assert [p[0].x_m for p in truth[32:]] == pytest.approx(scene.x_m.tolist())
+    if kind == 'paper':
+        # The paper's protocol takes (x_p, y_p) at its spot: its normal presses do (split 2).
+        assert own.tolist() == [2 if a == 0 else 0 for a in scene.alpha_deg]
+    else:
+        assert not own.any()
+
+
+def test_normal_presses_at_the_place_of_use_re_take_the_offset_after_the_calibration():
+    data = calibrated_scene('paper', 'film', np.random.default_rng(0), 3)
+    est, notes = prepared_estimator(data, 'taxel_fit')
+    assert [n.split(':')[0] for n in notes] == ['offset', 'force', 'compliance', 'offset']
+    assert notes[-1].endswith('(at the place of use)') and 'from 3 normal presses' in notes[-1]
+    calibration = est.calibration
+    assert calibration.presses == 3 and calibration.force_presses == 16
+    assert calibration.compliance_presses == 16
+    # The scored frames stay apart: the split 2 frames are normal presses, never scored.
+    assert not (data.alpha_deg[data.scored_frames()] == 0).any()
 
 
 def test_paper_scene_presses_the_skins_own_force_at_the_eight_betas():

@@ -53,8 +53,10 @@ def test_family_scores_every_skin_scene_and_method_and_names_the_worst(results):
         (s, m) for s in ('default', 'soft') for m in methods}
     for m in methods:
         worst = fam['worst'][m]['random']
+        # A method with no valid direction on a skin has no error there (None).
         errors = {r['skin']: r['mean_error_deg'] for r in fam['rows']
-                  if r['method'] == m and r['scene'] == 'random'}
+                  if r['method'] == m and r['scene'] == 'random'
+                  and r['mean_error_deg'] is not None}
         assert worst['mean_error_deg'] == max(errors.values())
         assert errors[worst['error_skin']] == worst['mean_error_deg']
     # The default's Python description runs beside the compiled kernel: the same scores.
@@ -68,3 +70,19 @@ def test_family_scores_every_skin_scene_and_method_and_names_the_worst(results):
         # Nothing estimates the azimuth better than the floor on its own frames.
         assert fam['worst']['taxel_fit'][kind]['ratio_to_oracle'] > 1.0
     assert all(s > 0 and 0 <= e <= 180 for s, e, _, _ in fam['sigma_vs_error'])
+
+
+def test_every_family_method_gets_the_users_calibration_and_only_scored_frames_count(results):
+    fam = results['family']
+    # Only the scene's frames are scored: the 32 calibration frames (and in the paper's
+    # protocol its normal press, which re-takes the offset) never are.
+    frames = {(r['skin'], r['scene']): r['frames'] for r in fam['rows']}
+    assert frames[('default', 'paper')] == 8 and frames[('soft', 'random')] == 5
+    notes = {(n['skin'], n['scene'], n['method']): n['notes'] for n in fam['calibration_notes']}
+    assert {m for _, _, m in notes} == {'taxel_fit', 'seed', 'plain_centroid'}
+    for (skin, kind, method), parts in notes.items():
+        names = [p.split(':')[0] for p in parts]
+        assert names == ['offset', 'force', 'compliance'] + (['offset'] if kind == 'paper'
+                                                             else [])
+        # The same force curves for every method: they come from the same frames.
+        assert parts[1] == notes[(skin, kind, 'taxel_fit')][1]
