@@ -155,7 +155,8 @@ static int fit_profiles(const double *profiles, int nn, const int *len, const st
     free[j] = 1.0;
     if (cut && cut->fixed[j]) {
       s[j] = cut->width[j];
-      mu[j] = cut->mu[j];
+      /* a cut profile starts, and falls back, at the given centre, not at its centroid */
+      start[j] = mu[j] = cut->mu[j];
       low[j] = cut->low[j];
       high[j] = cut->high[j];
       free[j] = 0.0;
@@ -228,7 +229,7 @@ static int fit_profiles(const double *profiles, int nn, const int *len, const st
      * profile a taxel and a half wide, whose centroid has no sampling bias to speak of.
      */
     int keep = isfinite(mu[j]) && e >= MIN_EXPLAINED && (start_width[j] < WIDE || free[j] == 0.0);
-    centre[j] = keep ? mu[j] : (free[j] == 0.0 ? cut->mu[j] : start[j]);
+    centre[j] = keep ? mu[j] : start[j];
     width[j] = s[j];
     e = isfinite(e) ? e : 0.0;
     explained[j] = e > 0.0 ? e : 0.0;

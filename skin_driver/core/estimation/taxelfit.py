@@ -86,7 +86,9 @@ def fit_cell_profiles(profiles: np.ndarray, mask: np.ndarray, cut: tuple = None)
     if cut is not None:
         fixed = np.isfinite(cut[0])
         s = np.where(fixed, cut[0], s)
-        mu = np.where(fixed, cut[1], mu)
+        # A cut profile starts, and falls back, at the given centre, not at its centroid.
+        start = np.where(fixed, cut[1], start)
+        mu = start.copy()
         low, high = np.where(fixed, cut[2], low), np.where(fixed, cut[3], high)
         free = np.where(fixed, 0.0, 1.0)
     for _ in range(_ITERATIONS):
@@ -119,7 +121,7 @@ def fit_cell_profiles(profiles: np.ndarray, mask: np.ndarray, cut: tuple = None)
     # centroid's sampling bias, exp(-2 pi^2 s^2) / pi taxel, is nil, and the centroid takes
     # every cell as it is, where a Gaussian would misfit a flat or skewed imprint.
     keep = np.isfinite(mu) & (explained >= _MIN_EXPLAINED) & ((start_width < _WIDE) | (free == 0))
-    mu = np.where(keep, mu, start if cut is None else np.where(free == 0, cut[1], start))
+    mu = np.where(keep, mu, start)
     explained = np.where(np.isfinite(explained), explained, 0.0)
     bad = ~(mass > 0)
     mu = np.where(bad, np.nan, mu)
