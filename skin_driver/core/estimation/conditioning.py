@@ -337,11 +337,12 @@ class Conditioner:
 
     def _level_clipped(self, c: np.ndarray, t: np.ndarray, b: np.ndarray) -> None:
         """Put the taxels the ADC cut at their layer's highest tared count, in place."""
-        full = self.config.fsr.full_scale
-        for layer, raw in enumerate((t, b)):
-            if raw.max() >= full:
-                cut = raw >= full
-                c[layer][cut & (c[layer] > 0)] = c[layer].max()
+        clipped = self.clipped(t, b)
+        if clipped is None:
+            return
+        for layer, cut in zip(c, clipped):
+            if cut.any():
+                layer[cut & (layer > 0)] = layer.max()
 
     def clipped(self, top_counts, bottom_counts) -> np.ndarray:
         """Return where raw maps read the ADC's full scale, (2, rows, cols), or None if nowhere."""
