@@ -6,8 +6,7 @@ import json
 import numpy as np
 
 from skin_driver.core.estimation.dataset import save_dataset
-from skin_driver.core.sim.experiments import add_calibration_frames, make_scene
-from skin_driver.core.sim.skins import family_skin
+from skin_driver.core.sim.experiments import calibrated_scene
 from skin_driver.tools.evaluate import cli
 
 
@@ -47,8 +46,7 @@ def test_the_paper_scene_after_calibration_frames_scores_the_tilted_presses_agai
 
 def test_contacts_are_numbered_by_their_frame_in_the_dataset(tmp_path):
     rng = np.random.default_rng(0)
-    data = add_calibration_frames(make_scene('random', 'default', rng, 6),
-                                  family_skin('default').model, rng)
+    data = calibrated_scene('random', 'default', rng, 6)
     path, out = tmp_path / 'd.npz', tmp_path / 'c.csv'
     save_dataset(path, data)
     assert cli.main([str(path), '--contacts', str(out)]) == 0

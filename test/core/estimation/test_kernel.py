@@ -22,7 +22,7 @@ from skin_driver.core.estimation.calibration import Calibration
 from skin_driver.core.estimation.pipeline import ContactEstimator, EstimatorConfig
 from skin_driver.core.estimation.prepared import prepared_estimator
 from skin_driver.core.estimation.shift import REFERENCES
-from skin_driver.core.sim.experiments import add_calibration_frames, make_scene
+from skin_driver.core.sim.experiments import calibrated_scene, make_scene
 from skin_driver.core.sim.physics import Press, render, SkinModel
 from skin_driver.core.sim.skins import family_skin, skin_names
 
@@ -121,7 +121,7 @@ def test_rim_loads_of_a_force_calibration_are_added_alike(skin):
     # load (forcecurve) that the kernel adds itself to every unsaturated imprint.
     member = family_skin(skin)
     rng = np.random.default_rng(3)
-    data = add_calibration_frames(make_scene('random', member, rng, 4), member.model, rng)
+    data = calibrated_scene('random', member, rng, 4)
     est = prepared_estimator(data, 'taxel_fit')[0]
     assert any(curve.rim_load_n > 0 for curve in est.calibration.force_curves)
     compiled, described = both_ways(est)
@@ -135,7 +135,7 @@ def test_a_censoring_force_curve_fills_in_the_saturated_imprint_alike():
     # and the calibrated curve fills their force in from the rims (forcecurve, in Python).
     member = family_skin('saturating')
     rng = np.random.default_rng(3)
-    data = add_calibration_frames(make_scene('random', member, rng, 2), member.model, rng)
+    data = calibrated_scene('random', member, rng, 2)
     est, notes = prepared_estimator(data, 'taxel_fit')
     assert any('filled in from their rims' in note for note in notes)
     compiled, described = both_ways(est)
@@ -151,7 +151,7 @@ def test_taxels_the_adc_cut_are_censored_alike():
     # the force at full scale and are filled in by the censoring curves, both ways.
     member = family_skin('held_out:2@64')
     rng = np.random.default_rng(3)
-    data = add_calibration_frames(make_scene('random', member, rng, 4), member.model, rng)
+    data = calibrated_scene('random', member, rng, 4)
     est, notes = prepared_estimator(data, 'taxel_fit')
     assert all(curve.censor_counts > 0 for curve in est.calibration.force_curves)
     compiled, described = both_ways(est)

@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 from skin_driver.core.estimation.prepared import prepared_estimator
-from skin_driver.core.sim.experiments import add_calibration_frames, make_scene
+from skin_driver.core.sim.experiments import calibrated_scene
 from skin_driver.core.sim.physics import Press, render
 from skin_driver.core.sim.skins import family_skin
 
@@ -14,7 +14,7 @@ def test_a_saturating_skin_is_calibrated_and_reads_heavy_presses(skin):
     # over ~12 N reads the ceiling, yet 16 presses of 5-60 N make a calibration, not a refusal.
     member = family_skin(skin)
     rng = np.random.default_rng(3)
-    data = add_calibration_frames(make_scene('random', member, rng, 5), member.model, rng)
+    data = calibrated_scene('random', member, rng, 5)
     est, notes = prepared_estimator(data, 'poc')
     force_note = next(n for n in notes if n.startswith('force'))
     assert 'refused' not in force_note and 'filled in from their rims' in force_note
@@ -33,7 +33,7 @@ def test_a_fine_saturating_skin_reads_the_presses_of_another_indenter():
     # read it about a third low).
     member = family_skin('saturating@64')
     rng = np.random.default_rng(3)
-    data = add_calibration_frames(make_scene('random', member, rng, 5), member.model, rng)
+    data = calibrated_scene('random', member, rng, 5)
     est, _ = prepared_estimator(data, 'poc')
     centre = 0.5 * (member.model.cols - 1) * member.model.pitch_m
     for force in (15.0, 30.0, 50.0):
