@@ -1,5 +1,6 @@
 """Subscriber counts asked at a low rate, and work for viewers kept off the reader's thread."""
 
+import contextlib
 import threading
 import time
 
@@ -64,7 +65,9 @@ def test_latest_only_serves_the_newest_item_and_survives_a_failing_job():
     assert errors == ['viewer gone']
 
 
-def test_a_subscription_taken_on_its_own_thread_gets_every_message_and_no_executor_runs_it():
+@contextlib.contextmanager
+def numbers_taken_on_thread(thread_name, on_message, on_error, depth):
+    """Yield (context, executor, publisher): a node's `numbers` taken by a TakenOnThread."""
     import rclpy
     from rosutil import ros_context, spin_until
     from skin_driver.ros.hot_path import TakenOnThread
@@ -73,61 +76,60 @@ def test_a_subscription_taken_on_its_own_thread_gets_every_message_and_no_execut
     with ros_context() as (context, executor):
         node = rclpy.create_node('taken_on_thread', context=context)
         executor.add_node(node)
-        threads, taken = set(), []
-
-        def on_message(msg):
-            threads.add(threading.current_thread().name)
-            if msg.data == 3:
-                raise ValueError('a bad message')
-            taken.append(msg.data)
-
-        errors = []
-        sub = TakenOnThread(node, 'skin-test-take', errors.append)
-        sub.subscribe(UInt32, 'numbers', on_message, 100)
+        sub = TakenOnThread(node, thread_name, on_error)
+        sub.subscribe(UInt32, 'numbers', on_message, depth)
         sub.start()
-        pub = node.create_publisher(UInt32, 'numbers', 100)
+        pub = node.create_publisher(UInt32, 'numbers', depth)
         try:
             assert spin_until(executor, lambda: pub.get_subscription_count() == 1, 10.0)
-            for i in range(50):
-                pub.publish(UInt32(data=i))
-            # The executor spins meanwhile and must not take a single one of them.
-            assert spin_until(executor, lambda: len(taken) == 49, 10.0)
+            yield context, executor, pub
         finally:
             sub.stop()
-            node.destroy_node()
-        assert taken == [i for i in range(50) if i != 3]  # in order; the bad one is reported
-        assert [str(e) for e in errors] == ['a bad message']
-        assert threads == {'skin-test-take'}
+            if context.ok():
+                node.destroy_node()
+
+
+def test_a_subscription_taken_on_its_own_thread_gets_every_message_and_no_executor_runs_it():
+    from rosutil import spin_until
+    from std_msgs.msg import UInt32
+
+    threads, taken, errors = set(), [], []
+
+    def on_message(msg):
+        threads.add(threading.current_thread().name)
+        if msg.data == 3:
+            raise ValueError('a bad message')
+        taken.append(msg.data)
+
+    with numbers_taken_on_thread('skin-test-take', on_message, errors.append, 100) as (
+            _, executor, pub):
+        for i in range(50):
+            pub.publish(UInt32(data=i))
+        # The executor spins meanwhile and must not take a single one of them.
+        assert spin_until(executor, lambda: len(taken) == 49, 10.0)
+    assert taken == [i for i in range(50) if i != 3]  # in order; the bad one is reported
+    assert [str(e) for e in errors] == ['a bad message']
+    assert threads == {'skin-test-take'}
 
 
 def test_a_callback_failing_because_ctrl_c_shut_the_context_is_not_reported():
     import rclpy
-    from rosutil import ros_context, spin_until
-    from skin_driver.ros.hot_path import TakenOnThread
     from std_msgs.msg import UInt32
 
-    with ros_context() as (context, executor):
-        node = rclpy.create_node('taken_at_shutdown', context=context)
-        executor.add_node(node)
-        errors, calls = [], []
+    errors, calls, running = [], [], {}
 
-        def on_message(msg):
-            calls.append(msg.data)
-            # What Ctrl-C does under the callback: the publish it makes then fails.
-            rclpy.shutdown(context=context)
-            raise RuntimeError('Failed to publish: context is invalid')
+    def on_message(msg):
+        calls.append(msg.data)
+        # What Ctrl-C does under the callback: the publish it makes then fails.
+        rclpy.shutdown(context=running['context'])
+        raise RuntimeError('Failed to publish: context is invalid')
 
-        sub = TakenOnThread(node, 'skin-test-shutdown', errors.append)
-        sub.subscribe(UInt32, 'numbers', on_message, 10)
-        sub.start()
-        pub = node.create_publisher(UInt32, 'numbers', 10)
-        try:
-            assert spin_until(executor, lambda: pub.get_subscription_count() == 1, 10.0)
-            pub.publish(UInt32(data=1))
-            deadline = time.monotonic() + 10.0
-            while not calls and time.monotonic() < deadline:
-                time.sleep(0.01)
-        finally:
-            sub.stop()
-        assert calls == [1]
-        assert errors == []
+    with numbers_taken_on_thread('skin-test-shutdown', on_message, errors.append, 10) as (
+            context, _, pub):
+        running['context'] = context
+        pub.publish(UInt32(data=1))
+        deadline = time.monotonic() + 10.0
+        while not calls and time.monotonic() < deadline:
+            time.sleep(0.01)
+    assert calls == [1]
+    assert errors == []
