@@ -11,7 +11,7 @@ least-squares fit to the unsaturated taxels, and each censored taxel carries the
 bump and its own reading.
 
 A force calibration fits the spread and the power together with the layer's curve
-(:mod:`forcecurve`), so the bump is the one the presses of known force showed, blur of the
+(:mod:`forcefit`), so the bump is the one the presses of known force showed, blur of the
 layers and size of the indenter included. Another indenter makes another bump: a smaller one a
 narrower imprint whose rim carries a smaller share of its force. Where the calibration's bump
 is a taxel wide or more, the rim samples its shape over several taxels, so each imprint's own

@@ -29,7 +29,7 @@ import numpy as np
 
 from .calibration import calibrate_zero, Calibration, compliance_from_presses, SkinIdentity
 from .conditioning import mark_clipped
-from .forcecurve import check_known_forces, fit_force_curve
+from .forcefit import check_known_forces, fit_force_curve
 from .gains import gains_from_force_sums, limits_note
 from .presses import PressSegmenter
 

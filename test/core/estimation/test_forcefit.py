@@ -1,0 +1,128 @@
+"""Tests of the fit of a monotone counts-to-force curve to presses of known force."""
+
+import numpy as np
+import pytest
+from skin_driver.core.estimation.forcefit import fit_force_curve
+from skin_driver.core.estimation.fsr import FsrModel
+
+SKIN = FsrModel(r_min_ohm=150.0, r_max_ohm=6000.0, force_at_r_min_n=40.0)
+SHARES = np.array([0.02, 0.05, 0.08, 0.12, 0.16, 0.14, 0.12, 0.1, 0.08, 0.06, 0.04, 0.03])
+
+
+def presses(forces, skin=SKIN, fill=0.9):
+    """Return (counts, gains, sensed, known) of presses spreading each force over 12 taxels."""
+    forces = np.asarray(forces, dtype=np.float64)
+    counts = [skin.force_to_counts(f * fill * fill * SHARES) for f in forces]
+    return counts, [np.ones(SHARES.size)] * len(forces), forces * fill * fill, forces
+
+
+def test_the_fit_recovers_another_skins_curve_over_the_range_pressed():
+    fit = fit_force_curve(*presses(np.linspace(5.0, 60.0, 16)))
+    assert max(abs(r) for r in fit.residuals_n) < 0.05 * 5.0
+    # Where most of the force sits, between the peaks of a 15 N and the 60 N press, the curve
+    # is the skin's own within 10 % (the presses pin sums over taxels, not single taxels).
+    counts = np.linspace(SKIN.force_to_counts(15.0 * 0.81 * SHARES.max()),
+                         SKIN.force_to_counts(60.0 * 0.81 * SHARES.max()), 20)
+    np.testing.assert_allclose(fit.curve.counts_to_force(counts), SKIN.counts_to_force(counts),
+                               rtol=0.10)
+    assert fit.censored == 0 and fit.curve.censor_counts == 0
+    assert (np.diff(fit.curve.counts_to_force(np.arange(0, 4096, 7.0))) >= 0).all()
+
+
+@pytest.mark.parametrize('forces, message', [
+    (np.linspace(5.0, 60.0, 5), 'needs at least 6'),
+    (np.linspace(10.0, 20.0, 16), 'span only 10.00 to 20.00 N'),
+])
+def test_too_few_presses_or_no_range_are_refused(forces, message):
+    with pytest.raises(ValueError, match=message):
+        fit_force_curve(*presses(forces))
+
+
+def test_forces_that_fall_as_the_counts_rise_are_refused():
+    counts, gains, sensed, known = presses(np.linspace(5.0, 60.0, 16))
+    # The known forces given in the wrong order: no increasing curve fits them.
+    with pytest.raises(ValueError, match='disagree'):
+        fit_force_curve(counts, gains, sensed[::-1], known[::-1])
+
+
+def bumps(forces, skin, spread=1.2, size=9, fill=0.9):
+    """Return (maps of counts, gain maps, sensed, known): Gaussian imprints of each force."""
+    rows, cols = np.indices((size, size))
+    shape = np.exp(-((rows - 4.3) ** 2 + (cols - 3.8) ** 2) / (2 * spread ** 2))
+    shape /= shape.sum()
+    forces = np.asarray(forces, dtype=np.float64)
+    counts = []
+    for f in forces:
+        c = skin.force_to_counts(f * fill * fill * shape)
+        counts.append(np.where(c > 40, c, 0.0))
+    return counts, [np.ones((size, size))] * len(forces), forces * fill * fill, forces
+
+
+def test_saturated_taxels_are_censored_and_the_rims_carry_the_force():
+    # This film saturates at 3 N a taxel: the centre of every press above ~15 N reads its
+    # ceiling, but the rims still grow with the force.
+    soft = FsrModel(r_min_ohm=200.0, r_max_ohm=6000.0, force_at_r_max_n=0.1,
+                    force_at_r_min_n=3.0)
+    fit = fit_force_curve(*bumps(np.linspace(5.0, 60.0, 16), soft))
+    assert fit.curve.censor_counts > 0 and fit.censored >= 8
+    assert max(abs(r) / f for r, f in zip(fit.residuals_n, np.linspace(5.0, 60.0, 16))) < 0.05
+
+
+def test_a_press_off_the_curve_is_refused_by_name():
+    counts, gains, sensed, known = bumps(np.linspace(5.0, 60.0, 16), SKIN)
+    known, sensed = known.copy(), sensed.copy()
+    known[6] *= 3.0  # press 7: a known force typed wrong
+    sensed[6] *= 3.0
+    with pytest.raises(ValueError, match='press 7 of 81.00 N is fitted as'):
+        fit_force_curve(counts, gains, sensed, known)
+
+
+def test_load_at_the_rims_that_no_taxel_reads_is_learned_per_imprint():
+    counts, gains, sensed, known = bumps(np.linspace(5.0, 60.0, 16), SKIN)
+    # The rim under the touch threshold (40 counts) is unread already; a film that turns on at
+    # a pressure leaves more of every imprint's rim unread: here 0.5 N of sensed force more per
+    # press (the imprints grow with the force, so a load per imprint is no load per taxel).
+    plain = fit_force_curve(counts, gains, sensed, known)
+    fit = fit_force_curve(counts, gains, sensed + 0.5, known + 0.5 / 0.81)
+    assert plain.curve.rim_load_n > 0
+    assert fit.curve.rim_load_n - plain.curve.rim_load_n == pytest.approx(0.5, rel=0.05)
+    assert max(abs(r) / f for r, f in zip(fit.residuals_n, known)) < 0.01
+    press = counts[4]
+    force = fit.curve.counts_to_force(press)
+    assert fit.curve.imprint_force(press, force) == pytest.approx(
+        force.sum() + fit.curve.rim_load_n)
+    # A faint imprint (one taxel over the threshold) is no press: at most twice what it reads.
+    faint = np.array([[60.0]])
+    read = float(fit.curve.counts_to_force(faint).sum())
+    assert fit.curve.imprint_force(faint, fit.curve.counts_to_force(faint)) == pytest.approx(
+        2 * read)
+
+
+def test_a_skin_whose_curve_matches_the_assumed_one_keeps_it():
+    fit = fit_force_curve(*presses(np.linspace(5.0, 60.0, 16), skin=FsrModel()))
+    # Over the counts pressed (past them the curve goes on straight).
+    counts = np.linspace(50.0, fit.curve.counts[-1], 30)
+    np.testing.assert_allclose(fit.curve.counts_to_force(counts),
+                               FsrModel().counts_to_force(counts), rtol=0.01)
+    assert fit.curve.rim_load_n == pytest.approx(0.0, abs=1e-3)
+
+
+def test_taxels_cut_at_full_scale_are_always_censored_and_read_the_highest_uncut_count():
+    # The ADC cut the centre of the heavier presses (crosstalk on top of the film): the
+    # conditioning puts those taxels at full scale. They are lower bounds: the fit censors
+    # them whatever fits best, and the curve is flat from the highest count read under the cut
+    # (the assumed law run on to full scale would give them hundreds of newtons).
+    skin = FsrModel(r_min_ohm=150.0, r_max_ohm=6000.0, force_at_r_min_n=40.0)
+    counts, gains, sensed, known = bumps(np.linspace(5.0, 60.0, 16), skin, spread=1.5)
+    full = skin.full_scale
+    cut = 0.8 * max(c.max() for c in counts)
+    counts = [np.where(c >= cut, float(full), c) for c in counts]
+    fit = fit_force_curve(counts, gains, sensed, known)
+    highest = max(c[c < full].max() for c in counts)
+    assert 0 < fit.curve.censor_counts < full and fit.censored >= 4
+    # Flat past the knot after the highest uncut count (the knots are 1/128 of the range apart).
+    assert fit.curve.counts_to_force(full) == pytest.approx(
+        fit.curve.counts_to_force(highest + full / 128), abs=1e-12)
+    assert fit.curve.counts_to_force(full) == pytest.approx(
+        fit.curve.counts_to_force(highest), rel=0.02)
+    assert max(abs(r) / f for r, f in zip(fit.residuals_n, known)) < 0.1
