@@ -12,6 +12,10 @@ calibrating (x_p, y_p):
   some elliptical.
 * ``border``: one tilted press centred within a taxel of an edge or a corner, partly off the skin.
 * ``multi``: two or three presses at once, some only 2..3 taxels apart.
+* ``one_tip``: ``random`` pressed with the indenter of the user's calibration presses (round,
+  8 mm; :func:`add_calibration_frames`): what a user who calibrates with the tip they press with
+  gets, the force calibration's own protocol. The first four are the direction's scenes
+  (``DIRECTION_KINDS``); the benchmark scores force and alpha on ``one_tip`` as well.
 
 Forces follow the skin (:class:`skins.FamilySkin`): ``paper_force_n`` for the paper's protocol,
 ``force_range_n`` for the others, so that every skin's shifts are meaningful. Every dataset
@@ -30,10 +34,10 @@ from .skins import family_skin, FamilySkin
 from ..estimation.dataset import Dataset
 from ..estimation.validate import check_int
 
-__all__ = ['SCENE_KINDS', 'PAPER_ALPHA_DEG', 'PAPER_BETAS_DEG', 'paper_presses', 'make_scene',
-           'make_seed_experiment', 'make_random_experiment', 'make_border_experiment',
-           'make_multi_experiment', 'add_calibration_frames', 'calibrated_scene',
-           'render_scene', 'press_for_shift']
+__all__ = ['SCENE_KINDS', 'DIRECTION_KINDS', 'CALIBRATION_RADIUS_M', 'PAPER_ALPHA_DEG',
+           'PAPER_BETAS_DEG', 'paper_presses', 'make_scene', 'make_seed_experiment',
+           'make_random_experiment', 'make_border_experiment', 'make_multi_experiment',
+           'add_calibration_frames', 'calibrated_scene', 'render_scene', 'press_for_shift']
 
 PAPER_ALPHA_DEG = 45.0
 PAPER_BETAS_DEG = tuple(float(b) for b in range(0, 360, 45))
@@ -44,6 +48,8 @@ PAPER_SPOT = (0.49, 0.51)
 NORMAL_EVERY = 5
 DIAMETER_RANGE_M = (0.003, 0.007)
 ELLIPTICAL_SHARE = 0.3
+# The indenter of the user's calibration presses (:func:`add_calibration_frames`).
+CALIBRATION_RADIUS_M = 0.004
 ALPHA_RANGE_DEG = (15.0, 60.0)
 TARE_FRAMES = 20
 
@@ -127,12 +133,13 @@ def _default_skin(model: SkinModel) -> SkinModel:
 
 
 def _random_press(rng, x, y, force_range_n, alpha_range_deg=ALPHA_RANGE_DEG,
-                  diameter_range_m=DIAMETER_RANGE_M, normal: bool = False) -> Press:
+                  diameter_range_m=DIAMETER_RANGE_M, normal: bool = False,
+                  elliptical_share: float = ELLIPTICAL_SHARE) -> Press:
     """Return a press at (x, y): random force, beta, alpha, round or elliptical indenter."""
     f = rng.uniform(*force_range_n)
     radius = rng.uniform(*diameter_range_m) / 2.0
     aspect, orientation = 1.0, 0.0
-    if rng.random() < ELLIPTICAL_SHARE:
+    if rng.random() < elliptical_share:
         aspect, orientation = rng.uniform(0.5, 0.8), rng.uniform(0.0, math.pi)
     alpha = 0.0 if normal else math.radians(rng.uniform(*alpha_range_deg))
     beta = rng.uniform(0.0, 2.0 * math.pi) if not normal else 0.0
@@ -174,7 +181,8 @@ def make_random_experiment(model: SkinModel = None, frames: int = 400,
                            rng: np.random.Generator = None, force_range_n: tuple = (5.0, 15.0),
                            alpha_range_deg: tuple = ALPHA_RANGE_DEG,
                            diameter_range_m: tuple = DIAMETER_RANGE_M,
-                           border_m: float = 0.01, truth_out: list = None) -> Dataset:
+                           border_m: float = 0.01, truth_out: list = None,
+                           elliptical_share: float = ELLIPTICAL_SHARE) -> Dataset:
     """Render single presses at random spots at least ``border_m`` inside the taxel span."""
     model = _default_skin(model)
     rng = rng if rng is not None else np.random.default_rng(0)
@@ -182,7 +190,8 @@ def make_random_experiment(model: SkinModel = None, frames: int = 400,
     for i in range(int(frames)):
         x, y = _interior_spot(model, rng, border_m)
         out.append([_random_press(rng, x, y, force_range_n, alpha_range_deg, diameter_range_m,
-                                  normal=i % NORMAL_EVERY == 0)])
+                                  normal=i % NORMAL_EVERY == 0,
+                                  elliptical_share=elliptical_share)])
     return _build(model, out, rng, truth_out)
 
 
@@ -259,8 +268,9 @@ def make_multi_experiment(model: SkinModel = None, frames: int = 200,
     return _build(model, out, rng, truth_out)
 
 
-SCENE_KINDS = ('paper', 'random', 'border', 'multi')
-_DEFAULT_SIZE = {'paper': 10, 'random': 300, 'border': 200, 'multi': 200}
+DIRECTION_KINDS = ('paper', 'random', 'border', 'multi')
+SCENE_KINDS = DIRECTION_KINDS + ('one_tip',)
+_DEFAULT_SIZE = {'paper': 10, 'random': 300, 'border': 200, 'multi': 200, 'one_tip': 300}
 
 
 def make_scene(kind: str, skin, rng: np.random.Generator = None, size: int = None,
@@ -280,6 +290,11 @@ def make_scene(kind: str, skin, rng: np.random.Generator = None, size: int = Non
     model = member.model
     if kind == 'paper':
         return make_seed_experiment(model, size, rng, member.paper_force_n, truth_out)
+    if kind == 'one_tip':
+        tip = 2.0 * CALIBRATION_RADIUS_M
+        return make_random_experiment(model, size, rng, force_range_n=member.force_range_n,
+                                      diameter_range_m=(tip, tip), truth_out=truth_out,
+                                      elliptical_share=0.0)
     maker = {'random': make_random_experiment, 'border': make_border_experiment,
              'multi': make_multi_experiment}[kind]
     return maker(model, size, rng, force_range_n=member.force_range_n, truth_out=truth_out)
@@ -289,7 +304,8 @@ def add_calibration_frames(data: Dataset, model: SkinModel, rng: np.random.Gener
                            normal: int = 16, tilted: int = 16,
                            normal_force_range_n: tuple = (5.0, 60.0),
                            tilted_force_range_n: tuple = (5.0, 15.0),
-                           alpha_range_deg: tuple = (20.0, 45.0), radius_m: float = 0.004,
+                           alpha_range_deg: tuple = (20.0, 45.0),
+                           radius_m: float = CALIBRATION_RADIUS_M,
                            border_m: float = 0.015, at_use: np.ndarray = None,
                            truth_out: list = None) -> Dataset:
     """

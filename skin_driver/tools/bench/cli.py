@@ -28,6 +28,7 @@ import numpy as np
 
 from skin_driver.core.estimation.shift import DEFAULT_METHOD
 from skin_driver.tools.bench import estimators as bench_core, plots, tables
+from skin_driver.tools.bench.calibration import calibration_accuracy
 from skin_driver.tools.bench.scoring import label, targets, tradeoffs, why_e2e
 from skin_driver.tools.evaluate.tables import json_safe
 
@@ -43,7 +44,7 @@ FULL = {
     'rates': [1000.0, 2000.0], 'e2e_seconds': 60.0, 'e2e_warmup': 3.0, 'priorities': [0, 50],
     'stage_repeats': 1000,
     'family_sizes': {'paper': 8, 'random': 150, 'border': 80, 'multi': 80},
-    'family_all_methods': True,
+    'family_all_methods': True, 'calibration_frames': 150,
 }
 QUICK = {
     'grids': [16, 32], 'shifts': [0.5, 2.0], 'noises': [6.0], 'frames': 3,
@@ -52,7 +53,7 @@ QUICK = {
     'rates': [1000.0, 2000.0], 'e2e_seconds': 3.0, 'e2e_warmup': 1.0, 'stage_repeats': 100,
     'priorities': [0],
     'family_sizes': {'paper': 1, 'random': 15, 'border': 10, 'multi': 10},
-    'family_all_methods': False,
+    'family_all_methods': False, 'calibration_frames': 15,
 }
 
 
@@ -161,6 +162,8 @@ def _in_process(cfg, args, res, log) -> None:
     res['family'] = bench_core.family(cfg['family_sizes'],
                                       bench_core.family_methods(cfg['family_all_methods']),
                                       seed=args.seed, log=log)
+    log('6. force calibration on the family')
+    res['calibration'] = calibration_accuracy(cfg['calibration_frames'], seed=args.seed, log=log)
     log('4. scale')
     res['scaling'] = bench_core.scaling(cfg['scale_grids'], cfg['contacts'],
                                         [DEFAULT_METHOD, 'seed'], cfg['scale_frames'],

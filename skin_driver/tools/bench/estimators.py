@@ -18,11 +18,12 @@ from skin_driver.core.estimation.shift import (
     centroid, DEFAULT_METHOD, Method, method_names, NO_SHIFT, REFERENCES, resolve,
     ShiftEstimate)
 from skin_driver.core.sim.experiments import (
-    calibrated_scene, make_random_experiment, make_seed_experiment, press_for_shift,
-    SCENE_KINDS)
+    calibrated_scene, DIRECTION_KINDS, make_random_experiment, make_seed_experiment,
+    press_for_shift)
 from skin_driver.core.sim.oracle import ORACLE, oracle_run
 from skin_driver.core.sim.physics import Press, render, SkinModel
 from skin_driver.core.sim.skins import family_skin, PATCH_M, skin_for_grid, skin_names
+from skin_driver.tools.bench.calibration import force_figures
 from skin_driver.tools.evaluate.scoring import (
     angle_error_deg, direction_errors, evaluate, MethodRun, PAPER_TABLE, score_run)
 from skin_driver.tools.evaluate.tables import format_table
@@ -284,6 +285,7 @@ def _family_row(skin, kind, data, run, costs) -> dict:
             'separate_share_far': presses and presses['separate_share_far'],
             'merged_share_far': presses and presses['merged_share_far'],
             'separate_share_close': presses and presses['separate_share_close'],
+            **force_figures(summary),
             'median_us': 1e6 * float(np.median(costs)), 'mean_us': 1e6 * float(np.mean(costs))}
 
 
@@ -319,7 +321,7 @@ def family(sizes: dict, methods: list, skins: list = None, seed: int = 0, log=pr
     for skin in skins or skin_names():
         per_skin = {m: [] for m in methods}
         oracle_us = []
-        for kind in SCENE_KINDS:
+        for kind in DIRECTION_KINDS:
             truth = []
             data = calibrated_scene(kind, skin, rng, sizes[kind], truth)
             prepared = {m: _family_estimator(data, m) for m in methods if m != PYTHON_DEFAULT}
@@ -388,7 +390,7 @@ def family_worst(rows, costs, methods) -> dict:
     for m in methods:
         mine = [r for r in rows if r['method'] == m]
         entry = {}
-        for kind in SCENE_KINDS:
+        for kind in DIRECTION_KINDS:
             sel = [r for r in mine if r['scene'] == kind]
             error, error_skin = _worst(sel, 'mean_error_deg', lowest=False)
             valid, valid_skin = _worst(sel, 'valid_share', lowest=True)

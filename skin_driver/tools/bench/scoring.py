@@ -45,6 +45,8 @@ def targets(res) -> list:
                            (r['valid_share'] or 0) >= 0.95, spec='.1f'))
     if 'family' in res:
         out += family_targets(res['family']['worst'])
+    if 'calibration' in res:
+        out += calibration_targets(res['calibration']['worst'])
     if 'scaling' in res:
         rows = res['scaling']['by_grid']
         for n, limit in ((16, 100.0), (128, 1000.0)):
@@ -115,6 +117,21 @@ def family_targets(worst) -> list:
                        v, '<= 100 us', v is not None and v <= 100.0,
                        f'worst on {d["cost_skin"]}' + (f', {v / 100:.2f} x the limit'
                                                        if v and v > 100 else ''), '.0f'))
+    return out
+
+
+def calibration_targets(worst) -> list:
+    """Return issue #17's |F| and alpha targets after calibration, each at its worst skin."""
+    out = []
+    for kind, tip in (('one_tip', "the calibration's tip"), ('random', 'tips of 3-7 mm')):
+        for key, limit, unit in (('force_error_pct', 5.0, '%'), ('alpha_error_deg', 2.0, 'deg')):
+            v, skin = worst[f'{kind}_{key}']
+            what = '|F|' if key.startswith('force') else 'alpha'
+            out.append(_target(f'family, calibrated, pressed with {tip}: {what} error '
+                               '(default, worst skin)', v, f'<= {limit:g} {unit}',
+                               v is not None and v <= limit,
+                               f'worst on {skin}' + (f', {v / limit:.2f} x the limit'
+                                                     if v and v > limit else '')))
     return out
 
 

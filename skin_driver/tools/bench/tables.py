@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+from skin_driver.core.estimation.shift import DEFAULT_METHOD
+from skin_driver.core.sim.experiments import DIRECTION_KINDS
+from skin_driver.core.sim.oracle import ORACLE
 from skin_driver.tools.bench.scoring import label
 
 
@@ -95,6 +98,8 @@ def markdown(res, images) -> str:
         out += ['']
     if 'family' in res:
         out += _family_section(res['family'], images)
+    if 'calibration' in res:
+        out += _calibration_section(res['calibration'])
     if 'e2e' in res:
         out += _e2e_section(res, images)
     return '\n'.join(out) + '\n'
@@ -110,7 +115,7 @@ def _worst_cell(w: dict) -> str:
             f'{_pct(w["valid_share"])} ({w["valid_skin"]})')
 
 
-SCENES = ('paper', 'random', 'border', 'multi')
+SCENES = DIRECTION_KINDS
 
 
 # How the family's estimators were calibrated (core.sim.experiments.calibrated_scene).
@@ -205,6 +210,35 @@ def _family_section(fam, images) -> list:
             'one point per tilted press with a valid direction; the line is the RMS error per '
             'sigma bin. Honest sigmas put it on the dashed diagonal.', '']
     return out
+
+
+def _calibration_section(cal) -> list:
+    """Return the |F| and alpha errors after calibration, per skin, beside the oracle's."""
+    out = ['## 6. Force calibration on the skin family', '',
+           f'Each skin tared and calibrated as in section 5 (32 calibration frames: 16 normal '
+           'presses of known load at 5-60 N and 16 tilted ones, an 8 mm round indenter), then '
+           f'{cal["size"]} frames of a scene, one in five a normal press: `one_tip` presses with '
+           "the calibration's own indenter (issue #17's protocol), `random` with indenters of "
+           '3-7 mm, some elliptical. Error: mean |error| of |F| (%) and of alpha (deg) over the '
+           'tilted presses with a valid direction (bias: the mean signed error). The oracle '
+           '(the simulator fitted, indenter included, from the truth) is the floor. '
+           '`python -m skin_driver.evaluate --skin S --scene one_tip --calibration-frames` '
+           'repeats any row.', '']
+    index = {(r['skin'], r['scene'], r['method']): r for r in cal['rows']}
+    skins = list(dict.fromkeys(r['skin'] for r in cal['rows']))
+
+    def cell(skin, kind, method):
+        r = index.get((skin, kind, method))
+        if r is None or r['force_error_pct'] is None:
+            return '-'
+        return (f'{r["force_error_pct"]:.1f} % ({r["force_bias_pct"]:+.1f}) / '
+                f'{r["alpha_error_deg"]:.2f} deg ({r["alpha_bias_deg"]:+.2f})')
+
+    head = ['skin'] + [f'{k}: {m} \\|F\\| (bias) / alpha (bias)' for k in cal['scenes']
+                       for m in (DEFAULT_METHOD, ORACLE)]
+    out += _table(head, [[s] + [cell(s, k, m) for k in cal['scenes']
+                                for m in (DEFAULT_METHOD, ORACLE)] for s in skins])
+    return out + ['']
 
 
 def _ms(d) -> str:

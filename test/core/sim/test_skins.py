@@ -8,7 +8,8 @@ import pytest
 from skin_driver.core.estimation.dataset import Dataset, load_dataset, save_dataset
 from skin_driver.core.estimation.prepared import prepared_estimator
 from skin_driver.core.sim.experiments import (
-    calibrated_scene, make_scene, PAPER_BETAS_DEG, press_for_shift, SCENE_KINDS)
+    calibrated_scene, CALIBRATION_RADIUS_M, make_scene, PAPER_BETAS_DEG, press_for_shift,
+    SCENE_KINDS)
 from skin_driver.core.sim.physics import (
     layer_shift_m, Press, render, render_force, SkinModel, taxel_spread)
 from skin_driver.core.sim.skins import family_skin, get_skin, skin_for_grid, skin_names
@@ -250,3 +251,13 @@ def test_a_skin_on_a_finer_grid_covers_the_same_patch_with_the_same_film():
     assert fine.force_range_n == coarse.force_range_n
     with pytest.raises(ValueError, match='NAME@N'):
         family_skin('saturating@x')
+
+
+def test_the_one_tip_scene_presses_with_the_calibrations_own_indenter():
+    truth = []
+    data = calibrated_scene('one_tip', 'default', np.random.default_rng(6), 20, truth)
+    tips = {(p.radius_m, p.aspect) for presses in truth for p in presses}
+    assert tips == {(CALIBRATION_RADIUS_M, 1.0)}
+    # The random scene's own draws, tips aside: tilted presses at random spots and azimuths.
+    scored = data.scored_frames()
+    assert (data.alpha_deg[scored] > 0).sum() == 16 and len(set(data.azimuth_deg[scored])) > 10

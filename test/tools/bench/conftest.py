@@ -2,6 +2,7 @@
 
 import pytest
 from skin_driver.tools.bench import cli as bench, estimators as bench_core
+from skin_driver.tools.bench.calibration import calibration_accuracy
 
 
 @pytest.fixture(scope='session')
@@ -19,6 +20,7 @@ def results():
         'family': bench_core.family({'paper': 1, 'random': 5, 'border': 5, 'multi': 6},
                                     bench_core.family_methods(False), skins=['default', 'soft'],
                                     log=lambda s: None),
+        'calibration': calibration_accuracy(10, skins=['saturating'], log=lambda s: None),
         'how': {'command': 'test', 'pinned_cpu': 0, 'repetitions': 'tiny'},
         'elapsed_s': 1.0, 'generated_utc': 'now',
     }

@@ -22,7 +22,7 @@ def test_write_produces_json_markdown_and_plots(results, tmp_path):
     text = (tmp_path / 'benchmarks.md').read_text()
     for heading in ('## Machine and method', '## Targets', '## 1. Accuracy against speed',
                     "## 2. The seed's experiment", '## 4. Scale', '## Headline: worst case',
-                    '## 5. The skin family'):
+                    '## 5. The skin family', '## 6. Force calibration on the skin family'):
         assert heading in text
     assert 'paper mean' in text
     for path in data['images'].values():

@@ -13,6 +13,25 @@ def test_targets_name_each_figure_with_its_limit(results):
     assert all({'measured', 'limit', 'met', 'note'} <= set(t) for t in scoring.targets(results))
 
 
+def test_force_calibration_targets_name_the_tip_the_worst_skin_and_the_shortfall():
+    worst = {'one_tip_force_error_pct': (4.0, 'sharp'), 'one_tip_alpha_error_deg': (3.0, 'film'),
+             'random_force_error_pct': (10.0, 'saturating'),
+             'random_alpha_error_deg': (None, None)}
+    got = {t['name']: t for t in scoring.calibration_targets(worst)}
+    tip = got["family, calibrated, pressed with the calibration's tip: |F| error "
+              '(default, worst skin)']
+    assert tip['met'] and tip['limit'] == '<= 5 %' and tip['note'] == 'worst on sharp'
+    alpha = got["family, calibrated, pressed with the calibration's tip: alpha error "
+                '(default, worst skin)']
+    assert not alpha['met'] and alpha['note'] == 'worst on film, 1.50 x the limit'
+    mixed = got['family, calibrated, pressed with tips of 3-7 mm: |F| error (default, worst skin)']
+    assert not mixed['met'] and '2.00 x the limit' in mixed['note']
+    # No direction at all on any skin: nothing measured is no pass.
+    none = got['family, calibrated, pressed with tips of 3-7 mm: alpha error '
+               '(default, worst skin)']
+    assert not none['met'] and none['measured'] == '-'
+
+
 def test_end_to_end_targets_judge_each_layout_at_each_rate(e2e):
     targets = {t['name']: t for t in scoring.e2e_targets(e2e)}
     assert not targets['split at 1 kHz: scans lost in 60 s']['met']
