@@ -17,8 +17,8 @@ where the ADC cut the peak.
 The polish runs only on scans where a line is lifted: most of its taxels over a gate. After a
 tare the gate is ``LEAK_SIGMAS`` times each taxel's measured noise, so a leak under the touch
 threshold still comes off. Before a tare neither the noise nor the rest reading is known (the
-counts still hold the rest reading, tens of counts on a real skin, which a noise guess would
-take for leak on every scan): the only level known to lie above the rest is the touch
+counts still hold the rest reading, about 20 counts on the simulated skins, which a noise guess
+would take for leak on most scans): the only level known to lie above the rest is the touch
 threshold, which gates until a tare (:func:`leak_gate`).
 """
 
@@ -30,7 +30,7 @@ __all__ = ['remove_line_leak', 'leak_gate', 'MAX_LEAK', 'LEAK_SIGMAS']
 
 # Largest median, as a share of the line's load above it, that is taken for leak.
 MAX_LEAK = 0.05
-# A line is lifted by leak when most of its taxels read this many noise sigmas or more.
+# After a tare, a line is lifted by leak when most of its taxels read this many noise sigmas.
 LEAK_SIGMAS = 3.0
 
 
