@@ -9,7 +9,7 @@
 
 /* Largest median, as a share of the line's load above it, taken for leak (crosstalk.py). */
 #define MAX_LEAK 0.05
-/* A line is lifted by leak when most of its taxels read this many noise sigmas or more. */
+/* After a tare, a line is lifted by leak when most of its taxels read this many noise sigmas. */
 #define LEAK_SIGMAS 3.0
 
 /*
@@ -161,19 +161,22 @@ static void remove_line_leak(sk_kernel *k)
   int rows = k->rows, cols = k->cols, n = k->n;
   double half = 0.5 * (rows < cols ? rows : cols);
   int lifted = 0;
+  /* the gate: LEAK_SIGMAS noise sigmas after a tare, the touch threshold before (crosstalk.py) */
+  double scale = k->tared ? LEAK_SIGMAS : 1.0;
   for (int layer = 0; layer < 2 && !lifted; layer++) {
-    const double *c = k->counts + layer * n, *noise = k->noise + layer * n;
+    const double *c = k->counts + layer * n;
+    const double *gate = (k->tared ? k->noise : k->threshold) + layer * n;
     for (int r = 0; r < rows && !lifted; r++) {
       int over = 0;
       for (int j = 0; j < cols; j++) {
-        over += c[r * cols + j] >= LEAK_SIGMAS * noise[r * cols + j];
+        over += c[r * cols + j] >= scale * gate[r * cols + j];
       }
       lifted = over >= half;
     }
     for (int j = 0; j < cols && !lifted; j++) {
       int over = 0;
       for (int r = 0; r < rows; r++) {
-        over += c[r * cols + j] >= LEAK_SIGMAS * noise[r * cols + j];
+        over += c[r * cols + j] >= scale * gate[r * cols + j];
       }
       lifted = over >= half;
     }

@@ -16,7 +16,7 @@ typedef struct {
 } sk_pair;
 
 struct sk_kernel {
-  int rows, cols, n, kmax, method, crosstalk, fill_dead, full_scale, has_gain;
+  int rows, cols, n, kmax, method, crosstalk, fill_dead, full_scale, has_gain, tared;
   double reals[SK_NREALS];
   /* the estimator's state, (2, n) each */
   double *baseline, *threshold, *noise, *gain;
@@ -72,6 +72,13 @@ void sk_centroid(const double *counts, int h, int w, double *scratch, double *dx
 void sk_poc(const double *maps, int h, int w, double *scratch, double *dx, double *dy,
             double *confidence);
 int sk_poc_scratch(int h, int w);
+
+/* imprint.c: one imprint's force sum (h x w counts and force), each taxel at censor counts or
+ * more filled in by a bump of spread (taxels) and power fitted to its rim, the rim load added;
+ * scratch holds 2 h w doubles */
+double sk_imprint_force(const double *counts, const double *force, int h, int w,
+                        double censor, double spread, double power, double rim,
+                        double *scratch);
 
 /* sigma.c: 1-sigma uncertainty of one axis of pair p's shift (taxels) */
 double sk_sigma(const sk_kernel *k, const sk_pair *p, const double *window, int alone);

@@ -67,6 +67,7 @@ sk_kernel *sk_new(const int *ints, const double *reals, const double *baseline,
   k->fill_dead = ints[SK_FILL_DEAD];
   k->full_scale = full_scale;
   k->has_gain = gain != NULL;
+  k->tared = ints[SK_TARED];
   memcpy(k->reals, reals, sizeof(k->reals));
   size_t size = (size_t)full_scale + 1, kcap = k->kmax ? k->kmax : 1;
   k->baseline = copy_of(baseline, 2 * n);
@@ -88,7 +89,10 @@ sk_kernel *sk_new(const int *ints, const double *reals, const double *baseline,
   if (k->method == SK_POC) {
     shift_scratch += (size_t)sk_poc_scratch(rows, cols);
   }
-  k->fit = copy_of(NULL, 4 * (size_t)n + shift_scratch);
+  /* a saturated imprint's fill-in: its marked counts (2 windows), then sk_imprint_force's */
+  size_t imprint_scratch = 4 * (size_t)n;
+  k->fit = copy_of(NULL, 4 * (size_t)n
+                   + (shift_scratch > imprint_scratch ? shift_scratch : imprint_scratch));
   k->labels = malloc(sizeof(int) * n);
   k->iscratch = malloc(sizeof(int) * 4 * n);
   if (!k->baseline || !k->threshold || !k->noise || (gain && !k->gain) || !k->dead || !k->clipped || !k->live
@@ -168,14 +172,11 @@ static void contact(const sk_kernel *k, int q, double *rec)
   rec[SK_SHIFT_CONFIDENCE] = p->confidence;
 }
 
-int sk_finish(sk_kernel *k, const double *forces, double *out)
+/* Write the records of the last scan's pairs to out, strongest first; returns their number. */
+static int finish(sk_kernel *k, double *out)
 {
   int count = k->npairs;
   for (int q = 0; q < count; q++) {
-    if (forces) {
-      k->pairs[q].top_force = forces[2 * q];
-      k->pairs[q].bottom_force = forces[2 * q + 1];
-    }
     double *rec = out + q * SK_NREC;
     contact(k, q, rec);
     /* strongest first, a stable insertion */
@@ -188,6 +189,32 @@ int sk_finish(sk_kernel *k, const double *forces, double *out)
     }
   }
   return count;
+}
+
+/*
+ * Pair p's force sums with their rim loads, each saturated layer's filled in from its rim
+ * (pipeline._censored). k->fit holds its window; a taxel the ADC cut is censored there.
+ */
+static void imprint_forces(sk_kernel *k, sk_pair *p)
+{
+  double *sums[2] = {&p->top_force, &p->bottom_force};
+  int m = p->h * p->w;
+  double *marked = k->fit + 4 * m;
+  if (p->censored) {
+    memcpy(marked, k->fit, sizeof(double) * 2 * m);
+    sk_clipped_window(k, p, marked, 1);
+  }
+  for (int layer = 0; layer < 2; layer++) {
+    double rim = k->reals[SK_RIM_TOP + layer];
+    if (p->censored >> layer & 1) {
+      *sums[layer] = sk_imprint_force(marked + layer * m, k->fit + (2 + layer) * m, p->h, p->w,
+                                      k->reals[SK_CENSOR_TOP + layer],
+                                      k->reals[SK_SPREAD_TOP + layer],
+                                      k->reals[SK_POWER_TOP + layer], rim, marked + 2 * m);
+    } else {
+      *sums[layer] += fmin(rim, *sums[layer]);
+    }
+  }
 }
 
 int sk_scan(sk_kernel *k, const double *maps, int every_pair, double *out, int *status)
@@ -225,16 +252,10 @@ int sk_scan(sk_kernel *k, const double *maps, int every_pair, double *out, int *
       }
     }
     censored |= p->censored;
-    /* A saturated layer's fill-in (Python, sk_finish) adds its rim load itself. */
-    if (!(p->censored & 1)) {
-      p->top_force += fmin(k->reals[SK_RIM_TOP], p->top_force);
-    }
-    if (!(p->censored & 2)) {
-      p->bottom_force += fmin(k->reals[SK_RIM_BOTTOM], p->bottom_force);
-    }
+    imprint_forces(k, p);
     p->dx = p->dy = p->confidence = 0.0;
     p->sigma = INFINITY;
-    if (!every_pair && !p->censored && normal_force(k, p) < k->reals[SK_MIN_FORCE]) {
+    if (!every_pair && normal_force(k, p) < k->reals[SK_MIN_FORCE]) {
       /* too light to report, and its force is final: its shift is never asked for */
       continue;
     }
@@ -254,22 +275,7 @@ int sk_scan(sk_kernel *k, const double *maps, int every_pair, double *out, int *
   status[SK_STATUS_PAIRS] = count;
   status[SK_STATUS_CENSORED] = censored;
   status[SK_STATUS_REVIVED] = k->revived;
-  return sk_finish(k, NULL, out);
-}
-
-int sk_window(const sk_kernel *k, int pair, double *out, int *shape)
-{
-  if (pair < 0 || pair >= k->npairs) {
-    return -1;
-  }
-  const sk_pair *p = &k->pairs[pair];
-  shape[0] = p->r0;
-  shape[1] = p->c0;
-  shape[2] = p->h;
-  shape[3] = p->w;
-  sk_pair_window(k, pair, out);
-  sk_clipped_window(k, p, out, 1);
-  return 0;
+  return finish(k, out);
 }
 
 void sk_dead(const sk_kernel *k, unsigned char *out)

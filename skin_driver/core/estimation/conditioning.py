@@ -23,7 +23,7 @@ from typing import NamedTuple
 import cv2
 import numpy as np
 
-from .crosstalk import remove_line_leak
+from .crosstalk import leak_gate, remove_line_leak
 from .fsr import FsrModel
 from .validate import check_map, check_number, check_pair, check_stack
 
@@ -122,10 +122,11 @@ class _DeadFill:
 class _Stacked:
     """Both layers' calibration as (2, rows, cols) arrays, rebuilt whenever a setter runs."""
 
-    def __init__(self, layers, fill_dead: bool):
+    def __init__(self, layers, fill_dead: bool, tared: bool):
         self.baseline = np.stack([layer.baseline for layer in layers])
         self.threshold = np.stack([layer.threshold for layer in layers])
         self.noise = np.stack([layer.noise for layer in layers])
+        self.leak_gate = leak_gate(self.noise, self.threshold, tared)
         gains = [layer.gain for layer in layers]
         self.gain = None
         if any(g is not None for g in gains):
@@ -145,6 +146,7 @@ class ConditionerState(NamedTuple):
     gain: np.ndarray     # None when no gain is set
     dead: np.ndarray     # bool
     tables: np.ndarray   # (2, full_scale + 1): each layer's force at every count
+    tared: bool          # the noise and rest reading measured (crosstalk.leak_gate)
 
 
 class Conditioner:
@@ -286,7 +288,7 @@ class Conditioner:
 
     def _stacked(self) -> _Stacked:
         if self._stack is None:
-            self._stack = _Stacked(self._layers, self.config.fill_dead)
+            self._stack = _Stacked(self._layers, self.config.fill_dead, self._tared)
         return self._stack
 
     def state(self, shape: tuple) -> ConditionerState:
@@ -296,7 +298,7 @@ class Conditioner:
         return ConditionerState(st.baseline.copy(), st.threshold.copy(), st.noise.copy(),
                                 None if st.gain is None else st.gain.copy(),
                                 np.stack(self.dead_masks()),
-                                np.stack([table.force for table in self._tables]))
+                                np.stack([table.force for table in self._tables]), self._tared)
 
     def count_noise(self) -> np.ndarray:
         """Return the (2, rows, cols) 1-sigma count noise of every taxel (measured by the tare)."""
@@ -325,7 +327,7 @@ class Conditioner:
         np.subtract(t, st.baseline[0], out=c[0])
         np.subtract(b, st.baseline[1], out=c[1])
         if self.config.remove_crosstalk:
-            remove_line_leak(c, st.noise)
+            remove_line_leak(c, st.leak_gate)
         c[c < st.threshold] = 0.0
         self._level_clipped(c, t, b)
         if st.dead:

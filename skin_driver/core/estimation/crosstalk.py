@@ -13,30 +13,45 @@ what the line carries above it is a load that covers most of the line (a palm, a
 for the gain calibration), and is left alone. The peak is no measure of it: on a fine grid a
 press covers dozens of taxels of a line, whose leak then reaches a third of the peak, and more
 where the ADC cut the peak.
+
+The polish runs only on scans where a line is lifted: most of its taxels over a gate. After a
+tare the gate is ``LEAK_SIGMAS`` times each taxel's measured noise, so a leak under the touch
+threshold still comes off. Before a tare neither the noise nor the rest reading is known (the
+counts still hold the rest reading, about 20 counts on the simulated skins, which a noise guess
+would take for leak on most scans): the only level known to lie above the rest is the touch
+threshold, which gates until a tare (:func:`leak_gate`).
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-__all__ = ['remove_line_leak', 'MAX_LEAK', 'LEAK_SIGMAS']
+__all__ = ['remove_line_leak', 'leak_gate', 'MAX_LEAK', 'LEAK_SIGMAS']
 
 # Largest median, as a share of the line's load above it, that is taken for leak.
 MAX_LEAK = 0.05
-# A line is lifted by leak when most of its taxels read this many noise sigmas or more.
+# After a tare, a line is lifted by leak when most of its taxels read this many noise sigmas.
 LEAK_SIGMAS = 3.0
 
 
-def remove_line_leak(counts: np.ndarray, noise: np.ndarray) -> None:
+def leak_gate(noise: np.ndarray, threshold: np.ndarray, tared: bool) -> np.ndarray:
+    """
+    Return each taxel's count over which it counts as lifted (module docstring).
+
+    ``LEAK_SIGMAS`` times its ``noise`` once ``tared``, its touch ``threshold`` before.
+    """
+    return LEAK_SIGMAS * noise if tared else threshold
+
+
+def remove_line_leak(counts: np.ndarray, gate: np.ndarray) -> None:
     """
     Subtract from a (layers, rows, cols) stack of tared counts, in place, each line's leak.
 
-    ``noise`` (same shape) is each taxel's 1-sigma count noise. A leak under the touch
-    threshold still adds to every loaded taxel of its lines, so a scan is cleaned as soon as
-    one line is mostly ``LEAK_SIGMAS`` over its noise; scans where none is are left as they
-    are, at the cost of one comparison.
+    ``gate`` (same shape, :func:`leak_gate`): a scan is cleaned as soon as one line is mostly
+    at its gate or over, since a leak under the touch threshold still adds to every loaded
+    taxel of its lines; scans where none is are left as they are, at the cost of one comparison.
     """
-    over = counts >= LEAK_SIGMAS * noise
+    over = counts >= gate
     half = 0.5 * min(counts.shape[1:])
     if not ((over.sum(axis=2) >= half).any() or (over.sum(axis=1) >= half).any()):
         return

@@ -19,6 +19,10 @@ spread is fitted (within ``SPREAD_RANGE`` of the calibration's, which keeps a bu
 cannot pin down from running off): the spread whose bump best fits the unsaturated taxels
 without falling below a censored taxel's reading. A narrower bump is sampled by one ring of
 taxels at most, too few for a width: there the calibration's spread is kept.
+
+The compiled kernel fills in each scan's saturated imprints the same way
+(``skin_kernel/src/imprint.c``, held to this module by the tests); the force calibration fits
+its curves with this module.
 """
 
 from __future__ import annotations

@@ -2,16 +2,14 @@
 The compiled per-scan estimation (package ``skin_kernel``, plain C) bound through ctypes.
 
 One call per scan does what :class:`pipeline.ContactEstimator` describes in Python:
-conditioning, contacts, each contact's shift (any registered method: ``taxel_fit``, ``poc``,
+conditioning, contacts, a saturated imprint's force filled in from its rim (a calibrated
+censoring curve), each contact's shift (any registered method: ``taxel_fit``, ``poc``,
 ``centroid``) and uncertainty, and the contact figures. The Python code stays the description
 of the algorithm; the tests run both side by side (test/core/estimation/test_kernel.py).
 
 A :class:`Kernel` copies an estimator's state once (tare, gains, force tables, settings) and owns
 preallocated buffers, so a scan costs one copy of the maps into its buffer and one foreign call.
-Two things stay in Python because they change elsewhere: a saturated imprint's force
-(``forcecurve.ForceCurve.imprint_force``, asked for only when a calibrated censoring curve meets a
-saturated taxel; the kernel adds the curves' rim loads to the other imprints itself) and the
-dead-taxel marks a touch revives (handed back to the conditioner).
+The dead-taxel marks a touch revives are handed back to the conditioner, which owns them.
 """
 
 from __future__ import annotations
@@ -34,17 +32,16 @@ __all__ = ['METHODS', 'KernelSettings', 'Kernel', 'KernelMissing', 'load_library
 METHODS = {'centroid': 0, 'taxel_fit': 1, 'poc': 2}
 
 # skin_kernel.h's layout: bump both together.
-_ABI_VERSION = 4
-_INTS = 8
-_REALS = 17
+_ABI_VERSION = 5
+_INTS = 9
+_REALS = 21
 _NREC = 23
 _NSTATUS = 3
 # A record's first CONTACT_FIELDS numbers are pipeline.Contact's fields in order, the shift and
 # the force vector flattened (x_m, y_m, force_n, area_m2, shift x, y, azimuth_rad, ...).
 CONTACT_FIELDS = 14
-(KEPT, DX, DY, _PAIR, _CENSORED, _SIGMA, _TOP_FORCE, _BOTTOM_FORCE,
- _SHIFT_CONFIDENCE) = range(CONTACT_FIELDS, _NREC)
-_PAIRS, _ANY_CENSORED, _REVIVED = range(_NSTATUS)
+KEPT, DX, DY = range(CONTACT_FIELDS, CONTACT_FIELDS + 3)
+_REVIVED = 2  # sk_scan's status word SK_STATUS_REVIVED
 
 _FIX = ('build it with `make setup` (or `colcon build` in the workspace) and source the '
         'workspace, e.g. `tools/with-env.sh`')
@@ -80,8 +77,6 @@ def load_library() -> ctypes.CDLL:
                             f'{_FIX}')
     signatures = {'sk_new': (ptr, [ptr] * 8), 'sk_free': (None, [ptr]),
                   'sk_scan': (ctypes.c_int, [ptr, ptr, ctypes.c_int, ptr, ptr]),
-                  'sk_finish': (ctypes.c_int, [ptr] * 3),
-                  'sk_window': (ctypes.c_int, [ptr, ctypes.c_int, ptr, ptr]),
                   'sk_dead': (None, [ptr, ptr])}
     for name, (restype, argtypes) in signatures.items():
         function = getattr(lib, name)
@@ -97,13 +92,14 @@ class KernelSettings(NamedTuple):
     max_contacts: int
     remove_crosstalk: bool
     fill_dead: bool
-    reals: tuple         # skin_kernel.h's SK_PITCH ... SK_RIM_BOTTOM, in that order
+    reals: tuple         # skin_kernel.h's SK_PITCH ... SK_POWER_BOTTOM, in that order
     baseline: np.ndarray  # (2, rows, cols) each, like threshold, noise, gain (or None), dead
     threshold: np.ndarray
     noise: np.ndarray
     gain: np.ndarray
     dead: np.ndarray
     tables: np.ndarray    # (2, full_scale + 1): each layer's force at every count
+    tared: bool           # conditioning.ConditionerState.tared
 
 
 def _address(array: np.ndarray) -> ctypes.c_void_p:
@@ -120,7 +116,7 @@ class Kernel:
         full_scale = settings.tables.shape[1] - 1
         ints = np.array([rows, cols, settings.max_contacts, METHODS[settings.method],
                          settings.remove_crosstalk, settings.fill_dead, full_scale,
-                         settings.gain is not None], dtype=np.intc)
+                         settings.gain is not None, settings.tared], dtype=np.intc)
         assert ints.size == _INTS and len(settings.reals) == _REALS
         reals = np.array(settings.reals, dtype=np.float64)
         arrays = [np.ascontiguousarray(a, dtype=np.float64) for a in (
@@ -149,15 +145,13 @@ class Kernel:
                                 for every in (0, 1))
         self._lock = threading.Lock()
 
-    def scan(self, top, bottom, imprint_forces=None, every_pair: bool = False) -> tuple:
+    def scan(self, top, bottom, every_pair: bool = False) -> tuple:
         """
         Return (records, revived) of the raw maps: a list per contact, strongest first.
 
         Without ``every_pair`` a contact too light to report (record[KEPT] 0) gets no shift.
         ``revived`` is None, or the dead-taxel marks after this scan revived some. Bad maps
-        raise ValueError saying what is wrong. ``imprint_forces(window, censored, forces)``
-        returns a saturated contact's (top, bottom) force sums from its (4, h, w) window (counts
-        then force share of both layers); called only for such contacts.
+        raise ValueError saying what is wrong.
         """
         if not (type(top) is np.ndarray and type(bottom) is np.ndarray
                 and top.shape == self.shape and bottom.shape == self.shape
@@ -170,10 +164,7 @@ class Kernel:
             if count < 0:
                 check_pair(top, bottom, self.shape)
                 raise ValueError('top or bottom holds a value that is not a count')
-            status = self._status
-            if status[_ANY_CENSORED] and imprint_forces is not None:
-                self._censor(count, imprint_forces)
-            revived = self.dead_masks() if status[_REVIVED] else None
+            revived = self.dead_masks() if self._status[_REVIVED] else None
             return self._out[:count].tolist(), revived
 
     def dead_masks(self) -> np.ndarray:
@@ -181,19 +172,3 @@ class Kernel:
         out = np.zeros((2,) + self.shape, dtype=np.uint8)
         self._lib.sk_dead(self._handle, _address(out))
         return out.astype(bool)
-
-    def _censor(self, count: int, imprint_forces) -> None:
-        records = self._out[:count]
-        forces = np.zeros((count, 2))
-        pairs = records[:, _PAIR].astype(int)
-        forces[pairs] = records[:, [_TOP_FORCE, _BOTTOM_FORCE]]
-        window = np.zeros((4,) + self.shape)
-        shape = np.zeros(4, dtype=np.intc)
-        for pair, censored in zip(pairs.tolist(), records[:, _CENSORED].astype(int).tolist()):
-            if not censored:
-                continue
-            self._lib.sk_window(self._handle, pair, _address(window), _address(shape))
-            h, w = int(shape[2]), int(shape[3])
-            own = window.ravel()[:4 * h * w].reshape(4, h, w)
-            forces[pair] = imprint_forces(own, (censored & 1, censored & 2), forces[pair])
-        self._lib.sk_finish(self._handle, _address(forces), _address(self._out))

@@ -340,8 +340,7 @@ class ContactEstimator:
     def _scan(self, top_counts, bottom_counts, every_pair: bool = False) -> list:
         """Return the compiled kernel's records of the contacts (kernel.Kernel.scan)."""
         kernel = self._kernel or self._build_kernel(top_counts, bottom_counts)
-        records, revived = kernel.scan(top_counts, bottom_counts, self._imprint_forces,
-                                       every_pair)
+        records, revived = kernel.scan(top_counts, bottom_counts, every_pair)
         if revived is not None:
             self.conditioner.set_dead(revived[0], revived[1])
         return records
@@ -358,17 +357,14 @@ class ContactEstimator:
                          cal.x_p_m, cal.y_p_m, *cal.zero_slope_m_per_n, cal.zero_ref_n,
                          self._calibration_variance(),
                          *(c.censor_counts if c is not None else 0.0 for c in curves),
-                         *(c.rim_load_n if c is not None else 0.0 for c in curves))
+                         *(c.rim_load_n if c is not None else 0.0 for c in curves),
+                         *(c.spread_taxels if c is not None else 0.0 for c in curves),
+                         *(c.bump_power if c is not None else 2.0 for c in curves))
                 cond = self.conditioner.config
                 self._kernel = compiled_kernel.Kernel(compiled_kernel.KernelSettings(
                     self._method.name, cfg.max_contacts, cond.remove_crosstalk, cond.fill_dead,
                     reals, *state))
         return self._kernel
-
-    def _imprint_forces(self, window: np.ndarray, saturated, sums) -> list:
-        """Return a saturated contact's force sums (the compiled kernel's censoring hook)."""
-        return _imprint_sums(window[:2], window[2:], saturated, sums,
-                             self.calibration.force_curves)
 
     def _process_described(self, top_counts, bottom_counts) -> list:
         """Return the contacts as :meth:`process`, by the Python description of the pipeline."""

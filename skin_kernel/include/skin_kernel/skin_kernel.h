@@ -3,8 +3,9 @@
  *
  * One call per scan (sk_scan) turns the raw counts of both layers into contacts: conditioning
  * (tare, line-leak removal, threshold, dead-taxel fill, counts to force), contacts (components,
- * peak split, bottom-load mixture, windows), the layer shift of each contact (taxel_fit,
- * poc or centroid), its uncertainty and the contact figures. The algorithm's description is the Python
+ * peak split, bottom-load mixture, windows), a saturated imprint's force filled in from its rim,
+ * the layer shift of each contact (taxel_fit, poc or centroid), its uncertainty and the contact
+ * figures. The algorithm's description is the Python
  * package skin_driver.core.estimation, which the tests run side by side with this library.
  *
  * A kernel is built once per estimator from its state (tare, gains, force tables, settings) and
@@ -18,12 +19,14 @@ extern "C" {
 #endif
 
 /* Bumped whenever a signature or a layout below changes; the binding checks it. */
-#define SK_ABI_VERSION 4
+#define SK_ABI_VERSION 5
 
 /* Integer settings, in this order. */
 enum {
   SK_ROWS, SK_COLS, SK_MAX_CONTACTS, SK_METHOD, SK_REMOVE_CROSSTALK, SK_FILL_DEAD,
-  SK_FULL_SCALE, SK_HAS_GAIN, SK_NINTS
+  SK_FULL_SCALE, SK_HAS_GAIN,
+  SK_TARED, /* 1 once a tare measured noise and rest: the line-leak gate (crosstalk.py) */
+  SK_NINTS
 };
 
 /* Shift methods. */
@@ -36,6 +39,8 @@ enum {
   SK_CALIBRATION_VAR, /* the calibration's share of sigma**2, taxels**2 */
   SK_CENSOR_TOP, SK_CENSOR_BOTTOM, /* counts from which a taxel is saturated; 0: never */
   SK_RIM_TOP, SK_RIM_BOTTOM, /* force at an imprint's rim that no taxel reads (forcecurve) */
+  SK_SPREAD_TOP, SK_SPREAD_BOTTOM, /* a saturated imprint's bump: spread (taxels), power */
+  SK_POWER_TOP, SK_POWER_BOTTOM,   /* (imprint.py) */
   SK_NREALS
 };
 
@@ -45,7 +50,7 @@ enum {
   SK_AZIMUTH_SIGMA, SK_ALPHA, SK_FORCE_X, SK_FORCE_Y, SK_FORCE_Z, SK_CONFIDENCE, SK_VALID,
   SK_KEPT,        /* 1 when the normal force reaches the minimum: a contact to report */
   SK_DX, SK_DY,   /* the raw shift, taxels */
-  SK_PAIR,        /* index of the contact in sk_window and sk_finish */
+  SK_PAIR,        /* index of the contact among the scan's pairs */
   SK_CENSORED,    /* bit 0: the top layer reached its censor counts, bit 1: the bottom */
   SK_SIGMA, SK_TOP_FORCE, SK_BOTTOM_FORCE, SK_SHIFT_CONFIDENCE,
   SK_NREC
@@ -79,19 +84,6 @@ void sk_free(sk_kernel *k);
  * every_pair, a contact too light to report (SK_KEPT 0) gets no shift (0) and no sigma (inf).
  */
 int sk_scan(sk_kernel *k, const double *maps, int every_pair, double *out, int *status);
-
-/*
- * Redo the contact figures of the last scan with other force sums per pair (top, bottom in pair
- * order; a saturated imprint's force filled in by the caller). Returns the number of records.
- */
-int sk_finish(sk_kernel *k, const double *forces, double *out);
-
-/*
- * Copy pair i's window of the last scan: counts (top, bottom) then its share of the force maps
- * (top, bottom), each h x w, to out; shape gets (r0, c0, h, w). Returns 0, or -1 for no such pair.
- * A loaded taxel whose raw count was the ADC's full scale has full scale counts there (censored).
- */
-int sk_window(const sk_kernel *k, int pair, double *out, int *shape);
 
 /* Copy the dead-taxel marks in force, (2, rows, cols), to out. */
 void sk_dead(const sk_kernel *k, unsigned char *out);

@@ -162,3 +162,29 @@ def test_a_leak_under_the_touch_threshold_comes_off_the_loaded_taxels():
         cond, _, rng = _tared(model)
         read.append(sum(f.sum() for f in cond.condition(*render(model, press, rng))))
     assert read[1] == pytest.approx(read[0], rel=0.02)
+
+
+def test_before_a_tare_the_rest_reading_is_taken_for_no_line_leak():
+    # Untared, every taxel still reads its rest counts (about 20 on this skin, 2.5 times the
+    # noise guessed before a tare) under the 40-count touch threshold: the leak gate stays
+    # shut, and rest frames and a press read the same with the leak removal on or off.
+    model = family_skin('default').model
+    rng = np.random.default_rng(0)
+    frames = [render(model, [], rng) for _ in range(3)]
+    frames.append(render(model, [Press(0.035, 0.04, 10.0, radius_m=0.004)], rng))
+    on, off = Conditioner(), Conditioner(ConditioningConfig(remove_crosstalk=False))
+    for top, bottom in frames:
+        np.testing.assert_array_equal(on.touch_counts(top, bottom), off.touch_counts(top, bottom))
+    assert on.touch_counts(*frames[-1]).any()
+
+
+def test_before_a_tare_a_leak_over_the_touch_threshold_still_comes_off():
+    # 1.1 % crosstalk on a 64 x 64 grid: untared, a 50 N press lifts nearly every taxel over
+    # the touch threshold (leak plus rest counts); the leak comes off and leaves the imprint.
+    model = family_skin('held_out:2@64').model
+    top, bottom = render(model, [Press(0.04, 0.04, 50.0, radius_m=0.003)],
+                         np.random.default_rng(1))
+    off = Conditioner(ConditioningConfig(remove_crosstalk=False)).touch_counts(top, bottom)
+    assert (off[1] > 0).sum() > 2000
+    rows, cols = np.nonzero(Conditioner().touch_counts(top, bottom)[1])
+    assert np.ptp(rows) < 20 and np.ptp(cols) < 20
