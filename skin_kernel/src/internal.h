@@ -62,9 +62,9 @@ void sk_pair_window(const sk_kernel *k, int q, double *out);
 /* Bottom load below this share of a contact's peak share is not part of its window. */
 #define WINDOW_SHARE 0.02
 
-/* taxelfit.c: the shift of a (2, h, w) window; force may be NULL (centroid) */
-void sk_taxel_fit(const double *force, const double *counts, int h, int w, double *scratch,
-                  double *dx, double *dy, double *confidence);
+/* taxelfit.c: the shift of a (2, h, w) window; censored: 1 where a taxel is saturated */
+void sk_taxel_fit(const double *force, const double *counts, const double *censored, int h,
+                  int w, double *scratch, double *dx, double *dy, double *confidence);
 void sk_centroid(const double *counts, int h, int w, double *scratch, double *dx, double *dy,
                  double *confidence);
 

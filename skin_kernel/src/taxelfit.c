@@ -16,6 +16,9 @@
 #define PLATEAU 1e-9
 #define PAST_EDGE 2.0 /* widths */
 #define INV_SQRT2PI 0.3989422804014327
+#define MIN_FREE 8
+#define ITERATIONS_2D 20
+#define TOLERANCE_2D 1e-10
 /* Abramowitz and Stegun 7.1.26: erf to 1.5e-7, far below the counts' noise */
 static const double AS_P = 0.3275911;
 static const double AS[5] = {0.254829592, -0.284496736, 1.421413741, -1.453152027, 1.061405429};
@@ -264,6 +267,150 @@ static int cut_by_edge(const double *profiles, int nn, const int *len, const dou
   return any;
 }
 
+/* A unit Gaussian's share of each of n cells and its derivatives by mu and s (taxelfit._axis_cells). */
+static void axis_cells(double mu, double s, int n, double *g, double *d_mu, double *d_s)
+{
+  double u0 = (-0.5 - mu) / s;
+  double pdf0 = exp(-0.5 * u0 * u0) * INV_SQRT2PI, cdf0 = normal_cdf(u0), updf0 = u0 * pdf0;
+  for (int i = 0; i < n; i++) {
+    double u1 = ((i + 1) - 0.5 - mu) / s;
+    double pdf1 = exp(-0.5 * u1 * u1) * INV_SQRT2PI, cdf1 = normal_cdf(u1), updf1 = u1 * pdf1;
+    g[i] = cdf1 - cdf0;
+    d_mu[i] = -(pdf1 - pdf0) / s;
+    d_s[i] = -(updf1 - updf0) / s;
+    pdf0 = pdf1;
+    cdf0 = cdf1;
+    updf0 = updf1;
+  }
+}
+
+/* Solve the 5 x 5 system a x = b by elimination with partial pivoting; 0 for a zero pivot. */
+static int solve5(double a[5][5], double b[5], double x[5])
+{
+  for (int j = 0; j < 5; j++) {
+    int p = j;
+    for (int i = j + 1; i < 5; i++) {
+      p = fabs(a[i][j]) > fabs(a[p][j]) ? i : p;
+    }
+    if (a[p][j] == 0.0) {
+      return 0;
+    }
+    for (int m = 0; m < 5; m++) {
+      double t = a[j][m];
+      a[j][m] = a[p][m];
+      a[p][m] = t;
+    }
+    double t = b[j];
+    b[j] = b[p];
+    b[p] = t;
+    for (int i = j + 1; i < 5; i++) {
+      double f = a[i][j] / a[j][j];
+      for (int m = j; m < 5; m++) {
+        a[i][m] -= f * a[j][m];
+      }
+      b[i] -= f * b[j];
+    }
+  }
+  for (int i = 4; i >= 0; i--) {
+    double v = b[i];
+    for (int m = i + 1; m < 5; m++) {
+      v -= a[i][m] * x[m];
+    }
+    x[i] = v / a[i][i];
+  }
+  return 1;
+}
+
+/* Whether a layer's window calls for fit_censored (taxelfit._fits_censored). */
+static int fits_censored(const double *force, const double *censored, int h, int w)
+{
+  int any = 0, free = 0, edge = 0;
+  for (int r = 0; r < h; r++) {
+    for (int c = 0; c < w; c++) {
+      int j = r * w + c;
+      any |= censored[j] > 0;
+      free += force[j] > 0 && !(censored[j] > 0);
+      edge |= force[j] != 0 && (r == 0 || r == h - 1 || c == 0 || c == w - 1);
+    }
+  }
+  return any && free >= MIN_FREE && !edge;
+}
+
+/*
+ * 2-D cell-integrated Gaussian fitted to one layer's window, its censored taxels lower bounds
+ * (taxelfit.fit_censored_layer): centre (x, y) in and out, widths from the marginal fits;
+ * returns 0 (centre untouched) when it cannot fit. scratch: 3 (h + w) doubles.
+ */
+static int fit_censored(const double *force, const double *censored, int h, int w,
+                        double *scratch, double *centre, double sx, double sy)
+{
+  double *gx = scratch, *dgx_mu = gx + w, *dgx_s = dgx_mu + w;
+  double *gy = dgx_s + w, *dgy_mu = gy + h, *dgy_s = dgy_mu + h;
+  double mx = centre[0], my = centre[1];
+  axis_cells(mx, sx, w, gx, dgx_mu, dgx_s);
+  axis_cells(my, sy, h, gy, dgy_mu, dgy_s);
+  double weight = 0.0, along = 0.0;
+  for (int r = 0; r < h; r++) {
+    for (int c = 0; c < w; c++) {
+      if (!(censored[r * w + c] > 0)) {
+        double b = gy[r] * gx[c];
+        weight += b * b;
+        along += force[r * w + c] * b;
+      }
+    }
+  }
+  if (!(weight > 0)) {
+    return 0;
+  }
+  double amp = along / weight;
+  for (int it = 0; it < ITERATIONS_2D; it++) {
+    axis_cells(mx, sx, w, gx, dgx_mu, dgx_s);
+    axis_cells(my, sy, h, gy, dgy_mu, dgy_s);
+    double normal[5][5] = {{0}}, rhs[5] = {0}, step[5];
+    for (int r = 0; r < h; r++) {
+      for (int c = 0; c < w; c++) {
+        int j = r * w + c;
+        double model = amp * (gy[r] * gx[c]);
+        /* a censored taxel counts only while the model falls below its reading */
+        if (censored[j] > 0 && !(model < force[j])) {
+          continue;
+        }
+        double jac[5] = {gy[r] * gx[c], amp * (gy[r] * dgx_mu[c]), amp * (dgy_mu[r] * gx[c]),
+                         amp * (gy[r] * dgx_s[c]), amp * (dgy_s[r] * gx[c])};
+        double residual = force[j] - model;
+        for (int a = 0; a < 5; a++) {
+          for (int b = 0; b < 5; b++) {
+            normal[a][b] += jac[a] * jac[b];
+          }
+          rhs[a] += jac[a] * residual;
+        }
+      }
+    }
+    for (int a = 0; a < 5; a++) {
+      normal[a][a] += 1e-12;
+    }
+    if (!solve5(normal, rhs, step)) {
+      return 0;
+    }
+    /* damped as the marginal fits */
+    amp += step[0];
+    mx = clip(mx + clip(step[1], -1.0, 1.0), -0.5, w - 0.5);
+    my = clip(my + clip(step[2], -1.0, 1.0), -0.5, h - 0.5);
+    double wx = sx + clip(step[3], -0.5 * sx, 0.5 * sx), wy = sy + clip(step[4], -0.5 * sy, 0.5 * sy);
+    sx = wx < MIN_WIDTH ? MIN_WIDTH : wx;
+    sy = wy < MIN_WIDTH ? MIN_WIDTH : wy;
+    if (fmax(fabs(step[1]), fabs(step[2])) < TOLERANCE_2D) {
+      break;
+    }
+  }
+  if (!(isfinite(mx) && isfinite(my))) {
+    return 0;
+  }
+  centre[0] = mx;
+  centre[1] = my;
+  return 1;
+}
+
 static int plateau(const double *layer, int m)
 {
   double peak = layer[0];
@@ -293,8 +440,8 @@ static void profiles_of(const double *layer, int h, int w, int nn, double *along
   }
 }
 
-void sk_taxel_fit(const double *force, const double *counts, int h, int w, double *scratch,
-                  double *dx, double *dy, double *confidence)
+void sk_taxel_fit(const double *force, const double *counts, const double *censored, int h,
+                  int w, double *scratch, double *dx, double *dy, double *confidence)
 {
   int m = h * w, nn = h > w ? h : w;
   double *profiles = scratch;
@@ -317,6 +464,16 @@ void sk_taxel_fit(const double *force, const double *counts, int h, int w, doubl
       if (cut.fixed[j]) {
         centre[j] = again[j];
         explained[j] = share[j];
+      }
+    }
+  }
+  for (int layer = 0; layer < 2; layer++) {
+    const double *own = force + layer * m, *marks = censored + layer * m;
+    if (fits_censored(own, marks, h, w)) {
+      double found[2] = {centre[layer], centre[2 + layer]};
+      if (fit_censored(own, marks, h, w, scratch, found, width[layer], width[2 + layer])) {
+        centre[layer] = found[0];
+        centre[2 + layer] = found[1];
       }
     }
   }

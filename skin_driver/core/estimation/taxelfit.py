@@ -21,6 +21,15 @@ force curve ends, is fitted on its counts instead):
 A profile cut by the map's edge keeps the width of the same layer's whole profile along the
 other axis, and its centre may lie past the edge (:func:`_cut_by_edge`).
 
+A layer with saturated taxels (at its force curve's ceiling or cut by the ADC: ``censored``)
+loses its shape in the marginal sums: a saturated taxel reads the ceiling's force whatever it
+carries, and the sums mix it with the rim. Such a layer is fitted in 2-D instead
+(:func:`fit_censored_layer`): a Gaussian integrated over the cells along both axes whose
+saturated taxels are lower bounds, so the rim places the imprint (on the saturating skin the
+bottom imprint's centre error fell from 0.09 to 0.05 taxel rms at random spots). It needs
+enough rim: a layer with fewer loaded taxels below its ceiling than ``_MIN_FREE`` (the sharp
+top imprint, mostly) keeps its marginal fit, where a 2-D fit's width runs off.
+
 Integrating the model over the cells is what removes the sampling bias: the fitted centre is a
 continuous parameter of the profile, not a weighted mean of cell positions. The four fits
 (two layers, two axes) are independent three-parameter problems, solved together.
@@ -32,7 +41,7 @@ import math
 
 import numpy as np
 
-__all__ = ['fit_cell_profiles', 'cell_fit_shift']
+__all__ = ['fit_cell_profiles', 'fit_censored_layer', 'cell_fit_shift']
 
 _ITERATIONS = 8
 # Centre steps below this (taxels) end the fit: a hundredth of the noise floor's shift error.
@@ -47,6 +56,12 @@ _PAST_EDGE = 2.0
 # Taxels within this share of a layer's peak force sit on one plateau: the curve's cap.
 _PLATEAU = 1e-9
 _INV_SQRT2PI = 1.0 / math.sqrt(2.0 * math.pi)
+# A censored layer is fitted in 2-D with at least this many loaded taxels below its ceiling: five
+# parameters, and the noise, need that many (with fewer the width trades against the centre).
+_MIN_FREE = 8
+_ITERATIONS_2D = 20
+# The 2-D fit runs until its centre steps fall below this (taxels): converged, not merely close.
+_TOLERANCE_2D = 1e-10
 # Abramowitz and Stegun 7.1.26: erf to 1.5e-7, far below the counts' noise.
 _AS_P = 0.3275911
 _AS = (0.254829592, -0.284496736, 1.421413741, -1.453152027, 1.061405429)
@@ -128,6 +143,61 @@ def fit_cell_profiles(profiles: np.ndarray, mask: np.ndarray, cut: tuple = None)
     return mu, s, np.where(bad, 0.0, np.maximum(explained, 0.0))
 
 
+def _axis_cells(mu: float, s: float, n: int) -> tuple:
+    """Return a unit Gaussian's share of each of ``n`` cells and its derivatives by mu and s."""
+    u = (np.arange(n + 1, dtype=np.float64) - 0.5 - mu) / s
+    pdf = np.exp(-0.5 * u * u) * _INV_SQRT2PI
+    return np.diff(_normal_cdf(u)), -np.diff(pdf) / s, -np.diff(u * pdf) / s
+
+
+def fit_censored_layer(force: np.ndarray, censored: np.ndarray, centre: tuple, width: tuple):
+    """
+    Return the (x, y) centre of one layer's imprint, its saturated taxels lower bounds, or None.
+
+    ``force``: the layer's (h, w) linearised window; ``censored``: its taxels whose reading is
+    only a lower bound. The model is ``amp * gy[r] * gx[c]``, a Gaussian integrated over the
+    cells along each axis, fitted by Gauss-Newton from ``centre`` and ``width`` (x, y: the
+    marginal fits'); a censored taxel counts only while the model falls below its reading.
+    """
+    h, w = force.shape
+    (mx, my), (sx, sy) = centre, width
+    free = ~censored
+    base = np.outer(_axis_cells(my, sy, h)[0], _axis_cells(mx, sx, w)[0])
+    weight = float(base[free] @ base[free])
+    if not weight > 0:
+        return None
+    amp = float(force[free] @ base[free]) / weight
+    for _ in range(_ITERATIONS_2D):
+        gx, dgx_mu, dgx_s = _axis_cells(mx, sx, w)
+        gy, dgy_mu, dgy_s = _axis_cells(my, sy, h)
+        model = amp * np.outer(gy, gx)
+        active = free | (model < force)
+        jac = np.stack((np.outer(gy, gx), amp * np.outer(gy, dgx_mu), amp * np.outer(dgy_mu, gx),
+                        amp * np.outer(gy, dgx_s), amp * np.outer(dgy_s, gx)), axis=2)[active]
+        residual = (force - model)[active]
+        try:
+            step = np.linalg.solve(jac.T @ jac + 1e-12 * np.eye(5), jac.T @ residual)
+        except np.linalg.LinAlgError:
+            return None
+        # Damped as the marginal fits: a taxel at most for a centre, half a width for a width.
+        amp += float(step[0])
+        mx = min(max(mx + min(max(float(step[1]), -1.0), 1.0), -0.5), w - 0.5)
+        my = min(max(my + min(max(float(step[2]), -1.0), 1.0), -0.5), h - 0.5)
+        sx = max(sx + min(max(float(step[3]), -0.5 * sx), 0.5 * sx), _MIN_WIDTH)
+        sy = max(sy + min(max(float(step[4]), -0.5 * sy), 0.5 * sy), _MIN_WIDTH)
+        if max(abs(float(step[1])), abs(float(step[2]))) < _TOLERANCE_2D:
+            break
+    return (mx, my) if math.isfinite(mx) and math.isfinite(my) else None
+
+
+def _fits_censored(force: np.ndarray, censored: np.ndarray) -> bool:
+    """Return whether a layer's window calls for :func:`fit_censored_layer` (module docstring)."""
+    if not censored.any() or int(((force > 0) & ~censored).sum()) < _MIN_FREE:
+        return False
+    # An imprint cut by the map's edge has lost part of its rim: the marginal fits place it.
+    return not (force[0].any() or force[-1].any() or force[:, 0].any() or force[:, -1].any())
+
+
 def _cut_by_edge(profiles: np.ndarray, mask: np.ndarray, mu: np.ndarray, width: np.ndarray):
     """
     Return the ``cut`` of :func:`fit_cell_profiles` for profiles cut by the map's edge, or None.
@@ -162,7 +232,7 @@ def _plateau(layer: np.ndarray) -> bool:
     return peak > 0 and int((layer >= peak * (1.0 - _PLATEAU)).sum()) >= 2
 
 
-def cell_fit_shift(maps: np.ndarray, counts: np.ndarray = None):
+def cell_fit_shift(maps: np.ndarray, counts: np.ndarray = None, censored: np.ndarray = None):
     """
     Return (dx, dy, explained share) of a (2, h, w) linearised window, or None without load.
 
@@ -170,8 +240,10 @@ def cell_fit_shift(maps: np.ndarray, counts: np.ndarray = None):
     worst of the four fits) serves as the confidence. A layer whose linearised map is flat at
     its peak hit the end of the force curve: its force says nothing there, so that layer is
     fitted on its ``counts`` (same shape) when given. Each layer's centre is absolute, so the
-    two layers need not be fitted on the same scale.
+    two layers need not be fitted on the same scale. ``censored`` (same shape, boolean) marks
+    saturated taxels: a layer with enough rim below them is fitted in 2-D (module docstring).
     """
+    force = maps
     if counts is not None:
         maps = np.stack([c if _plateau(m) else m for m, c in zip(maps, counts)])
     h, w = maps.shape[1:]
@@ -192,5 +264,11 @@ def cell_fit_shift(maps: np.ndarray, counts: np.ndarray = None):
         fixed = np.isfinite(cut[0])
         mu = np.where(fixed, again, mu)
         explained = np.where(fixed, share, explained)
+    for layer in range(2 if censored is not None else 0):
+        if _fits_censored(force[layer], censored[layer]):
+            found = fit_censored_layer(force[layer], censored[layer],
+                                       (mu[layer], mu[2 + layer]), (width[layer], width[2 + layer]))
+            if found is not None:
+                mu[layer], mu[2 + layer] = found
     return (float(mu[1] - mu[0]), float(mu[3] - mu[2]),
             float(min(max(explained.min(), 0.0), 1.0)))
