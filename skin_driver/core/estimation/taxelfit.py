@@ -266,8 +266,8 @@ def cell_fit_shift(maps: np.ndarray, counts: np.ndarray = None, censored: np.nda
         explained = np.where(fixed, share, explained)
     for layer in range(2 if censored is not None else 0):
         if _fits_censored(force[layer], censored[layer]):
-            found = fit_censored_layer(force[layer], censored[layer],
-                                       (mu[layer], mu[2 + layer]), (width[layer], width[2 + layer]))
+            found = fit_censored_layer(force[layer], censored[layer], (mu[layer], mu[2 + layer]),
+                                       (width[layer], width[2 + layer]))
             if found is not None:
                 mu[layer], mu[2 + layer] = found
     return (float(mu[1] - mu[0]), float(mu[3] - mu[2]),
