@@ -322,7 +322,7 @@ static int solve5(double a[5][5], double b[5], double x[5])
 }
 
 /* Whether a layer's window calls for fit_censored (taxelfit._fits_censored). */
-static int fits_censored(const double *force, const double *censored, int h, int w)
+static int fits_censored(const double *force, const double *censored, int h, int w, int min_free)
 {
   int any = 0, free = 0, edge = 0;
   for (int r = 0; r < h; r++) {
@@ -333,36 +333,39 @@ static int fits_censored(const double *force, const double *censored, int h, int
       edge |= force[j] != 0 && (r == 0 || r == h - 1 || c == 0 || c == w - 1);
     }
   }
-  return any && free >= MIN_FREE && !edge;
+  return any && free >= min_free && !edge;
 }
 
 /*
  * 2-D cell-integrated Gaussian fitted to one layer's window, its censored taxels lower bounds
- * (taxelfit.fit_censored_layer): centre (x, y) in and out, widths from the marginal fits;
- * returns 0 (centre untouched) when it cannot fit. scratch: 3 (h + w) doubles.
+ * (taxelfit.fit_censored_layer): found = (x, y) centre in, (x, y, mass) out; widths from the
+ * marginal fits; *mass > 0 is held fixed, else fitted. Returns 0 (found untouched) when it
+ * cannot fit. scratch: 3 (h + w) doubles.
  */
 static int fit_censored(const double *force, const double *censored, int h, int w,
-                        double *scratch, double *centre, double sx, double sy)
+                        double *scratch, double *found, double sx, double sy, double given)
 {
   double *gx = scratch, *dgx_mu = gx + w, *dgx_s = dgx_mu + w;
   double *gy = dgx_s + w, *dgy_mu = gy + h, *dgy_s = dgy_mu + h;
-  double mx = centre[0], my = centre[1];
-  axis_cells(mx, sx, w, gx, dgx_mu, dgx_s);
-  axis_cells(my, sy, h, gy, dgy_mu, dgy_s);
-  double weight = 0.0, along = 0.0;
-  for (int r = 0; r < h; r++) {
-    for (int c = 0; c < w; c++) {
-      if (!(censored[r * w + c] > 0)) {
-        double b = gy[r] * gx[c];
-        weight += b * b;
-        along += force[r * w + c] * b;
+  double mx = found[0], my = found[1], mass = given, fitted = given > 0 ? 0.0 : 1.0;
+  if (!(given > 0)) {
+    axis_cells(mx, sx, w, gx, dgx_mu, dgx_s);
+    axis_cells(my, sy, h, gy, dgy_mu, dgy_s);
+    double weight = 0.0, along = 0.0;
+    for (int r = 0; r < h; r++) {
+      for (int c = 0; c < w; c++) {
+        if (!(censored[r * w + c] > 0)) {
+          double b = gy[r] * gx[c];
+          weight += b * b;
+          along += force[r * w + c] * b;
+        }
       }
     }
+    if (!(weight > 0)) {
+      return 0;
+    }
+    mass = along / weight;
   }
-  if (!(weight > 0)) {
-    return 0;
-  }
-  double amp = along / weight;
   for (int it = 0; it < ITERATIONS_2D; it++) {
     axis_cells(mx, sx, w, gx, dgx_mu, dgx_s);
     axis_cells(my, sy, h, gy, dgy_mu, dgy_s);
@@ -370,13 +373,15 @@ static int fit_censored(const double *force, const double *censored, int h, int 
     for (int r = 0; r < h; r++) {
       for (int c = 0; c < w; c++) {
         int j = r * w + c;
-        double model = amp * (gy[r] * gx[c]);
+        double model = mass * (gy[r] * gx[c]);
         /* a censored taxel counts only while the model falls below its reading */
         if (censored[j] > 0 && !(model < force[j])) {
           continue;
         }
-        double jac[5] = {gy[r] * gx[c], amp * (gy[r] * dgx_mu[c]), amp * (dgy_mu[r] * gx[c]),
-                         amp * (gy[r] * dgx_s[c]), amp * (dgy_s[r] * gx[c])};
+        /* a fixed mass has no column: its normal equation is the regulariser's, its step 0 */
+        double jac[5] = {gy[r] * gx[c] * fitted, mass * (gy[r] * dgx_mu[c]),
+                         mass * (dgy_mu[r] * gx[c]), mass * (gy[r] * dgx_s[c]),
+                         mass * (dgy_s[r] * gx[c])};
         double residual = force[j] - model;
         for (int a = 0; a < 5; a++) {
           for (int b = 0; b < 5; b++) {
@@ -393,10 +398,11 @@ static int fit_censored(const double *force, const double *censored, int h, int 
       return 0;
     }
     /* damped as the marginal fits */
-    amp += step[0];
+    mass += step[0];
     mx = clip(mx + clip(step[1], -1.0, 1.0), -0.5, w - 0.5);
     my = clip(my + clip(step[2], -1.0, 1.0), -0.5, h - 0.5);
-    double wx = sx + clip(step[3], -0.5 * sx, 0.5 * sx), wy = sy + clip(step[4], -0.5 * sy, 0.5 * sy);
+    double wx = sx + clip(step[3], -0.5 * sx, 0.5 * sx);
+    double wy = sy + clip(step[4], -0.5 * sy, 0.5 * sy);
     sx = wx < MIN_WIDTH ? MIN_WIDTH : wx;
     sy = wy < MIN_WIDTH ? MIN_WIDTH : wy;
     if (fmax(fabs(step[1]), fabs(step[2])) < TOLERANCE_2D) {
@@ -406,9 +412,39 @@ static int fit_censored(const double *force, const double *censored, int h, int 
   if (!(isfinite(mx) && isfinite(my))) {
     return 0;
   }
-  centre[0] = mx;
-  centre[1] = my;
+  found[0] = mx;
+  found[1] = my;
+  found[2] = mass;
   return 1;
+}
+
+/*
+ * Refit the saturated layers in 2-D (taxelfit._censored_centres): the bottom first, whose mass
+ * (fitted, or summed when unsaturated) the top takes.
+ */
+static void censored_centres(const double *force, const double *censored, int h, int w,
+                             double *scratch, double *centre, const double *width)
+{
+  int m = h * w;
+  int saturated = 0;
+  for (int j = m; j < 2 * m; j++) {
+    saturated |= censored[j] > 0;
+  }
+  double mass = saturated ? NAN : sk_sum(force + m, m);
+  for (int layer = 1; layer >= 0; layer--) {
+    /* NaN or none: the mass is fitted */
+    double given = layer == 0 ? mass : NAN;
+    const double *own = force + layer * m, *marks = censored + layer * m;
+    if (!fits_censored(own, marks, h, w, given > 0 ? 0 : MIN_FREE)) {
+      continue;
+    }
+    double found[3] = {centre[layer], centre[2 + layer], 0.0};
+    if (fit_censored(own, marks, h, w, scratch, found, width[layer], width[2 + layer], given)) {
+      centre[layer] = found[0];
+      centre[2 + layer] = found[1];
+      mass = layer == 1 ? found[2] : mass;
+    }
+  }
 }
 
 static int plateau(const double *layer, int m)
@@ -467,16 +503,7 @@ void sk_taxel_fit(const double *force, const double *counts, const double *censo
       }
     }
   }
-  for (int layer = 0; layer < 2; layer++) {
-    const double *own = force + layer * m, *marks = censored + layer * m;
-    if (fits_censored(own, marks, h, w)) {
-      double found[2] = {centre[layer], centre[2 + layer]};
-      if (fit_censored(own, marks, h, w, scratch, found, width[layer], width[2 + layer])) {
-        centre[layer] = found[0];
-        centre[2 + layer] = found[1];
-      }
-    }
-  }
+  censored_centres(force, censored, h, w, scratch, centre, width);
   *dx = centre[1] - centre[0];
   *dy = centre[3] - centre[2];
   double worst = explained[0];

@@ -56,7 +56,9 @@ _INV_SQRT2PI = 1.0 / math.sqrt(2.0 * math.pi)
 # A censored layer is fitted in 2-D with at least this many loaded taxels below its ceiling: five
 # parameters, and the noise, need that many (with fewer the width trades against the centre).
 _MIN_FREE = 8
-_ITERATIONS_2D = 20
+_ITERATIONS_2D = 30
+# Halvings of a 2-D step that raises the misfit before the fit stops where it is.
+_HALVINGS = 12
 # The 2-D fit runs until its centre steps fall below this (taxels): converged, not merely close.
 _TOLERANCE_2D = 1e-10
 # Abramowitz and Stegun 7.1.26: erf to 1.5e-7, far below the counts' noise.
@@ -147,6 +149,26 @@ def _axis_cells(mu: float, s: float, n: int) -> tuple:
     return np.diff(_normal_cdf(u)), -np.diff(pdf) / s, -np.diff(u * pdf) / s
 
 
+def _censored_cost(force: np.ndarray, free: np.ndarray, params: tuple) -> float:
+    """Return the squared misfit of (mass, x, y, sx, sy): a censored taxel's only below it."""
+    mass, mx, my, sx, sy = params
+    h, w = force.shape
+    residual = force - mass * np.outer(_axis_cells(my, sy, h)[0], _axis_cells(mx, sx, w)[0])
+    residual = np.where(free, residual, np.maximum(residual, 0.0))
+    return float((residual * residual).sum())
+
+
+def _damped(params: tuple, step: np.ndarray, shape: tuple) -> tuple:
+    """Return params moved by step: a taxel at most for a centre, half a width for a width."""
+    mass, mx, my, sx, sy = params
+    h, w = shape
+    return (mass + float(step[0]),
+            min(max(mx + min(max(float(step[1]), -1.0), 1.0), -0.5), w - 0.5),
+            min(max(my + min(max(float(step[2]), -1.0), 1.0), -0.5), h - 0.5),
+            max(sx + min(max(float(step[3]), -0.5 * sx), 0.5 * sx), _MIN_WIDTH),
+            max(sy + min(max(float(step[4]), -0.5 * sy), 0.5 * sy), _MIN_WIDTH))
+
+
 def fit_censored_layer(force: np.ndarray, censored: np.ndarray, centre: tuple, width: tuple,
                        mass: float = None):
     """
@@ -156,19 +178,23 @@ def fit_censored_layer(force: np.ndarray, censored: np.ndarray, centre: tuple, w
     only a lower bound. The model is ``mass * gy[r] * gx[c]``, a Gaussian integrated over the
     cells along each axis, fitted by Gauss-Newton from ``centre`` and ``width`` (x, y: the
     marginal fits'); a censored taxel counts only while the model falls below its reading.
-    A given ``mass`` is held fixed.
+    A given ``mass`` is held fixed. Each step is halved until the misfit does not grow: the
+    saturated taxels that count come and go from step to step, and a full step can overshoot.
     """
     h, w = force.shape
-    (mx, my), (sx, sy) = centre, width
     free = ~censored
     fitted = 1.0 if mass is None else 0.0
     if mass is None:
-        base = np.outer(_axis_cells(my, sy, h)[0], _axis_cells(mx, sx, w)[0])
+        base = np.outer(_axis_cells(centre[1], width[1], h)[0],
+                        _axis_cells(centre[0], width[0], w)[0])
         weight = float(base[free] @ base[free])
         if not weight > 0:
             return None
         mass = float(force[free] @ base[free]) / weight
+    params = (mass, centre[0], centre[1], width[0], width[1])
+    cost = _censored_cost(force, free, params)
     for _ in range(_ITERATIONS_2D):
+        mass, mx, my, sx, sy = params
         gx, dgx_mu, dgx_s = _axis_cells(mx, sx, w)
         gy, dgy_mu, dgy_s = _axis_cells(my, sy, h)
         model = mass * np.outer(gy, gx)
@@ -182,15 +208,20 @@ def fit_censored_layer(force: np.ndarray, censored: np.ndarray, centre: tuple, w
             step = np.linalg.solve(jac.T @ jac + 1e-12 * np.eye(5), jac.T @ residual)
         except np.linalg.LinAlgError:
             return None
-        # Damped as the marginal fits: a taxel at most for a centre, half a width for a width.
-        mass += float(step[0])
-        mx = min(max(mx + min(max(float(step[1]), -1.0), 1.0), -0.5), w - 0.5)
-        my = min(max(my + min(max(float(step[2]), -1.0), 1.0), -0.5), h - 0.5)
-        sx = max(sx + min(max(float(step[3]), -0.5 * sx), 0.5 * sx), _MIN_WIDTH)
-        sy = max(sy + min(max(float(step[4]), -0.5 * sy), 0.5 * sy), _MIN_WIDTH)
         if max(abs(float(step[1])), abs(float(step[2]))) < _TOLERANCE_2D:
+            params = _damped(params, step, (h, w))
             break
-    return (mx, my, mass) if math.isfinite(mx) and math.isfinite(my) else None
+        for _ in range(_HALVINGS):
+            trial = _damped(params, step, (h, w))
+            trial_cost = _censored_cost(force, free, trial)
+            if trial_cost <= cost:
+                break
+            step = 0.5 * step
+        else:
+            break
+        params, cost = trial, trial_cost
+    mx, my = params[1], params[2]
+    return (mx, my, params[0]) if math.isfinite(mx) and math.isfinite(my) else None
 
 
 def _fits_censored(force: np.ndarray, censored: np.ndarray, min_free: int) -> bool:
@@ -207,7 +238,7 @@ def _censored_centres(force: np.ndarray, censored: np.ndarray, mu: np.ndarray,
     # The bottom first: its mass, fitted or (unsaturated) summed, is the top's.
     mass = None if censored[1].any() else float(force[1].sum())
     for layer in (1, 0):
-        given = mass if layer == 0 else None
+        given = mass if layer == 0 and mass is not None and mass > 0 else None
         if not _fits_censored(force[layer], censored[layer], _MIN_FREE if given is None else 0):
             continue
         found = fit_censored_layer(force[layer], censored[layer], (mu[layer], mu[2 + layer]),
