@@ -88,7 +88,7 @@ sk_kernel *sk_new(const int *ints, const double *reals, const double *baseline,
   if (k->method == SK_POC) {
     shift_scratch += (size_t)sk_poc_scratch(rows, cols);
   } else if (k->method == SK_TAXEL_FIT) {
-    shift_scratch += 2 * (size_t)n; /* the window's censored taxels */
+    shift_scratch += 3 * (size_t)n; /* the window's censored taxels, a 2-D fit's misfits */
   }
   k->fit = copy_of(NULL, 4 * (size_t)n + shift_scratch);
   k->labels = malloc(sizeof(int) * n);

@@ -4,6 +4,7 @@
  */
 #include <math.h>
 #include <stddef.h>
+#include <string.h>
 
 #include "internal.h"
 
@@ -17,7 +18,9 @@
 #define PAST_EDGE 2.0 /* widths */
 #define INV_SQRT2PI 0.3989422804014327
 #define MIN_FREE 8
-#define ITERATIONS_2D 20
+#define ITERATIONS_2D 30
+#define HALVINGS 12
+#define SEARCHED 1e-5
 #define TOLERANCE_2D 1e-10
 /* Abramowitz and Stegun 7.1.26: erf to 1.5e-7, far below the counts' noise */
 static const double AS_P = 0.3275911;
@@ -336,21 +339,59 @@ static int fits_censored(const double *force, const double *censored, int h, int
   return any && free >= min_free && !edge;
 }
 
+/* Parameters of a 2-D fit: mass, centre x, y, width x, y. */
+enum { P_MASS, P_X, P_Y, P_SX, P_SY, NPARAM };
+
+/* Squared misfit of params, a censored taxel's only below it (taxelfit._censored_cost). */
+static double censored_cost(const double *force, const double *censored, int h, int w,
+                            const double *params, double *scratch)
+{
+  double *gx = scratch, *gy = gx + w, *dmu = gy + h, *ds = dmu + (h > w ? h : w);
+  axis_cells(params[P_X], params[P_SX], w, gx, dmu, ds);
+  axis_cells(params[P_Y], params[P_SY], h, gy, dmu, ds);
+  double *sq = ds + (h > w ? h : w);
+  for (int r = 0; r < h; r++) {
+    for (int c = 0; c < w; c++) {
+      int j = r * w + c;
+      double residual = force[j] - params[P_MASS] * (gy[r] * gx[c]);
+      if (censored[j] > 0 && residual < 0.0) {
+        residual = 0.0;
+      }
+      sq[j] = residual * residual;
+    }
+  }
+  return sk_sum(sq, h * w);
+}
+
+/* params moved by step: a taxel at most for a centre, half a width for a width (_damped). */
+static void damped(const double *params, const double *step, int h, int w, double *out)
+{
+  out[P_MASS] = params[P_MASS] + step[0];
+  out[P_X] = clip(params[P_X] + clip(step[1], -1.0, 1.0), -0.5, w - 0.5);
+  out[P_Y] = clip(params[P_Y] + clip(step[2], -1.0, 1.0), -0.5, h - 0.5);
+  double wx = params[P_SX] + clip(step[3], -0.5 * params[P_SX], 0.5 * params[P_SX]);
+  double wy = params[P_SY] + clip(step[4], -0.5 * params[P_SY], 0.5 * params[P_SY]);
+  out[P_SX] = wx < MIN_WIDTH ? MIN_WIDTH : wx;
+  out[P_SY] = wy < MIN_WIDTH ? MIN_WIDTH : wy;
+}
+
 /*
  * 2-D cell-integrated Gaussian fitted to one layer's window, its censored taxels lower bounds
  * (taxelfit.fit_censored_layer): found = (x, y) centre in, (x, y, mass) out; widths from the
- * marginal fits; *mass > 0 is held fixed, else fitted. Returns 0 (found untouched) when it
- * cannot fit. scratch: 3 (h + w) doubles.
+ * marginal fits; a mass > 0 is held fixed, else fitted; a step that raises the misfit is
+ * halved. Returns 0 (found untouched) when it cannot fit. scratch: 6 (h + w) + 2 h w doubles.
  */
 static int fit_censored(const double *force, const double *censored, int h, int w,
                         double *scratch, double *found, double sx, double sy, double given)
 {
   double *gx = scratch, *dgx_mu = gx + w, *dgx_s = dgx_mu + w;
   double *gy = dgx_s + w, *dgy_mu = gy + h, *dgy_s = dgy_mu + h;
-  double mx = found[0], my = found[1], mass = given, fitted = given > 0 ? 0.0 : 1.0;
+  double *cost_scratch = dgy_s + h;
+  double fitted = given > 0 ? 0.0 : 1.0;
+  double params[NPARAM] = {given, found[0], found[1], sx, sy}, trial[NPARAM];
   if (!(given > 0)) {
-    axis_cells(mx, sx, w, gx, dgx_mu, dgx_s);
-    axis_cells(my, sy, h, gy, dgy_mu, dgy_s);
+    axis_cells(found[0], sx, w, gx, dgx_mu, dgx_s);
+    axis_cells(found[1], sy, h, gy, dgy_mu, dgy_s);
     double weight = 0.0, along = 0.0;
     for (int r = 0; r < h; r++) {
       for (int c = 0; c < w; c++) {
@@ -364,11 +405,13 @@ static int fit_censored(const double *force, const double *censored, int h, int 
     if (!(weight > 0)) {
       return 0;
     }
-    mass = along / weight;
+    params[P_MASS] = along / weight;
   }
+  double cost = censored_cost(force, censored, h, w, params, cost_scratch);
   for (int it = 0; it < ITERATIONS_2D; it++) {
-    axis_cells(mx, sx, w, gx, dgx_mu, dgx_s);
-    axis_cells(my, sy, h, gy, dgy_mu, dgy_s);
+    double mass = params[P_MASS];
+    axis_cells(params[P_X], params[P_SX], w, gx, dgx_mu, dgx_s);
+    axis_cells(params[P_Y], params[P_SY], h, gy, dgy_mu, dgy_s);
     double normal[5][5] = {{0}}, rhs[5] = {0}, step[5];
     for (int r = 0; r < h; r++) {
       for (int c = 0; c < w; c++) {
@@ -397,24 +440,39 @@ static int fit_censored(const double *force, const double *censored, int h, int 
     if (!solve5(normal, rhs, step)) {
       return 0;
     }
-    /* damped as the marginal fits */
-    mass += step[0];
-    mx = clip(mx + clip(step[1], -1.0, 1.0), -0.5, w - 0.5);
-    my = clip(my + clip(step[2], -1.0, 1.0), -0.5, h - 0.5);
-    double wx = sx + clip(step[3], -0.5 * sx, 0.5 * sx);
-    double wy = sy + clip(step[4], -0.5 * sy, 0.5 * sy);
-    sx = wx < MIN_WIDTH ? MIN_WIDTH : wx;
-    sy = wy < MIN_WIDTH ? MIN_WIDTH : wy;
-    if (fmax(fabs(step[1]), fabs(step[2])) < TOLERANCE_2D) {
+    double moves = fmax(fabs(step[1]), fabs(step[2]));
+    if (moves < SEARCHED) {
+      /* near the optimum the misfit is flat to its rounding: Gauss-Newton steps as they are */
+      damped(params, step, h, w, params);
+      if (moves < TOLERANCE_2D) {
+        break;
+      }
+      continue;
+    }
+    double trial_cost = cost;
+    int lower = 0;
+    for (int half = 0; half < HALVINGS && !lower; half++) {
+      damped(params, step, h, w, trial);
+      trial_cost = censored_cost(force, censored, h, w, trial, cost_scratch);
+      lower = trial_cost <= cost;
+      if (!lower) {
+        for (int a = 0; a < 5; a++) {
+          step[a] *= 0.5;
+        }
+      }
+    }
+    if (!lower) {
       break;
     }
+    memcpy(params, trial, sizeof(params));
+    cost = trial_cost;
   }
-  if (!(isfinite(mx) && isfinite(my))) {
+  if (!(isfinite(params[P_X]) && isfinite(params[P_Y]))) {
     return 0;
   }
-  found[0] = mx;
-  found[1] = my;
-  found[2] = mass;
+  found[0] = params[P_X];
+  found[1] = params[P_Y];
+  found[2] = params[P_MASS];
   return 1;
 }
 

@@ -57,8 +57,10 @@ _INV_SQRT2PI = 1.0 / math.sqrt(2.0 * math.pi)
 # parameters, and the noise, need that many (with fewer the width trades against the centre).
 _MIN_FREE = 8
 _ITERATIONS_2D = 30
-# Halvings of a 2-D step that raises the misfit before the fit stops where it is.
+# Halvings of a 2-D step that raises the misfit before the fit stops where it is; steps that
+# move the centre less than _SEARCHED (taxels) are taken whole.
 _HALVINGS = 12
+_SEARCHED = 1e-5
 # The 2-D fit runs until its centre steps fall below this (taxels): converged, not merely close.
 _TOLERANCE_2D = 1e-10
 # Abramowitz and Stegun 7.1.26: erf to 1.5e-7, far below the counts' noise.
@@ -208,9 +210,13 @@ def fit_censored_layer(force: np.ndarray, censored: np.ndarray, centre: tuple, w
             step = np.linalg.solve(jac.T @ jac + 1e-12 * np.eye(5), jac.T @ residual)
         except np.linalg.LinAlgError:
             return None
-        if max(abs(float(step[1])), abs(float(step[2]))) < _TOLERANCE_2D:
+        moves = max(abs(float(step[1])), abs(float(step[2])))
+        if moves < _SEARCHED:
+            # Near the optimum the misfit is flat to its rounding: Gauss-Newton steps as they are.
             params = _damped(params, step, (h, w))
-            break
+            if moves < _TOLERANCE_2D:
+                break
+            continue
         for _ in range(_HALVINGS):
             trial = _damped(params, step, (h, w))
             trial_cost = _censored_cost(force, free, trial)

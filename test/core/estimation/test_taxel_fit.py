@@ -112,11 +112,17 @@ def test_a_saturated_layer_is_placed_by_its_rim():
     assert math.hypot(plain_dx - 0.35, plain_dy - 0.2) > 5.0 * error
 
 
-def test_a_saturated_layer_with_little_rim_keeps_its_marginal_fit():
-    # A sharp imprint (0.3 taxel) whose centre saturates leaves fewer than eight taxels below the
-    # ceiling: too few for a 2-D fit's five parameters, so the marks change nothing.
+def test_a_sharp_saturated_top_imprint_takes_the_bottom_layers_mass():
+    # A sharp top imprint (0.3 taxel, 20 N) reads the ceiling of 3 N at its centre and leaves
+    # too little rim to fit its mass; the unsaturated bottom imprint carries the same 20 N.
+    # Expected: the shift of the true centres, which the marginal fits of the plateau miss.
     top = _imprint((9, 9), (4.2, 4.1), 0.3, 20.0, 0.05)
-    maps = np.stack((np.minimum(top, 3.0), _imprint((9, 9), (4.5, 4.0), 0.9, 5.0)))
+    bottom = _imprint((9, 9), (4.5, 4.0), 0.9, 20.0, 0.05)
+    maps = np.stack((np.minimum(top, 3.0), bottom))
     censored = np.stack((top >= 3.0, np.zeros_like(top, dtype=bool)))
-    assert censored[0].any()
-    assert cell_fit_shift(maps, None, censored) == cell_fit_shift(maps)
+    assert int(((maps[0] > 0) & ~censored[0]).sum()) < 8
+    dx, dy, _ = cell_fit_shift(maps, None, censored)
+    error = math.hypot(dx - 0.3, dy + 0.1)
+    assert error < 0.01
+    plain_dx, plain_dy, _ = cell_fit_shift(maps)
+    assert math.hypot(plain_dx - 0.3, plain_dy + 0.1) > 5.0 * error
