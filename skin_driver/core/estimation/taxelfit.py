@@ -28,8 +28,7 @@ carries, and the sums mix it with the rim. Such a layer is fitted in 2-D instead
 saturated taxels are lower bounds, so the rim places the imprint. The bottom imprint, blurred,
 has rim enough (``_MIN_FREE`` taxels) to fit its mass too. The sharp top imprint has not: a fit
 of its mass trades it against width and centre (a thousandfold mass in one saturated taxel), so
-it takes the bottom layer's mass, the same load seen through the layer (on the saturating skin
-the rms centre error fell from 0.09 to 0.05 taxel on the bottom, 0.15 to 0.06 on the top).
+it takes the bottom layer's mass, the same load seen through the layer (docs/estimation.md).
 """
 
 from __future__ import annotations
