@@ -88,7 +88,8 @@ sk_kernel *sk_new(const int *ints, const double *reals, const double *baseline,
   if (k->method == SK_POC) {
     shift_scratch += (size_t)sk_poc_scratch(rows, cols);
   } else if (k->method == SK_TAXEL_FIT) {
-    shift_scratch += 3 * (size_t)n; /* the window's censored taxels, a 2-D fit's misfits */
+    /* the window's censored taxels and a 2-D fit's work (taxelfit.c: fit_censored) */
+    shift_scratch += 6 * (size_t)n + 4 * ((size_t)line + 1);
   }
   k->fit = copy_of(NULL, 4 * (size_t)n + shift_scratch);
   k->labels = malloc(sizeof(int) * n);

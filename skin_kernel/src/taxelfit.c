@@ -21,6 +21,8 @@
 #define ITERATIONS_2D 30
 #define HALVINGS 12
 #define SEARCHED 1e-5
+#define DECREASE 1e-12
+#define PINNED 1e-3
 #define TOLERANCE_2D 1e-10
 /* Abramowitz and Stegun 7.1.26: erf to 1.5e-7, far below the counts' noise */
 static const double AS_P = 0.3275911;
@@ -325,36 +327,32 @@ static int solve5(double a[5][5], double b[5], double x[5])
 }
 
 /* Whether a layer's window calls for fit_censored (taxelfit._fits_censored). */
-static int fits_censored(const double *force, const double *censored, int h, int w, int min_free)
+static int fits_censored(const double *force, const double *censored, int m, int min_free)
 {
-  int any = 0, free = 0, edge = 0;
-  for (int r = 0; r < h; r++) {
-    for (int c = 0; c < w; c++) {
-      int j = r * w + c;
-      any |= censored[j] > 0;
-      free += force[j] > 0 && !(censored[j] > 0);
-      edge |= force[j] != 0 && (r == 0 || r == h - 1 || c == 0 || c == w - 1);
-    }
+  int any = 0, free = 0;
+  for (int j = 0; j < m; j++) {
+    any |= censored[j] > 0;
+    free += force[j] > 0 && !(censored[j] > 0);
   }
-  return any && free >= min_free && !edge;
+  return any && free >= min_free;
 }
 
 /* Parameters of a 2-D fit: mass, centre x, y, width x, y. */
 enum { P_MASS, P_X, P_Y, P_SX, P_SY, NPARAM };
 
-/* Squared misfit of params, a censored taxel's only below it (taxelfit._censored_cost). */
-static double censored_cost(const double *force, const double *censored, int h, int w,
+/* Squared misfit of params, a bound taxel's only below it (taxelfit._censored_cost). */
+static double censored_cost(const double *force, const double *bound, int h, int w,
                             const double *params, double *scratch)
 {
-  double *gx = scratch, *gy = gx + w, *dmu = gy + h, *ds = dmu + (h > w ? h : w);
+  int nn = h > w ? h : w;
+  double *gx = scratch, *gy = gx + w, *dmu = gy + h, *ds = dmu + nn, *sq = ds + nn;
   axis_cells(params[P_X], params[P_SX], w, gx, dmu, ds);
   axis_cells(params[P_Y], params[P_SY], h, gy, dmu, ds);
-  double *sq = ds + (h > w ? h : w);
   for (int r = 0; r < h; r++) {
     for (int c = 0; c < w; c++) {
       int j = r * w + c;
       double residual = force[j] - params[P_MASS] * (gy[r] * gx[c]);
-      if (censored[j] > 0 && residual < 0.0) {
+      if (bound[j] > 0 && residual < 0.0) {
         residual = 0.0;
       }
       sq[j] = residual * residual;
@@ -363,68 +361,54 @@ static double censored_cost(const double *force, const double *censored, int h, 
   return sk_sum(sq, h * w);
 }
 
-/* params moved by step: a taxel at most for a centre, half a width for a width (_damped). */
+/*
+ * params moved by step: a taxel at most for a centre, half a width for a width; a centre may
+ * lie past the window's edge by PAST_EDGE widths (taxelfit._damped). out may be params.
+ */
 static void damped(const double *params, const double *step, int h, int w, double *out)
 {
-  out[P_MASS] = params[P_MASS] + step[0];
-  out[P_X] = clip(params[P_X] + clip(step[1], -1.0, 1.0), -0.5, w - 0.5);
-  out[P_Y] = clip(params[P_Y] + clip(step[2], -1.0, 1.0), -0.5, h - 0.5);
+  double reach_x = PAST_EDGE * params[P_SX], reach_y = PAST_EDGE * params[P_SY];
   double wx = params[P_SX] + clip(step[3], -0.5 * params[P_SX], 0.5 * params[P_SX]);
   double wy = params[P_SY] + clip(step[4], -0.5 * params[P_SY], 0.5 * params[P_SY]);
+  out[P_MASS] = params[P_MASS] + step[0];
+  out[P_X] = clip(params[P_X] + clip(step[1], -1.0, 1.0), -0.5 - reach_x, w - 0.5 + reach_x);
+  out[P_Y] = clip(params[P_Y] + clip(step[2], -1.0, 1.0), -0.5 - reach_y, h - 0.5 + reach_y);
   out[P_SX] = wx < MIN_WIDTH ? MIN_WIDTH : wx;
   out[P_SY] = wy < MIN_WIDTH ? MIN_WIDTH : wy;
 }
 
 /*
- * 2-D cell-integrated Gaussian fitted to one layer's window, its censored taxels lower bounds
- * (taxelfit.fit_censored_layer): found = (x, y) centre in, (x, y, mass) out; widths from the
- * marginal fits; a mass > 0 is held fixed, else fitted; a step that raises the misfit is
- * halved. Returns 0 (found untouched) when it cannot fit. scratch: 6 (h + w) + 2 h w doubles.
+ * Gauss-Newton on censored_cost from params, in place (taxelfit._gauss_newton); bound: 1 where
+ * a taxel is a lower bound. Returns whether it converged. scratch: 5 max(h, w) + 2 (h + w) +
+ * h w doubles.
  */
-static int fit_censored(const double *force, const double *censored, int h, int w,
-                        double *scratch, double *found, double sx, double sy, double given)
+static int gauss_newton(const double *force, const double *bound, int h, int w, double *params,
+                        double fitted, int searched, double *scratch)
 {
   double *gx = scratch, *dgx_mu = gx + w, *dgx_s = dgx_mu + w;
   double *gy = dgx_s + w, *dgy_mu = gy + h, *dgy_s = dgy_mu + h;
   double *cost_scratch = dgy_s + h;
-  double fitted = given > 0 ? 0.0 : 1.0;
-  double params[NPARAM] = {given, found[0], found[1], sx, sy}, trial[NPARAM];
-  if (!(given > 0)) {
-    axis_cells(found[0], sx, w, gx, dgx_mu, dgx_s);
-    axis_cells(found[1], sy, h, gy, dgy_mu, dgy_s);
-    double weight = 0.0, along = 0.0;
-    for (int r = 0; r < h; r++) {
-      for (int c = 0; c < w; c++) {
-        if (!(censored[r * w + c] > 0)) {
-          double b = gy[r] * gx[c];
-          weight += b * b;
-          along += force[r * w + c] * b;
-        }
-      }
-    }
-    if (!(weight > 0)) {
-      return 0;
-    }
-    params[P_MASS] = along / weight;
-  }
-  double cost = censored_cost(force, censored, h, w, params, cost_scratch);
+  double trial[NPARAM], whole[NPARAM];
+  double cost = censored_cost(force, bound, h, w, params, cost_scratch);
   for (int it = 0; it < ITERATIONS_2D; it++) {
     double mass = params[P_MASS];
     axis_cells(params[P_X], params[P_SX], w, gx, dgx_mu, dgx_s);
     axis_cells(params[P_Y], params[P_SY], h, gy, dgy_mu, dgy_s);
+    /* a width at its floor has no column, as a fixed mass: the centre's step cannot count on it */
+    double free_sx = params[P_SX] > MIN_WIDTH ? 1.0 : 0.0;
+    double free_sy = params[P_SY] > MIN_WIDTH ? 1.0 : 0.0;
     double normal[5][5] = {{0}}, rhs[5] = {0}, step[5];
     for (int r = 0; r < h; r++) {
       for (int c = 0; c < w; c++) {
         int j = r * w + c;
         double model = mass * (gy[r] * gx[c]);
-        /* a censored taxel counts only while the model falls below its reading */
-        if (censored[j] > 0 && !(model < force[j])) {
+        /* a bound taxel counts only while the model falls below its reading */
+        if (bound[j] > 0 && !(model < force[j])) {
           continue;
         }
-        /* a fixed mass has no column: its normal equation is the regulariser's, its step 0 */
         double jac[5] = {gy[r] * gx[c] * fitted, mass * (gy[r] * dgx_mu[c]),
-                         mass * (dgy_mu[r] * gx[c]), mass * (gy[r] * dgx_s[c]),
-                         mass * (dgy_s[r] * gx[c])};
+                         mass * (dgy_mu[r] * gx[c]), mass * (gy[r] * dgx_s[c]) * free_sx,
+                         mass * (dgy_s[r] * gx[c]) * free_sy};
         double residual = force[j] - model;
         for (int a = 0; a < 5; a++) {
           for (int b = 0; b < 5; b++) {
@@ -440,21 +424,25 @@ static int fit_censored(const double *force, const double *censored, int h, int 
     if (!solve5(normal, rhs, step)) {
       return 0;
     }
-    double moves = fmax(fabs(step[1]), fabs(step[2]));
-    if (moves < SEARCHED) {
+    /* the centre's move as taken: a bound (past the edge, a width's floor) may hold it */
+    damped(params, step, h, w, whole);
+    double moves = fmax(fabs(whole[P_X] - params[P_X]), fabs(whole[P_Y] - params[P_Y]));
+    if (moves < SEARCHED || !searched) {
       /* near the optimum the misfit is flat to its rounding: Gauss-Newton steps as they are */
-      damped(params, step, h, w, params);
+      memcpy(params, whole, sizeof(whole));
       if (moves < TOLERANCE_2D) {
-        break;
+        return 1;
       }
+      cost = censored_cost(force, bound, h, w, params, cost_scratch);
       continue;
     }
     double trial_cost = cost;
     int lower = 0;
     for (int half = 0; half < HALVINGS && !lower; half++) {
       damped(params, step, h, w, trial);
-      trial_cost = censored_cost(force, censored, h, w, trial, cost_scratch);
-      lower = trial_cost <= cost;
+      trial_cost = censored_cost(force, bound, h, w, trial, cost_scratch);
+      /* lower by more than its rounding, so that no tie decides where the fit goes */
+      lower = trial_cost < cost * (1.0 - DECREASE);
       if (!lower) {
         for (int a = 0; a < 5; a++) {
           step[a] *= 0.5;
@@ -462,12 +450,63 @@ static int fit_censored(const double *force, const double *censored, int h, int 
       }
     }
     if (!lower) {
-      break;
+      return 0;
     }
-    memcpy(params, trial, sizeof(params));
+    memcpy(params, trial, sizeof(trial));
     cost = trial_cost;
   }
-  if (!(isfinite(params[P_X]) && isfinite(params[P_Y]))) {
+  return 0;
+}
+
+/*
+ * 2-D cell-integrated Gaussian fitted to one layer's window, its censored taxels lower bounds
+ * (taxelfit.fit_censored_layer): found = (x, y) centre in, (x, y, mass) out; widths from the
+ * marginal fits; a mass > 0 is held fixed, else fitted. Unsettled, the censored taxels within
+ * PINNED of their reading are taken as readings and the fit polished. Returns 0 (found
+ * untouched) when it does not settle. scratch: 6 max(h, w) + 2 (h + w) + 2 h w doubles.
+ */
+static int fit_censored(const double *force, const double *censored, int h, int w,
+                        double *scratch, double *found, double sx, double sy, double given)
+{
+  int m = h * w;
+  double *bound = scratch, *work = scratch + m;
+  double fitted = given > 0 ? 0.0 : 1.0;
+  double params[NPARAM] = {given, found[0], found[1], sx, sy};
+  if (!(given > 0)) {
+    double *gx = work, *gy = gx + w, *dmu = gy + h, *ds = dmu + (h > w ? h : w);
+    axis_cells(found[0], sx, w, gx, dmu, ds);
+    axis_cells(found[1], sy, h, gy, dmu, ds);
+    double weight = 0.0, along = 0.0;
+    for (int r = 0; r < h; r++) {
+      for (int c = 0; c < w; c++) {
+        if (!(censored[r * w + c] > 0)) {
+          double b = gy[r] * gx[c];
+          weight += b * b;
+          along += force[r * w + c] * b;
+        }
+      }
+    }
+    if (!(weight > 0)) {
+      return 0;
+    }
+    params[P_MASS] = along / weight;
+  }
+  int converged = gauss_newton(force, censored, h, w, params, fitted, 1, work);
+  if (!converged) {
+    double *gx = work, *gy = gx + w, *dmu = gy + h, *ds = dmu + (h > w ? h : w);
+    axis_cells(params[P_X], params[P_SX], w, gx, dmu, ds);
+    axis_cells(params[P_Y], params[P_SY], h, gy, dmu, ds);
+    for (int r = 0; r < h; r++) {
+      for (int c = 0; c < w; c++) {
+        int j = r * w + c;
+        double model = params[P_MASS] * (gy[r] * gx[c]);
+        int pinned = censored[j] > 0 && fabs(force[j] - model) <= PINNED * force[j];
+        bound[j] = censored[j] > 0 && !pinned ? 1.0 : 0.0;
+      }
+    }
+    converged = gauss_newton(force, bound, h, w, params, fitted, 0, work);
+  }
+  if (!(converged && isfinite(params[P_X]) && isfinite(params[P_Y]))) {
     return 0;
   }
   found[0] = params[P_X];
@@ -493,7 +532,7 @@ static void censored_centres(const double *force, const double *censored, int h,
     /* NaN or none: the mass is fitted */
     double given = layer == 0 ? mass : NAN;
     const double *own = force + layer * m, *marks = censored + layer * m;
-    if (!fits_censored(own, marks, h, w, given > 0 ? 0 : MIN_FREE)) {
+    if (!fits_censored(own, marks, m, given > 0 ? 0 : MIN_FREE)) {
       continue;
     }
     double found[3] = {centre[layer], centre[2 + layer], 0.0};

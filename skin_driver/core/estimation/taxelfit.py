@@ -26,7 +26,8 @@ loses its shape in the marginal sums: a saturated taxel reads the ceiling's forc
 carries, and the sums mix it with the rim. Such a layer is fitted in 2-D instead
 (:func:`fit_censored_layer`): a Gaussian integrated over the cells along both axes whose
 saturated taxels are lower bounds, so the rim places the imprint. The bottom imprint, blurred,
-has rim enough (``_MIN_FREE`` taxels) to fit its mass too. The sharp top imprint has not: a fit
+has rim enough (``_MIN_FREE`` taxels) to fit its mass too. An imprint cut by the map's edge is
+fitted on the cells the map has, its centre free to lie past the edge. The sharp top imprint has not: a fit
 of its mass trades it against width and centre (a thousandfold mass in one saturated taxel), so
 it takes the bottom layer's mass, the same load seen through the layer (docs/estimation.md).
 """
@@ -60,6 +61,9 @@ _ITERATIONS_2D = 30
 # move the centre less than _SEARCHED (taxels) are taken whole.
 _HALVINGS = 12
 _SEARCHED = 1e-5
+_DECREASE = 1e-12
+# A censored taxel this close to its reading (share of it) holds a kinked optimum's bound.
+_PINNED = 1e-3
 # The 2-D fit runs until its centre steps fall below this (taxels): converged, not merely close.
 _TOLERANCE_2D = 1e-10
 # Abramowitz and Stegun 7.1.26: erf to 1.5e-7, far below the counts' noise.
@@ -160,14 +164,71 @@ def _censored_cost(force: np.ndarray, free: np.ndarray, params: tuple) -> float:
 
 
 def _damped(params: tuple, step: np.ndarray, shape: tuple) -> tuple:
-    """Return params moved by step: a taxel at most for a centre, half a width for a width."""
+    """
+    Return params moved by step: a taxel at most for a centre, half a width for a width.
+
+    A centre may lie past the window's edge by ``_PAST_EDGE`` widths: where the window is the
+    map's edge, the imprint's rim on the map still places it (:func:`_cut_by_edge`).
+    """
     mass, mx, my, sx, sy = params
     h, w = shape
+    reach_x, reach_y = _PAST_EDGE * sx, _PAST_EDGE * sy
     return (mass + float(step[0]),
-            min(max(mx + min(max(float(step[1]), -1.0), 1.0), -0.5), w - 0.5),
-            min(max(my + min(max(float(step[2]), -1.0), 1.0), -0.5), h - 0.5),
+            min(max(mx + min(max(float(step[1]), -1.0), 1.0), -0.5 - reach_x), w - 0.5 + reach_x),
+            min(max(my + min(max(float(step[2]), -1.0), 1.0), -0.5 - reach_y), h - 0.5 + reach_y),
             max(sx + min(max(float(step[3]), -0.5 * sx), 0.5 * sx), _MIN_WIDTH),
             max(sy + min(max(float(step[4]), -0.5 * sy), 0.5 * sy), _MIN_WIDTH))
+
+
+def _gauss_newton(force: np.ndarray, free: np.ndarray, params: tuple, fitted: float,
+                  searched: bool) -> tuple:
+    """
+    Return (params, converged) of Gauss-Newton on :func:`_censored_cost` from ``params``.
+
+    ``searched``: a step that moves a centre by ``_SEARCHED`` or more is halved until the misfit
+    falls (the saturated taxels that count come and go, and a full step can overshoot), and the
+    fit stops where none does. ``fitted`` 0 holds the mass.
+    """
+    h, w = force.shape
+    cost = _censored_cost(force, free, params)
+    for _ in range(_ITERATIONS_2D):
+        mass, mx, my, sx, sy = params
+        gx, dgx_mu, dgx_s = _axis_cells(mx, sx, w)
+        gy, dgy_mu, dgy_s = _axis_cells(my, sy, h)
+        model = mass * np.outer(gy, gx)
+        active = free | (model < force)
+        # A fixed mass has no column: its normal equation is the regulariser's, its step 0. So
+        # has a width at its floor: else the centre's step counts on a width it cannot take.
+        jac = np.stack((np.outer(gy, gx) * fitted, mass * np.outer(gy, dgx_mu),
+                        mass * np.outer(dgy_mu, gx),
+                        mass * np.outer(gy, dgx_s) * float(sx > _MIN_WIDTH),
+                        mass * np.outer(dgy_s, gx) * float(sy > _MIN_WIDTH)), axis=2)[active]
+        residual = (force - model)[active]
+        try:
+            step = np.linalg.solve(jac.T @ jac + 1e-12 * np.eye(5), jac.T @ residual)
+        except np.linalg.LinAlgError:
+            return params, False
+        # The centre's move as taken: a bound (past the edge, a width's floor) may hold it.
+        whole = _damped(params, step, (h, w))
+        moves = max(abs(whole[1] - params[1]), abs(whole[2] - params[2]))
+        if moves < _SEARCHED or not searched:
+            # Near the optimum the misfit is flat to its rounding: Gauss-Newton steps as they are.
+            params = whole
+            if moves < _TOLERANCE_2D:
+                return params, True
+            cost = _censored_cost(force, free, params)
+            continue
+        for _ in range(_HALVINGS):
+            trial = _damped(params, step, (h, w))
+            trial_cost = _censored_cost(force, free, trial)
+            # Lower by more than its rounding, so that no tie decides where the fit goes.
+            if trial_cost < cost * (1.0 - _DECREASE):
+                break
+            step = 0.5 * step
+        else:
+            return params, False
+        params, cost = trial, trial_cost
+    return params, False
 
 
 def fit_censored_layer(force: np.ndarray, censored: np.ndarray, centre: tuple, width: tuple,
@@ -179,8 +240,10 @@ def fit_censored_layer(force: np.ndarray, censored: np.ndarray, centre: tuple, w
     only a lower bound. The model is ``mass * gy[r] * gx[c]``, a Gaussian integrated over the
     cells along each axis, fitted by Gauss-Newton from ``centre`` and ``width`` (x, y: the
     marginal fits'); a censored taxel counts only while the model falls below its reading.
-    A given ``mass`` is held fixed. Each step is halved until the misfit does not grow: the
-    saturated taxels that count come and go from step to step, and a full step can overshoot.
+    A given ``mass`` is held fixed. Where the optimum sits on saturated taxels' bounds (kinks
+    of the misfit, along which the steps only creep), the taxels within ``_PINNED`` of their
+    reading are taken as readings and the fit polished from there. None when it does not
+    settle: the taxels it leans on still come and go.
     """
     h, w = force.shape
     free = ~censored
@@ -192,49 +255,20 @@ def fit_censored_layer(force: np.ndarray, censored: np.ndarray, centre: tuple, w
         if not weight > 0:
             return None
         mass = float(force[free] @ base[free]) / weight
-    params = (mass, centre[0], centre[1], width[0], width[1])
-    cost = _censored_cost(force, free, params)
-    for _ in range(_ITERATIONS_2D):
-        mass, mx, my, sx, sy = params
-        gx, dgx_mu, dgx_s = _axis_cells(mx, sx, w)
-        gy, dgy_mu, dgy_s = _axis_cells(my, sy, h)
-        model = mass * np.outer(gy, gx)
-        active = free | (model < force)
-        # A fixed mass has no column: its normal equation is the regulariser's, its step 0.
-        jac = np.stack((np.outer(gy, gx) * fitted, mass * np.outer(gy, dgx_mu),
-                        mass * np.outer(dgy_mu, gx), mass * np.outer(gy, dgx_s),
-                        mass * np.outer(dgy_s, gx)), axis=2)[active]
-        residual = (force - model)[active]
-        try:
-            step = np.linalg.solve(jac.T @ jac + 1e-12 * np.eye(5), jac.T @ residual)
-        except np.linalg.LinAlgError:
-            return None
-        moves = max(abs(float(step[1])), abs(float(step[2])))
-        if moves < _SEARCHED:
-            # Near the optimum the misfit is flat to its rounding: Gauss-Newton steps as they are.
-            params = _damped(params, step, (h, w))
-            if moves < _TOLERANCE_2D:
-                break
-            continue
-        for _ in range(_HALVINGS):
-            trial = _damped(params, step, (h, w))
-            trial_cost = _censored_cost(force, free, trial)
-            if trial_cost <= cost:
-                break
-            step = 0.5 * step
-        else:
-            break
-        params, cost = trial, trial_cost
+    params, converged = _gauss_newton(force, free, (mass, centre[0], centre[1], width[0],
+                                                     width[1]), fitted, True)
+    if not converged:
+        model = params[0] * np.outer(_axis_cells(params[2], params[4], h)[0],
+                                     _axis_cells(params[1], params[3], w)[0])
+        pinned = censored & (np.abs(force - model) <= _PINNED * force)
+        params, converged = _gauss_newton(force, free | pinned, params, fitted, False)
     mx, my = params[1], params[2]
-    return (mx, my, params[0]) if math.isfinite(mx) and math.isfinite(my) else None
+    return (mx, my, params[0]) if converged and math.isfinite(mx) and math.isfinite(my) else None
 
 
 def _fits_censored(force: np.ndarray, censored: np.ndarray, min_free: int) -> bool:
     """Return whether a layer's window calls for :func:`fit_censored_layer` (module docstring)."""
-    if not censored.any() or int(((force > 0) & ~censored).sum()) < min_free:
-        return False
-    # An imprint cut by the map's edge has lost part of its rim: the marginal fits place it.
-    return not (force[0].any() or force[-1].any() or force[:, 0].any() or force[:, -1].any())
+    return bool(censored.any()) and int(((force > 0) & ~censored).sum()) >= min_free
 
 
 def _censored_centres(force: np.ndarray, censored: np.ndarray, mu: np.ndarray,
