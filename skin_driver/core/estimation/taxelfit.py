@@ -26,10 +26,11 @@ loses its shape in the marginal sums: a saturated taxel reads the ceiling's forc
 carries, and the sums mix it with the rim. Such a layer is fitted in 2-D instead
 (:func:`fit_censored_layer`): a Gaussian integrated over the cells along both axes whose
 saturated taxels are lower bounds, so the rim places the imprint. The bottom imprint, blurred,
-has rim enough (``_MIN_FREE`` taxels) to fit its mass too. An imprint cut by the map's edge is
-fitted on the cells the map has, its centre free to lie past the edge. The sharp top imprint has not: a fit
+has rim enough (``_MIN_FREE`` taxels) to fit its mass too. The sharp top imprint has not: a fit
 of its mass trades it against width and centre (a thousandfold mass in one saturated taxel), so
 it takes the bottom layer's mass, the same load seen through the layer (docs/estimation.md).
+An imprint cut by the map's edge is fitted on the cells the map has, its centre free to lie
+past the edge.
 """
 
 from __future__ import annotations
@@ -255,8 +256,8 @@ def fit_censored_layer(force: np.ndarray, censored: np.ndarray, centre: tuple, w
         if not weight > 0:
             return None
         mass = float(force[free] @ base[free]) / weight
-    params, converged = _gauss_newton(force, free, (mass, centre[0], centre[1], width[0],
-                                                     width[1]), fitted, True)
+    start = (mass, centre[0], centre[1], width[0], width[1])
+    params, converged = _gauss_newton(force, free, start, fitted, True)
     if not converged:
         model = params[0] * np.outer(_axis_cells(params[2], params[4], h)[0],
                                      _axis_cells(params[1], params[3], w)[0])
