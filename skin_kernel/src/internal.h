@@ -62,9 +62,25 @@ void sk_pair_window(const sk_kernel *k, int q, double *out);
 /* Bottom load below this share of a contact's peak share is not part of its window. */
 #define WINDOW_SHARE 0.02
 
-/* taxelfit.c: the shift of a (2, h, w) window; force may be NULL (centroid) */
-void sk_taxel_fit(const double *force, const double *counts, int h, int w, double *scratch,
-                  double *dx, double *dy, double *confidence);
+/* taxelfit.py's constants shared by taxelfit.c and censorfit.c */
+#define MIN_WIDTH 0.25
+#define PAST_EDGE 2.0 /* widths */
+#define INV_SQRT2PI 0.3989422804014327
+
+/* taxelfit.c: numpy.clip of one number, and the normal CDF to 1.5e-7 (Abramowitz and Stegun) */
+double sk_clip(double x, double lo, double hi);
+double sk_normal_cdf(double u);
+
+/*
+ * censorfit.c: the saturated layers of a (2, h, w) window refitted in 2-D, in place on the
+ * marginal fits' centres (x top, x bottom, y top, y bottom); width likewise
+ */
+void sk_censored_centres(const double *force, const double *censored, int h, int w,
+                         double *scratch, double *centre, const double *width);
+
+/* taxelfit.c: the shift of a (2, h, w) window; censored: 1 where a taxel is saturated */
+void sk_taxel_fit(const double *force, const double *counts, const double *censored, int h,
+                  int w, double *scratch, double *dx, double *dy, double *confidence);
 void sk_centroid(const double *counts, int h, int w, double *scratch, double *dx, double *dy,
                  double *confidence);
 

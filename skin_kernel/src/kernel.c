@@ -88,6 +88,9 @@ sk_kernel *sk_new(const int *ints, const double *reals, const double *baseline,
   size_t shift_scratch = 8 * ((size_t)line + 1);
   if (k->method == SK_POC) {
     shift_scratch += (size_t)sk_poc_scratch(rows, cols);
+  } else if (k->method == SK_TAXEL_FIT) {
+    /* the window's censored taxels and a 2-D fit's work (taxelfit.c: fit_censored) */
+    shift_scratch += 6 * (size_t)n + 4 * ((size_t)line + 1);
   }
   /* a saturated imprint's fill-in: its marked counts (2 windows), then sk_imprint_force's */
   size_t imprint_scratch = 4 * (size_t)n;
@@ -261,7 +264,18 @@ int sk_scan(sk_kernel *k, const double *maps, int every_pair, double *out, int *
     }
     double *scratch = k->fit + 4 * m;
     if (k->method == SK_TAXEL_FIT) {
-      sk_taxel_fit(k->fit + 2 * m, k->fit, p->h, p->w, scratch, &p->dx, &p->dy, &p->confidence);
+      /* saturated taxels: at the curve's censoring counts, or cut by the ADC (pipeline.py) */
+      double *marks = scratch;
+      memcpy(marks, k->fit, 2 * m * sizeof(double));
+      sk_clipped_window(k, p, marks, 1);
+      for (int layer = 0; layer < 2; layer++) {
+        double censor = k->reals[SK_CENSOR_TOP + layer];
+        for (int j = layer * m; j < (layer + 1) * m; j++) {
+          marks[j] = censor > 0 && marks[j] >= censor ? 1.0 : 0.0;
+        }
+      }
+      sk_taxel_fit(k->fit + 2 * m, k->fit, marks, p->h, p->w, scratch + 2 * m, &p->dx, &p->dy,
+                   &p->confidence);
     } else if (k->method == SK_POC) {
       sk_poc(k->fit, p->h, p->w, scratch, &p->dx, &p->dy, &p->confidence);
     } else {

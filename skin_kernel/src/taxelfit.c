@@ -1,6 +1,7 @@
 /*
  * Shift of one contact's window: cell-integrated Gaussian profiles (taxel_fit) or the centroid
- * difference. Python description: taxelfit.py and shift.centroid.
+ * difference; a saturated layer is refitted in 2-D by censorfit.c. Python description:
+ * taxelfit.py and shift.centroid.
  */
 #include <math.h>
 #include <stddef.h>
@@ -10,23 +11,20 @@
 /* taxelfit.py's constants */
 #define ITERATIONS 8
 #define TOLERANCE 1e-4
-#define MIN_WIDTH 0.25
 #define MIN_EXPLAINED 0.5
 #define WIDE 1.5
 #define PLATEAU 1e-9
-#define PAST_EDGE 2.0 /* widths */
-#define INV_SQRT2PI 0.3989422804014327
 /* Abramowitz and Stegun 7.1.26: erf to 1.5e-7, far below the counts' noise */
 static const double AS_P = 0.3275911;
 static const double AS[5] = {0.254829592, -0.284496736, 1.421413741, -1.453152027, 1.061405429};
 
-static double clip(double x, double lo, double hi)
+double sk_clip(double x, double lo, double hi)
 {
   /* comparisons keep a NaN, as numpy.clip does */
   return x < lo ? lo : (x > hi ? hi : x);
 }
 
-static double normal_cdf(double u)
+double sk_normal_cdf(double u)
 {
   double x = fabs(u) * (1.0 / sqrt(2.0));
   double t = 1.0 / (1.0 + AS_P * x);
@@ -107,9 +105,9 @@ static int solve3(double a[3][3], double b[3], double x[3])
 /* Cells of the profile (mu, s) over len cells: differences of the CDF at the cell edges. */
 static void cells_of(double mu, double s, int len, double *cells)
 {
-  double before = normal_cdf((-0.5 - mu) / s);
+  double before = sk_normal_cdf((-0.5 - mu) / s);
   for (int i = 0; i < len; i++) {
-    double after = normal_cdf(((i + 1) - 0.5 - mu) / s);
+    double after = sk_normal_cdf(((i + 1) - 0.5 - mu) / s);
     cells[i] = after - before;
     before = after;
   }
@@ -168,11 +166,11 @@ static int fit_profiles(const double *profiles, int nn, const int *len, const st
     for (int j = 0; j < 4 && solved; j++) {
       const double *p = profiles + j * nn;
       double u0 = (-0.5 - mu[j]) / s[j];
-      double pdf0 = exp(-0.5 * u0 * u0) * INV_SQRT2PI, cdf0 = normal_cdf(u0), updf0 = u0 * pdf0;
+      double pdf0 = exp(-0.5 * u0 * u0) * INV_SQRT2PI, cdf0 = sk_normal_cdf(u0), updf0 = u0 * pdf0;
       double normal[3][3] = {{0}}, rhs[3] = {0};
       for (int i = 0; i < len[j]; i++) {
         double u1 = ((i + 1) - 0.5 - mu[j]) / s[j];
-        double pdf1 = exp(-0.5 * u1 * u1) * INV_SQRT2PI, cdf1 = normal_cdf(u1), updf1 = u1 * pdf1;
+        double pdf1 = exp(-0.5 * u1 * u1) * INV_SQRT2PI, cdf1 = sk_normal_cdf(u1), updf1 = u1 * pdf1;
         /* a fixed width has no column: its normal equation is the regulariser's, its step 0 */
         double jac[3] = {cdf1 - cdf0, amp[j] * (-(pdf1 - pdf0) / s[j]),
                          amp[j] * (-(updf1 - updf0) / s[j] * free[j])};
@@ -203,8 +201,8 @@ static int fit_profiles(const double *profiles, int nn, const int *len, const st
     for (int j = 0; j < 4; j++) {
       /* Damped: a step never moves the centre by more than a taxel nor the width by half. */
       amp[j] = amp[j] + step[j][0];
-      mu[j] = clip(mu[j] + clip(step[j][1], -1.0, 1.0), low[j], high[j]);
-      double w = s[j] + clip(step[j][2], -0.5 * s[j], 0.5 * s[j]);
+      mu[j] = sk_clip(mu[j] + sk_clip(step[j][1], -1.0, 1.0), low[j], high[j]);
+      double w = s[j] + sk_clip(step[j][2], -0.5 * s[j], 0.5 * s[j]);
       s[j] = w < MIN_WIDTH ? MIN_WIDTH : w;
       small &= fabs(step[j][1]) < TOLERANCE;
     }
@@ -259,7 +257,7 @@ static int cut_by_edge(const double *profiles, int nn, const int *len, const dou
     cut->low[j] = first[j] ? -0.5 - reach : -0.5;
     cut->high[j] = last[j] ? (len[j] - 0.5) + reach : len[j] - 0.5;
     cut->width[j] = width[other];
-    cut->mu[j] = clip(mu[j], cut->low[j], cut->high[j]);
+    cut->mu[j] = sk_clip(mu[j], cut->low[j], cut->high[j]);
   }
   return any;
 }
@@ -293,8 +291,8 @@ static void profiles_of(const double *layer, int h, int w, int nn, double *along
   }
 }
 
-void sk_taxel_fit(const double *force, const double *counts, int h, int w, double *scratch,
-                  double *dx, double *dy, double *confidence)
+void sk_taxel_fit(const double *force, const double *counts, const double *censored, int h,
+                  int w, double *scratch, double *dx, double *dy, double *confidence)
 {
   int m = h * w, nn = h > w ? h : w;
   double *profiles = scratch;
@@ -320,6 +318,7 @@ void sk_taxel_fit(const double *force, const double *counts, int h, int w, doubl
       }
     }
   }
+  sk_censored_centres(force, censored, h, w, scratch, centre, width);
   *dx = centre[1] - centre[0];
   *dy = centre[3] - centre[2];
   double worst = explained[0];

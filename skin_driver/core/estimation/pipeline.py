@@ -155,6 +155,23 @@ def _rimmed(sums, curves, saturated) -> tuple:
                  for total, curve, hit in zip(sums, curves, saturated))
 
 
+def _marked(pair: LayerPair, clipped: np.ndarray, full_scale: float) -> np.ndarray:
+    """Return the pair's counts with the taxels ``clipped`` marks at ``full_scale`` (or as is)."""
+    if clipped is None:
+        return pair.maps
+    r0, c0 = pair.origin
+    h, w = pair.maps.shape[1:]
+    return mark_clipped(pair.maps, clipped[:, r0:r0 + h, c0:c0 + w], full_scale)
+
+
+def _censored_taxels(pair: LayerPair, curves, clipped: np.ndarray, full_scale: float):
+    """Return 1.0 where a taxel of the pair's window is saturated (a lower bound), else 0.0."""
+    maps = _marked(pair, clipped, full_scale)
+    ceilings = [c.censor_counts if c is not None and c.censor_counts else math.inf
+                for c in (curves or (None, None))]
+    return np.stack([own >= ceiling for own, ceiling in zip(maps, ceilings)]).astype(np.float64)
+
+
 def _censored(pair: LayerPair, window: np.ndarray, curves, clipped: np.ndarray = None,
               full_scale: float = 0.0) -> LayerPair:
     """
@@ -163,11 +180,7 @@ def _censored(pair: LayerPair, window: np.ndarray, curves, clipped: np.ndarray =
     ``clipped`` marks the taxels of the whole maps read at the ADC's full scale (or None):
     censored whatever their tared counts (:func:`conditioning.mark_clipped`).
     """
-    maps = pair.maps
-    if clipped is not None:
-        r0, c0 = pair.origin
-        h, w = maps.shape[1:]
-        maps = mark_clipped(maps, clipped[:, r0:r0 + h, c0:c0 + w], full_scale)
+    maps = _marked(pair, clipped, full_scale)
     saturated = _saturated(maps, curves)
     sums = _imprint_sums(maps, window, saturated,
                          _rimmed((pair.top_force_n, pair.bottom_force_n), curves, saturated),
@@ -282,7 +295,8 @@ class ContactEstimator:
             if whole is not None:
                 est = whole
             elif method.linear:
-                est = method.function(np.concatenate((window, pair.maps)))
+                est = method.function(np.concatenate((window, pair.maps, _censored_taxels(
+                    pair, curves, clipped, conditioner.config.fsr.full_scale))))
             else:
                 est = method.function(pair.maps)
             if not (math.isfinite(est.dx) and math.isfinite(est.dy)):

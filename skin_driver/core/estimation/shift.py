@@ -67,8 +67,9 @@ class Method:
     A registered estimator: ``function`` maps a (2, h, w) top/bottom stack to a ShiftEstimate.
 
     ``whole_map`` methods get the whole raw count maps instead of one contact's window;
-    ``linear`` ones get a (4, h, w) stack: the window's force maps (counts linearised by each
-    layer's force curve), then its counts.
+    ``linear`` ones get a (6, h, w) stack: the window's force maps (counts linearised by each
+    layer's force curve), its counts, then 1 where a taxel is saturated (its reading a lower
+    bound: at its force curve's censoring counts or cut by the ADC), else 0.
     """
 
     name: str
@@ -212,9 +213,11 @@ def taxel_fit(maps: np.ndarray) -> ShiftEstimate:
     """
     Estimate the shift by cell-integrated profiles on linearised maps (:mod:`taxelfit`).
 
-    ``maps`` is the (4, h, w) stack a ``linear`` method gets, or a plain (2, h, w) one.
+    ``maps`` is the (6, h, w) stack a ``linear`` method gets, or a plain (2, h, w) one.
     """
-    found = cell_fit_shift(maps[:2], maps[2:] if maps.shape[0] == 4 else None)
+    linear = maps.shape[0] == 6
+    found = cell_fit_shift(maps[:2], maps[2:4] if linear else None,
+                           maps[4:] > 0 if linear else None)
     return NO_SHIFT if found is None else ShiftEstimate(*found)
 
 

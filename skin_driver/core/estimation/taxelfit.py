@@ -21,9 +21,16 @@ force curve ends, is fitted on its counts instead):
 A profile cut by the map's edge keeps the width of the same layer's whole profile along the
 other axis, and its centre may lie past the edge (:func:`_cut_by_edge`).
 
-Integrating the model over the cells is what removes the sampling bias: the fitted centre is a
-continuous parameter of the profile, not a weighted mean of cell positions. The four fits
-(two layers, two axes) are independent three-parameter problems, solved together.
+A layer with saturated taxels (at its force curve's ceiling or cut by the ADC: ``censored``)
+loses its shape in the marginal sums: a saturated taxel reads the ceiling's force whatever it
+carries, and the sums mix it with the rim. Such a layer is fitted in 2-D instead
+(:func:`fit_censored_layer`): a Gaussian integrated over the cells along both axes whose
+saturated taxels are lower bounds, so the rim places the imprint. The bottom imprint, blurred,
+has rim enough (``_MIN_FREE`` taxels) to fit its mass too. The sharp top imprint has not: a fit
+of its mass trades it against width and centre (a thousandfold mass in one saturated taxel), so
+it takes the bottom layer's mass, the same load seen through the layer (docs/estimation.md).
+An imprint cut by the map's edge is fitted on the cells the map has, its centre free to lie
+past the edge.
 """
 
 from __future__ import annotations
@@ -32,7 +39,7 @@ import math
 
 import numpy as np
 
-__all__ = ['fit_cell_profiles', 'cell_fit_shift']
+__all__ = ['fit_cell_profiles', 'fit_censored_layer', 'cell_fit_shift']
 
 _ITERATIONS = 8
 # Centre steps below this (taxels) end the fit: a hundredth of the noise floor's shift error.
@@ -47,6 +54,19 @@ _PAST_EDGE = 2.0
 # Taxels within this share of a layer's peak force sit on one plateau: the curve's cap.
 _PLATEAU = 1e-9
 _INV_SQRT2PI = 1.0 / math.sqrt(2.0 * math.pi)
+# A censored layer is fitted in 2-D with at least this many loaded taxels below its ceiling: five
+# parameters, and the noise, need that many (with fewer the width trades against the centre).
+_MIN_FREE = 8
+_ITERATIONS_2D = 30
+# Halvings of a 2-D step that raises the misfit before the fit stops where it is; steps that
+# move the centre less than _SEARCHED (taxels) are taken whole.
+_HALVINGS = 12
+_SEARCHED = 1e-5
+_DECREASE = 1e-12
+# A censored taxel this close to its reading (share of it) holds a kinked optimum's bound.
+_PINNED = 1e-3
+# The 2-D fit runs until its centre steps fall below this (taxels): converged, not merely close.
+_TOLERANCE_2D = 1e-10
 # Abramowitz and Stegun 7.1.26: erf to 1.5e-7, far below the counts' noise.
 _AS_P = 0.3275911
 _AS = (0.254829592, -0.284496736, 1.421413741, -1.453152027, 1.061405429)
@@ -128,6 +148,146 @@ def fit_cell_profiles(profiles: np.ndarray, mask: np.ndarray, cut: tuple = None)
     return mu, s, np.where(bad, 0.0, np.maximum(explained, 0.0))
 
 
+def _axis_cells(mu: float, s: float, n: int) -> tuple:
+    """Return a unit Gaussian's share of each of ``n`` cells and its derivatives by mu and s."""
+    u = (np.arange(n + 1, dtype=np.float64) - 0.5 - mu) / s
+    pdf = np.exp(-0.5 * u * u) * _INV_SQRT2PI
+    return np.diff(_normal_cdf(u)), -np.diff(pdf) / s, -np.diff(u * pdf) / s
+
+
+def _censored_cost(force: np.ndarray, free: np.ndarray, params: tuple) -> float:
+    """Return the squared misfit of (mass, x, y, sx, sy): a censored taxel's only below it."""
+    mass, mx, my, sx, sy = params
+    h, w = force.shape
+    residual = force - mass * np.outer(_axis_cells(my, sy, h)[0], _axis_cells(mx, sx, w)[0])
+    residual = np.where(free, residual, np.maximum(residual, 0.0))
+    return float((residual * residual).sum())
+
+
+def _damped(params: tuple, step: np.ndarray, shape: tuple) -> tuple:
+    """
+    Return params moved by step: a taxel at most for a centre, half a width for a width.
+
+    A centre may lie past the window's edge by ``_PAST_EDGE`` widths: where the window is the
+    map's edge, the imprint's rim on the map still places it (:func:`_cut_by_edge`).
+    """
+    mass, mx, my, sx, sy = params
+    h, w = shape
+    reach_x, reach_y = _PAST_EDGE * sx, _PAST_EDGE * sy
+    return (mass + float(step[0]),
+            min(max(mx + min(max(float(step[1]), -1.0), 1.0), -0.5 - reach_x), w - 0.5 + reach_x),
+            min(max(my + min(max(float(step[2]), -1.0), 1.0), -0.5 - reach_y), h - 0.5 + reach_y),
+            max(sx + min(max(float(step[3]), -0.5 * sx), 0.5 * sx), _MIN_WIDTH),
+            max(sy + min(max(float(step[4]), -0.5 * sy), 0.5 * sy), _MIN_WIDTH))
+
+
+def _gauss_newton(force: np.ndarray, free: np.ndarray, params: tuple, fitted: float,
+                  searched: bool) -> tuple:
+    """
+    Return (params, converged) of Gauss-Newton on :func:`_censored_cost` from ``params``.
+
+    ``searched``: a step that moves a centre by ``_SEARCHED`` or more is halved until the misfit
+    falls (the saturated taxels that count come and go, and a full step can overshoot), and the
+    fit stops where none does. ``fitted`` 0 holds the mass.
+    """
+    h, w = force.shape
+    cost = _censored_cost(force, free, params)
+    for _ in range(_ITERATIONS_2D):
+        mass, mx, my, sx, sy = params
+        gx, dgx_mu, dgx_s = _axis_cells(mx, sx, w)
+        gy, dgy_mu, dgy_s = _axis_cells(my, sy, h)
+        model = mass * np.outer(gy, gx)
+        active = free | (model < force)
+        # A fixed mass has no column: its normal equation is the regulariser's, its step 0. So
+        # has a width at its floor: else the centre's step counts on a width it cannot take.
+        jac = np.stack((np.outer(gy, gx) * fitted, mass * np.outer(gy, dgx_mu),
+                        mass * np.outer(dgy_mu, gx),
+                        mass * np.outer(gy, dgx_s) * float(sx > _MIN_WIDTH),
+                        mass * np.outer(dgy_s, gx) * float(sy > _MIN_WIDTH)), axis=2)[active]
+        residual = (force - model)[active]
+        try:
+            step = np.linalg.solve(jac.T @ jac + 1e-12 * np.eye(5), jac.T @ residual)
+        except np.linalg.LinAlgError:
+            return params, False
+        # The centre's move as taken: a bound (past the edge, a width's floor) may hold it.
+        whole = _damped(params, step, (h, w))
+        moves = max(abs(whole[1] - params[1]), abs(whole[2] - params[2]))
+        if moves < _SEARCHED or not searched:
+            # Near the optimum the misfit is flat to its rounding: Gauss-Newton steps as they are.
+            params = whole
+            if moves < _TOLERANCE_2D:
+                return params, True
+            cost = _censored_cost(force, free, params)
+            continue
+        for _ in range(_HALVINGS):
+            trial = _damped(params, step, (h, w))
+            trial_cost = _censored_cost(force, free, trial)
+            # Lower by more than its rounding, so that no tie decides where the fit goes.
+            if trial_cost < cost * (1.0 - _DECREASE):
+                break
+            step = 0.5 * step
+        else:
+            return params, False
+        params, cost = trial, trial_cost
+    return params, False
+
+
+def fit_censored_layer(force: np.ndarray, censored: np.ndarray, centre: tuple, width: tuple,
+                       mass: float = None):
+    """
+    Return (x, y, mass) of one layer's imprint, its saturated taxels lower bounds, or None.
+
+    ``force``: the layer's (h, w) linearised window; ``censored``: its taxels whose reading is
+    only a lower bound. The model is ``mass * gy[r] * gx[c]``, a Gaussian integrated over the
+    cells along each axis, fitted by Gauss-Newton from ``centre`` and ``width`` (x, y: the
+    marginal fits'); a censored taxel counts only while the model falls below its reading.
+    A given ``mass`` is held fixed. Where the optimum sits on saturated taxels' bounds (kinks
+    of the misfit, along which the steps only creep), the taxels within ``_PINNED`` of their
+    reading are taken as readings and the fit polished from there. None when it does not
+    settle: the taxels it leans on still come and go.
+    """
+    h, w = force.shape
+    free = ~censored
+    fitted = 1.0 if mass is None else 0.0
+    if mass is None:
+        base = np.outer(_axis_cells(centre[1], width[1], h)[0],
+                        _axis_cells(centre[0], width[0], w)[0])
+        weight = float(base[free] @ base[free])
+        if not weight > 0:
+            return None
+        mass = float(force[free] @ base[free]) / weight
+    start = (mass, centre[0], centre[1], width[0], width[1])
+    params, converged = _gauss_newton(force, free, start, fitted, True)
+    if not converged:
+        model = params[0] * np.outer(_axis_cells(params[2], params[4], h)[0],
+                                     _axis_cells(params[1], params[3], w)[0])
+        pinned = censored & (np.abs(force - model) <= _PINNED * force)
+        params, converged = _gauss_newton(force, free | pinned, params, fitted, False)
+    mx, my = params[1], params[2]
+    return (mx, my, params[0]) if converged and math.isfinite(mx) and math.isfinite(my) else None
+
+
+def _fits_censored(force: np.ndarray, censored: np.ndarray, min_free: int) -> bool:
+    """Return whether a layer's window calls for :func:`fit_censored_layer` (module docstring)."""
+    return bool(censored.any()) and int(((force > 0) & ~censored).sum()) >= min_free
+
+
+def _censored_centres(force: np.ndarray, censored: np.ndarray, mu: np.ndarray,
+                      width: np.ndarray) -> None:
+    """Refit the saturated layers of a (2, h, w) window in 2-D, in place on ``mu`` (docstring)."""
+    # The bottom first: its mass, fitted or (unsaturated) summed, is the top's.
+    mass = None if censored[1].any() else float(force[1].sum())
+    for layer in (1, 0):
+        given = mass if layer == 0 and mass is not None and mass > 0 else None
+        if not _fits_censored(force[layer], censored[layer], _MIN_FREE if given is None else 0):
+            continue
+        found = fit_censored_layer(force[layer], censored[layer], (mu[layer], mu[2 + layer]),
+                                   (width[layer], width[2 + layer]), given)
+        if found is not None:
+            mu[layer], mu[2 + layer], fitted = found
+            mass = fitted if layer == 1 else mass
+
+
 def _cut_by_edge(profiles: np.ndarray, mask: np.ndarray, mu: np.ndarray, width: np.ndarray):
     """
     Return the ``cut`` of :func:`fit_cell_profiles` for profiles cut by the map's edge, or None.
@@ -162,7 +322,7 @@ def _plateau(layer: np.ndarray) -> bool:
     return peak > 0 and int((layer >= peak * (1.0 - _PLATEAU)).sum()) >= 2
 
 
-def cell_fit_shift(maps: np.ndarray, counts: np.ndarray = None):
+def cell_fit_shift(maps: np.ndarray, counts: np.ndarray = None, censored: np.ndarray = None):
     """
     Return (dx, dy, explained share) of a (2, h, w) linearised window, or None without load.
 
@@ -170,8 +330,10 @@ def cell_fit_shift(maps: np.ndarray, counts: np.ndarray = None):
     worst of the four fits) serves as the confidence. A layer whose linearised map is flat at
     its peak hit the end of the force curve: its force says nothing there, so that layer is
     fitted on its ``counts`` (same shape) when given. Each layer's centre is absolute, so the
-    two layers need not be fitted on the same scale.
+    two layers need not be fitted on the same scale. ``censored`` (same shape, boolean) marks
+    saturated taxels: a layer with enough rim below them is fitted in 2-D (module docstring).
     """
+    force = maps
     if counts is not None:
         maps = np.stack([c if _plateau(m) else m for m, c in zip(maps, counts)])
     h, w = maps.shape[1:]
@@ -192,5 +354,7 @@ def cell_fit_shift(maps: np.ndarray, counts: np.ndarray = None):
         fixed = np.isfinite(cut[0])
         mu = np.where(fixed, again, mu)
         explained = np.where(fixed, share, explained)
+    if censored is not None:
+        _censored_centres(force, censored, mu, width)
     return (float(mu[1] - mu[0]), float(mu[3] - mu[2]),
             float(min(max(explained.min(), 0.0), 1.0)))

@@ -84,3 +84,45 @@ def test_an_imprint_cut_by_the_map_edge_keeps_its_centre_past_the_edge():
     dx, dy, explained = cell_fit_shift(maps)
     assert dx == pytest.approx(-4.0, abs=0.05) and dy == pytest.approx(0.0, abs=0.02)
     assert explained > 0.95
+
+
+def _imprint(shape: tuple, centre: tuple, width: float, mass: float, floor: float = 1e-3
+             ) -> np.ndarray:
+    """Return a 2-D Gaussian integrated over unit cells, (x, y) centre, loads under floor cut."""
+    from statistics import NormalDist
+    along = [np.diff([NormalDist(c, width).cdf(e) for e in np.arange(n + 1) - 0.5])
+             for c, n in zip(centre, (shape[1], shape[0]))]
+    layer = mass * np.outer(along[1], along[0])
+    return np.where(layer > floor, layer, 0.0)
+
+
+def test_a_saturated_layer_is_placed_by_its_rim():
+    # The bottom imprint (0.9 taxel wide, 30 N) reads a ceiling of 3 N at its centre: those
+    # taxels carry no shape, the rim does. Expected: the shift of the true centres.
+    top = _imprint((11, 11), (5.0, 5.0), 0.8, 2.0)
+    bottom = _imprint((11, 11), (5.35, 5.2), 0.9, 30.0)
+    capped = np.minimum(bottom, 3.0)
+    maps = np.stack((top, capped))
+    censored = np.stack((np.zeros_like(top, dtype=bool), bottom >= 3.0))
+    dx, dy, _ = cell_fit_shift(maps, None, censored)
+    error = math.hypot(dx - 0.35, dy - 0.2)
+    assert error < 0.005
+    # Without the marks the capped plateau is taken for the imprint's shape, and misplaces it.
+    plain_dx, plain_dy, _ = cell_fit_shift(maps)
+    assert math.hypot(plain_dx - 0.35, plain_dy - 0.2) > 5.0 * error
+
+
+def test_a_sharp_saturated_top_imprint_takes_the_bottom_layers_mass():
+    # A sharp top imprint (0.3 taxel, 20 N) reads the ceiling of 3 N at its centre and leaves
+    # too little rim to fit its mass; the unsaturated bottom imprint carries the same 20 N.
+    # Expected: the shift of the true centres, which the marginal fits of the plateau miss.
+    top = _imprint((9, 9), (4.2, 4.1), 0.3, 20.0, 0.05)
+    bottom = _imprint((9, 9), (4.5, 4.0), 0.9, 20.0, 0.05)
+    maps = np.stack((np.minimum(top, 3.0), bottom))
+    censored = np.stack((top >= 3.0, np.zeros_like(top, dtype=bool)))
+    assert int(((maps[0] > 0) & ~censored[0]).sum()) < 8
+    dx, dy, _ = cell_fit_shift(maps, None, censored)
+    error = math.hypot(dx - 0.3, dy + 0.1)
+    assert error < 0.01
+    plain_dx, plain_dy, _ = cell_fit_shift(maps)
+    assert math.hypot(plain_dx - 0.3, plain_dy + 0.1) > 5.0 * error

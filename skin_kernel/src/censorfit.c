@@ -1,0 +1,289 @@
+/*
+ * A saturated layer's imprint fitted in 2-D, its saturated taxels lower bounds: the censored
+ * fit of taxel_fit. Python description: taxelfit.py (fit_censored_layer, _censored_centres).
+ */
+#include <math.h>
+#include <string.h>
+
+#include "internal.h"
+
+/* taxelfit.py's constants of the 2-D fit */
+#define MIN_FREE 8
+#define ITERATIONS_2D 30
+#define HALVINGS 12
+#define SEARCHED 1e-5
+#define DECREASE 1e-12
+#define PINNED 1e-3
+#define TOLERANCE_2D 1e-10
+
+/* A unit Gaussian's share of each of n cells and its derivatives by mu and s (taxelfit._axis_cells). */
+static void axis_cells(double mu, double s, int n, double *g, double *d_mu, double *d_s)
+{
+  double u0 = (-0.5 - mu) / s;
+  double pdf0 = exp(-0.5 * u0 * u0) * INV_SQRT2PI, cdf0 = sk_normal_cdf(u0), updf0 = u0 * pdf0;
+  for (int i = 0; i < n; i++) {
+    double u1 = ((i + 1) - 0.5 - mu) / s;
+    double pdf1 = exp(-0.5 * u1 * u1) * INV_SQRT2PI, cdf1 = sk_normal_cdf(u1), updf1 = u1 * pdf1;
+    g[i] = cdf1 - cdf0;
+    d_mu[i] = -(pdf1 - pdf0) / s;
+    d_s[i] = -(updf1 - updf0) / s;
+    pdf0 = pdf1;
+    cdf0 = cdf1;
+    updf0 = updf1;
+  }
+}
+
+/* Solve the 5 x 5 system a x = b by elimination with partial pivoting; 0 for a zero pivot. */
+static int solve5(double a[5][5], double b[5], double x[5])
+{
+  for (int j = 0; j < 5; j++) {
+    int p = j;
+    for (int i = j + 1; i < 5; i++) {
+      p = fabs(a[i][j]) > fabs(a[p][j]) ? i : p;
+    }
+    if (a[p][j] == 0.0) {
+      return 0;
+    }
+    for (int m = 0; m < 5; m++) {
+      double t = a[j][m];
+      a[j][m] = a[p][m];
+      a[p][m] = t;
+    }
+    double t = b[j];
+    b[j] = b[p];
+    b[p] = t;
+    for (int i = j + 1; i < 5; i++) {
+      double f = a[i][j] / a[j][j];
+      for (int m = j; m < 5; m++) {
+        a[i][m] -= f * a[j][m];
+      }
+      b[i] -= f * b[j];
+    }
+  }
+  for (int i = 4; i >= 0; i--) {
+    double v = b[i];
+    for (int m = i + 1; m < 5; m++) {
+      v -= a[i][m] * x[m];
+    }
+    x[i] = v / a[i][i];
+  }
+  return 1;
+}
+
+/* Whether a layer's window calls for fit_censored (taxelfit._fits_censored). */
+static int fits_censored(const double *force, const double *censored, int m, int min_free)
+{
+  int any = 0, free = 0;
+  for (int j = 0; j < m; j++) {
+    any |= censored[j] > 0;
+    free += force[j] > 0 && !(censored[j] > 0);
+  }
+  return any && free >= min_free;
+}
+
+/* Parameters of a 2-D fit: mass, centre x, y, width x, y. */
+enum { P_MASS, P_X, P_Y, P_SX, P_SY, NPARAM };
+
+/* Squared misfit of params, a bound taxel's only below it (taxelfit._censored_cost). */
+static double censored_cost(const double *force, const double *bound, int h, int w,
+                            const double *params, double *scratch)
+{
+  int nn = h > w ? h : w;
+  double *gx = scratch, *gy = gx + w, *dmu = gy + h, *ds = dmu + nn, *sq = ds + nn;
+  axis_cells(params[P_X], params[P_SX], w, gx, dmu, ds);
+  axis_cells(params[P_Y], params[P_SY], h, gy, dmu, ds);
+  for (int r = 0; r < h; r++) {
+    for (int c = 0; c < w; c++) {
+      int j = r * w + c;
+      double residual = force[j] - params[P_MASS] * (gy[r] * gx[c]);
+      if (bound[j] > 0 && residual < 0.0) {
+        residual = 0.0;
+      }
+      sq[j] = residual * residual;
+    }
+  }
+  return sk_sum(sq, h * w);
+}
+
+/*
+ * params moved by step: a taxel at most for a centre, half a width for a width; a centre may
+ * lie past the window's edge by PAST_EDGE widths (taxelfit._damped). out may be params.
+ */
+static void damped(const double *params, const double *step, int h, int w, double *out)
+{
+  double reach_x = PAST_EDGE * params[P_SX], reach_y = PAST_EDGE * params[P_SY];
+  double wx = params[P_SX] + sk_clip(step[3], -0.5 * params[P_SX], 0.5 * params[P_SX]);
+  double wy = params[P_SY] + sk_clip(step[4], -0.5 * params[P_SY], 0.5 * params[P_SY]);
+  out[P_MASS] = params[P_MASS] + step[0];
+  out[P_X] = sk_clip(params[P_X] + sk_clip(step[1], -1.0, 1.0), -0.5 - reach_x, w - 0.5 + reach_x);
+  out[P_Y] = sk_clip(params[P_Y] + sk_clip(step[2], -1.0, 1.0), -0.5 - reach_y, h - 0.5 + reach_y);
+  out[P_SX] = wx < MIN_WIDTH ? MIN_WIDTH : wx;
+  out[P_SY] = wy < MIN_WIDTH ? MIN_WIDTH : wy;
+}
+
+/*
+ * Gauss-Newton on censored_cost from params, in place (taxelfit._gauss_newton); bound: 1 where
+ * a taxel is a lower bound. Returns whether it converged. scratch: 5 max(h, w) + 2 (h + w) +
+ * h w doubles.
+ */
+static int gauss_newton(const double *force, const double *bound, int h, int w, double *params,
+                        double fitted, int searched, double *scratch)
+{
+  double *gx = scratch, *dgx_mu = gx + w, *dgx_s = dgx_mu + w;
+  double *gy = dgx_s + w, *dgy_mu = gy + h, *dgy_s = dgy_mu + h;
+  double *cost_scratch = dgy_s + h;
+  double trial[NPARAM], whole[NPARAM];
+  double cost = censored_cost(force, bound, h, w, params, cost_scratch);
+  for (int it = 0; it < ITERATIONS_2D; it++) {
+    double mass = params[P_MASS];
+    axis_cells(params[P_X], params[P_SX], w, gx, dgx_mu, dgx_s);
+    axis_cells(params[P_Y], params[P_SY], h, gy, dgy_mu, dgy_s);
+    /* a width at its floor has no column, as a fixed mass: the centre's step cannot count on it */
+    double free_sx = params[P_SX] > MIN_WIDTH ? 1.0 : 0.0;
+    double free_sy = params[P_SY] > MIN_WIDTH ? 1.0 : 0.0;
+    double normal[5][5] = {{0}}, rhs[5] = {0}, step[5];
+    for (int r = 0; r < h; r++) {
+      for (int c = 0; c < w; c++) {
+        int j = r * w + c;
+        double model = mass * (gy[r] * gx[c]);
+        /* a bound taxel counts only while the model falls below its reading */
+        if (bound[j] > 0 && !(model < force[j])) {
+          continue;
+        }
+        double jac[5] = {gy[r] * gx[c] * fitted, mass * (gy[r] * dgx_mu[c]),
+                         mass * (dgy_mu[r] * gx[c]), mass * (gy[r] * dgx_s[c]) * free_sx,
+                         mass * (dgy_s[r] * gx[c]) * free_sy};
+        double residual = force[j] - model;
+        for (int a = 0; a < 5; a++) {
+          for (int b = 0; b < 5; b++) {
+            normal[a][b] += jac[a] * jac[b];
+          }
+          rhs[a] += jac[a] * residual;
+        }
+      }
+    }
+    for (int a = 0; a < 5; a++) {
+      normal[a][a] += 1e-12;
+    }
+    if (!solve5(normal, rhs, step)) {
+      return 0;
+    }
+    /* the centre's move as taken: a bound (past the edge, a width's floor) may hold it */
+    damped(params, step, h, w, whole);
+    double moves = fmax(fabs(whole[P_X] - params[P_X]), fabs(whole[P_Y] - params[P_Y]));
+    if (moves < SEARCHED || !searched) {
+      /* near the optimum the misfit is flat to its rounding: Gauss-Newton steps as they are */
+      memcpy(params, whole, sizeof(whole));
+      if (moves < TOLERANCE_2D) {
+        return 1;
+      }
+      cost = censored_cost(force, bound, h, w, params, cost_scratch);
+      continue;
+    }
+    double trial_cost = cost;
+    int lower = 0;
+    for (int half = 0; half < HALVINGS && !lower; half++) {
+      damped(params, step, h, w, trial);
+      trial_cost = censored_cost(force, bound, h, w, trial, cost_scratch);
+      /* lower by more than its rounding, so that no tie decides where the fit goes */
+      lower = trial_cost < cost * (1.0 - DECREASE);
+      if (!lower) {
+        for (int a = 0; a < 5; a++) {
+          step[a] *= 0.5;
+        }
+      }
+    }
+    if (!lower) {
+      return 0;
+    }
+    memcpy(params, trial, sizeof(trial));
+    cost = trial_cost;
+  }
+  return 0;
+}
+
+/*
+ * 2-D cell-integrated Gaussian fitted to one layer's window, its censored taxels lower bounds
+ * (taxelfit.fit_censored_layer): found = (x, y) centre in, (x, y, mass) out; widths from the
+ * marginal fits; a mass > 0 is held fixed, else fitted. Unsettled, the censored taxels within
+ * PINNED of their reading are taken as readings and the fit polished. Returns 0 (found
+ * untouched) when it does not settle. scratch: 6 max(h, w) + 2 (h + w) + 2 h w doubles.
+ */
+static int fit_censored(const double *force, const double *censored, int h, int w,
+                        double *scratch, double *found, double sx, double sy, double given)
+{
+  int m = h * w;
+  double *bound = scratch, *work = scratch + m;
+  double fitted = given > 0 ? 0.0 : 1.0;
+  double params[NPARAM] = {given, found[0], found[1], sx, sy};
+  if (!(given > 0)) {
+    double *gx = work, *gy = gx + w, *dmu = gy + h, *ds = dmu + (h > w ? h : w);
+    axis_cells(found[0], sx, w, gx, dmu, ds);
+    axis_cells(found[1], sy, h, gy, dmu, ds);
+    double weight = 0.0, along = 0.0;
+    for (int r = 0; r < h; r++) {
+      for (int c = 0; c < w; c++) {
+        if (!(censored[r * w + c] > 0)) {
+          double b = gy[r] * gx[c];
+          weight += b * b;
+          along += force[r * w + c] * b;
+        }
+      }
+    }
+    if (!(weight > 0)) {
+      return 0;
+    }
+    params[P_MASS] = along / weight;
+  }
+  int converged = gauss_newton(force, censored, h, w, params, fitted, 1, work);
+  if (!converged) {
+    double *gx = work, *gy = gx + w, *dmu = gy + h, *ds = dmu + (h > w ? h : w);
+    axis_cells(params[P_X], params[P_SX], w, gx, dmu, ds);
+    axis_cells(params[P_Y], params[P_SY], h, gy, dmu, ds);
+    for (int r = 0; r < h; r++) {
+      for (int c = 0; c < w; c++) {
+        int j = r * w + c;
+        double model = params[P_MASS] * (gy[r] * gx[c]);
+        int pinned = censored[j] > 0 && fabs(force[j] - model) <= PINNED * force[j];
+        bound[j] = censored[j] > 0 && !pinned ? 1.0 : 0.0;
+      }
+    }
+    converged = gauss_newton(force, bound, h, w, params, fitted, 0, work);
+  }
+  if (!(converged && isfinite(params[P_X]) && isfinite(params[P_Y]))) {
+    return 0;
+  }
+  found[0] = params[P_X];
+  found[1] = params[P_Y];
+  found[2] = params[P_MASS];
+  return 1;
+}
+
+/*
+ * Refit the saturated layers in 2-D (taxelfit._censored_centres): the bottom first, whose mass
+ * (fitted, or summed when unsaturated) the top takes.
+ */
+void sk_censored_centres(const double *force, const double *censored, int h, int w,
+                         double *scratch, double *centre, const double *width)
+{
+  int m = h * w;
+  int saturated = 0;
+  for (int j = m; j < 2 * m; j++) {
+    saturated |= censored[j] > 0;
+  }
+  double mass = saturated ? NAN : sk_sum(force + m, m);
+  for (int layer = 1; layer >= 0; layer--) {
+    /* NaN or none: the mass is fitted */
+    double given = layer == 0 ? mass : NAN;
+    const double *own = force + layer * m, *marks = censored + layer * m;
+    if (!fits_censored(own, marks, m, given > 0 ? 0 : MIN_FREE)) {
+      continue;
+    }
+    double found[3] = {centre[layer], centre[2 + layer], 0.0};
+    if (fit_censored(own, marks, h, w, scratch, found, width[layer], width[2 + layer], given)) {
+      centre[layer] = found[0];
+      centre[2 + layer] = found[1];
+      mass = layer == 1 ? found[2] : mass;
+    }
+  }
+}
