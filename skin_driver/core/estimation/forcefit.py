@@ -26,7 +26,7 @@ import numpy as np
 
 from .forcecurve import ForceCurve
 from .fsr import FsrModel
-from .imprint import bump, imprint_bump, MIN_FITTED_SPREAD
+from .imprint import bump
 
 __all__ = ['CurveFit', 'check_known_forces', 'fit_force_curve', 'MIN_PRESSES', 'MIN_FORCE_SPAN']
 
@@ -46,8 +46,6 @@ _REFINE_ROUNDS = 8
 _REFINED_CHOICES = 4
 _GRID = 129
 _POWERS = (2.0, 3.0, 4.0, 6.0)
-# Rounds of the curve and the imprints' own spreads, refitted in turn.
-_OWN_SPREAD_ROUNDS = 3
 
 
 @dataclass(frozen=True)
@@ -173,9 +171,7 @@ class _Layout:
     the bump to fit its height to); the other censored taxels count as read.
     """
 
-    def __init__(self, presses: list, censor: float, shape: tuple, own: list = None):
-        """Lay out ``presses`` censored at ``censor`` counts, each under its ``own`` bump or
-        ``shape``'s."""
+    def __init__(self, presses: list, censor: float, shape: tuple):
         self.n = len(presses)
         self.press = np.concatenate([np.full(p.counts.size, k) for k, p in enumerate(presses)])
         self.gains = np.concatenate([p.gains for p in presses])
@@ -183,10 +179,8 @@ class _Layout:
             self.log_force = np.log(np.concatenate([p.assumed_n for p in presses]))
         censored = (np.concatenate([p.counts for p in presses]) >= censor if censor > 0
                     else np.zeros(self.press.size, bool))
-        own = own or [None] * self.n
-        self.phi = np.concatenate([
-            (p.bump(shape) if phi is None else phi) if censor > 0 and (p.counts >= censor).any()
-            else np.zeros(p.counts.size) for p, phi in zip(presses, own)])
+        self.phi = np.concatenate([p.bump(shape) if censor > 0 and (p.counts >= censor).any()
+                                   else np.zeros(p.counts.size) for p in presses])
         free = ~censored
         self.weight = np.bincount(self.press[free], self.phi[free] ** 2, self.n)
         self.filled = censored & (self.weight[self.press] > 0)
@@ -278,51 +272,13 @@ def _best_choice(presses: list, target: np.ndarray, full_scale: int) -> tuple:
     tried.sort(key=lambda t: t[0])
     best = None
     for _, censor, bump_shape, layout in tried[:_REFINED_CHOICES]:
-        _, exponent, fit = _best_exponent(layout, target, _EXPONENTS, _REFINE_ROUNDS)
-        exponent, fit = _with_own_spreads(presses, target, censor, bump_shape, exponent, fit)
-        misfit = _misfit(fit, target)
+        misfit, exponent, fit = _best_exponent(layout, target, _EXPONENTS,
+                                               _REFINE_ROUNDS)
         if censor:
             misfit /= CENSOR_GAIN
         if best is None or misfit < best[0]:
             best = (misfit, censor, bump_shape, exponent, fit)
     return best[1:]
-
-
-def _own_bumps(presses: list, censor: float, shape: tuple, exponent: float, fit) -> list:
-    """
-    Return per press the unit bump over its loaded taxels that the pipeline will fill it with.
-
-    On a bump wide enough for the rim to tell its width, each imprint fits its own spread at
-    run time (:func:`imprint.imprint_bump`) to the forces the curve gives its taxels.
-    """
-    scale, activation = fit[:2]
-    own = []
-    for p in presses:
-        counts = p.map_counts
-        loaded = counts > 0
-        force = np.zeros(counts.shape)
-        force[loaded] = p.gains * (scale * p.assumed_n ** exponent + activation)
-        censored = counts >= censor
-        fill = imprint_bump(counts, force, censored, *shape) if censored.any() else None
-        own.append(None if fill is None else fill[1][loaded])
-    return own
-
-
-def _with_own_spreads(presses: list, target: np.ndarray, censor: float, shape: tuple,
-                      exponent: float, fit) -> tuple:
-    """
-    Return (exponent, fit) refitted with each press's own bump where the run time fits one.
-
-    The curve moves the taxels' forces, hence the spreads the imprints choose, hence the
-    curve: a few rounds of the two settle it.
-    """
-    if not (censor and shape[0] >= MIN_FITTED_SPREAD):
-        return exponent, fit
-    for _ in range(_OWN_SPREAD_ROUNDS):
-        layout = _Layout(presses, censor, shape, _own_bumps(presses, censor, shape, exponent,
-                                                            fit))
-        _, exponent, fit = _best_exponent(layout, target, _EXPONENTS, _REFINE_ROUNDS)
-    return exponent, fit
 
 
 def _censoring_choices(presses: list, full_scale: int, shape: tuple) -> list:

@@ -29,7 +29,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ['bump', 'censored_force', 'imprint_bump', 'MIN_FITTED_SPREAD', 'SPREAD_RANGE']
+__all__ = ['bump', 'censored_force', 'MIN_FITTED_SPREAD', 'SPREAD_RANGE']
 
 # The narrowest calibrated bump (spread, taxels) whose width each imprint's rim can tell.
 MIN_FITTED_SPREAD = 1.0
@@ -84,39 +84,26 @@ def _best_spread(counts, force, censored, free, spread_taxels: float, power: flo
     return best[0]
 
 
-def imprint_bump(counts: np.ndarray, force: np.ndarray, censored: np.ndarray,
-                 spread_taxels: float, power: float = 2.0):
-    """
-    Return (height, unit bump) that fill in one imprint's ``censored`` taxels, or None.
-
-    The spread is the imprint's own where the bump is wide enough for its rim to tell it
-    (module docstring); None when no free taxel lies under the bump.
-    """
-    free = (counts > 0) & ~censored
-    if spread_taxels >= MIN_FITTED_SPREAD:
-        best = _best_spread(counts, force, censored, free, spread_taxels, power)
-    else:
-        best = _fill(counts, force, censored, free, spread_taxels, power)
-    return None if best is None else best[1:]
-
-
 def censored_force(counts: np.ndarray, force: np.ndarray, censor_counts: float,
                    spread_taxels: float, power: float = 2.0) -> float:
     """
     Return the summed force of one imprint (2-D maps of counts and of taxel forces).
 
     Taxels at ``censor_counts`` or more are censored; without any, or without a bump
-    (``spread_taxels`` 0), the plain sum. Each censored taxel carries the larger of its reading
-    and the bump (:func:`imprint_bump`).
+    (``spread_taxels`` 0), the plain sum. The spread is the imprint's own where the bump is
+    wide enough for its rim to tell it (module docstring).
     """
     counts = np.asarray(counts, dtype=np.float64)
     force = np.asarray(force, dtype=np.float64)
     censored = counts >= censor_counts
     if not (spread_taxels > 0 and censor_counts > 0 and censored.any()):
         return float(force.sum())
-    fill = imprint_bump(counts, force, censored, spread_taxels, power)
-    if fill is None:
-        return float(force.sum())
-    height, phi = fill
     free = (counts > 0) & ~censored
+    if spread_taxels >= MIN_FITTED_SPREAD:
+        best = _best_spread(counts, force, censored, free, spread_taxels, power)
+    else:
+        best = _fill(counts, force, censored, free, spread_taxels, power)
+    if best is None:
+        return float(force.sum())
+    _, height, phi = best
     return float(force[free].sum() + np.maximum(force[censored], height * phi[censored]).sum())
