@@ -42,8 +42,8 @@ static int bump(const double *counts, int h, int w, double spread, double power,
 
 /* The least-squares fit of one spread on the free taxels (imprint._fill): 0 without a bump. */
 static int fill(const double *counts, const double *force, int h, int w, double censor,
-                double spread, double power, double *gather, double *phi, double *misfit,
-                double *height)
+                double spread, double power, double activation, double *gather, double *phi,
+                double *misfit, double *height)
 {
   int m = h * w;
   if (!bump(counts, h, w, spread, power, gather, phi)) {
@@ -53,7 +53,7 @@ static int fill(const double *counts, const double *force, int h, int w, double 
   for (int j = 0; j < m; j++) {
     if (counts[j] > 0 && counts[j] < censor) {
       weight += phi[j] * phi[j];
-      dot += force[j] * phi[j];
+      dot += (force[j] - activation) * phi[j];
     }
   }
   if (!(weight > 0)) {
@@ -63,11 +63,11 @@ static int fill(const double *counts, const double *force, int h, int w, double 
   for (int j = 0; j < m; j++) {
     if (counts[j] >= censor) {
       /* A bump below a censored taxel's reading contradicts it (a lower bound). */
-      double d = a * phi[j] - force[j];
+      double d = a * phi[j] - (force[j] - activation);
       d = d < 0.0 ? d : 0.0;
       below += d * d;
     } else if (counts[j] > 0) {
-      double d = force[j] - a * phi[j];
+      double d = (force[j] - activation) - a * phi[j];
       sq += d * d;
     }
   }
@@ -78,7 +78,8 @@ static int fill(const double *counts, const double *force, int h, int w, double 
 
 /* The spread of the best fill over SPREAD_LOW..HIGH of the calibration's, a grid then finer. */
 static int best_spread(const double *counts, const double *force, int h, int w, double censor,
-                       double spread, double power, double *gather, double *phi, double *best)
+                       double spread, double power, double activation, double *gather,
+                       double *phi, double *best)
 {
   /* numpy.geomspace: powers of ten at even steps of the logarithm, the ends exact */
   double log_low = log10(SPREAD_LOW), log_high = log10(SPREAD_HIGH);
@@ -94,7 +95,8 @@ static int best_spread(const double *counts, const double *force, int h, int w, 
   for (int round = 0; round <= REFINE_ROUNDS; round++) {
     for (int i = 0; i < size; i++) {
       double misfit, height;
-      if (fill(counts, force, h, w, censor, grid[i], power, gather, phi, &misfit, &height)
+      if (fill(counts, force, h, w, censor, grid[i], power, activation, gather, phi, &misfit,
+               &height)
           && (!found || misfit < best_misfit)) {
         best_misfit = misfit;
         *best = grid[i];
@@ -113,8 +115,8 @@ static int best_spread(const double *counts, const double *force, int h, int w, 
 }
 
 double sk_imprint_force(const double *counts, const double *force, int h, int w,
-                        double censor, double spread, double power, double rim,
-                        double *scratch)
+                        double censor, double spread, double power, double activation,
+                        double rim, double *scratch)
 {
   int m = h * w, any = 0;
   for (int j = 0; j < m && !any; j++) {
@@ -124,11 +126,13 @@ double sk_imprint_force(const double *counts, const double *force, int h, int w,
   double best = spread, misfit, height;
   int fitted = spread > 0 && censor > 0 && any;
   if (fitted && spread >= MIN_FITTED_SPREAD) {
-    fitted = best_spread(counts, force, h, w, censor, spread, power, gather, phi, &best);
+    fitted = best_spread(counts, force, h, w, censor, spread, power, activation, gather, phi,
+                         &best);
   }
   /* the best spread's bump again: the same numbers as when it was chosen */
   if (fitted) {
-    fitted = fill(counts, force, h, w, censor, best, power, gather, phi, &misfit, &height);
+    fitted = fill(counts, force, h, w, censor, best, power, activation, gather, phi, &misfit,
+                  &height);
   }
   if (!fitted) {
     read = sk_sum(force, m);
@@ -142,7 +146,7 @@ double sk_imprint_force(const double *counts, const double *force, int h, int w,
     double free_sum = sk_sum(gather, nfree);
     for (int j = 0; j < m; j++) {
       if (counts[j] >= censor) {
-        double bumped = height * phi[j];
+        double bumped = activation + height * phi[j];
         gather[ncensored++] = force[j] > bumped ? force[j] : bumped;
       }
     }

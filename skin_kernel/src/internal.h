@@ -90,11 +90,11 @@ void sk_poc(const double *maps, int h, int w, double *scratch, double *dx, doubl
 int sk_poc_scratch(int h, int w);
 
 /* imprint.c: one imprint's force sum (h x w counts and force), each taxel at censor counts or
- * more filled in by a bump of spread (taxels) and power fitted to its rim, the rim load added;
- * scratch holds 2 h w doubles */
+ * more filled in by the activation plus a bump of spread (taxels) and power fitted to its rim's
+ * force above the activation, the rim load added; scratch holds 2 h w doubles */
 double sk_imprint_force(const double *counts, const double *force, int h, int w,
-                        double censor, double spread, double power, double rim,
-                        double *scratch);
+                        double censor, double spread, double power, double activation,
+                        double rim, double *scratch);
 
 /* sigma.c: 1-sigma uncertainty of one axis of pair p's shift (taxels) */
 double sk_sigma(const sk_kernel *k, const sk_pair *p, const double *window, int alone);

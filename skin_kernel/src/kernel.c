@@ -213,7 +213,8 @@ static void imprint_forces(sk_kernel *k, sk_pair *p)
       *sums[layer] = sk_imprint_force(marked + layer * m, k->fit + (2 + layer) * m, p->h, p->w,
                                       k->reals[SK_CENSOR_TOP + layer],
                                       k->reals[SK_SPREAD_TOP + layer],
-                                      k->reals[SK_POWER_TOP + layer], rim, marked + 2 * m);
+                                      k->reals[SK_POWER_TOP + layer],
+                                      k->reals[SK_ACTIVATION_TOP + layer], rim, marked + 2 * m);
     } else {
       *sums[layer] += fmin(rim, *sums[layer]);
     }

@@ -37,7 +37,8 @@ from .imprint import censored_force
 
 __all__ = ['ForceCurve']
 
-_KEYS = ('counts', 'force_n', 'censor_counts', 'spread_taxels', 'bump_power', 'rim_load_n')
+_KEYS = ('counts', 'force_n', 'censor_counts', 'spread_taxels', 'bump_power', 'rim_load_n',
+         'activation_n')
 
 
 @dataclass(frozen=True)
@@ -48,7 +49,8 @@ class ForceCurve:
     ``censor_counts`` > 0: taxels reading that many counts or more saturated; their force is
     filled in by a bump of ``spread_taxels`` and ``bump_power`` (:func:`imprint.censored_force`).
     0: none. ``rim_load_n``: the sensed force at the rim of every imprint that no taxel reads,
-    added to each imprint's sum (module docstring).
+    added to each imprint's sum (module docstring). ``activation_n``: the force every conducting
+    taxel carries (the curve's activation), no part of a saturated imprint's bump.
     """
 
     counts: tuple
@@ -57,6 +59,7 @@ class ForceCurve:
     spread_taxels: float = 0.0
     bump_power: float = 2.0
     rim_load_n: float = 0.0
+    activation_n: float = 0.0
 
     def __post_init__(self):
         """Reject curves that fall or do not start at (0, 0), and a censoring without bump."""
@@ -72,7 +75,7 @@ class ForceCurve:
             raise ValueError('force curve counts must increase')
         if (np.diff(f) < 0).any() or f[-1] <= 0:
             raise ValueError('force curve forces must not decrease (the curve must be monotone)')
-        for name in ('censor_counts', 'spread_taxels', 'rim_load_n'):
+        for name in ('censor_counts', 'spread_taxels', 'rim_load_n', 'activation_n'):
             v = getattr(self, name)
             if isinstance(v, bool) or not (np.isfinite(v) and v >= 0):
                 raise ValueError(f'force curve {name} must be a non-negative number, got {v!r}')
@@ -86,6 +89,7 @@ class ForceCurve:
         object.__setattr__(self, 'spread_taxels', float(self.spread_taxels))
         object.__setattr__(self, 'bump_power', float(self.bump_power))
         object.__setattr__(self, 'rim_load_n', float(self.rim_load_n))
+        object.__setattr__(self, 'activation_n', float(self.activation_n))
 
     def with_rim(self, read: float) -> float:
         """
@@ -107,7 +111,8 @@ class ForceCurve:
     def imprint_force(self, counts: np.ndarray, force: np.ndarray) -> float:
         """Return one imprint's summed force (2-D counts and taxel forces), censored, rim added."""
         return self.with_rim(censored_force(counts, force, self.censor_counts,
-                                            self.spread_taxels, self.bump_power))
+                                            self.spread_taxels, self.bump_power,
+                                            self.activation_n))
 
     def to_dict(self) -> dict:
         """Return the knots (and any censoring) as plain values (for YAML)."""
@@ -115,6 +120,8 @@ class ForceCurve:
         if self.censor_counts:
             out.update(censor_counts=self.censor_counts, spread_taxels=self.spread_taxels,
                        bump_power=self.bump_power)
+            if self.activation_n:
+                out['activation_n'] = self.activation_n
         if self.rim_load_n:
             out['rim_load_n'] = self.rim_load_n
         return out
@@ -123,8 +130,8 @@ class ForceCurve:
     def from_dict(cls, doc) -> 'ForceCurve':
         """Build a curve from :meth:`to_dict` output."""
         if not isinstance(doc, dict) or not {'counts', 'force_n'} <= set(doc) <= set(_KEYS):
-            raise ValueError('a force curve is a mapping with counts and force_n lists '
-                             '(and censor_counts, spread_taxels, bump_power, rim_load_n)')
+            raise ValueError('a force curve is a mapping with counts and force_n lists (and '
+                             'censor_counts, spread_taxels, bump_power, rim_load_n, activation_n)')
         for key in ('counts', 'force_n'):
             values = doc[key]
             if not isinstance(values, list) or not all(

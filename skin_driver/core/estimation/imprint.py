@@ -85,13 +85,15 @@ def _best_spread(counts, force, censored, free, spread_taxels: float, power: flo
 
 
 def censored_force(counts: np.ndarray, force: np.ndarray, censor_counts: float,
-                   spread_taxels: float, power: float = 2.0) -> float:
+                   spread_taxels: float, power: float = 2.0, activation: float = 0.0) -> float:
     """
     Return the summed force of one imprint (2-D maps of counts and of taxel forces).
 
     Taxels at ``censor_counts`` or more are censored; without any, or without a bump
     (``spread_taxels`` 0), the plain sum. The spread is the imprint's own where the bump is
-    wide enough for its rim to tell it (module docstring).
+    wide enough for its rim to tell it (module docstring). ``activation``, the force every
+    conducting taxel carries, is no part of the bump: it is fitted to the free taxels' force
+    above it, and a censored taxel carries the activation plus the bump.
     """
     counts = np.asarray(counts, dtype=np.float64)
     force = np.asarray(force, dtype=np.float64)
@@ -99,11 +101,13 @@ def censored_force(counts: np.ndarray, force: np.ndarray, censor_counts: float,
     if not (spread_taxels > 0 and censor_counts > 0 and censored.any()):
         return float(force.sum())
     free = (counts > 0) & ~censored
+    above = force - activation
     if spread_taxels >= MIN_FITTED_SPREAD:
-        best = _best_spread(counts, force, censored, free, spread_taxels, power)
+        best = _best_spread(counts, above, censored, free, spread_taxels, power)
     else:
-        best = _fill(counts, force, censored, free, spread_taxels, power)
+        best = _fill(counts, above, censored, free, spread_taxels, power)
     if best is None:
         return float(force.sum())
     _, height, phi = best
-    return float(force[free].sum() + np.maximum(force[censored], height * phi[censored]).sum())
+    return float(force[free].sum()
+                 + np.maximum(force[censored], activation + height * phi[censored]).sum())

@@ -34,7 +34,7 @@ METHODS = {'centroid': 0, 'taxel_fit': 1, 'poc': 2}
 # skin_kernel.h's layout: bump both together.
 _ABI_VERSION = 5
 _INTS = 9
-_REALS = 21
+_REALS = 23
 _NREC = 23
 _NSTATUS = 3
 # A record's first CONTACT_FIELDS numbers are pipeline.Contact's fields in order, the shift and
@@ -92,7 +92,7 @@ class KernelSettings(NamedTuple):
     max_contacts: int
     remove_crosstalk: bool
     fill_dead: bool
-    reals: tuple         # skin_kernel.h's SK_PITCH ... SK_POWER_BOTTOM, in that order
+    reals: tuple         # skin_kernel.h's SK_PITCH ... SK_ACTIVATION_BOTTOM, in order
     baseline: np.ndarray  # (2, rows, cols) each, like threshold, noise, gain (or None), dead
     threshold: np.ndarray
     noise: np.ndarray

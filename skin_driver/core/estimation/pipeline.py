@@ -373,7 +373,8 @@ class ContactEstimator:
                          *(c.censor_counts if c is not None else 0.0 for c in curves),
                          *(c.rim_load_n if c is not None else 0.0 for c in curves),
                          *(c.spread_taxels if c is not None else 0.0 for c in curves),
-                         *(c.bump_power if c is not None else 2.0 for c in curves))
+                         *(c.bump_power if c is not None else 2.0 for c in curves),
+                         *(c.activation_n if c is not None else 0.0 for c in curves))
                 cond = self.conditioner.config
                 self._kernel = compiled_kernel.Kernel(compiled_kernel.KernelSettings(
                     self._method.name, cfg.max_contacts, cond.remove_crosstalk, cond.fill_dead,

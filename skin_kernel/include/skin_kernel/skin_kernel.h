@@ -41,6 +41,7 @@ enum {
   SK_RIM_TOP, SK_RIM_BOTTOM, /* force at an imprint's rim that no taxel reads (forcecurve) */
   SK_SPREAD_TOP, SK_SPREAD_BOTTOM, /* a saturated imprint's bump: spread (taxels), power */
   SK_POWER_TOP, SK_POWER_BOTTOM,   /* (imprint.py) */
+  SK_ACTIVATION_TOP, SK_ACTIVATION_BOTTOM, /* force of every conducting taxel, not the bump's */
   SK_NREALS
 };
 

@@ -45,10 +45,11 @@ def test_a_fine_saturating_skin_reads_the_presses_of_another_indenter():
 
 
 def test_the_pipeline_reads_the_calibration_presses_as_the_force_fit_gave_them_back():
-    # The fit models the run-time fill-in of saturated taxels, activation force included: a
-    # bump fitted to rim taxels that carry the activation puts several times it on each
-    # saturated taxel. Modelled as one activation a taxel, the pipeline read the heavy
-    # presses up to 7 % above what the fit reported (the scored presses' force 5 % high).
+    # The fit bumps the power part of the curve; the pipeline fills a saturated taxel in with
+    # the activation plus the bump fitted to the free taxels' force above it. A bump fitted to
+    # rim taxels that carry the activation too put several activations on each saturated
+    # taxel: the pipeline read the heavy presses up to 7 % above what the fit reported (the
+    # scored presses' force 5 % high).
     data = calibrated_scene('one_tip', 'saturating', np.random.default_rng(0), 5)
     normal = np.flatnonzero((data.split == 1) & (data.alpha_deg == 0))
     est = ContactEstimator(EstimatorConfig(pitch_m=data.pitch_m)).with_tare(data.tare_top,
