@@ -1,5 +1,7 @@
 """Run nodes until shutdown, the one way every executable of this package does."""
 
+import gc
+
 import rclpy
 from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from skin_driver.core.estimation.kernel import KernelMissing
@@ -24,11 +26,26 @@ def create_or_exit(create, name: str):
     raise SystemExit(1)
 
 
+def freeze_heap() -> None:
+    """
+    Put every object alive now out of the garbage collector's reach (gc.freeze).
+
+    What a process holds once its nodes are up (modules, nodes, estimator, reused messages)
+    lives as long as the process. A full collection walks all of it while holding the GIL, a
+    pause in which no thread reads, estimates or publishes a scan, and a subscriber at the
+    sensor-data depth loses what arrives meanwhile. Frozen, a collection walks only what came
+    later.
+    """
+    gc.collect()
+    gc.freeze()
+
+
 def spin_nodes(nodes, before_spin=None) -> None:
     """
     Spin ``nodes`` on one executor until Ctrl-C or shutdown, then destroy them and shut down.
 
-    ``before_spin()`` runs once the nodes are on the executor (a lifecycle node's autostart).
+    ``before_spin()`` runs once the nodes are on the executor (a lifecycle node's autostart);
+    then what is alive is frozen (:func:`freeze_heap`).
     A node with a ``close()`` method has it called before it is destroyed.
     """
     executor = SingleThreadedExecutor()
@@ -37,6 +54,7 @@ def spin_nodes(nodes, before_spin=None) -> None:
     try:
         if before_spin is not None:
             before_spin()
+        freeze_heap()
         executor.spin()
     except (KeyboardInterrupt, ExternalShutdownException):
         pass

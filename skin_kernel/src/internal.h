@@ -78,9 +78,12 @@ double sk_normal_cdf(double u);
 void sk_censored_centres(const double *force, const double *censored, int h, int w,
                          double *scratch, double *centre, const double *width);
 
-/* taxelfit.c: the shift of a (2, h, w) window; censored: 1 where a taxel is saturated */
-void sk_taxel_fit(const double *force, const double *counts, const double *censored, int h,
-                  int w, double *scratch, double *dx, double *dy, double *confidence);
+/*
+ * taxelfit.c: the shift of a (2, h, w) window; censored: 1 where a taxel is saturated; force's
+ * taxels on a film's turn-on step are halved in place
+ */
+void sk_taxel_fit(double *force, const double *counts, const double *censored, int h, int w,
+                  double *scratch, double *dx, double *dy, double *confidence);
 void sk_centroid(const double *counts, int h, int w, double *scratch, double *dx, double *dy,
                  double *confidence);
 

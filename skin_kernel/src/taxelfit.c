@@ -14,6 +14,9 @@
 #define MIN_EXPLAINED 0.5
 #define WIDE 1.5
 #define PLATEAU 1e-9
+#define STEP_TAXELS 3
+#define STEP_SPREAD 0.05
+#define STEP_HEIGHT 0.2
 /* Abramowitz and Stegun 7.1.26: erf to 1.5e-7, far below the counts' noise */
 static const double AS_P = 0.3275911;
 static const double AS[5] = {0.254829592, -0.284496736, 1.421413741, -1.453152027, 1.061405429};
@@ -275,6 +278,35 @@ static int plateau(const double *layer, int m)
   return peak > 0 && at_peak >= 2;
 }
 
+/* Taxels on a film's turn-on step at half their force, in place (taxelfit._on_step) */
+static void on_step(double *force, const double *counts, int m)
+{
+  for (int layer = 0; layer < 2; layer++) {
+    const double *c = counts + layer * m;
+    double low = INFINITY, peak = 0.0;
+    int loaded = 0;
+    for (int i = 0; i < m; i++) {
+      if (c[i] > 0) {
+        loaded++;
+        low = c[i] < low ? c[i] : low;
+      }
+      peak = c[i] > peak ? c[i] : peak;
+    }
+    int on = 0;
+    for (int i = 0; i < m; i++) {
+      on += c[i] > 0 && c[i] <= low * (1.0 + STEP_SPREAD);
+    }
+    if (loaded == 0 || on < STEP_TAXELS || 2 * on > loaded || !(low > STEP_HEIGHT * peak)) {
+      continue;
+    }
+    for (int i = 0; i < m; i++) {
+      if (c[i] > 0 && c[i] <= low * (1.0 + STEP_SPREAD)) {
+        force[layer * m + i] *= 0.5;
+      }
+    }
+  }
+}
+
 /* Column profiles (summed over rows, in row order) and row profiles (numpy's pairwise sums). */
 static void profiles_of(const double *layer, int h, int w, int nn, double *along_x,
                         double *along_y)
@@ -291,10 +323,11 @@ static void profiles_of(const double *layer, int h, int w, int nn, double *along
   }
 }
 
-void sk_taxel_fit(const double *force, const double *counts, const double *censored, int h,
-                  int w, double *scratch, double *dx, double *dy, double *confidence)
+void sk_taxel_fit(double *force, const double *counts, const double *censored, int h, int w,
+                  double *scratch, double *dx, double *dy, double *confidence)
 {
   int m = h * w, nn = h > w ? h : w;
+  on_step(force, counts, m);
   double *profiles = scratch;
   int len[4] = {w, w, h, h};
   for (int layer = 0; layer < 2; layer++) {

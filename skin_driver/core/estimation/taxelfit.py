@@ -67,6 +67,15 @@ _DECREASE = 1e-12
 _PINNED = 1e-3
 # The 2-D fit runs until its centre steps fall below this (taxels): converged, not merely close.
 _TOLERANCE_2D = 1e-10
+# A film that turns on at a pressure steps to a few kOhm: a rim taxel conducting over any part
+# of its cell reads at least the step's counts, whatever its load (docs/estimation.md). Such
+# taxels sit on one floor: at least _STEP_TAXELS loaded taxels within _STEP_SPREAD (share of it)
+# of the layer's lowest reading, no more than half its loaded taxels (an imprint's rim, not a
+# narrow imprint's every taxel), the floor above _STEP_HEIGHT of the peak (a rim fading into
+# the noise sits near the touch threshold, far below it).
+_STEP_TAXELS = 3
+_STEP_SPREAD = 0.05
+_STEP_HEIGHT = 0.2
 # Abramowitz and Stegun 7.1.26: erf to 1.5e-7, far below the counts' noise.
 _AS_P = 0.3275911
 _AS = (0.254829592, -0.284496736, 1.421413741, -1.453152027, 1.061405429)
@@ -314,6 +323,30 @@ def _cut_by_edge(profiles: np.ndarray, mask: np.ndarray, mu: np.ndarray, width: 
     return (np.where(fixed, width[other], np.nan), np.clip(mu, low, high), low, high)
 
 
+def _on_step(force: np.ndarray, counts: np.ndarray) -> np.ndarray:
+    """
+    Return the force window with the taxels on a film's turn-on step at half their force.
+
+    Such a taxel's load lies anywhere between nothing and the step's force (the constants'
+    comment): the middle of that interval is its least biased value, where the step's force
+    pulled the fitted centre towards the rim's side with most taxels on the step.
+    """
+    out = force
+    for layer in range(2):
+        c = counts[layer]
+        loaded = c > 0
+        n = int(loaded.sum())
+        if n == 0:
+            continue
+        low = float(c[loaded].min())
+        step = loaded & (c <= low * (1.0 + _STEP_SPREAD))
+        k = int(step.sum())
+        if k >= _STEP_TAXELS and 2 * k <= n and low > _STEP_HEIGHT * float(c.max()):
+            out = out.copy() if out is force else out
+            out[layer][step] *= 0.5
+    return out
+
+
 def _plateau(layer: np.ndarray) -> bool:
     """Return whether the layer's highest value is shared by several taxels (a clipped top)."""
     peak = layer.max()
@@ -332,7 +365,10 @@ def cell_fit_shift(maps: np.ndarray, counts: np.ndarray = None, censored: np.nda
     fitted on its ``counts`` (same shape) when given. Each layer's centre is absolute, so the
     two layers need not be fitted on the same scale. ``censored`` (same shape, boolean) marks
     saturated taxels: a layer with enough rim below them is fitted in 2-D (module docstring).
+    Taxels on a film's turn-on step count at half their force (:func:`_on_step`).
     """
+    if counts is not None:
+        maps = _on_step(maps, counts)
     force = maps
     if counts is not None:
         maps = np.stack([c if _plateau(m) else m for m, c in zip(maps, counts)])

@@ -33,6 +33,10 @@ _PER_PRESS = 5
 # Finite-difference steps: a fiftieth of a taxel averages over the fine grid's steps.
 _STEP = np.array((0.02, 0.02, 0.01, 0.02, 0.02))
 _ITERATIONS = 8
+# The most one step may move each parameter (a trust region): where the frame does not hold a
+# parameter (a bottom imprint shifted off the map leaves its shift free) the damped step would
+# otherwise run away on a flat misfit.
+_MAX_STEP = np.array((0.5, 0.5, 0.5, 1.0, 1.0))
 
 
 def _press_of(model: SkinModel, like: Press, u: np.ndarray) -> Press:
@@ -102,8 +106,10 @@ def fit_presses(model: SkinModel, presses: Sequence[Press], counts: np.ndarray) 
     jac = frame.jacobian(u, forces, r)
     for _ in range(_ITERATIONS):
         normal = jac.T @ jac
-        step = np.linalg.solve(normal + damping * np.diag(np.diag(normal) + 1e-9), -jac.T @ r)
-        trial = u + step.reshape(u.shape)
+        step = np.linalg.solve(normal + damping * np.diag(np.diag(normal) + 1e-9),
+                               -jac.T @ r).reshape(u.shape)
+        step /= max(1.0, float(np.abs(step / _MAX_STEP).max()))
+        trial = u + step
         trial_forces = frame.forces(trial)
         trial_r = frame.residual(trial_forces)
         trial_cost = trial_r @ trial_r
@@ -129,7 +135,8 @@ def oracle_contacts(model: SkinModel, presses: Sequence[Press], counts: np.ndarr
 
     Each press gives one contact at its fitted place, with its fitted normal force and the
     azimuth of its fitted tangential displacement; the azimuth sigma comes from the fit's
-    curvature. An empty press list gives no contact.
+    curvature, and a displacement whose standard error reaches its length has no valid
+    direction (the frame does not hold it). An empty press list gives no contact.
     """
     if not presses:
         return []
@@ -143,12 +150,14 @@ def oracle_contacts(model: SkinModel, presses: Sequence[Press], counts: np.ndarr
         fx, fy = ((tangential * tx / length, tangential * ty / length) if length > 0
                   else (0.0, 0.0))
         spread = math.hypot(sx, sy) / math.sqrt(2.0)
+        # A shift the frame does not hold (its standard error as long as itself) has no azimuth.
+        known = math.isfinite(spread) and spread < length
         out.append(Contact(
             x_m=x * pitch, y_m=y * pitch, force_n=normal, area_m2=0.0,
             shift_m=(tx * pitch, ty * pitch), azimuth_rad=math.atan2(ty, tx),
             azimuth_sigma_rad=math.atan2(spread, length) if math.isfinite(spread) else math.pi,
             alpha_rad=math.atan2(tangential, normal), force_xyz_n=(fx, fy, -normal),
-            confidence=1.0, direction_valid=length > 0))
+            confidence=1.0 if known else 0.0, direction_valid=known))
     out.sort(key=lambda c: -c.force_n)
     return out
 

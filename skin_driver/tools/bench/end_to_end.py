@@ -31,6 +31,7 @@ from skin_driver.core.sim.physics import Press, render, SkinModel
 from skin_driver.ros import conversions
 from skin_driver.ros.direction_node import DirectionNode
 from skin_driver.ros.estimation_host import EstimationHost
+from skin_driver.ros.spin import freeze_heap
 from skin_driver.tools.harness import (
     overrides, ros_args, ros_session, spawn, spin_for, start_nodes, start_sim, stop, wait_for,
     write_params)
@@ -127,6 +128,9 @@ def _run(executor, probe, layout, nodes, rate, seconds, warmup, port, log, prior
                     prefix=realtime_prefix(priority))
     probe.reset()
     spin_for(executor, warmup)
+    # This process holds the in-process part's results, which a controller would not: frozen,
+    # a full collection does not stop the probe's thread while it walks them.
+    freeze_heap()
     pids = {'sim': sim.process.pid, **{k: p.pid for k, p in nodes.items()}, 'probe': os.getpid()}
     cpu0 = {k: cpu_seconds(p) for k, p in pids.items()}
     threads0 = {k: thread_cpu(p.pid) for k, p in nodes.items()}

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import math
 import time
+import warnings
 
 import numpy as np
 
@@ -38,8 +39,11 @@ def skimage_shift(maps: np.ndarray) -> ShiftEstimate:
     top, bottom = maps
     if not (top.any() and bottom.any()):
         return NO_SHIFT
-    # Registering top onto bottom gives the displacement of bottom, (dy, dx).
-    (dy, dx), _, _ = phase_cross_correlation(bottom, top, upsample_factor=SKIMAGE_UPSAMPLE)
+    # Registering top onto bottom gives the displacement of bottom, (dy, dx). Its RMS error,
+    # unused here, is undefined for a layer of zero mean and warns on every such frame.
+    with warnings.catch_warnings():
+        warnings.simplefilter('ignore', UserWarning)
+        (dy, dx), _, _ = phase_cross_correlation(bottom, top, upsample_factor=SKIMAGE_UPSAMPLE)
     if not (math.isfinite(dx) and math.isfinite(dy)):
         return NO_SHIFT
     # It has no validity decision of its own: its estimates are taken as trusted.

@@ -24,6 +24,7 @@ import serial
 from skin_driver.core.estimation.pipeline import ContactEstimator, EstimatorConfig
 from skin_driver.core.protocol.wire import CRC_SIZE, frame_size, HEADER_SIZE, SYNC
 from skin_driver.ros import conversions, qos
+from skin_driver.ros.spin import freeze_heap
 from skin_msgs.msg import TactileContactArray
 from std_msgs.msg import Header
 
@@ -53,6 +54,7 @@ def main(argv=None) -> int:
     poller.register(device.fileno(), select.POLLIN)
     size, count = frame_size(rows, cols), 2 * rows * cols
     pending = b''
+    freeze_heap()  # as the nodes do before they spin
     try:
         while rclpy.ok():
             if not poller.poll(50):

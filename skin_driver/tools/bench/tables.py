@@ -287,7 +287,10 @@ def _e2e_section(res, images) -> list:
            'audit, best effort with a deep queue (depth '
            f'{e["runs"][0].get("audit_depth", "-") if e["runs"] else "-"}), that tells the '
            "driver's own losses apart from those of a subscriber not scheduled in time (depth 5 "
-           'holds 5 ms of scans at 1 kHz, 2.5 ms at 2 kHz). Each contacts message carries its '
+           'holds 5 ms of scans at 1 kHz, 2.5 ms at 2 kHz). Every process freezes its heap '
+           '(`gc.freeze`) once up, the bench process before each measured window: a full '
+           'garbage collection of what lives as long as the process would stop its threads '
+           'for as long as it takes. Each contacts message carries its '
            "scan's sequence number and device time. Per run: "
            f'{e["warmup_s"]:g} s warm-up, then {e["seconds"]:g} s measured.', '',
            '- **lost**: scans of the measured window (by device time) with no contacts message '

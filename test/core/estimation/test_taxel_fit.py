@@ -49,6 +49,30 @@ def test_fitted_centre_of_a_cell_integrated_gaussian_is_exact():
     assert explained[0] == pytest.approx(1.0, abs=1e-6)
 
 
+def _cell_imprint(cx: float, cy: float, width: float, n: int = 9) -> np.ndarray:
+    """Return a unit Gaussian imprint integrated over the cells of an n x n window."""
+    from statistics import NormalDist
+    edges = np.arange(n + 1) - 0.5
+    gx, gy = (np.diff([NormalDist(c, width).cdf(e) for e in edges]) for c in (cx, cy))
+    return np.outer(gy, gx)
+
+
+def test_a_films_turn_on_step_at_the_rim_does_not_pull_the_centre():
+    # A film that turns on at a pressure reads at least its step on any conducting rim taxel
+    # (here 8 % of the peak force, 28 % of the peak counts on a square-root curve): six of the
+    # bottom imprint's twelve taxels sit on the step, more of them on one side. At their step
+    # force they pulled the fitted shift 0.05 taxel; at half of it, 0.026.
+    top = _cell_imprint(4.0, 4.0, 0.6)
+    true_bottom = _cell_imprint(4.2, 4.1, 0.5)
+    step = 0.08 * true_bottom.max()
+    bottom = np.where(true_bottom > 0.002 * true_bottom.max(),
+                      np.maximum(true_bottom, step), 0.0)
+    force = np.stack((top, bottom))
+    counts = np.sqrt(force / force.max(axis=(1, 2), keepdims=True))
+    dx, dy, _ = cell_fit_shift(force, counts)
+    assert dx == pytest.approx(0.2, abs=0.035) and dy == pytest.approx(0.1, abs=0.035)
+
+
 def test_empty_layer_gives_no_shift_and_odd_shapes_fall_back_to_the_centroid():
     maps = np.zeros((2, 5, 5))
     maps[0, 2, 2] = 1.0

@@ -33,6 +33,18 @@ def test_oracle_finds_the_azimuth_of_a_noisy_frame_within_a_degree():
     assert oracle_contacts(model, [], np.stack((top, bottom))) == []
 
 
+def test_a_shift_off_the_map_has_no_direction_and_does_not_run_away():
+    # A soft layer (held_out:0's 2.8 mm/N) pushed outward at the edge: the bottom imprint
+    # leaves the map by some five taxels, so nothing in the frame tells how far.
+    model = held_out_skin(0).model
+    press = Press(0.0765, 0.040, 12.0, math.radians(60.0), math.radians(5.0), 0.004)
+    top, bottom = render(model, [press], np.random.default_rng(1))
+    (contact,) = oracle_contacts(model, [press], np.stack((top, bottom)))
+    assert not contact.direction_valid
+    assert contact.force_n == pytest.approx(press.normal_force_n, rel=0.05)
+    assert math.hypot(*contact.shift_m) < 0.1  # a trust region, not thousands of taxels
+
+
 def test_film_below_its_turn_on_pressure_reads_nothing_and_steps_on_at_the_rim():
     plain = SkinModel(noise_counts=0.0, cover_spread_m=0.0005)
     film = SkinModel(noise_counts=0.0, cover_spread_m=0.0005, turn_on_pa=4e4,
