@@ -22,8 +22,6 @@ from functools import lru_cache
 import cv2
 import numpy as np
 
-from .jointfit import joint_shares
-
 __all__ = ['LayerPair', 'pair_layers']
 
 # A second peak of one connected top group is another contact only if the load between them
@@ -34,7 +32,6 @@ _MIXTURE_ITERATIONS = 3
 # Bottom load below this share of a contact's peak share is not part of its window.
 _WINDOW_SHARE = 0.02
 _DILATE = np.ones((3, 3), np.uint8)
-_MEANS = [None]  # DEV HACK
 
 
 @dataclass(frozen=True, eq=False)
@@ -93,7 +90,6 @@ def pair_layers(maps: np.ndarray, max_contacts: int = 32, dead: np.ndarray = Non
         own = labels[None] == np.array(keep[:max_contacts])[:, None, None]
         tops, top_forces = top * own, force[0] * own
         fraction = _share_bottom(tops, bottom)
-        fraction = joint_shares(top_forces, force[1], _MEANS[0], fraction)
         shares, bottom_forces = fraction * bottom, fraction * force[1]
     return [_pair(t, b, tf, bf) for t, b, tf, bf in zip(tops, shares, top_forces, bottom_forces)]
 
@@ -195,7 +191,6 @@ def _share_bottom(tops: np.ndarray, bottom: np.ndarray) -> np.ndarray:
         var = np.maximum(0.5 * (m[:, 3] / got - (mean * mean).sum(axis=1)), 0.25)
         log_weight = np.log(got / got.sum())
     shares.reshape(k, -1)[:, loaded] = resp
-    _MEANS[0] = mean
     return shares
 
 
