@@ -24,7 +24,6 @@ from skin_driver.core.sim.experiments import (
 from skin_driver.core.sim.oracle import ORACLE, oracle_run
 from skin_driver.core.sim.physics import Press, render, SkinModel
 from skin_driver.core.sim.skins import family_skin, PATCH_M, skin_for_grid, skin_names
-from skin_driver.tools.bench.calibration import force_figures
 from skin_driver.tools.evaluate.scoring import (
     angle_error_deg, direction_errors, evaluate, MethodRun, PAPER_TABLE, score_run)
 from skin_driver.tools.evaluate.tables import format_table
@@ -289,7 +288,6 @@ def _family_row(skin, kind, data, run, costs) -> dict:
             'separate_share_far': presses and presses['separate_share_far'],
             'merged_share_far': presses and presses['merged_share_far'],
             'separate_share_close': presses and presses['separate_share_close'],
-            **force_figures(summary),
             'median_us': 1e6 * float(np.median(costs)), 'mean_us': 1e6 * float(np.mean(costs))}
 
 
