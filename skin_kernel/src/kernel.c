@@ -196,17 +196,13 @@ static int finish(sk_kernel *k, double *out)
 
 /*
  * Pair p's force sums with their rim loads, each saturated layer's filled in from its rim
- * (pipeline._censored). k->fit holds its window; a taxel the ADC cut is censored there.
+ * (pipeline._censored). marked: p's window counts with the taxels the ADC cut at full scale
+ * (censored there), when p->censored; 2 h w doubles of scratch follow it.
  */
-static void imprint_forces(sk_kernel *k, sk_pair *p)
+static void imprint_forces(sk_kernel *k, sk_pair *p, const double *marked)
 {
   double *sums[2] = {&p->top_force, &p->bottom_force};
   int m = p->h * p->w;
-  double *marked = k->fit + 4 * m;
-  if (p->censored) {
-    memcpy(marked, k->fit, sizeof(double) * 2 * m);
-    sk_clipped_window(k, p, marked, 1);
-  }
   for (int layer = 0; layer < 2; layer++) {
     double rim = k->reals[SK_RIM_TOP + layer];
     if (p->censored >> layer & 1) {
@@ -214,7 +210,8 @@ static void imprint_forces(sk_kernel *k, sk_pair *p)
                                       k->reals[SK_CENSOR_TOP + layer],
                                       k->reals[SK_SPREAD_TOP + layer],
                                       k->reals[SK_POWER_TOP + layer],
-                                      k->reals[SK_ACTIVATION_TOP + layer], rim, marked + 2 * m);
+                                      k->reals[SK_ACTIVATION_TOP + layer], rim,
+                                      k->fit + 6 * m);
     } else {
       *sums[layer] += fmin(rim, *sums[layer]);
     }
@@ -256,7 +253,13 @@ int sk_scan(sk_kernel *k, const double *maps, int every_pair, double *out, int *
       }
     }
     censored |= p->censored;
-    imprint_forces(k, p);
+    /* the counts with the ADC's cut taxels marked, for the fill-in and the shift's bounds */
+    double *marked = k->fit + 4 * m;
+    if (p->censored) {
+      memcpy(marked, k->fit, sizeof(double) * 2 * m);
+      sk_clipped_window(k, p, marked, 1);
+    }
+    imprint_forces(k, p, marked);
     p->dx = p->dy = p->confidence = 0.0;
     p->sigma = INFINITY;
     if (!every_pair && normal_force(k, p) < k->reals[SK_MIN_FORCE]) {
@@ -265,14 +268,15 @@ int sk_scan(sk_kernel *k, const double *maps, int every_pair, double *out, int *
     }
     double *scratch = k->fit + 4 * m;
     if (k->method == SK_TAXEL_FIT) {
-      /* saturated taxels: at the curve's censoring counts, or cut by the ADC (pipeline.py) */
-      double *marks = scratch;
-      memcpy(marks, k->fit, 2 * m * sizeof(double));
-      sk_clipped_window(k, p, marks, 1);
+      /*
+       * saturated taxels: at the curve's censoring counts, or cut by the ADC (pipeline.py);
+       * a pair with none is not censored, and its marks are all 0
+       */
+      double *marks = marked;
       for (int layer = 0; layer < 2; layer++) {
         double censor = k->reals[SK_CENSOR_TOP + layer];
         for (int j = layer * m; j < (layer + 1) * m; j++) {
-          marks[j] = censor > 0 && marks[j] >= censor ? 1.0 : 0.0;
+          marks[j] = p->censored && censor > 0 && marks[j] >= censor ? 1.0 : 0.0;
         }
       }
       sk_taxel_fit(k->fit + 2 * m, k->fit, marks, p->h, p->w, scratch + 2 * m, &p->dx, &p->dy,
