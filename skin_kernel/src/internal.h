@@ -13,6 +13,7 @@ typedef struct {
   int taxels, at_border, censored;
   int bottom_cut;          /* the bottom share's strongest line is the map's edge line */
   double dx, dy, confidence, sigma;
+  double cut_var;          /* taxel_fit's variance of its profiles cut by the edge; < 0: none */
 } sk_pair;
 
 struct sk_kernel {
@@ -80,10 +81,12 @@ void sk_censored_centres(const double *force, const double *censored, int h, int
 
 /*
  * taxelfit.c: the shift of a (2, h, w) window; censored: 1 where a taxel is saturated; force's
- * taxels on a film's turn-on step are halved in place
+ * taxels on a film's turn-on step are halved in place; cut_var: the variance (taxels**2) of the
+ * profiles cut by the map's edge (0 when none is)
  */
 void sk_taxel_fit(double *force, const double *counts, const double *censored, int h, int w,
-                  double *scratch, double *dx, double *dy, double *confidence);
+                  double *scratch, double *dx, double *dy, double *confidence,
+                  double *cut_var);
 void sk_centroid(const double *counts, int h, int w, double *scratch, double *dx, double *dy,
                  double *confidence);
 

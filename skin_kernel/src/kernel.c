@@ -262,6 +262,7 @@ int sk_scan(sk_kernel *k, const double *maps, int every_pair, double *out, int *
     imprint_forces(k, p, marked);
     p->dx = p->dy = p->confidence = 0.0;
     p->sigma = INFINITY;
+    p->cut_var = -1.0;
     if (!every_pair && normal_force(k, p) < k->reals[SK_MIN_FORCE]) {
       /* too light to report, and its force is final: its shift is never asked for */
       continue;
@@ -280,7 +281,7 @@ int sk_scan(sk_kernel *k, const double *maps, int every_pair, double *out, int *
         }
       }
       sk_taxel_fit(k->fit + 2 * m, k->fit, marks, p->h, p->w, scratch + 2 * m, &p->dx, &p->dy,
-                   &p->confidence);
+                   &p->confidence, &p->cut_var);
     } else if (k->method == SK_POC) {
       sk_poc(k->fit, p->h, p->w, scratch, &p->dx, &p->dy, &p->confidence);
     } else {
@@ -288,6 +289,7 @@ int sk_scan(sk_kernel *k, const double *maps, int every_pair, double *out, int *
     }
     if (!(isfinite(p->dx) && isfinite(p->dy))) {
       p->dx = p->dy = p->confidence = 0.0;
+      p->cut_var = -1.0;
     }
     p->sigma = sk_sigma(k, p, k->fit, count == 1);
   }

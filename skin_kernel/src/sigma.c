@@ -1,13 +1,14 @@
 /*
  * The 1-sigma uncertainty of one axis of a contact's shift, from its own data: the counts'
- * noise through each centroid, the pixel-locking error of a narrow imprint, the map's edge and
- * the calibration. Python description: pipeline.ContactEstimator._sigma (and its docstring).
+ * noise through each centroid, the pixel-locking error of a narrow imprint, the map's edge (the
+ * shift method's own uncertainty of its cut profiles, else a flat fifth of a taxel) and the
+ * calibration. Python description: uncertainty.shift_sigma (and its module docstring).
  */
 #include <math.h>
 
 #include "internal.h"
 
-/* pipeline.py's constants */
+/* uncertainty.py's constants */
 #define MIN_MASS_COUNTS 1.0
 #define BORDER_SIGMA 0.2
 
@@ -54,7 +55,10 @@ double sk_sigma(const sk_kernel *k, const sk_pair *p, const double *window, int 
       total += 0.5 * ((spread > 0.0 ? spread : 0.0) + 0.5 * lock * lock);
     }
   }
-  if (p->at_border) {
+  if (p->cut_var >= 0.0) {
+    /* the shift method's own uncertainty of its profiles cut by the edge (taxelfit.c) */
+    total += p->cut_var;
+  } else if (p->at_border) {
     total += BORDER_SIGMA * BORDER_SIGMA;
   }
   total += k->reals[SK_CALIBRATION_VAR];

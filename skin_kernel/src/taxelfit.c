@@ -17,6 +17,7 @@
 #define STEP_TAXELS 3
 #define STEP_SPREAD 0.05
 #define STEP_HEIGHT 0.2
+#define CUT_WIDTH_SHARE 0.4
 /* Abramowitz and Stegun 7.1.26: erf to 1.5e-7, far below the counts' noise */
 static const double AS_P = 0.3275911;
 static const double AS[5] = {0.254829592, -0.284496736, 1.421413741, -1.453152027, 1.061405429};
@@ -265,6 +266,46 @@ static int cut_by_edge(const double *profiles, int nn, const int *len, const dou
   return any;
 }
 
+/*
+ * The variance (taxels**2, one axis of the shift) of the centres of the profiles cut by the
+ * map's edge: each one's derivative by the width with the mass refitted, times CUT_WIDTH_SHARE
+ * of the width (taxelfit._cut_variance).
+ */
+static double cut_variance(const double *profiles, int nn, const int *len, const double *mu,
+                           const double *width)
+{
+  double total = 0.0;
+  for (int j = 0; j < 4; j++) {
+    const double *p = profiles + j * nn;
+    if (!(p[0] > 0 || p[len[j] - 1] > 0)) {
+      continue;
+    }
+    double s = width[j];
+    double u0 = (-0.5 - mu[j]) / s;
+    double pdf0 = exp(-0.5 * u0 * u0) * INV_SQRT2PI, cdf0 = sk_normal_cdf(u0), updf0 = u0 * pdf0;
+    double n00 = 0.0, n01 = 0.0, n11 = 0.0, b0 = 0.0, b1 = 0.0;
+    for (int i = 0; i < len[j]; i++) {
+      double u1 = ((i + 1) - 0.5 - mu[j]) / s;
+      double pdf1 = exp(-0.5 * u1 * u1) * INV_SQRT2PI, cdf1 = sk_normal_cdf(u1), updf1 = u1 * pdf1;
+      double cell = cdf1 - cdf0, d_mu = -(pdf1 - pdf0) / s, d_s = -(updf1 - updf0) / s;
+      n00 += cell * cell;
+      n01 += cell * d_mu;
+      n11 += d_mu * d_mu;
+      b0 += cell * d_s;
+      b1 += d_mu * d_s;
+      pdf0 = pdf1;
+      cdf0 = cdf1;
+      updf0 = updf1;
+    }
+    n00 += 1e-12;
+    n11 += 1e-12;
+    double sens = -(n00 * b1 - n01 * b0) / (n00 * n11 - n01 * n01);
+    double v = CUT_WIDTH_SHARE * s * sens;
+    total += v * v;
+  }
+  return 0.5 * total;
+}
+
 static int plateau(const double *layer, int m)
 {
   double peak = layer[0];
@@ -324,7 +365,8 @@ static void profiles_of(const double *layer, int h, int w, int nn, double *along
 }
 
 void sk_taxel_fit(double *force, const double *counts, const double *censored, int h, int w,
-                  double *scratch, double *dx, double *dy, double *confidence)
+                  double *scratch, double *dx, double *dy, double *confidence,
+                  double *cut_var)
 {
   int m = h * w, nn = h > w ? h : w;
   on_step(force, counts, m);
@@ -336,11 +378,13 @@ void sk_taxel_fit(double *force, const double *counts, const double *censored, i
     profiles_of(maps, h, w, nn, profiles + layer * nn, profiles + (2 + layer) * nn);
   }
   double centre[4], width[4], explained[4];
+  *cut_var = -1.0;
   if (!fit_profiles(profiles, nn, len, NULL, scratch + 4 * nn, centre, width, explained)) {
     *dx = *dy = *confidence = NAN;
     return;
   }
   struct cut cut;
+  double fitted_width[4] = {width[0], width[1], width[2], width[3]};
   if (cut_by_edge(profiles, nn, len, centre, width, &cut)) {
     double again[4], again_width[4], share[4];
     fit_profiles(profiles, nn, len, &cut, scratch + 4 * nn, again, again_width, share);
@@ -348,9 +392,11 @@ void sk_taxel_fit(double *force, const double *counts, const double *censored, i
       if (cut.fixed[j]) {
         centre[j] = again[j];
         explained[j] = share[j];
+        fitted_width[j] = again_width[j];
       }
     }
   }
+  *cut_var = cut_variance(profiles, nn, len, centre, fitted_width);
   sk_censored_centres(force, censored, h, w, scratch, centre, width);
   *dx = centre[1] - centre[0];
   *dy = centre[3] - centre[2];

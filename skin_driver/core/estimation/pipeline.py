@@ -238,7 +238,7 @@ class ContactEstimator:
             if not (math.isfinite(est.dx) and math.isfinite(est.dy)):
                 est = NO_SHIFT
             out.append((pair, est, shift_sigma(pair, maps, noise, len(pairs) == 1,
-                                               self._calibration_variance())))
+                                               self._calibration_variance(), est.cut_variance)))
         return out
 
     def _calibration_variance(self) -> float:

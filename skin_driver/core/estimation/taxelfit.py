@@ -31,6 +31,13 @@ of its mass trades it against width and centre (a thousandfold mass in one satur
 it takes the bottom layer's mass, the same load seen through the layer (docs/estimation.md).
 An imprint cut by the map's edge is fitted on the cells the map has, its centre free to lie
 past the edge.
+
+A profile cut by the map's edge places its centre by the shape of the part the map holds, so
+the centre follows the width it was fitted with: the further past the edge, the more. Its
+uncertainty (:func:`_cut_variance`) is that dependence, the centre's derivative by the width
+along the fit's valley (the mass refitted), times the width's own uncertainty
+(``_CUT_WIDTH_SHARE`` of it): nil for a profile cut at its tail, large for one whose centre
+lies past the edge.
 """
 
 from __future__ import annotations
@@ -76,6 +83,9 @@ _TOLERANCE_2D = 1e-10
 _STEP_TAXELS = 3
 _STEP_SPREAD = 0.05
 _STEP_HEIGHT = 0.2
+# How far a cut profile's width may be off, a share of it: the width taken from the other axis
+# is that of the imprint's part on the map, and an imprint is no Gaussian (docs/estimation.md).
+_CUT_WIDTH_SHARE = 0.4
 # Abramowitz and Stegun 7.1.26: erf to 1.5e-7, far below the counts' noise.
 _AS_P = 0.3275911
 _AS = (0.254829592, -0.284496736, 1.421413741, -1.453152027, 1.061405429)
@@ -323,6 +333,35 @@ def _cut_by_edge(profiles: np.ndarray, mask: np.ndarray, mu: np.ndarray, width: 
     return (np.where(fixed, width[other], np.nan), np.clip(mu, low, high), low, high)
 
 
+def _cut_variance(profiles: np.ndarray, mask: np.ndarray, mu: np.ndarray,
+                  width: np.ndarray) -> float:
+    """
+    Return the variance (taxels**2, one axis of the shift) of the centres cut by the map's edge.
+
+    For each profile loaded in its first or last cell (cut, :func:`_cut_by_edge`), the centre's
+    derivative by the width with the mass refitted, ``-(d_mu' d_s) / (d_mu' d_mu)`` in the
+    metric that leaves out the mass's column (cells, d_mu, d_s: the profile's unit cells and
+    their derivatives at the fitted centre and width), times ``_CUT_WIDTH_SHARE`` of the width.
+    Half the sum of their squares: ``sigma`` stands for one axis of the shift (uncertainty.py).
+    """
+    length = mask.sum(axis=1).astype(int)
+    cut = (profiles[:, 0] > 0) | (profiles[np.arange(4), length - 1] > 0)
+    total = 0.0
+    for j in np.flatnonzero(cut):
+        u = (np.arange(length[j] + 1, dtype=np.float64) - 0.5 - mu[j]) / width[j]
+        pdf = np.exp(-0.5 * u * u) * _INV_SQRT2PI
+        cells = np.diff(_normal_cdf(u))
+        d_mu = -np.diff(pdf) / width[j]
+        d_s = -np.diff(u * pdf) / width[j]
+        n00 = float(cells @ cells) + 1e-12
+        n01 = float(cells @ d_mu)
+        n11 = float(d_mu @ d_mu) + 1e-12
+        b0, b1 = float(cells @ d_s), float(d_mu @ d_s)
+        sens = -(n00 * b1 - n01 * b0) / (n00 * n11 - n01 * n01)
+        total += (_CUT_WIDTH_SHARE * width[j] * sens) ** 2
+    return 0.5 * total
+
+
 def _on_step(force: np.ndarray, counts: np.ndarray) -> np.ndarray:
     """
     Return the force window with the taxels on a film's turn-on step at half their force.
@@ -357,10 +396,12 @@ def _plateau(layer: np.ndarray) -> bool:
 
 def cell_fit_shift(maps: np.ndarray, counts: np.ndarray = None, censored: np.ndarray = None):
     """
-    Return (dx, dy, explained share) of a (2, h, w) linearised window, or None without load.
+    Return (dx, dy, explained share, cut variance) of a (2, h, w) linearised window, or None.
 
-    dx, dy: the bottom's fitted centres less the top's, taxels; the explained share (the
-    worst of the four fits) serves as the confidence. A layer whose linearised map is flat at
+    None without load. dx, dy: the bottom's fitted centres less the top's, taxels; the
+    explained share (the worst of the four fits) serves as the confidence; the cut variance
+    (taxels**2, :func:`_cut_variance`) is the uncertainty of the profiles cut by the map's edge,
+    0 when none is. A layer whose linearised map is flat at
     its peak hit the end of the force curve: its force says nothing there, so that layer is
     fitted on its ``counts`` (same shape) when given. Each layer's centre is absolute, so the
     two layers need not be fitted on the same scale. ``censored`` (same shape, boolean) marks
@@ -385,12 +426,15 @@ def cell_fit_shift(maps: np.ndarray, counts: np.ndarray = None, censored: np.nda
     if not np.isfinite(mu).all():
         return None
     cut = _cut_by_edge(profiles, mask, mu, width)
+    fitted_width = width
     if cut is not None:
-        again, _, share = fit_cell_profiles(profiles, mask, cut)
+        again, held, share = fit_cell_profiles(profiles, mask, cut)
         fixed = np.isfinite(cut[0])
         mu = np.where(fixed, again, mu)
         explained = np.where(fixed, share, explained)
+        fitted_width = np.where(fixed, held, width)
+    variance = _cut_variance(profiles, mask, mu, fitted_width)
     if censored is not None:
         _censored_centres(force, censored, mu, width)
     return (float(mu[1] - mu[0]), float(mu[3] - mu[2]),
-            float(min(max(explained.min(), 0.0), 1.0)))
+            float(min(max(explained.min(), 0.0), 1.0)), variance)

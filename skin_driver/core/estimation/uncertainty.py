@@ -5,10 +5,12 @@ Each taxel's count noise (measured by the tare) gives the noise of each imprint'
 imprint narrower than a taxel adds the pixel-locking error of its sampled centroid, whose size
 follows from the imprint's measured width (a Gaussian profile of variance ``v - 1/12`` sampled on
 unit cells has a first harmonic of amplitude ``exp(-2 pi^2 (v - 1/12)) / pi`` taxels); an imprint
-cut by the map's edge adds a fifth of a taxel; the calibration adds the spread of its zero about
-the normal presses and its standard error (the zero a new press meets, :mod:`pipeline`). The
-root sum of squares is ``sigma``, one axis of the shift (see :mod:`pipeline`). The compiled
-kernel's ``sigma.c`` does the same; the tests hold it to this.
+cut by the map's edge adds the shift method's own uncertainty of its cut profiles (``taxel_fit``:
+how far the centre follows the width, :func:`taxelfit.cell_fit_shift`), or a fifth of a taxel
+for a method without one; the calibration adds the spread of its zero about the normal presses
+and its standard error (the zero a new press meets, :mod:`pipeline`). The root sum of squares is
+``sigma``, one axis of the shift (see :mod:`pipeline`). The compiled kernel's ``sigma.c`` does
+the same; the tests hold it to this.
 """
 
 from __future__ import annotations
@@ -24,7 +26,8 @@ __all__ = ['shift_sigma']
 
 # Less load than this (counts) on a layer gives a contact no measurable shift.
 _MIN_MASS_COUNTS = 1.0
-# Extra shift uncertainty (taxels) of an imprint cut by the edge of the map.
+# Extra shift uncertainty (taxels) of an imprint cut by the edge of the map, for a shift method
+# that gives none of its own.
 _BORDER_SIGMA = 0.2
 
 
@@ -39,13 +42,14 @@ def _axis_basis(shape: tuple) -> np.ndarray:
 
 
 def shift_sigma(pair: LayerPair, maps: np.ndarray, noise: np.ndarray, alone: bool,
-                calibration_variance: float) -> float:
+                calibration_variance: float, cut_variance: float = None) -> float:
     """
     Return the 1-sigma uncertainty of one axis of a contact's shift, in taxels (module doc).
 
     ``maps`` are the scan's touch counts, ``noise`` each taxel's count noise, both (2, rows,
     cols); ``alone``: the only contact of its scan; ``calibration_variance`` the calibration's
-    share of sigma**2 (taxels**2).
+    share of sigma**2 (taxels**2); ``cut_variance`` the shift method's own for imprints cut by
+    the map's edge (taxels**2, :class:`shift.ShiftEstimate`), None for the flat rule.
     """
     r0, c0 = pair.origin
     h, w = pair.maps.shape[1:]
@@ -74,6 +78,8 @@ def shift_sigma(pair: LayerPair, maps: np.ndarray, noise: np.ndarray, alone: boo
             lock = math.exp(-2.0 * math.pi ** 2 * max(var - 1.0 / 12.0, 0.0)) / math.pi
             # Half of both axes: ``sigma`` stands for one axis of the shift.
             total += 0.5 * (max(spread, 0.0) + 0.5 * lock * lock)
-    if pair.at_border:
+    if cut_variance is not None:
+        total += cut_variance
+    elif pair.at_border:
         total += _BORDER_SIGMA ** 2
     return math.sqrt(total + calibration_variance)

@@ -69,7 +69,7 @@ def test_a_films_turn_on_step_at_the_rim_does_not_pull_the_centre():
                       np.maximum(true_bottom, step), 0.0)
     force = np.stack((top, bottom))
     counts = np.sqrt(force / force.max(axis=(1, 2), keepdims=True))
-    dx, dy, _ = cell_fit_shift(force, counts)
+    dx, dy, _, _ = cell_fit_shift(force, counts)
     assert dx == pytest.approx(0.2, abs=0.035) and dy == pytest.approx(0.1, abs=0.035)
 
 
@@ -81,7 +81,7 @@ def test_empty_layer_gives_no_shift_and_odd_shapes_fall_back_to_the_centroid():
     # A ring (no Gaussian explains it): the centre stays the centroid, in the window.
     ring = np.zeros((2, 7, 7))
     ring[:, 1, 1:6] = ring[:, 5, 1:6] = ring[:, 1:6, 1] = ring[:, 1:6, 5] = 1.0
-    dx, dy, _ = cell_fit_shift(ring)
+    dx, dy, _, _ = cell_fit_shift(ring)
     assert dx == pytest.approx(0.0, abs=1e-9) and dy == pytest.approx(0.0, abs=1e-9)
     assert get_method('taxel_fit').linear
 
@@ -105,7 +105,7 @@ def test_an_imprint_cut_by_the_map_edge_keeps_its_centre_past_the_edge():
     maps[0] = np.outer(_cell_gaussian(3.0, 0.6, h), _cell_gaussian(3.0, 0.6, w))
     maps[1] = np.outer(_cell_gaussian(3.0, 1.1, h), _cell_gaussian(-1.0, 1.1, w))
     maps[maps < 0.005] = 0.0
-    dx, dy, explained = cell_fit_shift(maps)
+    dx, dy, explained, _ = cell_fit_shift(maps)
     assert dx == pytest.approx(-4.0, abs=0.05) and dy == pytest.approx(0.0, abs=0.02)
     assert explained > 0.95
 
@@ -128,11 +128,11 @@ def test_a_saturated_layer_is_placed_by_its_rim():
     capped = np.minimum(bottom, 3.0)
     maps = np.stack((top, capped))
     censored = np.stack((np.zeros_like(top, dtype=bool), bottom >= 3.0))
-    dx, dy, _ = cell_fit_shift(maps, None, censored)
+    dx, dy, _, _ = cell_fit_shift(maps, None, censored)
     error = math.hypot(dx - 0.35, dy - 0.2)
     assert error < 0.005
     # Without the marks the capped plateau is taken for the imprint's shape, and misplaces it.
-    plain_dx, plain_dy, _ = cell_fit_shift(maps)
+    plain_dx, plain_dy, _, _ = cell_fit_shift(maps)
     assert math.hypot(plain_dx - 0.35, plain_dy - 0.2) > 5.0 * error
 
 
@@ -145,8 +145,27 @@ def test_a_sharp_saturated_top_imprint_takes_the_bottom_layers_mass():
     maps = np.stack((np.minimum(top, 3.0), bottom))
     censored = np.stack((top >= 3.0, np.zeros_like(top, dtype=bool)))
     assert int(((maps[0] > 0) & ~censored[0]).sum()) < 8
-    dx, dy, _ = cell_fit_shift(maps, None, censored)
+    dx, dy, _, _ = cell_fit_shift(maps, None, censored)
     error = math.hypot(dx - 0.3, dy + 0.1)
     assert error < 0.01
-    plain_dx, plain_dy, _ = cell_fit_shift(maps)
+    plain_dx, plain_dy, _, _ = cell_fit_shift(maps)
     assert math.hypot(plain_dx - 0.3, plain_dy + 0.1) > 5.0 * error
+
+
+def test_a_cut_profiles_uncertainty_grows_as_its_centre_leaves_the_map():
+    # A whole top imprint at column 3 and a bottom imprint 1.1 taxels wide whose centre moves
+    # from column 3 (whole: no cut variance) to 1.0 (its tail cut at the edge) and -1.0 (past
+    # the edge, its centre placed by the width it takes from the other axis). Expected: 0, then
+    # under a tenth of a taxel (1 sigma), then more than a third: a shift of a taxel is then
+    # within the noise.
+    h, w = 7, 7
+    variances = []
+    for column in (3.0, 1.0, -1.0):
+        maps = np.zeros((2, h, w))
+        maps[0] = np.outer(_cell_gaussian(3.0, 0.6, h), _cell_gaussian(3.0, 0.6, w))
+        maps[1] = np.outer(_cell_gaussian(3.0, 1.1, h), _cell_gaussian(column, 1.1, w))
+        maps[maps < 0.005] = 0.0
+        variances.append(cell_fit_shift(maps)[3])
+    assert variances[0] == 0.0
+    assert 0.0 < math.sqrt(variances[1]) < 0.1
+    assert math.sqrt(variances[2]) > 1.0 / 3.0
