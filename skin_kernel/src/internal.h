@@ -13,7 +13,7 @@ typedef struct {
   int taxels, at_border, censored;
   int bottom_cut;          /* the bottom share's strongest line is the map's edge line */
   double dx, dy, confidence, sigma;
-  double cut_var;          /* taxel_fit's variance of its profiles cut by the edge; < 0: none */
+  double cut_var;          /* taxel_fit's variance of its profiles cut by the edge; 0: none */
 } sk_pair;
 
 struct sk_kernel {

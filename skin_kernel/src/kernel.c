@@ -262,7 +262,7 @@ int sk_scan(sk_kernel *k, const double *maps, int every_pair, double *out, int *
     imprint_forces(k, p, marked);
     p->dx = p->dy = p->confidence = 0.0;
     p->sigma = INFINITY;
-    p->cut_var = -1.0;
+    p->cut_var = 0.0;
     if (!every_pair && normal_force(k, p) < k->reals[SK_MIN_FORCE]) {
       /* too light to report, and its force is final: its shift is never asked for */
       continue;
@@ -289,7 +289,7 @@ int sk_scan(sk_kernel *k, const double *maps, int every_pair, double *out, int *
     }
     if (!(isfinite(p->dx) && isfinite(p->dy))) {
       p->dx = p->dy = p->confidence = 0.0;
-      p->cut_var = -1.0;
+      p->cut_var = 0.0;
     }
     p->sigma = sk_sigma(k, p, k->fit, count == 1);
   }

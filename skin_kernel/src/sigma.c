@@ -55,11 +55,15 @@ double sk_sigma(const sk_kernel *k, const sk_pair *p, const double *window, int 
       total += 0.5 * ((spread > 0.0 ? spread : 0.0) + 0.5 * lock * lock);
     }
   }
-  if (p->cut_var >= 0.0) {
-    /* the shift method's own uncertainty of its profiles cut by the edge (taxelfit.c) */
-    total += p->cut_var;
+  double flat = BORDER_SIGMA * BORDER_SIGMA;
+  if (p->cut_var > 0.0) {
+    /*
+     * the shift method's own uncertainty of its profiles cut by the edge (taxelfit.c); a contact
+     * sharing the bottom load fits the mixture's share, which the flat rule still bounds
+     */
+    total += alone || p->cut_var > flat ? p->cut_var : flat;
   } else if (p->at_border) {
-    total += BORDER_SIGMA * BORDER_SIGMA;
+    total += flat;
   }
   total += k->reals[SK_CALIBRATION_VAR];
   return sqrt(total);

@@ -378,7 +378,7 @@ void sk_taxel_fit(double *force, const double *counts, const double *censored, i
     profiles_of(maps, h, w, nn, profiles + layer * nn, profiles + (2 + layer) * nn);
   }
   double centre[4], width[4], explained[4];
-  *cut_var = -1.0;
+  *cut_var = 0.0;
   if (!fit_profiles(profiles, nn, len, NULL, scratch + 4 * nn, centre, width, explained)) {
     *dx = *dy = *confidence = NAN;
     return;

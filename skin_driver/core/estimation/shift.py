@@ -55,14 +55,14 @@ class ShiftEstimate(NamedTuple):
     Shift of bottom relative to top in taxels, with a confidence in [0, 1].
 
     ``cut_variance``: the method's own uncertainty (taxels**2, one axis) of a shift whose
-    imprints the map's edge cut (``taxel_fit``'s, :func:`taxelfit.cell_fit_shift`); None when
-    the method has none, and the uncertainty takes a flat rule (:mod:`uncertainty`).
+    imprints the map's edge cut (``taxel_fit``'s, :func:`taxelfit.cell_fit_shift`); 0 when none
+    is cut or the method has none: the uncertainty then takes a flat rule (:mod:`uncertainty`).
     """
 
     dx: float
     dy: float
     confidence: float
-    cut_variance: float = None
+    cut_variance: float = 0.0
 
 
 NO_SHIFT = ShiftEstimate(0.0, 0.0, 0.0)

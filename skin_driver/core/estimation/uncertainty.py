@@ -6,8 +6,9 @@ imprint narrower than a taxel adds the pixel-locking error of its sampled centro
 follows from the imprint's measured width (a Gaussian profile of variance ``v - 1/12`` sampled on
 unit cells has a first harmonic of amplitude ``exp(-2 pi^2 (v - 1/12)) / pi`` taxels); an imprint
 cut by the map's edge adds the shift method's own uncertainty of its cut profiles (``taxel_fit``:
-how far the centre follows the width, :func:`taxelfit.cell_fit_shift`), or a fifth of a taxel
-for a method without one; the calibration adds the spread of its zero about the normal presses
+how far the centre follows the width, :func:`taxelfit.cell_fit_shift`; at least a fifth of a
+taxel for a contact sharing the bottom load with others), else a fifth of a taxel; the
+calibration adds the spread of its zero about the normal presses
 and its standard error (the zero a new press meets, :mod:`pipeline`). The root sum of squares is
 ``sigma``, one axis of the shift (see :mod:`pipeline`). The compiled kernel's ``sigma.c`` does
 the same; the tests hold it to this.
@@ -42,14 +43,14 @@ def _axis_basis(shape: tuple) -> np.ndarray:
 
 
 def shift_sigma(pair: LayerPair, maps: np.ndarray, noise: np.ndarray, alone: bool,
-                calibration_variance: float, cut_variance: float = None) -> float:
+                calibration_variance: float, cut_variance: float = 0.0) -> float:
     """
     Return the 1-sigma uncertainty of one axis of a contact's shift, in taxels (module doc).
 
     ``maps`` are the scan's touch counts, ``noise`` each taxel's count noise, both (2, rows,
     cols); ``alone``: the only contact of its scan; ``calibration_variance`` the calibration's
     share of sigma**2 (taxels**2); ``cut_variance`` the shift method's own for imprints cut by
-    the map's edge (taxels**2, :class:`shift.ShiftEstimate`), None for the flat rule.
+    the map's edge (taxels**2, :class:`shift.ShiftEstimate`), 0 for the flat rule.
     """
     r0, c0 = pair.origin
     h, w = pair.maps.shape[1:]
@@ -78,8 +79,12 @@ def shift_sigma(pair: LayerPair, maps: np.ndarray, noise: np.ndarray, alone: boo
             lock = math.exp(-2.0 * math.pi ** 2 * max(var - 1.0 / 12.0, 0.0)) / math.pi
             # Half of both axes: ``sigma`` stands for one axis of the shift.
             total += 0.5 * (max(spread, 0.0) + 0.5 * lock * lock)
-    if cut_variance is not None:
-        total += cut_variance
+    if cut_variance > 0.0:
+        # A contact sharing the bottom load fits the mixture's share, which at the edge may be
+        # a neighbour's load (docs/estimation.md): its fit bounds nothing below the flat rule.
+        total += cut_variance if alone else max(cut_variance, _BORDER_SIGMA ** 2)
     elif pair.at_border:
+        # No profile loaded at the edge, or a method without an uncertainty of its own: what
+        # the map lost lies below the touch threshold.
         total += _BORDER_SIGMA ** 2
     return math.sqrt(total + calibration_variance)

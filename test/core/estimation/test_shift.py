@@ -78,7 +78,7 @@ def test_the_centroid_beats_the_papers_reference_on_direction():
 @pytest.mark.parametrize('name', REQUIRED)
 def test_empty_maps_give_no_shift_and_zero_confidence(name):
     est = direction.estimate_shift(np.zeros((6, 6)), np.zeros((6, 6)), name)
-    assert est == (0.0, 0.0, 0.0)
+    assert est == (0.0, 0.0, 0.0, 0.0)
 
 
 def test_estimate_shift_validates():
