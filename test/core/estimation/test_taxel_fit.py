@@ -169,3 +169,25 @@ def test_a_cut_profiles_uncertainty_grows_as_its_centre_leaves_the_map():
     assert variances[0] == 0.0
     assert 0.0 < math.sqrt(variances[1]) < 0.1
     assert math.sqrt(variances[2]) > 1.0 / 3.0
+
+
+def test_a_border_press_is_as_sure_as_its_cut_fit():
+    # A press 0.4 taxel inside the map's first column, its layers shifted by 0.8 taxel: pushed
+    # inward or along the edge, the bottom imprint lies on the map and its fit holds; pushed
+    # outward, the bottom imprint's centre lies past the edge, placed by the width it takes.
+    # Expected: the first two valid within 3 deg, the third far less sure (pi: no direction).
+    model = SkinModel()
+    est = ContactEstimator(EstimatorConfig(fsr=model.fsr))
+    tare = [render(model, [], np.random.default_rng(i)) for i in range(8)]
+    est = est.with_tare(np.stack([t for t, _ in tare]), np.stack([b for _, b in tare]))
+    tangential = 0.8 * model.pitch_m / model.compliance_m_per_n
+    sigmas = {}
+    for beta_deg in (0.0, 90.0, 180.0):
+        press = Press(0.4 * model.pitch_m, 0.0371, math.hypot(10.0, tangential),
+                      math.atan2(tangential, 10.0), math.radians(beta_deg), 0.003)
+        contact = est.process(*render(model, [press], np.random.default_rng(3)))[0]
+        sigmas[beta_deg] = contact.azimuth_sigma_rad
+        if beta_deg < 180.0:
+            assert contact.direction_valid
+            assert abs(math.degrees(contact.azimuth_rad) - beta_deg) < 3.0
+    assert sigmas[180.0] > 3.0 * max(sigmas[0.0], sigmas[90.0])

@@ -21,7 +21,7 @@ def test_skimage_reference_reports_the_displacement_of_the_bottom_map():
     top[6:9, 5:9] = 1.0
     top[7, 6] = 3.0
     bottom = np.roll(top, (1, 2), axis=(0, 1))
-    dx, dy, conf = bench_core.skimage_shift(np.stack((top, bottom)))
+    dx, dy, conf, _ = bench_core.skimage_shift(np.stack((top, bottom)))
     assert (dx, dy, conf) == pytest.approx((2.0, 1.0, 1.0), abs=0.02)
     assert bench_core.skimage_shift(np.stack((top, np.zeros_like(top)))).confidence == 0.0
 
