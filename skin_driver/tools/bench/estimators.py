@@ -291,6 +291,41 @@ def _family_row(skin, kind, data, run, costs) -> dict:
             'median_us': 1e6 * float(np.median(costs)), 'mean_us': 1e6 * float(np.mean(costs))}
 
 
+# How many times the default goes over a skin's scored frames back to back (issue #16.5's cost).
+ALONE_REPEATS = 3
+
+
+def alone_costs(scenes, repeats: int = ALONE_REPEATS) -> dict:
+    """
+    Return the default's cost on one skin's scored frames run back to back, as a driver runs it.
+
+    ``scenes`` holds (scene, estimator, frames as (top, bottom) pairs); each scene's frames go
+    one after another with nothing between, ``repeats`` times, contacts included. Over all the
+    frames and per scene: the median and 90th percentile cost, and per scene the mean number of
+    contacts reported and the median cost per contact (frames with one or more). Interleaved
+    with the other estimators the compiled call finds its caches cold (the family's
+    ``median_us``).
+    """
+    every, per_scene = [], {}
+    for kind, est, frames in scenes:
+        est.process(*frames[0])
+        times, found = [], []
+        for _ in range(repeats):
+            for top, bottom in frames:
+                elapsed, contacts = _timed(est, top, bottom)
+                times.append(elapsed)
+                found.append(len(contacts))
+        every += times
+        per_contact = [t / k for t, k in zip(times, found) if k]
+        per_scene[kind] = {'median_us': 1e6 * float(np.median(times)),
+                           'contacts': float(np.mean(found)),
+                           'per_contact_us': (1e6 * float(np.median(per_contact))
+                                              if per_contact else None)}
+    return {'median_us': 1e6 * float(np.median(every)),
+            'p90_us': 1e6 * float(np.percentile(every, 90)), 'frames': len(every) // repeats,
+            'repeats': repeats, 'scenes': per_scene}
+
+
 def _family_estimator(data, method: str) -> tuple:
     """Return (estimator ``method`` prepared for ``data``, its calibration notes)."""
     if method == PLAIN_CENTROID:
@@ -310,7 +345,8 @@ def family(sizes: dict, methods: list, skins: list = None, seed: int = 0, log=pr
     re-takes the offset at its spot. Only the scored frames (split 0) are scored and timed, each
     going to every method in a fresh shuffled order (contacts included, on the core the process
     is pinned to). Returns per (skin, scene, method) rows, the cost per (skin, method) over all
-    the skin's scored frames, each method's calibration notes per (skin, scene), and the
+    the skin's scored frames (the default's also back to back, :func:`alone_costs`, as
+    ``alone``), each method's calibration notes per (skin, scene), and the
     default's (reported azimuth sigma, measured error) pairs. With ``oracle`` the floor
     (:mod:`core.sim.oracle`, the simulator's own model fitted to each frame from the truth) is
     scored too, as method ``oracle``.
@@ -323,6 +359,7 @@ def family(sizes: dict, methods: list, skins: list = None, seed: int = 0, log=pr
     for skin in skins or skin_names():
         per_skin = {m: [] for m in methods}
         oracle_us = []
+        alone = []
         for kind in DIRECTION_KINDS:
             truth = []
             data = calibrated_scene(kind, skin, rng, sizes[kind], truth)
@@ -344,6 +381,9 @@ def family(sizes: dict, methods: list, skins: list = None, seed: int = 0, log=pr
                     elapsed, found = _timed(ests[m], data.top[i], data.bottom[i])
                     times[m].append(elapsed)
                     contacts[m].append(found)
+            if DEFAULT_METHOD in ests:
+                alone.append((kind, ests[DEFAULT_METHOD],
+                              [(data.top[i], data.bottom[i]) for i in range(data.frames)]))
             for m in methods:
                 run = MethodRun(m, ests[m].calibration, contacts[m],
                                 1e6 * float(np.mean(times[m])))
@@ -362,7 +402,9 @@ def family(sizes: dict, methods: list, skins: list = None, seed: int = 0, log=pr
             per_skin[ORACLE] = oracle_us
         costs += [{'skin': skin, 'method': m, 'frames': len(t),
                    'median_us': 1e6 * float(np.median(t)), 'mean_us': 1e6 * float(np.mean(t)),
-                   'p90_us': 1e6 * float(np.percentile(t, 90))} for m, t in per_skin.items()]
+                   'p90_us': 1e6 * float(np.percentile(t, 90))}
+                  | ({'alone': alone_costs(alone)} if m == DEFAULT_METHOD and alone else {})
+                  for m, t in per_skin.items()]
         log(f'  family: {skin} done')
     methods = list(methods) + ([ORACLE] if oracle else [])
     return {'skins': {s: family_skin(s).description for s in (skins or skin_names())},
@@ -386,6 +428,8 @@ def family_worst(rows, costs, methods) -> dict:
     ``ratio_to_centroid``, ``ratio_to_seed`` and ``ratio_to_oracle`` are the largest ratios of
     the method's mean error to the plain centroid difference's, to seed's and to the oracle's on
     the same skin and scene.
+    ``median_us`` is the dearest skin's median cost interleaved with the others,
+    ``alone_median_us`` back to back (the default only; None for the others).
     """
     index = {(r['skin'], r['scene'], r['method']): r for r in rows}
     out = {}
@@ -418,8 +462,12 @@ def family_worst(rows, costs, methods) -> dict:
         separate, separate_skin = _worst(mine, 'separate_share_far', lowest=True)
         cost, cost_skin = _worst([c for c in costs if c['method'] == m], 'median_us',
                                  lowest=False)
+        alone, alone_skin = _worst([{'skin': c['skin'], 'median_us': c['alone']['median_us']}
+                                    for c in costs if c['method'] == m and 'alone' in c],
+                                   'median_us', lowest=False)
         entry.update({'large_shift_valid_share': large, 'large_shift_skin': large_skin,
                       'separate_share_far': separate, 'separate_skin': separate_skin,
-                      'median_us': cost, 'cost_skin': cost_skin})
+                      'median_us': cost, 'cost_skin': cost_skin,
+                      'alone_median_us': alone, 'alone_skin': alone_skin})
         out[m] = entry
     return out
