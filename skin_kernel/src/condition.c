@@ -3,6 +3,7 @@
  * the taxels the ADC cut, and touch counts to force. Python description: conditioning.py and
  * crosstalk.py.
  */
+#include <math.h>
 #include <string.h>
 
 #include "internal.h"
@@ -56,6 +57,49 @@ void sk_live_counts(sk_kernel *k)
   }
 }
 
+/*
+ * A sorting network of 16 inputs: 60 exchanges in 10 layers (Green's first four layers, the
+ * rest from Dobbelaere's list; it sorts all 2^16 inputs of 0s and 1s, hence every input). Free
+ * of branches, it sorts a line of up to 16 taxels, padded with +inf, in a fixed time, where a
+ * selection's comparisons are each a coin toss for the branch predictor (3 to 4 times dearer).
+ */
+#define NETWORK_INPUTS 16
+static const unsigned char NETWORK[][2] = {
+  {0, 13}, {1, 12}, {2, 15}, {3, 14}, {4, 8}, {5, 6}, {7, 11}, {9, 10},
+  {0, 5}, {1, 7}, {2, 9}, {3, 4}, {6, 13}, {8, 14}, {10, 15}, {11, 12},
+  {0, 1}, {2, 3}, {4, 5}, {6, 8}, {7, 9}, {10, 11}, {12, 13}, {14, 15},
+  {0, 2}, {1, 3}, {4, 10}, {5, 11}, {6, 7}, {8, 9}, {12, 14}, {13, 15},
+  {1, 2}, {3, 12}, {4, 6}, {5, 7}, {8, 10}, {9, 11}, {13, 14},
+  {1, 4}, {2, 6}, {5, 8}, {7, 10}, {9, 13}, {11, 14},
+  {2, 4}, {3, 6}, {9, 12}, {11, 13},
+  {3, 5}, {6, 8}, {7, 9}, {10, 12},
+  {3, 4}, {5, 6}, {7, 8}, {9, 10}, {11, 12},
+  {6, 7}, {8, 9}};
+
+/* written so that the compiler makes them minsd / maxsd (no branch) */
+static double smaller(double a, double b)
+{
+  return b < a ? b : a;
+}
+
+static double larger(double a, double b)
+{
+  return a < b ? b : a;
+}
+
+/* buf[0..len), len <= NETWORK_INPUTS, sorted; buf holds NETWORK_INPUTS doubles */
+static void network_sort(double *buf, int len)
+{
+  for (int i = len; i < NETWORK_INPUTS; i++) {
+    buf[i] = INFINITY;
+  }
+  for (size_t e = 0; e < sizeof(NETWORK) / sizeof(NETWORK[0]); e++) {
+    double a = buf[NETWORK[e][0]], b = buf[NETWORK[e][1]];
+    buf[NETWORK[e][0]] = smaller(a, b);
+    buf[NETWORK[e][1]] = larger(a, b);
+  }
+}
+
 /* The k-th smallest of buf[0..len) (Wirth's selection; reorders buf, leaves it split at k). */
 static double select_kth(double *buf, int len, int k)
 {
@@ -88,16 +132,17 @@ static double select_kth(double *buf, int len, int k)
   return buf[k];
 }
 
-/* The median of a line (stride apart), numpy's way: mean of the two middle values if even. */
-static double line_median(const double *a, int len, int stride, double *buf, double *sum)
+/*
+ * The median of buf[0..len), numpy's way: the mean of the two middle values if len is even.
+ * Reorders buf, which holds NETWORK_INPUTS doubles or more.
+ */
+static double median_of(double *buf, int len)
 {
-  double total = 0.0;
-  for (int i = 0; i < len; i++) {
-    buf[i] = a[i * stride];
-    total += buf[i];
-  }
-  *sum = total;
   int mid = (len - 1) / 2;
+  if (len <= NETWORK_INPUTS) {
+    network_sort(buf, len);
+    return len % 2 ? buf[mid] : 0.5 * (buf[mid] + buf[mid + 1]);
+  }
   double lo = select_kth(buf, len, mid);
   if (len % 2) {
     return lo;
@@ -110,9 +155,30 @@ static double line_median(const double *a, int len, int stride, double *buf, dou
   return 0.5 * (lo + hi);
 }
 
-/* A line's leak: its median, unless that is not a small share of the load above it. */
-static double line_leak(double median, double sum, int len)
+/*
+ * A line's leak (stride apart): its median, unless that is not positive or not a small share
+ * of the load above it. The median is found only when the line's counts leave it open: with
+ * fewer than half of them above 0 it is not positive; with fewer than half at or below `bound`
+ * it is larger than any small share (the bound is past the exact threshold by more than the
+ * test's rounding). Half the lines of a lifted map are settled so, those away from the touch.
+ */
+static double line_leak(const double *a, int len, int stride, double *buf)
 {
+  double sum = 0.0;
+  for (int i = 0; i < len; i++) {
+    buf[i] = a[i * stride];
+    sum += buf[i];
+  }
+  double bound = (MAX_LEAK * sum + 1e-9 * (fabs(sum) + 1.0)) / (1.0 + MAX_LEAK * len);
+  int positive = 0, low = 0, half = (len + 1) / 2;
+  for (int i = 0; i < len; i++) {
+    positive += buf[i] > 0.0;
+    low += buf[i] <= bound;
+  }
+  if (positive < half || low < half) {
+    return 0.0;
+  }
+  double median = median_of(buf, len);
   if (median > MAX_LEAK * (sum - len * median)) {
     return 0.0;
   }
@@ -134,23 +200,28 @@ static double leak_share(double leak, double load)
 static void give_back_own_leak(double *c, int rows, int cols, double *row_leak,
                                double *col_leak)
 {
+  /* a line without leak has no share whatever its load, and a taxel of two such lines is
+   * divided by 1: both are skipped */
   for (int r = 0; r < rows; r++) {
     double load = 0.0;
-    for (int j = 0; j < cols; j++) {
+    for (int j = 0; j < cols && row_leak[r] != 0.0; j++) {
       load += c[r * cols + j];
     }
     row_leak[r] = leak_share(row_leak[r], load);
   }
   for (int j = 0; j < cols; j++) {
     double load = 0.0;
-    for (int r = 0; r < rows; r++) {
+    for (int r = 0; r < rows && col_leak[j] != 0.0; r++) {
       load += c[r * cols + j];
     }
     col_leak[j] = leak_share(col_leak[j], load);
   }
   for (int r = 0; r < rows; r++) {
     for (int j = 0; j < cols; j++) {
-      c[r * cols + j] /= 1.0 - row_leak[r] - col_leak[j];
+      double keep = 1.0 - row_leak[r] - col_leak[j];
+      if (keep != 1.0) {
+        c[r * cols + j] /= keep;
+      }
     }
   }
 }
@@ -185,24 +256,24 @@ static void remove_line_leak(sk_kernel *k)
     return;
   }
   int line = rows > cols ? rows : cols;
-  double *buf = k->scratch, *row_leak = k->scratch + line, *col_leak = k->scratch + 2 * line;
+  int room = line > NETWORK_INPUTS ? line : NETWORK_INPUTS; /* median_of's */
+  double *buf = k->scratch, *row_leak = k->scratch + room, *col_leak = row_leak + line;
   /* Rows first, then columns: the leak is a row term plus a column term (layers apart). */
   for (int layer = 0; layer < 2; layer++) {
     double *c = k->counts + layer * n;
     for (int r = 0; r < rows; r++) {
-      double sum, median = line_median(c + r * cols, cols, 1, buf, &sum);
-      row_leak[r] = line_leak(median, sum, cols);
-    }
-    for (int r = 0; r < rows; r++) {
-      for (int j = 0; j < cols; j++) {
+      row_leak[r] = line_leak(c + r * cols, cols, 1, buf);
+      /* less 0 is the same number: such lines are left as they are */
+      for (int j = 0; j < cols && row_leak[r] != 0.0; j++) {
         c[r * cols + j] -= row_leak[r];
       }
     }
+    int any_column = 0;
     for (int j = 0; j < cols; j++) {
-      double sum, median = line_median(c + j, rows, cols, buf, &sum);
-      col_leak[j] = line_leak(median, sum, rows);
+      col_leak[j] = line_leak(c + j, rows, cols, buf);
+      any_column |= col_leak[j] != 0.0;
     }
-    for (int r = 0; r < rows; r++) {
+    for (int r = 0; r < rows && any_column; r++) {
       for (int j = 0; j < cols; j++) {
         c[r * cols + j] -= col_leak[j];
       }

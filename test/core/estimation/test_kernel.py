@@ -235,6 +235,27 @@ def test_dead_taxels_are_filled_and_revived_alike():
     assert not described.conditioner.dead_masks()[0][8, 8]
 
 
+@pytest.mark.parametrize('rows, cols', [(16, 16), (7, 12), (20, 17), (3, 40)])
+def test_line_leak_is_taken_alike_on_short_and_long_lines(rows, cols):
+    # Leak lifts every line through a press over the touch threshold (crosstalk.py): the
+    # kernel sorts lines of up to 16 taxels with a network and selects the median of longer
+    # ones, and settles lines away from the press without either; integer counts tie often.
+    rng = np.random.default_rng(rows * cols)
+    r, c = np.mgrid[:rows, :cols]
+    compiled, described = both_ways(ContactEstimator())
+    for _ in range(4):
+        y, x = rng.uniform(0, rows - 1), rng.uniform(0, cols - 1)
+        maps = []
+        for blur in (1.0, 2.0):
+            press = 2500.0 * np.exp(-((r - y) ** 2 + (c - x) ** 2) / (2 * blur))
+            leak = (0.03 * press.sum(axis=1, keepdims=True)
+                    + 0.02 * press.sum(axis=0, keepdims=True))
+            maps.append(np.round(press + leak + rng.integers(0, 25, (rows, cols))))
+        top, bottom = maps
+        assert ((top >= 40).sum(axis=1) >= 0.5 * min(rows, cols)).any()
+        assert_same(compiled, described, top, bottom, speck_tolerance=SPECK_TOLERANCE)
+
+
 def test_empty_maps_give_no_contact():
     compiled = ContactEstimator()
     zeros = np.zeros((16, 16), dtype=np.uint16)
