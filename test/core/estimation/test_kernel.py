@@ -50,6 +50,8 @@ def assert_same(compiled, described, top, bottom, tolerance=TOLERANCE, speck_tol
     got, want = compiled.process(top, bottom), described.process(top, bottom)
     assert len(got) == len(want)
     for g, w in zip(got, want):
+        # The same type with the same fields, however the kernel's Contact is made.
+        assert type(g) is type(w) and vars(g).keys() == vars(w).keys()
         a, b = figures(g), figures(w)
         assert np.isfinite(a).all()
         np.testing.assert_allclose(a, b, rtol=tolerance, atol=tolerance)
