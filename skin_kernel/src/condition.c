@@ -100,6 +100,16 @@ static void network_sort(double *buf, int len)
   }
 }
 
+void sk_leak_gate(sk_kernel *k)
+{
+  /* LEAK_SIGMAS noise sigmas after a tare, the touch threshold before (crosstalk.leak_gate) */
+  const double *gate = k->tared ? k->noise : k->threshold;
+  double scale = k->tared ? LEAK_SIGMAS : 1.0;
+  for (int i = 0; i < 2 * k->n; i++) {
+    k->leak_gate[i] = scale * gate[i];
+  }
+}
+
 /* The k-th smallest of buf[0..len) (Wirth's selection; reorders buf, leaves it split at k). */
 static double select_kth(double *buf, int len, int k)
 {
@@ -226,33 +236,43 @@ static void give_back_own_leak(double *c, int rows, int cols, double *row_leak,
   }
 }
 
+/*
+ * Whether a line of either layer is mostly at its gate or over (crosstalk.remove_line_leak):
+ * rows and columns counted in one sweep of each layer.
+ */
+static int lifted(const sk_kernel *k)
+{
+  int rows = k->rows, cols = k->cols, n = k->n;
+  double half = 0.5 * (rows < cols ? rows : cols);
+  int *col_over = k->iscratch;
+  for (int layer = 0; layer < 2; layer++) {
+    const double *c = k->counts + layer * n, *gate = k->leak_gate + layer * n;
+    memset(col_over, 0, sizeof(int) * cols);
+    for (int r = 0; r < rows; r++) {
+      int over = 0;
+      for (int j = 0; j < cols; j++) {
+        int at = c[r * cols + j] >= gate[r * cols + j];
+        over += at;
+        col_over[j] += at;
+      }
+      if (over >= half) {
+        return 1;
+      }
+    }
+    for (int j = 0; j < cols; j++) {
+      if (col_over[j] >= half) {
+        return 1;
+      }
+    }
+  }
+  return 0;
+}
+
 /* Take each line's leak (its median when a small share of its load) out of both layers. */
 static void remove_line_leak(sk_kernel *k)
 {
   int rows = k->rows, cols = k->cols, n = k->n;
-  double half = 0.5 * (rows < cols ? rows : cols);
-  int lifted = 0;
-  /* the gate: LEAK_SIGMAS noise sigmas after a tare, the touch threshold before (crosstalk.py) */
-  double scale = k->tared ? LEAK_SIGMAS : 1.0;
-  for (int layer = 0; layer < 2 && !lifted; layer++) {
-    const double *c = k->counts + layer * n;
-    const double *gate = (k->tared ? k->noise : k->threshold) + layer * n;
-    for (int r = 0; r < rows && !lifted; r++) {
-      int over = 0;
-      for (int j = 0; j < cols; j++) {
-        over += c[r * cols + j] >= scale * gate[r * cols + j];
-      }
-      lifted = over >= half;
-    }
-    for (int j = 0; j < cols && !lifted; j++) {
-      int over = 0;
-      for (int r = 0; r < rows; r++) {
-        over += c[r * cols + j] >= scale * gate[r * cols + j];
-      }
-      lifted = over >= half;
-    }
-  }
-  if (!lifted) {
+  if (!lifted(k)) {
     return;
   }
   int line = rows > cols ? rows : cols;
@@ -350,19 +370,21 @@ void sk_touch_counts(sk_kernel *k, const double *maps)
 {
   int n2 = 2 * k->n, any_clipped = 0;
   double full = (double)k->full_scale;
+  /* the arrays held apart from k: a byte store into clipped could be k's otherwise */
+  double *counts = k->counts;
+  const double *baseline = k->baseline, *threshold = k->threshold;
+  unsigned char *clipped = k->clipped;
   for (int i = 0; i < n2; i++) {
-    k->counts[i] = maps[i] - k->baseline[i];
-    k->clipped[i] = maps[i] >= full;
-    any_clipped |= k->clipped[i];
+    counts[i] = maps[i] - baseline[i];
+    clipped[i] = maps[i] >= full;
+    any_clipped |= clipped[i];
   }
   k->any_clipped = any_clipped;
   if (k->crosstalk) {
     remove_line_leak(k);
   }
   for (int i = 0; i < n2; i++) {
-    if (k->counts[i] < k->threshold[i]) {
-      k->counts[i] = 0.0;
-    }
+    counts[i] = counts[i] < threshold[i] ? 0.0 : counts[i];
   }
   if (any_clipped) {
     level_clipped(k);

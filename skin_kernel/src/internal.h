@@ -20,6 +20,7 @@ struct sk_kernel {
   double reals[SK_NREALS];
   /* the estimator's state, (2, n) each */
   double *baseline, *threshold, *noise, *gain;
+  double *leak_gate;                /* (2, n): a line is lifted at this count (crosstalk.py) */
   unsigned char *dead;
   int any_dead[2];
   unsigned char *clipped;           /* (2, n): the last scan's raw count at the ADC's full scale */
@@ -44,6 +45,7 @@ double sk_sum(const double *a, int n);
 
 /* condition.c */
 void sk_live_counts(sk_kernel *k);
+void sk_leak_gate(sk_kernel *k);
 void sk_touch_counts(sk_kernel *k, const double *maps);
 void sk_force_of(sk_kernel *k);
 /* pair p's layers (bits 0, 1) holding a loaded taxel the ADC cut; with mark, such taxels of its
