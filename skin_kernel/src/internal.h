@@ -96,7 +96,7 @@ int sk_poc_scratch(int h, int w);
 
 /* imprint.c: one imprint's force sum (h x w counts and force), each taxel at censor counts or
  * more filled in by the activation plus a bump of spread (taxels) and power fitted to its rim's
- * force above the activation, the rim load added; scratch holds 2 h w doubles */
+ * force above the activation, the rim load added; scratch holds 3 h w doubles */
 double sk_imprint_force(const double *counts, const double *force, int h, int w,
                         double censor, double spread, double power, double activation,
                         double rim, double *scratch);

@@ -93,8 +93,8 @@ sk_kernel *sk_new(const int *ints, const double *reals, const double *baseline,
     /* the window's censored taxels and a 2-D fit's work (taxelfit.c: fit_censored) */
     shift_scratch += 6 * (size_t)n + 4 * ((size_t)line + 1);
   }
-  /* a saturated imprint's fill-in: its marked counts (2 windows), then sk_imprint_force's */
-  size_t imprint_scratch = 4 * (size_t)n;
+  /* a saturated imprint's fill-in: its marked counts (2 windows), then sk_imprint_force's 3 */
+  size_t imprint_scratch = 5 * (size_t)n;
   k->fit = copy_of(NULL, 4 * (size_t)n
                    + (shift_scratch > imprint_scratch ? shift_scratch : imprint_scratch));
   k->labels = malloc(sizeof(int) * n);
