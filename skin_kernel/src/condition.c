@@ -366,6 +366,32 @@ static void level_clipped(sk_kernel *k)
   }
 }
 
+/* The rows and columns holding a taxel of either layer whose count is not 0 (k->box). */
+static void loaded_box(sk_kernel *k)
+{
+  int rows = k->rows, cols = k->cols, n = k->n;
+  int r0 = rows, r1 = 0, c0 = cols, c1 = 0;
+  const double *top = k->counts, *bottom = k->counts + n;
+  for (int r = 0; r < rows; r++) {
+    int any = 0;
+    for (int c = 0; c < cols; c++) {
+      if (top[r * cols + c] != 0.0 || bottom[r * cols + c] != 0.0) {
+        any = 1;
+        c0 = c < c0 ? c : c0;
+        c1 = c + 1 > c1 ? c + 1 : c1;
+      }
+    }
+    if (any) {
+      r0 = r < r0 ? r : r0;
+      r1 = r + 1;
+    }
+  }
+  k->box[0] = r0;
+  k->box[1] = r1 > r0 ? r1 : r0;
+  k->box[2] = c0;
+  k->box[3] = c1 > c0 ? c1 : c0;
+}
+
 void sk_touch_counts(sk_kernel *k, const double *maps)
 {
   int n2 = 2 * k->n, any_clipped = 0;
@@ -392,6 +418,7 @@ void sk_touch_counts(sk_kernel *k, const double *maps)
   if (k->any_dead[0] || k->any_dead[1]) {
     dead_taxels(k);
   }
+  loaded_box(k);
 }
 
 int sk_clipped_window(const sk_kernel *k, const sk_pair *p, double *window, int mark)

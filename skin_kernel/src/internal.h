@@ -29,6 +29,11 @@ struct sk_kernel {
   double *table_force;              /* 2 x (full_scale + 1) */
   /* the last scan */
   double *counts, *force;           /* (2, n): tared counts, force */
+  /*
+   * rows box[0]..box[1] and columns box[2]..box[3] (half-open) hold every taxel of either
+   * layer whose tared count is not 0: the loops of the contact stage skip the rest
+   */
+  int box[4];
   int npairs;
   sk_pair *pairs;                   /* kmax */
   /* (kmax, n): each contact's own top map and its share (0..1) of every bottom taxel */

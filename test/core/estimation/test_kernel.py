@@ -237,6 +237,24 @@ def test_dead_taxels_are_filled_and_revived_alike():
     assert not described.conditioner.dead_masks()[0][8, 8]
 
 
+@pytest.mark.parametrize('row', [0, 1, 8])
+def test_a_dead_taxel_between_two_peaks_is_no_dip_alike(row):
+    # Two 4 mm tips two taxels apart make one imprint with peaks in columns 7 and 9; the dead
+    # taxel between them, filled in low, is taken on the path between the peaks as its higher
+    # neighbour: one contact. Near the map's edge too, where the loaded taxels' box is cut.
+    model = SkinModel(noise_counts=0)
+    rng = np.random.default_rng(row)
+    est = tared_with_dead_taxel(model, rng, (row, 8))
+    compiled, described = both_ways(est)
+    for centre_m, gap_m in ((0.04, 0.01), (0.04125, 0.0105)):
+        y = (row + 0.2) * 0.005
+        presses = [Press(centre_m - gap_m / 2, y, 12.0, 0.0, 0.0, 0.004),
+                   Press(centre_m + gap_m / 2, y, 11.0, 0.0, 0.0, 0.004)]
+        top, bottom = render(model, presses, rng)
+        top[row, 8] = 0
+        assert len(assert_same(compiled, described, top, bottom)) == 1
+
+
 @pytest.mark.parametrize('rows, cols', [(16, 16), (7, 12), (20, 17), (3, 40)])
 def test_line_leak_is_taken_alike_on_short_and_long_lines(rows, cols):
     # Leak lifts every line through a press over the touch threshold (crosstalk.py): the
