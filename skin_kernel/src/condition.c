@@ -311,9 +311,12 @@ static void dead_taxels(sk_kernel *k)
     if (!k->any_dead[layer]) {
       continue;
     }
+    /* the arrays held apart from k: a byte store into dead could be k's otherwise */
+    unsigned char *dead = k->dead + layer * n;
+    const double *counts = k->counts + layer * n;
     for (int i = 0; i < n; i++) {
-      if (k->dead[layer * n + i] && k->counts[layer * n + i] > 0) {
-        k->dead[layer * n + i] = 0;
+      if (dead[i] && counts[i] > 0) {
+        dead[i] = 0;
         changed = 1;
       }
     }
@@ -372,18 +375,25 @@ static void loaded_box(sk_kernel *k)
   int rows = k->rows, cols = k->cols, n = k->n;
   int r0 = rows, r1 = 0, c0 = cols, c1 = 0;
   const double *top = k->counts, *bottom = k->counts + n;
+  int *column_loaded = k->iscratch;
+  memset(column_loaded, 0, sizeof(int) * cols);
+  /* flags first, without a branch per taxel */
   for (int r = 0; r < rows; r++) {
     int any = 0;
     for (int c = 0; c < cols; c++) {
-      if (top[r * cols + c] != 0.0 || bottom[r * cols + c] != 0.0) {
-        any = 1;
-        c0 = c < c0 ? c : c0;
-        c1 = c + 1 > c1 ? c + 1 : c1;
-      }
+      int loaded = (top[r * cols + c] != 0.0) | (bottom[r * cols + c] != 0.0);
+      any |= loaded;
+      column_loaded[c] |= loaded;
     }
     if (any) {
       r0 = r < r0 ? r : r0;
       r1 = r + 1;
+    }
+  }
+  for (int c = 0; c < cols; c++) {
+    if (column_loaded[c]) {
+      c0 = c < c0 ? c : c0;
+      c1 = c + 1;
     }
   }
   k->box[0] = r0;
@@ -446,29 +456,41 @@ int sk_clipped_window(const sk_kernel *k, const sk_pair *p, double *window, int 
 }
 
 /*
- * Force by linear interpolation in the layer's table at every integer count (_ForceTable): the
- * slope is the next entry less this one (numpy.diff), and 0 past the last count.
+ * One taxel's force by linear interpolation in its layer's table at every integer count
+ * (_ForceTable): the slope is the next entry less this one (numpy.diff), and 0 past the last
+ * count; a reading the ADC cut reads the force at full scale (conditioning.py).
  */
+static double force_at(const double *table, int size, double count, int clipped)
+{
+  if (count == 0.0) {
+    return 0.0;
+  }
+  double last = (double)(size - 1);
+  double x = count < last && !clipped ? count : last;
+  int j = (int)x;
+  double slope = j + 1 < size ? table[j + 1] - table[j] : 0.0;
+  return slope * (x - j) + table[j];
+}
+
 void sk_force_of(sk_kernel *k)
 {
-  int n = k->n, size = k->full_scale + 1;
-  double last = (double)k->full_scale;
+  int n = k->n, cols = k->cols, size = k->full_scale + 1;
+  const int *box = k->box;
   for (int layer = 0; layer < 2; layer++) {
     const double *table = k->table_force + layer * size;
     const double *c = k->counts + layer * n;
     const unsigned char *clipped = k->clipped + layer * n;
     double *f = k->force + layer * n;
     const double *gain = k->has_gain ? k->gain + layer * n : NULL;
+    /* a count of 0 (every taxel past the box) has the force 0 */
     for (int i = 0; i < n; i++) {
-      double v = 0.0;
-      if (c[i] != 0.0) {
-        /* a reading the ADC cut reads the force at full scale (conditioning.py) */
-        double x = c[i] < last && !clipped[i] ? c[i] : last;
-        int j = (int)x;
-        double slope = j + 1 < size ? table[j + 1] - table[j] : 0.0;
-        v = slope * (x - j) + table[j];
+      f[i] = gain ? 0.0 * gain[i] : 0.0;
+    }
+    for (int r = box[0]; r < box[1]; r++) {
+      for (int i = r * cols + box[2]; i < r * cols + box[3]; i++) {
+        double v = force_at(table, size, c[i], clipped[i]);
+        f[i] = gain ? v * gain[i] : v;
       }
-      f[i] = gain ? v * gain[i] : v;
     }
   }
 }
