@@ -135,8 +135,11 @@ def test_sequence_gap_is_counted_as_dropped_frames(tmp_path):
         more_frames(executor, probe, 20)
         sim.skip_sequence(1000)
         more_frames(executor, probe, 20)
+        # On a loaded machine the simulator may itself fall behind and skip frames it never
+        # sends (frames_dropped): those are dropped frames too, each run of them one more gap.
         assert spin_until(executor, lambda: probe.saw_link_status(
-            lambda s, v: v['frames dropped'] == '1007' and v['sequence gaps'] == '2'), WAIT_S)
+            lambda s, v: int(v['frames dropped']) == 1007 + sim.frames_dropped
+            and 2 <= int(v['sequence gaps']) <= 2 + sim.frames_dropped), WAIT_S)
         assert probe.saw_link_status(
             lambda s, v: s.level == WARN and 'frames dropped' in s.message)
         assert_published_frames_are_true(sim, probe)

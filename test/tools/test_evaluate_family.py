@@ -101,3 +101,19 @@ def test_presses_are_matched_by_location(contacts, separate, merged, errors):
     assert scored['separate_share_far'] == separate and scored['merged_share_far'] == merged
     found = sorted(e for _, _, e, _ in scoring.direction_errors(data, run) if e is not None)
     assert found == pytest.approx(errors)
+
+
+def test_a_press_merged_with_a_close_neighbour_is_still_apart_from_a_far_third():
+    # A and C 2 taxels apart are one contact between them; B is 6 taxels from both.
+    data = Dataset(top=np.zeros((1, 16, 16)), bottom=np.zeros((1, 16, 16)), pitch_m=0.005,
+                   azimuth_deg=[90.0], alpha_deg=[30.0],
+                   press_x_m=[[0.02, 0.05, 0.02]], press_y_m=[[0.03, 0.03, 0.04]],
+                   press_force_n=[[10.0, 6.0, 8.0]], press_azimuth_deg=[[90.0, 180.0, 0.0]],
+                   press_alpha_deg=[[30.0, 30.0, 30.0]],
+                   press_shift_m=[[0.002, 0.001, 0.001]])
+    contacts = [_contact(0.02, 0.035), _contact(0.05, 0.03)]
+    scored = scoring.score_presses(data, scoring.MethodRun('poc', Calibration(), [contacts], 1.0))
+    assert (scored['pairs_far'], scored['pairs_close']) == (2, 1)
+    assert scored['separate_share_far'] == 1.0 and scored['separate_share_close'] == 0.0
+    # Found press by press, one to one: the merged contact stands for one of A and C only.
+    assert scored['found_share'] == pytest.approx(2 / 3)

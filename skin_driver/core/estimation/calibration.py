@@ -360,34 +360,42 @@ def calibrate_from_shifts(shifts_m, max_std_m: float = 0.001,
 _SLOPE_SIGNIFICANCE = 3.0
 
 
-def calibrate_zero(shifts_m, normal_forces_n, max_std_m: float = 0.001) -> Calibration:
+def calibrate_zero(shifts_m, normal_forces_n, max_std_m: float = 0.001,
+                   prior_slope_m_per_n=(0.0, 0.0)) -> Calibration:
     """
     Return the calibration of the zero from normal presses: mean shift and, when measurable, slope.
 
     ``shifts_m`` K x 2 raw shifts, ``normal_forces_n`` the K measured normal forces. On each axis
     the shift is fitted as ``mean + slope * (F - mean F)``; a slope within
-    ``_SLOPE_SIGNIFICANCE`` standard errors of zero is dropped. ``std_x_m``, ``std_y_m`` are the
-    spreads about the fitted zero. Errors as :func:`calibrate_from_shifts`.
+    ``_SLOPE_SIGNIFICANCE`` standard errors of zero is dropped, unless it is as close to
+    ``prior_slope_m_per_n`` (the slope in force, a property of the layer): presses made at
+    about one force (the paper's protocol at its spot) re-take the zero at their place and keep
+    the slope that presses over a range of forces measured, where they cannot tell it from
+    zero. ``std_x_m``, ``std_y_m`` are the spreads about the fitted zero. Errors as
+    :func:`calibrate_from_shifts`.
     """
     plain = calibrate_from_shifts(shifts_m, max_std_m)
     s = np.asarray(shifts_m, dtype=np.float64).reshape(-1, 2)
     f = np.asarray(normal_forces_n, dtype=np.float64).ravel()
     if f.shape != (s.shape[0],) or not np.isfinite(f).all():
         raise ValueError(f'need one finite normal force per shift, got {f.shape}')
+    prior = tuple(check_number(float(v), 'prior_slope_m_per_n') for v in prior_slope_m_per_n)
     ref = float(f.mean())
     df = f - ref
     spread = float(df @ df)
     if s.shape[0] < 4 or spread <= 0:
-        return replace(plain, zero_ref_n=max(ref, 0.0))
+        return replace(plain, zero_ref_n=max(ref, 0.0), zero_slope_m_per_n=prior)
     slopes, stds = [], []
     for axis in range(2):
         d = s[:, axis] - s[:, axis].mean()
         slope = float(d @ df) / spread
         rest = d - slope * df
         error = math.sqrt(float(rest @ rest) / (s.shape[0] - 2) / spread)
-        keep = abs(slope) > _SLOPE_SIGNIFICANCE * error
-        slopes.append(slope if keep else 0.0)
-        stds.append(float((rest if keep else d).std()))
+        if abs(slope) <= _SLOPE_SIGNIFICANCE * error:
+            slope = (prior[axis] if abs(slope - prior[axis]) <= _SLOPE_SIGNIFICANCE * error
+                     else 0.0)
+        slopes.append(slope)
+        stds.append(float((d - slope * df).std()))
     return replace(plain, std_x_m=stds[0], std_y_m=stds[1], zero_slope_m_per_n=tuple(slopes),
                    zero_ref_n=max(ref, 0.0))
 

@@ -36,7 +36,7 @@ tangential components point along the azimuth, the direction in which the top la
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 import math
 import threading
 
@@ -44,7 +44,8 @@ import numpy as np
 
 from . import kernel as compiled_kernel
 from .calibration import Calibration
-from .conditioning import Conditioner, ConditioningConfig, mark_clipped
+from .censoring import censored_taxels, force_window, marked_counts, with_censored_sums
+from .conditioning import Conditioner, ConditioningConfig
 from .contacts import LayerPair, pair_layers
 from .fsr import FsrModel
 from .shift import DEFAULT_METHOD, get_method, Method, NO_SHIFT
@@ -120,72 +121,6 @@ class Contact:
     force_xyz_n: tuple
     confidence: float
     direction_valid: bool
-
-
-def _force_window(pair: LayerPair, maps: np.ndarray, force: np.ndarray) -> np.ndarray:
-    """Return the pair's window of the force maps, its share of each taxel as in its counts."""
-    r0, c0 = pair.origin
-    h, w = pair.maps.shape[1:]
-    counts = maps[:, r0:r0 + h, c0:c0 + w]
-    share = np.divide(pair.maps, counts, out=np.zeros_like(pair.maps), where=counts > 0)
-    return force[:, r0:r0 + h, c0:c0 + w] * share
-
-
-def _saturated(maps: np.ndarray, curves) -> tuple:
-    """Return per layer whether a contact's counts reach its curve's censoring counts."""
-    return tuple(bool(c.censor_counts and own.max() >= c.censor_counts)
-                 for own, c in zip(maps, curves))
-
-
-def _imprint_sums(maps: np.ndarray, window: np.ndarray, saturated, sums, curves) -> list:
-    """
-    Return a contact's force sums with each saturated layer's filled in from the rims (imprint).
-
-    ``maps`` are the contact's counts, ``window`` its share of the force maps
-    (:func:`_force_window`), ``sums`` its (top, bottom) force sums with their rim loads
-    (:func:`_rimmed`); a saturated layer's fill-in adds its rim load itself.
-    """
-    return [curve.imprint_force(own, force) if hit else float(total)
-            for own, force, hit, total, curve in zip(maps, window, saturated, sums, curves)]
-
-
-def _rimmed(sums, curves, saturated) -> tuple:
-    """Return the force sums of a contact's unsaturated layers with their curves' rim loads."""
-    return tuple(total if hit else curve.with_rim(total)
-                 for total, curve, hit in zip(sums, curves, saturated))
-
-
-def _marked(pair: LayerPair, clipped: np.ndarray, full_scale: float) -> np.ndarray:
-    """Return the pair's counts with the taxels ``clipped`` marks at ``full_scale`` (or as is)."""
-    if clipped is None:
-        return pair.maps
-    r0, c0 = pair.origin
-    h, w = pair.maps.shape[1:]
-    return mark_clipped(pair.maps, clipped[:, r0:r0 + h, c0:c0 + w], full_scale)
-
-
-def _censored_taxels(pair: LayerPair, curves, clipped: np.ndarray, full_scale: float):
-    """Return 1.0 where a taxel of the pair's window is saturated (a lower bound), else 0.0."""
-    maps = _marked(pair, clipped, full_scale)
-    ceilings = [c.censor_counts if c is not None and c.censor_counts else math.inf
-                for c in (curves or (None, None))]
-    return np.stack([own >= ceiling for own, ceiling in zip(maps, ceilings)]).astype(np.float64)
-
-
-def _censored(pair: LayerPair, window: np.ndarray, curves, clipped: np.ndarray = None,
-              full_scale: float = 0.0) -> LayerPair:
-    """
-    Return ``pair`` with its rim loads and saturated taxels' force (:func:`_imprint_sums`).
-
-    ``clipped`` marks the taxels of the whole maps read at the ADC's full scale (or None):
-    censored whatever their tared counts (:func:`conditioning.mark_clipped`).
-    """
-    maps = _marked(pair, clipped, full_scale)
-    saturated = _saturated(maps, curves)
-    sums = _imprint_sums(maps, window, saturated,
-                         _rimmed((pair.top_force_n, pair.bottom_force_n), curves, saturated),
-                         curves)
-    return replace(pair, top_force_n=sums[0], bottom_force_n=sums[1])
 
 
 def _or_zero(v: float) -> float:
@@ -288,15 +223,16 @@ class ContactEstimator:
             whole = method.function(np.stack((t, b)).astype(np.float64))
         out = []
         for pair in pairs:
-            window = (_force_window(pair, maps, force) if censoring or method.linear
-                      else None)
+            window = force_window(pair, maps, force) if censoring or method.linear else None
+            marked = (marked_counts(pair, clipped, conditioner.config.fsr.full_scale)
+                      if censoring or method.linear else None)
             if censoring:
-                pair = _censored(pair, window, curves, clipped, conditioner.config.fsr.full_scale)
+                pair = with_censored_sums(pair, marked, window, curves)
             if whole is not None:
                 est = whole
             elif method.linear:
-                est = method.function(np.concatenate((window, pair.maps, _censored_taxels(
-                    pair, curves, clipped, conditioner.config.fsr.full_scale))))
+                est = method.function(np.concatenate((window, pair.maps,
+                                                      censored_taxels(marked, curves))))
             else:
                 est = method.function(pair.maps)
             if not (math.isfinite(est.dx) and math.isfinite(est.dy)):

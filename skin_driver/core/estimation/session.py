@@ -243,7 +243,8 @@ class CalibrationSession:
     def _fit_offset(self) -> Outcome:
         shifts = np.array([r.shift_m for r in self.accepted])
         forces = np.array([r.peak_force_n for r in self.accepted])
-        fit = calibrate_zero(shifts, forces, max_std_m=self.max_std_m)
+        fit = calibrate_zero(shifts, forces, max_std_m=self.max_std_m,
+                             prior_slope_m_per_n=self.estimator.calibration.zero_slope_m_per_n)
         new = self._updated(x_p_m=fit.x_p_m, y_p_m=fit.y_p_m, std_x_m=fit.std_x_m,
                             std_y_m=fit.std_y_m, presses=fit.presses,
                             zero_slope_m_per_n=fit.zero_slope_m_per_n, zero_ref_n=fit.zero_ref_n)

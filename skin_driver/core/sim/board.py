@@ -2,8 +2,8 @@
 The simulated board: streams protocol frames of a scene on a pseudo-terminal, like the real one.
 
 Like a USB CDC board whose host stops reading, the simulator never blocks: frames that do not fit
-into the pty and a small output queue are dropped whole, so the clock and the sequence numbers run
-on and the reader sees a sequence gap.
+into the pty and a small output queue are dropped whole (``pty_line``), so the clock and the
+sequence numbers run on and the reader sees a sequence gap.
 
 Faults for reliability tests: unplug/replug, stall (the board stops for a while), burst (frames
 held back and sent in one clump), line noise (damaged frames and junk between frames), sequence
@@ -19,20 +19,16 @@ from __future__ import annotations
 
 from collections import deque
 from dataclasses import dataclass
-import errno
-import fcntl
 import math
 import os
-import struct
-import termios
 import threading
 import time
-import tty
 
 import numpy as np
 
 from . import physics
-from .line import damage, point_link, remove_link
+from .line import damage
+from .pty_line import PtyLine
 from .scene import load_scene, Scene
 from ..estimation.validate import check_int, check_number
 from ..protocol.wire import encode_counts, encode_frame, frame_size, frame_with_counts, MAX_SEQ
@@ -41,9 +37,6 @@ from ..protocol.wire import encode_counts, encode_frame, frame_size, frame_with_
 BATCH_S = 0.002
 # Further behind than this (a stalled process) the clock skips frames instead of bursting them.
 MAX_LAG_S = 0.5
-# Sent frames remembered to tell, at an unplug, which of them the reader had not read yet.
-SENT_HISTORY = 8192
-UNPLUG_SETTLE_S = 0.01
 
 
 @dataclass(frozen=True)
@@ -106,34 +99,19 @@ class SimulatedSkin:
         self._truth_order: deque = deque()
         self._truth_capacity = truth_capacity
         one_frame = frame_size(self.scene.model.rows, self.scene.model.cols)
-        self._max_pending = max(65536, 4 * one_frame)
-        self._lock = threading.Lock()
+        self._line = PtyLine(self.link_path, max_pending=max(65536, 4 * one_frame))
+        self._lock = threading.Lock()  # guards the truth
         self._stop = threading.Event()
         self._thread: threading.Thread | None = None
-        self._master: int | None = None
-        self._slave: int | None = None
-        self._port: str | None = None
-        self._pending = bytearray()
-        self._garbage: list = []
-        self._frame_ends: deque = deque()  # stream offsets at which queued frames end
-        self._queued_bytes = 0
-        self._written_bytes = 0
         self._next_index = 0
         self._t0 = 0.0
         self._seq_offset = 0
         self._time_offset_us = 0
-        self._hold_until = 0.0
         self._noise = 0.0
         self._noise_rng = np.random.default_rng(seed + 1)
         self._wire_shape: tuple | None = None
-        self._sent_ends: deque = deque(maxlen=SENT_HISTORY)  # (end offset, intact) of sent frames
-        self.frames_sent = 0          # frames whose last byte went into the pty
-        self.frames_dropped = 0       # frames scanned but never sent (unplugged, queue full, lag)
-        self.frames_damaged = 0       # sent frames whose bytes the line noise changed
-        self.frames_wrong_shape = 0   # sent frames of a grid other than the scene's
-        self.frames_unread = 0        # sent intact frames the reader had not read at an unplug
+        self._not_queued = 0          # frames scanned while unplugged, the queue full, or lagging
         self.seq_skipped = 0          # sequence numbers skipped by skip_sequence()
-        self.first_seq_since_plug = None  # seq of the first frame queued on the current pty
 
     # ---- public control -------------------------------------------------------------------
 
@@ -145,7 +123,37 @@ class SimulatedSkin:
     @property
     def port(self) -> str | None:
         """Return the pty slave path while plugged in, else None."""
-        return self._port
+        return self._line.port
+
+    @property
+    def frames_sent(self) -> int:
+        """Return how many frames had their last byte written into the pty."""
+        return self._line.frames_sent
+
+    @property
+    def frames_dropped(self) -> int:
+        """Return how many scanned frames were never sent (unplugged, queue full, lag)."""
+        return self._not_queued + self._line.frames_dropped
+
+    @property
+    def frames_damaged(self) -> int:
+        """Return how many sent frames the line noise changed."""
+        return self._line.frames_damaged
+
+    @property
+    def frames_wrong_shape(self) -> int:
+        """Return how many sent frames were of a grid other than the scene's."""
+        return self._line.frames_wrong_shape
+
+    @property
+    def frames_unread(self) -> int:
+        """Return how many sent intact frames the reader had not read at an unplug."""
+        return self._line.frames_unread
+
+    @property
+    def first_seq_since_plug(self) -> int | None:
+        """Return the sequence number of the first frame queued on the current pty."""
+        return self._line.first_tag_since_plug
 
     @property
     def next_seq(self) -> int:
@@ -170,12 +178,12 @@ class SimulatedSkin:
         if self._replay and self._replayed is None:
             passes = max(1, round(self.scene.duration_s * self.rate_hz))
             self._replayed = [self._render(i / self.rate_hz) for i in range(passes)]
-        self._plug()
+        port = self._line.plug()
         self._stop.clear()
         self._t0 = time.monotonic()
         self._thread = threading.Thread(target=self._run, name='skin-sim', daemon=True)
         self._thread.start()
-        return self.link_path or self._port
+        return self.link_path or port
 
     def stop(self) -> None:
         """Stop streaming, close the pty and remove the link."""
@@ -183,25 +191,20 @@ class SimulatedSkin:
         if self._thread is not None:
             self._thread.join()
             self._thread = None
-        with self._lock:
-            self._unplug_locked()
+        self._line.unplug()
 
     def unplug(self) -> None:
         """Close the pty as if the cable were pulled; the device clock keeps running."""
-        with self._lock:
-            self._unplug_locked()
+        self._line.unplug()
 
     def replug(self) -> str:
         """Open a fresh pty, re-point the link and resume streaming; return the port path."""
-        with self._lock:
-            self._unplug_locked()
-        self._plug()
-        return self.link_path or self._port
+        port = self._line.plug()
+        return self.link_path or port
 
     def inject_garbage(self, data: bytes) -> None:
         """Write raw bytes into the stream between two frames (fault injection)."""
-        with self._lock:
-            self._garbage.append(bytes(data))
+        self._line.inject(data)
 
     def stall(self, seconds: float) -> None:
         """Stop scanning and sending for seconds, as a hung firmware would, then carry on."""
@@ -215,8 +218,7 @@ class SimulatedSkin:
     def burst(self, seconds: float) -> None:
         """Hold the frames back for seconds, then send them all in one clump."""
         _check_duration(seconds)
-        with self._lock:
-            self._hold_until = time.monotonic() + seconds
+        self._line.hold(seconds)
 
     def set_line_noise(self, probability: float) -> None:
         """
@@ -252,61 +254,6 @@ class SimulatedSkin:
         """Stop the board."""
         self.stop()
 
-    # ---- pty handling ---------------------------------------------------------------------
-
-    def _plug(self) -> None:
-        master, slave = os.openpty()
-        try:
-            # Raw mode: no line editing, echo, CR/LF mapping or XON/XOFF on binary frames.
-            tty.setraw(slave)
-            flags = fcntl.fcntl(master, fcntl.F_GETFL)
-            fcntl.fcntl(master, fcntl.F_SETFL, flags | os.O_NONBLOCK)
-            port = os.ttyname(slave)
-            if self.link_path:
-                point_link(self.link_path, port)
-        except BaseException:
-            os.close(master)
-            os.close(slave)
-            raise
-        with self._lock:
-            self._pending.clear()
-            self._frame_ends.clear()
-            self._sent_ends.clear()
-            self._queued_bytes = self._written_bytes = 0
-            # The slave stays open here so that a reader may close and reopen the port.
-            self._master, self._slave, self._port = master, slave, port
-            self.first_seq_since_plug = None
-
-    def _unplug_locked(self) -> None:
-        if self._master is None:
-            return
-        self.frames_unread += self._count_unread_locked()
-        # Frames still queued here never leave the board.
-        self.frames_dropped += len(self._frame_ends)
-        for fd in (self._master, self._slave):
-            try:
-                os.close(fd)
-            except OSError:
-                pass
-        if self.link_path:
-            remove_link(self.link_path, self._port)
-        self._master = self._slave = self._port = None
-        self._pending.clear()
-        self._frame_ends.clear()
-        self._garbage.clear()
-
-    def _count_unread_locked(self) -> int:
-        """Return how many sent intact frames have bytes the reader has not read yet."""
-        # Written bytes reach the slave's read queue (what FIONREAD counts) a moment later.
-        time.sleep(UNPLUG_SETTLE_S)
-        try:
-            raw = fcntl.ioctl(self._slave, termios.FIONREAD, b'\0\0\0\0')
-            unread = struct.unpack('i', raw)[0]
-        except OSError:
-            return 0
-        read_up_to = self._written_bytes - unread
-        return sum(1 for end, intact in self._sent_ends if intact and end > read_up_to)
-
     # ---- streaming ------------------------------------------------------------------------
 
     def _run(self) -> None:
@@ -316,17 +263,17 @@ class SimulatedSkin:
             due = math.floor((now - self._t0) * self.rate_hz) + 1
             if due - self._next_index > MAX_LAG_S * self.rate_hz:
                 skipped = due - self._next_index - 1
-                self.frames_dropped += skipped
+                self._not_queued += skipped
                 self._next_index += skipped
             while self._next_index < due and not self._stop.is_set():
                 self._emit(self._next_index)
                 self._next_index += 1
-            self._flush()
+            self._line.flush()
             wake = self._t0 + self._next_index * period
             if period < BATCH_S:
                 wake += BATCH_S - period
             delay = max(0.0, wake - time.monotonic())
-            if self._pending:
+            if self._line.has_pending():
                 # Bytes the pty could not take yet (or held for a burst) go out meanwhile.
                 delay = min(delay, BATCH_S)
             self._stop.wait(delay)
@@ -341,11 +288,8 @@ class SimulatedSkin:
         seq = (index + self._seq_offset) & MAX_SEQ
         device_time_us, seconds = _frame_times(index, self.rate_hz)
         device_time_us += self._time_offset_us
-        with self._lock:
-            plugged = self._master is not None
-            room = len(self._pending) < self._max_pending
-        if not (plugged and room):
-            self.frames_dropped += 1
+        if not self._line.has_room():
+            self._not_queued += 1
             return
         if self._replayed:
             scan = self._replayed[index % len(self._replayed)]
@@ -373,19 +317,8 @@ class SimulatedSkin:
                                             dtype=np.uint8).tobytes()
         with self._lock:
             self._remember(truth)
-            if self._master is None:
-                self.frames_dropped += 1
-                return
-            self._garbage.append(junk)
-            for extra in self._garbage:
-                self._pending += extra
-                self._queued_bytes += len(extra)
-            self._garbage.clear()
-            self._pending += wire
-            self._queued_bytes += len(wire)
-            if self.first_seq_since_plug is None:
-                self.first_seq_since_plug = seq
-            self._frame_ends.append((self._queued_bytes, damaged, wrong_shape))
+        if not self._line.queue(wire, seq, damaged, wrong_shape, junk):
+            self._not_queued += 1
 
     def _render(self, t: float) -> _Scan:
         """Render the scan of scene time t."""
@@ -404,29 +337,6 @@ class SimulatedSkin:
         self._truth_order.append(truth.seq)
         while len(self._truth_order) > self._truth_capacity:
             del self._truth[self._truth_order.popleft()]
-
-    def _flush(self) -> None:
-        with self._lock:
-            if self._master is None or not self._pending:
-                return
-            if time.monotonic() < self._hold_until:
-                return
-            try:
-                n = os.write(self._master, self._pending)
-            except BlockingIOError:
-                return
-            except OSError as err:
-                if err.errno in (errno.EIO, errno.EBADF):
-                    return
-                raise
-            del self._pending[:n]
-            self._written_bytes += n
-            while self._frame_ends and self._frame_ends[0][0] <= self._written_bytes:
-                end, damaged, wrong_shape = self._frame_ends.popleft()
-                self.frames_sent += 1
-                self.frames_damaged += damaged
-                self.frames_wrong_shape += wrong_shape
-                self._sent_ends.append((end, not (damaged or wrong_shape)))
 
 
 def _check_duration(seconds: float) -> None:

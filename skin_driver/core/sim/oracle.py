@@ -2,14 +2,17 @@
 The floor of the direction estimate: the simulator's own forward model fitted to each frame.
 
 For a frame whose presses and skin are known (FSR curve, turn-on, true per-taxel gains and
-offsets, crosstalk, dead taxels), the oracle fits each press's position, normal force and
-tangential layer displacement to the frame's counts by damped Gauss-Newton (Levenberg-Marquardt)
-on the noise-free float counts of :func:`physics.expected_counts`, started at the truth. What
-it cannot undo is only the noise and the rounding of the counts, so its azimuth error is about
-the least the frames allow; the evaluator and the benchmark report every estimator's error in
-units of it. It knows the skin: it is for evaluation only, never a driver's estimator.
+offsets, crosstalk, dead taxels), the oracle fits each press's position, normal force,
+tangential layer displacement and indenter size to the frame's counts by damped Gauss-Newton
+(Levenberg-Marquardt) on the noise-free float counts of :func:`physics.expected_counts`, started
+at the truth. What it cannot undo is only the noise and the rounding of the counts, so its
+azimuth error is about the least the frames allow; the evaluator and the benchmark report every
+estimator's error in units of it. It knows the skin: it is for evaluation only, never a driver's
+estimator. It does not know the indenter's size, which no driver is told: where two taxels
+cannot tell an imprint's width from its place (a narrow or cliff-rimmed imprint), the floor
+says so. Its shape (aspect, orientation) is kept.
 
-Cost: each iteration renders every press once more per parameter (five per press), so a frame
+Cost: each iteration renders every press once more per parameter (six per press), so a frame
 costs tens of renders, milliseconds to tens of milliseconds; callers may skip it.
 """
 
@@ -28,26 +31,28 @@ __all__ = ['ORACLE', 'fit_presses', 'oracle_contacts', 'oracle_run']
 
 ORACLE = 'oracle'
 
-# Parameters per press: x, y (taxels), log normal force, tangential displacement x, y (taxels).
-_PER_PRESS = 5
-# Finite-difference steps: a fiftieth of a taxel averages over the fine grid's steps.
-_STEP = np.array((0.02, 0.02, 0.01, 0.02, 0.02))
+# Parameters per press: x, y (taxels), log normal force, tangential displacement x, y (taxels),
+# log indenter radius.
+_PER_PRESS = 6
+# Finite-difference steps: a fiftieth of a taxel averages over the fine grid's steps (a 3 %
+# larger radius moves a 2.5 mm disc's rim by a fiftieth of a 5 mm taxel).
+_STEP = np.array((0.02, 0.02, 0.01, 0.02, 0.02, 0.03))
 _ITERATIONS = 8
 # The most one step may move each parameter (a trust region): where the frame does not hold a
 # parameter (a bottom imprint shifted off the map leaves its shift free) the damped step would
 # otherwise run away on a flat misfit.
-_MAX_STEP = np.array((0.5, 0.5, 0.5, 1.0, 1.0))
+_MAX_STEP = np.array((0.5, 0.5, 0.5, 1.0, 1.0, 0.3))
 
 
 def _press_of(model: SkinModel, like: Press, u: np.ndarray) -> Press:
-    """Return the press with parameters ``u`` and ``like``'s indenter."""
+    """Return the press with parameters ``u`` and ``like``'s indenter shape."""
     pitch = model.pitch_m
     normal = math.exp(u[2])
     tx, ty = u[3] * pitch, u[4] * pitch
     tangential = math.hypot(tx, ty) / model.compliance_m_per_n
     return Press(u[0] * pitch, u[1] * pitch, math.hypot(normal, tangential),
                  math.atan2(tangential, normal), math.atan2(ty, tx) if tangential > 0 else 0.0,
-                 like.radius_m, like.aspect, like.orientation_rad)
+                 like.radius_m * math.exp(u[5]), like.aspect, like.orientation_rad)
 
 
 def _parameters(model: SkinModel, press: Press) -> np.ndarray:
@@ -56,7 +61,7 @@ def _parameters(model: SkinModel, press: Press) -> np.ndarray:
     t = model.compliance_m_per_n * press.tangential_force_n / pitch
     return np.array((press.x_m / pitch, press.y_m / pitch,
                      math.log(max(press.normal_force_n, 1e-6)),
-                     t * math.cos(press.beta_rad), t * math.sin(press.beta_rad)))
+                     t * math.cos(press.beta_rad), t * math.sin(press.beta_rad), 0.0))
 
 
 class _Frame:
@@ -94,8 +99,9 @@ def fit_presses(model: SkinModel, presses: Sequence[Press], counts: np.ndarray) 
     """
     Fit the presses' parameters to one frame's (2, rows, cols) counts, started at the truth.
 
-    Returns (K x 5 parameters: x, y in taxels, log normal force, tangential displacement x, y in
-    taxels; their K x 5 standard errors from the fit's curvature).
+    Returns (K x 6 parameters: x, y in taxels, log normal force, tangential displacement x, y in
+    taxels, log of the indenter radius over the true one; their K x 6 standard errors from the
+    fit's curvature).
     """
     frame = _Frame(model, presses, counts)
     u = np.array([_parameters(model, p) for p in presses])
@@ -143,7 +149,7 @@ def oracle_contacts(model: SkinModel, presses: Sequence[Press], counts: np.ndarr
     u, sigma = fit_presses(model, presses, counts)
     pitch = model.pitch_m
     out = []
-    for (x, y, log_fz, tx, ty), (_, _, _, sx, sy) in zip(u.tolist(), sigma.tolist()):
+    for (x, y, log_fz, tx, ty, _), (_, _, _, sx, sy, _) in zip(u.tolist(), sigma.tolist()):
         normal = math.exp(log_fz)
         length = math.hypot(tx, ty)
         tangential = length * pitch / model.compliance_m_per_n

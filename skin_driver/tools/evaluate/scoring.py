@@ -204,20 +204,41 @@ def direction_errors(data: Dataset, run: MethodRun, frames=None) -> list:
     return out
 
 
+def nearest_contacts(presses: list, contacts: list, pitch_m: float) -> list:
+    """
+    Return, for each press, the index of the nearest contact within the match radius (or None).
+
+    Unlike :func:`match_presses` two presses may share a contact: one that stands for a close
+    pair of presses is still apart from a third press far from both.
+    """
+    out = []
+    for p in presses:
+        near = [(math.hypot(c.x_m - p['x_m'], c.y_m - p['y_m']), j)
+                for j, c in enumerate(contacts)]
+        d, j = min(near, default=(math.inf, None))
+        out.append(j if d <= MATCH_RADIUS_TAXELS * pitch_m else None)
+    return out
+
+
 def _pair_stats(data: Dataset, run: MethodRun, frames) -> dict:
-    """Return how pairs of presses far apart (>= 3 taxels) and close (2..3) were separated."""
+    """
+    Return how pairs of presses far apart (>= 3 taxels) and close (2..3) were separated.
+
+    A pair is separate when each press lies near a contact (:func:`nearest_contacts`) and the
+    two contacts differ.
+    """
     counts = dict.fromkeys(('far', 'far_separate', 'far_merged', 'close', 'close_separate'), 0)
     for i in frames:
         presses = data.presses(i)
         contacts = run.contacts[i]
-        matched = match_presses(presses, contacts, data.pitch_m)
+        near = nearest_contacts(presses, contacts, data.pitch_m)
         for a in range(len(presses)):
             for b in range(a + 1, len(presses)):
                 pa, pb = presses[a], presses[b]
                 gap = math.hypot(pa['x_m'] - pb['x_m'], pa['y_m'] - pb['y_m']) / data.pitch_m
                 kind = 'far' if gap >= SEPARATE_TAXELS else 'close'
                 counts[kind] += 1
-                separate = matched[a] is not None and matched[b] is not None
+                separate = near[a] is not None and near[b] is not None and near[a] != near[b]
                 counts[kind + '_separate'] += separate
                 if kind == 'far' and not separate:
                     counts['far_merged'] += _between(pa, pb, contacts, data.pitch_m)

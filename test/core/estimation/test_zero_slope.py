@@ -21,6 +21,29 @@ def test_zero_follows_the_normal_force_only_when_it_measurably_does():
     assert flat.zero_slope_m_per_n == (0.0, 0.0)
 
 
+def test_presses_at_one_spot_and_force_re_take_the_zero_and_keep_the_measured_slope():
+    # The paper's protocol: normal presses at its spot, all at about 20 N. Their shift moves
+    # with the force as the layer's (1e-5 m/N on x) but they span too little force to show it.
+    rng = np.random.default_rng(2)
+    forces = rng.uniform(19.0, 21.0, 8)
+    shifts = np.stack((3e-4 + 1e-5 * (forces - 20.0), -1e-4 + 0.0 * forces), axis=1)
+    shifts += rng.normal(0.0, 2e-5, shifts.shape)
+    alone = calibrate_zero(shifts, forces, math.inf)
+    assert alone.zero_slope_m_per_n[0] == 0.0
+    kept = calibrate_zero(shifts, forces, math.inf, prior_slope_m_per_n=(1e-5, 0.0))
+    assert kept.zero_slope_m_per_n[0] == 1e-5
+    assert kept.zero_slope_m_per_n[1] == alone.zero_slope_m_per_n[1]
+    assert (kept.x_p_m, kept.y_p_m) == (alone.x_p_m, alone.y_p_m)
+    # A tilted press at 45 deg loads the normal by 14 N: its zero is the layer's there.
+    assert kept.zero_m(14.0)[0] == pytest.approx(3e-4 - 6e-5, abs=2e-5)
+    # Presses over a range of forces that show no slope drop a prior one they contradict.
+    wide = np.linspace(5.0, 60.0, 16)
+    flat = np.stack((3e-4 + 0.0 * wide, -1e-4 + 0.0 * wide), axis=1)
+    flat += rng.normal(0.0, 2e-5, flat.shape)
+    assert calibrate_zero(flat, wide, math.inf,
+                          prior_slope_m_per_n=(1e-5, 0.0)).zero_slope_m_per_n[0] == 0.0
+
+
 def test_zero_slope_survives_the_calibration_file(tmp_path):
     cal = Calibration(1e-4, 2e-4, presses=5, zero_slope_m_per_n=(1e-5, -3e-6), zero_ref_n=20.0)
     cal.save_yaml(tmp_path / 'c.yaml')

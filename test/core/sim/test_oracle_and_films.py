@@ -17,9 +17,20 @@ def test_oracle_started_at_the_truth_stays_there_on_noise_free_counts():
     counts = render_expected(model, [press])
     u, sigma = fit_presses(model, [press], counts)
     t = model.compliance_m_per_n * press.tangential_force_n / model.pitch_m
-    assert u[0, 3:] == pytest.approx((t * math.cos(press.beta_rad), t * math.sin(press.beta_rad)),
-                                     abs=1e-6)
+    assert u[0, 3:5] == pytest.approx((t * math.cos(press.beta_rad),
+                                       t * math.sin(press.beta_rad)), abs=1e-6)
+    assert u[0, 5] == pytest.approx(0.0, abs=1e-6)  # the indenter's own radius
     assert np.isfinite(sigma).all()
+
+
+def test_oracle_fits_the_indenters_size_it_is_not_told():
+    # Started from a tip 30 % too large, the fit finds the true one (a driver is never told it).
+    model = SkinModel(noise_counts=0.0)
+    truth = Press(0.0377, 0.0391, 12.0, math.radians(40.0), math.radians(110.0), 0.003)
+    counts = render_expected(model, [truth])
+    start = Press(truth.x_m, truth.y_m, truth.force_n, truth.alpha_rad, truth.beta_rad, 0.0039)
+    u, _ = fit_presses(model, [start], counts)
+    assert 0.0039 * math.exp(u[0, 5]) == pytest.approx(0.003, rel=0.02)
 
 
 def test_oracle_finds_the_azimuth_of_a_noisy_frame_within_a_degree():

@@ -34,8 +34,8 @@ def test_force_calibration_targets_name_the_tip_the_worst_skin_and_the_shortfall
 
 def test_end_to_end_targets_judge_each_layout_at_each_rate(e2e):
     targets = {t['name']: t for t in scoring.e2e_targets(e2e)}
-    assert not targets['split at 1 kHz: scans lost in 60 s']['met']
-    assert targets['fused at 1 kHz: scans lost in 60 s']['met']
+    assert not targets['split at 1 kHz: scans a depth-5 subscriber lacks in 60 s']['met']
+    assert targets['fused at 1 kHz: scans a depth-5 subscriber lacks in 60 s']['met']
     assert targets['split at 1 kHz: p99 latency, last byte -> subscriber']['note'] == \
         '1.5 x the limit'
     # Driver and direction node together are the split layout's hot path; the probe is not.
@@ -47,13 +47,15 @@ def test_end_to_end_targets_judge_each_layout_at_each_rate(e2e):
 
 def test_each_lost_scan_is_placed_and_the_drivers_own_losses_are_judged_apart(e2e):
     targets = {t['name']: t for t in scoring.e2e_targets(e2e)}
-    lost = targets['split at 1 kHz: scans lost in 60 s']
+    lost = targets['split at 1 kHz: scans a depth-5 subscriber lacks in 60 s']
     assert lost['note'] == ('of 60000 (0.02 %); never decoded 1, not delivered 3, '
-                            'subscriber queue 8')
+                            "subscriber queue 8; the rclpy floor's own depth-5 subscriber "
+                            'dropped 0')
     # Four of the twelve never reached the deep-queue subscriber either: the layout's own.
-    own = targets['split at 1 kHz: scans never delivered (subscriber at depth 10000)']
+    own = targets['split at 1 kHz: scans the driver lost (subscriber at depth 10000)']
     assert (own['measured'], own['met']) == ('4', False)
-    assert targets['fused at 1 kHz: scans never delivered (subscriber at depth 10000)']['met']
+    assert own['note'] == 'never decoded 1, not delivered 3'
+    assert targets['fused at 1 kHz: scans the driver lost (subscriber at depth 10000)']['met']
 
 
 def test_the_compiled_cost_is_judged_back_to_back_and_compared_with_its_description():
