@@ -50,7 +50,11 @@ double sk_sum(const double *a, int n);
 
 /* condition.c */
 void sk_live_counts(sk_kernel *k);
+
+/* crosstalk.c: the count at which a line is lifted (k->leak_gate), once per kernel; each
+ * lifted scan's line leak taken out of k->counts */
 void sk_leak_gate(sk_kernel *k);
+void sk_remove_line_leak(sk_kernel *k);
 void sk_touch_counts(sk_kernel *k, const double *maps);
 void sk_force_of(sk_kernel *k);
 /* pair p's layers (bits 0, 1) holding a loaded taxel the ADC cut; with mark, such taxels of its
