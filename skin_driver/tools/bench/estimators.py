@@ -8,7 +8,6 @@ interleaved frame by frame in a shuffled order, so that machine noise hits them 
 from __future__ import annotations
 
 import math
-import time
 import warnings
 
 import numpy as np
@@ -24,6 +23,7 @@ from skin_driver.core.sim.experiments import (
 from skin_driver.core.sim.oracle import ORACLE, oracle_run
 from skin_driver.core.sim.physics import Press, render, SkinModel
 from skin_driver.core.sim.skins import family_skin, PATCH_M, skin_for_grid, skin_names
+from skin_driver.tools.bench.costs import alone_costs, back_to_back_us, interleaved_cost, timed
 from skin_driver.tools.evaluate.scoring import (
     angle_error_deg, direction_errors, evaluate, MethodRun, PAPER_TABLE, score_run)
 from skin_driver.tools.evaluate.tables import format_table
@@ -82,12 +82,6 @@ def _tared(ests: dict, model, rng, frames=12) -> dict:
     return {name: est.with_tare(tops, bottoms) for name, est in ests.items()}
 
 
-def _timed(est, top, bottom) -> tuple:
-    start = time.perf_counter()
-    contacts = est.process(top, bottom)
-    return time.perf_counter() - start, contacts
-
-
 def accuracy_speed(grids, shifts, noises, frames, methods, seed=0, log=print) -> list:
     """
     Return one row per (grid, noise, shift, method): mean azimuth error, valid share, cost.
@@ -110,7 +104,7 @@ def accuracy_speed(grids, shifts, noises, frames, methods, seed=0, log=print) ->
                     press = press_for_shift(model, shift, rng)
                     top, bottom = render(model, [press], rng)
                     for m in rng.permutation(methods):
-                        elapsed, contacts = _timed(ests[m], top, bottom)
+                        elapsed, contacts = timed(ests[m], top, bottom)
                         costs[m].append(elapsed)
                         if contacts and contacts[0].direction_valid:
                             errors[m].append(angle_error_deg(
@@ -177,24 +171,6 @@ def _tared_estimator(name, model, rng):
     return _tared({name: make_estimator(name, model)}, model, rng)[name]
 
 
-def _interleaved_cost(ests, frames, rng, repeats) -> dict:
-    costs = {m: [] for m in ests}
-    for est in ests.values():
-        est.process(*frames[0])
-    for _ in range(repeats):
-        for top, bottom in frames:
-            for m in rng.permutation(list(ests)):
-                costs[m].append(_timed(ests[m], top, bottom)[0])
-    return {m: {'median_us': 1e6 * float(np.median(c)), 'mean_us': 1e6 * float(np.mean(c)),
-                'p90_us': 1e6 * float(np.percentile(c, 90))} for m, c in costs.items()}
-
-
-def _back_to_back_us(est, frames, repeats) -> float:
-    """Return the median cost of ``est`` on ``frames`` run one after another, nothing between."""
-    costs = [_timed(est, top, bottom)[0] for _ in range(repeats) for top, bottom in frames]
-    return 1e6 * float(np.median(costs))
-
-
 def scaling(grids, contact_counts, methods, frames, repeats, seed=0, log=print) -> dict:
     """
     Return pipeline cost (contacts included) against taxel count and against contacts.
@@ -213,10 +189,10 @@ def scaling(grids, contact_counts, methods, frames, repeats, seed=0, log=print) 
         model = skin_for_grid(n)
         ests = {m: _tared_estimator(m, model, rng) for m in methods}
         maps = [render(model, [press_for_shift(model, 1.0, rng)], rng) for _ in range(frames)]
-        cost = _interleaved_cost(ests, maps, rng, repeats)
+        cost = interleaved_cost(ests, maps, rng, repeats)
         if DEFAULT_METHOD in ests:
-            cost[DEFAULT_METHOD]['alone_median_us'] = _back_to_back_us(ests[DEFAULT_METHOD],
-                                                                       maps, repeats)
+            cost[DEFAULT_METHOD]['alone_median_us'] = back_to_back_us(ests[DEFAULT_METHOD],
+                                                                      maps, repeats)
         by_grid += [{'grid': n, 'taxels': n * n, 'method': m, **c} for m, c in cost.items()]
         log(f'  scaling: {n}x{n} done')
     by_contacts = []
@@ -231,7 +207,7 @@ def scaling(grids, contact_counts, methods, frames, repeats, seed=0, log=print) 
                            for x, y in _contact_slots(k)]
                 maps.append(render(model, presses, rng))
             found = float(np.mean([len(ests[methods[0]].process(*m)) for m in maps]))
-            cost = _interleaved_cost(ests, maps, rng, repeats)
+            cost = interleaved_cost(ests, maps, rng, repeats)
             by_contacts += [{'grid': n, 'contacts': k, 'contacts_found': found, 'method': m,
                              **c} for m, c in cost.items()]
         log(f'  scaling: contacts at {n}x{n} done')
@@ -291,41 +267,6 @@ def _family_row(skin, kind, data, run, costs) -> dict:
             'median_us': 1e6 * float(np.median(costs)), 'mean_us': 1e6 * float(np.mean(costs))}
 
 
-# How many times the default goes over a skin's scored frames back to back (issue #16.5's cost).
-ALONE_REPEATS = 3
-
-
-def alone_costs(scenes, repeats: int = ALONE_REPEATS) -> dict:
-    """
-    Return the default's cost on one skin's scored frames run back to back, as a driver runs it.
-
-    ``scenes`` holds (scene, estimator, frames as (top, bottom) pairs); each scene's frames go
-    one after another with nothing between, ``repeats`` times, contacts included. Over all the
-    frames and per scene: the median and 90th percentile cost, and per scene the mean number of
-    contacts reported and the median cost per contact (frames with one or more). Interleaved
-    with the other estimators the compiled call finds its caches cold (the family's
-    ``median_us``).
-    """
-    every, per_scene = [], {}
-    for kind, est, frames in scenes:
-        est.process(*frames[0])
-        times, found = [], []
-        for _ in range(repeats):
-            for top, bottom in frames:
-                elapsed, contacts = _timed(est, top, bottom)
-                times.append(elapsed)
-                found.append(len(contacts))
-        every += times
-        per_contact = [t / k for t, k in zip(times, found) if k]
-        per_scene[kind] = {'median_us': 1e6 * float(np.median(times)),
-                           'contacts': float(np.mean(found)),
-                           'per_contact_us': (1e6 * float(np.median(per_contact))
-                                              if per_contact else None)}
-    return {'median_us': 1e6 * float(np.median(every)),
-            'p90_us': 1e6 * float(np.percentile(every, 90)), 'frames': len(every) // repeats,
-            'repeats': repeats, 'scenes': per_scene}
-
-
 def _family_estimator(data, method: str) -> tuple:
     """Return (estimator ``method`` prepared for ``data``, its calibration notes)."""
     if method == PLAIN_CENTROID:
@@ -378,7 +319,7 @@ def family(sizes: dict, methods: list, skins: list = None, seed: int = 0, log=pr
             times = {m: [] for m in methods}
             for i in range(data.frames):
                 for m in order.permutation(methods):
-                    elapsed, found = _timed(ests[m], data.top[i], data.bottom[i])
+                    elapsed, found = timed(ests[m], data.top[i], data.bottom[i])
                     times[m].append(elapsed)
                     contacts[m].append(found)
             if DEFAULT_METHOD in ests:

@@ -4,7 +4,7 @@ import math
 
 import numpy as np
 import pytest
-from skin_driver.tools.bench import estimators as bench_core
+from skin_driver.tools.bench import costs, estimators as bench_core
 
 
 def test_accuracy_rows_cover_every_method_and_hold_finite_figures(results):
@@ -99,7 +99,7 @@ def test_alone_costs_give_the_cost_per_contact_only_of_frames_with_contacts():
         def process(self, top, bottom):
             return [object()] * int(top)
 
-    got = bench_core.alone_costs([('random', Counted(), [(0, 0), (2, 0), (2, 0)])], repeats=2)
+    got = costs.alone_costs([('random', Counted(), [(0, 0), (2, 0), (2, 0)])], repeats=2)
     assert got['frames'] == 3 and got['repeats'] == 2
     scene = got['scenes']['random']
     assert scene['contacts'] == pytest.approx(4 / 3)
