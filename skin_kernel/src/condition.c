@@ -1,16 +1,11 @@
 /*
- * Conditioning: raw counts to tared touch counts (baseline, line leak, threshold, dead taxels),
- * the taxels the ADC cut, and touch counts to force. Python description: conditioning.py and
- * crosstalk.py.
+ * Conditioning: raw counts to tared touch counts (baseline, line leak: crosstalk.c, threshold,
+ * dead taxels), the taxels the ADC cut, and touch counts to force. Python description:
+ * conditioning.py.
  */
 #include <string.h>
 
 #include "internal.h"
-
-/* Largest median, as a share of the line's load above it, taken for leak (crosstalk.py). */
-#define MAX_LEAK 0.05
-/* After a tare, a line is lifted by leak when most of its taxels read this many noise sigmas. */
-#define LEAK_SIGMAS 3.0
 
 /*
  * Unnormalised 3 x 3 box sum with a zero border, in OpenCV's order (boxFilter: three-term row
@@ -56,161 +51,6 @@ void sk_live_counts(sk_kernel *k)
   }
 }
 
-/* The k-th smallest of buf[0..len) (Wirth's selection; reorders buf, leaves it split at k). */
-static double select_kth(double *buf, int len, int k)
-{
-  int lo = 0, hi = len - 1;
-  while (lo < hi) {
-    double pivot = buf[k];
-    int i = lo, j = hi;
-    do {
-      while (buf[i] < pivot) {
-        i++;
-      }
-      while (pivot < buf[j]) {
-        j--;
-      }
-      if (i <= j) {
-        double t = buf[i];
-        buf[i] = buf[j];
-        buf[j] = t;
-        i++;
-        j--;
-      }
-    } while (i <= j);
-    if (j < k) {
-      lo = i;
-    }
-    if (k < i) {
-      hi = j;
-    }
-  }
-  return buf[k];
-}
-
-/* The median of a line (stride apart), numpy's way: mean of the two middle values if even. */
-static double line_median(const double *a, int len, int stride, double *buf, double *sum)
-{
-  double total = 0.0;
-  for (int i = 0; i < len; i++) {
-    buf[i] = a[i * stride];
-    total += buf[i];
-  }
-  *sum = total;
-  int mid = (len - 1) / 2;
-  double lo = select_kth(buf, len, mid);
-  if (len % 2) {
-    return lo;
-  }
-  /* the next value up is the smallest of those the selection left above mid */
-  double hi = buf[mid + 1];
-  for (int i = mid + 2; i < len; i++) {
-    hi = buf[i] < hi ? buf[i] : hi;
-  }
-  return 0.5 * (lo + hi);
-}
-
-/* A line's leak: its median, unless that is not a small share of the load above it. */
-static double line_leak(double median, double sum, int len)
-{
-  if (median > MAX_LEAK * (sum - len * median)) {
-    return 0.0;
-  }
-  return median > 0.0 ? median : 0.0;
-}
-
-/* A line's leak as a share of its load (0 on a line without load), MAX_LEAK at most. */
-static double leak_share(double leak, double load)
-{
-  double share = load > 0 ? leak / load : 0.0;
-  return share < MAX_LEAK ? share : MAX_LEAK;
-}
-
-/*
- * A taxel leaks onto the others of its lines, not onto itself: the lines' leak took a share of
- * its own count too much, which is given back (crosstalk.py). The shares are turned into the
- * leak arrays in place.
- */
-static void give_back_own_leak(double *c, int rows, int cols, double *row_leak,
-                               double *col_leak)
-{
-  for (int r = 0; r < rows; r++) {
-    double load = 0.0;
-    for (int j = 0; j < cols; j++) {
-      load += c[r * cols + j];
-    }
-    row_leak[r] = leak_share(row_leak[r], load);
-  }
-  for (int j = 0; j < cols; j++) {
-    double load = 0.0;
-    for (int r = 0; r < rows; r++) {
-      load += c[r * cols + j];
-    }
-    col_leak[j] = leak_share(col_leak[j], load);
-  }
-  for (int r = 0; r < rows; r++) {
-    for (int j = 0; j < cols; j++) {
-      c[r * cols + j] /= 1.0 - row_leak[r] - col_leak[j];
-    }
-  }
-}
-
-/* Take each line's leak (its median when a small share of its load) out of both layers. */
-static void remove_line_leak(sk_kernel *k)
-{
-  int rows = k->rows, cols = k->cols, n = k->n;
-  double half = 0.5 * (rows < cols ? rows : cols);
-  int lifted = 0;
-  /* the gate: LEAK_SIGMAS noise sigmas after a tare, the touch threshold before (crosstalk.py) */
-  double scale = k->tared ? LEAK_SIGMAS : 1.0;
-  for (int layer = 0; layer < 2 && !lifted; layer++) {
-    const double *c = k->counts + layer * n;
-    const double *gate = (k->tared ? k->noise : k->threshold) + layer * n;
-    for (int r = 0; r < rows && !lifted; r++) {
-      int over = 0;
-      for (int j = 0; j < cols; j++) {
-        over += c[r * cols + j] >= scale * gate[r * cols + j];
-      }
-      lifted = over >= half;
-    }
-    for (int j = 0; j < cols && !lifted; j++) {
-      int over = 0;
-      for (int r = 0; r < rows; r++) {
-        over += c[r * cols + j] >= scale * gate[r * cols + j];
-      }
-      lifted = over >= half;
-    }
-  }
-  if (!lifted) {
-    return;
-  }
-  int line = rows > cols ? rows : cols;
-  double *buf = k->scratch, *row_leak = k->scratch + line, *col_leak = k->scratch + 2 * line;
-  /* Rows first, then columns: the leak is a row term plus a column term (layers apart). */
-  for (int layer = 0; layer < 2; layer++) {
-    double *c = k->counts + layer * n;
-    for (int r = 0; r < rows; r++) {
-      double sum, median = line_median(c + r * cols, cols, 1, buf, &sum);
-      row_leak[r] = line_leak(median, sum, cols);
-    }
-    for (int r = 0; r < rows; r++) {
-      for (int j = 0; j < cols; j++) {
-        c[r * cols + j] -= row_leak[r];
-      }
-    }
-    for (int j = 0; j < cols; j++) {
-      double sum, median = line_median(c + j, rows, cols, buf, &sum);
-      col_leak[j] = line_leak(median, sum, rows);
-    }
-    for (int r = 0; r < rows; r++) {
-      for (int j = 0; j < cols; j++) {
-        c[r * cols + j] -= col_leak[j];
-      }
-    }
-    give_back_own_leak(c, rows, cols, row_leak, col_leak);
-  }
-}
-
 /* Unmark dead taxels that read a touch (they only rest below zero), then fill the dead ones. */
 static void dead_taxels(sk_kernel *k)
 {
@@ -220,9 +60,12 @@ static void dead_taxels(sk_kernel *k)
     if (!k->any_dead[layer]) {
       continue;
     }
+    /* the arrays held apart from k: a byte store into dead could be k's otherwise */
+    unsigned char *dead = k->dead + layer * n;
+    const double *counts = k->counts + layer * n;
     for (int i = 0; i < n; i++) {
-      if (k->dead[layer * n + i] && k->counts[layer * n + i] > 0) {
-        k->dead[layer * n + i] = 0;
+      if (dead[i] && counts[i] > 0) {
+        dead[i] = 0;
         changed = 1;
       }
     }
@@ -275,23 +118,58 @@ static void level_clipped(sk_kernel *k)
   }
 }
 
+/* The rows and columns holding a taxel of either layer whose count is not 0 (k->box). */
+static void loaded_box(sk_kernel *k)
+{
+  int rows = k->rows, cols = k->cols, n = k->n;
+  int r0 = rows, r1 = 0, c0 = cols, c1 = 0;
+  const double *top = k->counts, *bottom = k->counts + n;
+  int *column_loaded = k->iscratch;
+  memset(column_loaded, 0, sizeof(int) * cols);
+  /* flags first, without a branch per taxel */
+  for (int r = 0; r < rows; r++) {
+    int any = 0;
+    for (int c = 0; c < cols; c++) {
+      int loaded = (top[r * cols + c] != 0.0) | (bottom[r * cols + c] != 0.0);
+      any |= loaded;
+      column_loaded[c] |= loaded;
+    }
+    if (any) {
+      r0 = r < r0 ? r : r0;
+      r1 = r + 1;
+    }
+  }
+  for (int c = 0; c < cols; c++) {
+    if (column_loaded[c]) {
+      c0 = c < c0 ? c : c0;
+      c1 = c + 1;
+    }
+  }
+  k->box[0] = r0;
+  k->box[1] = r1 > r0 ? r1 : r0;
+  k->box[2] = c0;
+  k->box[3] = c1 > c0 ? c1 : c0;
+}
+
 void sk_touch_counts(sk_kernel *k, const double *maps)
 {
   int n2 = 2 * k->n, any_clipped = 0;
   double full = (double)k->full_scale;
+  /* the arrays held apart from k: a byte store into clipped could be k's otherwise */
+  double *counts = k->counts;
+  const double *baseline = k->baseline, *threshold = k->threshold;
+  unsigned char *clipped = k->clipped;
   for (int i = 0; i < n2; i++) {
-    k->counts[i] = maps[i] - k->baseline[i];
-    k->clipped[i] = maps[i] >= full;
-    any_clipped |= k->clipped[i];
+    counts[i] = maps[i] - baseline[i];
+    clipped[i] = maps[i] >= full;
+    any_clipped |= clipped[i];
   }
   k->any_clipped = any_clipped;
   if (k->crosstalk) {
-    remove_line_leak(k);
+    sk_remove_line_leak(k);
   }
   for (int i = 0; i < n2; i++) {
-    if (k->counts[i] < k->threshold[i]) {
-      k->counts[i] = 0.0;
-    }
+    counts[i] = counts[i] < threshold[i] ? 0.0 : counts[i];
   }
   if (any_clipped) {
     level_clipped(k);
@@ -299,6 +177,7 @@ void sk_touch_counts(sk_kernel *k, const double *maps)
   if (k->any_dead[0] || k->any_dead[1]) {
     dead_taxels(k);
   }
+  loaded_box(k);
 }
 
 int sk_clipped_window(const sk_kernel *k, const sk_pair *p, double *window, int mark)
@@ -326,29 +205,41 @@ int sk_clipped_window(const sk_kernel *k, const sk_pair *p, double *window, int 
 }
 
 /*
- * Force by linear interpolation in the layer's table at every integer count (_ForceTable): the
- * slope is the next entry less this one (numpy.diff), and 0 past the last count.
+ * One taxel's force by linear interpolation in its layer's table at every integer count
+ * (_ForceTable): the slope is the next entry less this one (numpy.diff), and 0 past the last
+ * count; a reading the ADC cut reads the force at full scale (conditioning.py).
  */
+static double force_at(const double *table, int size, double count, int clipped)
+{
+  if (count == 0.0) {
+    return 0.0;
+  }
+  double last = (double)(size - 1);
+  double x = count < last && !clipped ? count : last;
+  int j = (int)x;
+  double slope = j + 1 < size ? table[j + 1] - table[j] : 0.0;
+  return slope * (x - j) + table[j];
+}
+
 void sk_force_of(sk_kernel *k)
 {
-  int n = k->n, size = k->full_scale + 1;
-  double last = (double)k->full_scale;
+  int n = k->n, cols = k->cols, size = k->full_scale + 1;
+  const int *box = k->box;
   for (int layer = 0; layer < 2; layer++) {
     const double *table = k->table_force + layer * size;
     const double *c = k->counts + layer * n;
     const unsigned char *clipped = k->clipped + layer * n;
     double *f = k->force + layer * n;
     const double *gain = k->has_gain ? k->gain + layer * n : NULL;
+    /* a count of 0 (every taxel past the box) has the force 0 */
     for (int i = 0; i < n; i++) {
-      double v = 0.0;
-      if (c[i] != 0.0) {
-        /* a reading the ADC cut reads the force at full scale (conditioning.py) */
-        double x = c[i] < last && !clipped[i] ? c[i] : last;
-        int j = (int)x;
-        double slope = j + 1 < size ? table[j + 1] - table[j] : 0.0;
-        v = slope * (x - j) + table[j];
+      f[i] = gain ? 0.0 * gain[i] : 0.0;
+    }
+    for (int r = box[0]; r < box[1]; r++) {
+      for (int i = r * cols + box[2]; i < r * cols + box[3]; i++) {
+        double v = force_at(table, size, c[i], clipped[i]);
+        f[i] = gain ? v * gain[i] : v;
       }
-      f[i] = gain ? v * gain[i] : v;
     }
   }
 }

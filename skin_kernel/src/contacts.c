@@ -12,51 +12,69 @@
 #define SADDLE_RATIO 0.85
 #define MIN_PEAK_DISTANCE 2
 
-/* 3 x 3 maximum over the taxels inside the map (cv2.dilate's border leaves them out). */
-static void dilate3(const double *src, int rows, int cols, double *rowmax, double *dst)
+/*
+ * 3 x 3 maximum over the taxels inside a region of the map (rows region[0]..region[1],
+ * columns region[2]..region[3], half-open), whose border is taken for the map's (cv2.dilate's
+ * border leaves the taxels past it out): the map's own for every taxel whose 3 x 3 is inside.
+ */
+static void dilate3(const double *src, int cols, const int *region, double *rowmax,
+                    double *dst)
 {
+  int r0 = region[0], r1 = region[1], c0 = region[2], c1 = region[3];
   /* A maximum is exact in any order: rows first, then columns. */
-  for (int r = 0; r < rows; r++) {
+  for (int r = r0; r < r1; r++) {
     const double *s = src + r * cols;
     double *d = rowmax + r * cols;
-    for (int c = 0; c < cols; c++) {
+    for (int c = c0; c < c1; c++) {
       double m = s[c];
-      m = c > 0 && s[c - 1] > m ? s[c - 1] : m;
-      d[c] = c + 1 < cols && s[c + 1] > m ? s[c + 1] : m;
+      m = c > c0 && s[c - 1] > m ? s[c - 1] : m;
+      d[c] = c + 1 < c1 && s[c + 1] > m ? s[c + 1] : m;
     }
   }
-  for (int r = 0; r < rows; r++) {
-    const double *up = rowmax + (r > 0 ? r - 1 : r) * cols, *mid = rowmax + r * cols;
-    const double *down = rowmax + (r + 1 < rows ? r + 1 : r) * cols;
-    for (int c = 0; c < cols; c++) {
+  for (int r = r0; r < r1; r++) {
+    const double *up = rowmax + (r > r0 ? r - 1 : r) * cols, *mid = rowmax + r * cols;
+    const double *down = rowmax + (r + 1 < r1 ? r + 1 : r) * cols;
+    for (int c = c0; c < c1; c++) {
       double m = mid[c] > up[c] ? mid[c] : up[c];
       dst[r * cols + c] = down[c] > m ? down[c] : m;
     }
   }
 }
 
-/* Label the 8-connected loaded taxels 1, 2, ... in the raster order of their first taxel. */
-static int components(const double *top, int rows, int cols, int *labels, int *stack)
+/* Give every loaded taxel 8-connected to start (loaded, unlabelled) the label `label`. */
+static void flood(const double *top, int rows, int cols, int start, int label, int *labels,
+                  int *stack)
 {
-  int n = rows * cols, count = 0;
-  memset(labels, 0, sizeof(int) * n);
-  for (int start = 0; start < n; start++) {
-    if (!(top[start] > 0) || labels[start]) {
-      continue;
-    }
-    labels[start] = ++count;
-    int depth = 0;
-    stack[depth++] = start;
-    while (depth) {
-      int i = stack[--depth], r = i / cols, c = i % cols;
-      for (int rr = r - 1; rr <= r + 1; rr++) {
-        for (int cc = c - 1; cc <= c + 1; cc++) {
-          int j = rr * cols + cc;
-          if (rr >= 0 && rr < rows && cc >= 0 && cc < cols && top[j] > 0 && !labels[j]) {
-            labels[j] = count;
-            stack[depth++] = j;
-          }
+  int depth = 0;
+  labels[start] = label;
+  stack[depth++] = start;
+  while (depth) {
+    int i = stack[--depth], r = i / cols, c = i % cols;
+    for (int rr = r - 1; rr <= r + 1; rr++) {
+      for (int cc = c - 1; cc <= c + 1; cc++) {
+        int j = rr * cols + cc;
+        if (rr >= 0 && rr < rows && cc >= 0 && cc < cols && top[j] > 0 && !labels[j]) {
+          labels[j] = label;
+          stack[depth++] = j;
         }
+      }
+    }
+  }
+}
+
+/*
+ * Label the 8-connected loaded taxels 1, 2, ... in the raster order of their first taxel
+ * (all inside box, k->box's rows and columns).
+ */
+static int components(const double *top, int rows, int cols, const int *box, int *labels,
+                      int *stack)
+{
+  int count = 0;
+  memset(labels, 0, sizeof(int) * rows * cols);
+  for (int r = box[0]; r < box[1]; r++) {
+    for (int i = r * cols + box[2]; i < r * cols + box[3]; i++) {
+      if (top[i] > 0 && !labels[i]) {
+        flood(top, rows, cols, i, ++count, labels, stack);
       }
     }
   }
@@ -94,18 +112,46 @@ static int separate(const double *top, const double *values, int rows, int cols,
   return lowest < SADDLE_RATIO * top[p];
 }
 
+/* Rank among group `label`'s kept peaks of the one nearest to taxel i (the first if tied). */
+static int nearest(const int *kept, const int *kept_label, int nkept, int label, int cols, int i)
+{
+  int r = i / cols, c = i % cols, best = -1, which = 0, rank = 0, best_d2 = 0;
+  for (int j = 0; j < nkept; j++) {
+    if (kept_label[j] != label) {
+      continue;
+    }
+    int dr = r - kept[j] / cols, dc = c - kept[j] % cols, d2 = dr * dr + dc * dc;
+    if (best < 0 || d2 < best_d2) {
+      best = j;
+      best_d2 = d2;
+      which = rank;
+    }
+    rank++;
+  }
+  return which;
+}
+
 /* Give each clear peak of a connected group its own label; the nearest peak takes a taxel. */
 static int split_peaks(sk_kernel *k, const double *top, int count)
 {
   int rows = k->rows, cols = k->cols, n = k->n;
+  const int *box = k->box;
   double *dil = k->scratch, *values = k->scratch + n;
   int *labels = k->labels, *peaks = k->iscratch, *kept = k->iscratch + n;
   int *kept_label = k->iscratch + 2 * n, *groups = k->iscratch + 3 * n;
-  dilate3(top, rows, cols, values, dil);
+  /*
+   * The box and a taxel around it: the box's taxels get their 3 x 3 maximum, and a path
+   * between two peaks (separate) reads the taxel past its end, with a weight of 0.
+   */
+  int around[4] = {box[0] > 0 ? box[0] - 1 : 0, box[1] < rows ? box[1] + 1 : rows,
+                   box[2] > 0 ? box[2] - 1 : 0, box[3] < cols ? box[3] + 1 : cols};
+  dilate3(top, cols, around, values, dil);
   int npeaks = 0;
-  for (int i = 0; i < n; i++) {
-    if (top[i] >= dil[i] && top[i] > 0) {
-      peaks[npeaks++] = i;
+  for (int r = box[0]; r < box[1]; r++) {
+    for (int i = r * cols + box[2]; i < r * cols + box[3]; i++) {
+      if (top[i] >= dil[i] && top[i] > 0) {
+        peaks[npeaks++] = i;
+      }
     }
   }
   if (npeaks <= count) {
@@ -121,8 +167,10 @@ static int split_peaks(sk_kernel *k, const double *top, int count)
   }
   /* A filled-in dead taxel is no evidence of a dip: the path takes its higher neighbour. */
   const unsigned char *dead = k->any_dead[0] ? k->dead : NULL;
-  for (int i = 0; i < n; i++) {
-    values[i] = dead && dead[i] ? dil[i] : top[i];
+  for (int r = around[0]; r < around[1]; r++) {
+    for (int i = r * cols + around[2]; i < r * cols + around[3]; i++) {
+      values[i] = dead && dead[i] ? dil[i] : top[i];
+    }
   }
   int nkept = 0, ngroups = 0, split = 0;
   for (int i = 0; i < npeaks; i++) {
@@ -154,24 +202,13 @@ static int split_peaks(sk_kernel *k, const double *top, int count)
     if (centres < 2) {
       continue;
     }
-    for (int i = 0; i < n; i++) {
-      if (labels[i] != label) {
-        continue;
-      }
-      int r = i / cols, c = i % cols, best = -1, which = 0, rank = 0, best_d2 = 0;
-      for (int j = 0; j < nkept; j++) {
-        if (kept_label[j] != label) {
-          continue;
+    for (int r = box[0]; r < box[1]; r++) {
+      for (int i = r * cols + box[2]; i < r * cols + box[3]; i++) {
+        if (labels[i] == label) {
+          int which = nearest(kept, kept_label, nkept, label, cols, i);
+          labels[i] = which == 0 ? label : next + which - 1;
         }
-        int dr = r - kept[j] / cols, dc = c - kept[j] % cols, d2 = dr * dr + dc * dc;
-        if (best < 0 || d2 < best_d2) {
-          best = j;
-          best_d2 = d2;
-          which = rank;
-        }
-        rank++;
       }
-      labels[i] = which == 0 ? label : next + which - 1;
     }
     next += centres - 1;
   }
@@ -214,13 +251,21 @@ static int cut_at_edge(const sk_kernel *k, const sk_pair *p, const double *b, do
 static void make_pair(sk_kernel *k, int q, sk_pair *p)
 {
   int rows = k->rows, cols = k->cols, n = k->n;
+  const int *box = k->box;
   const double *t = k->tops + q * n, *fraction = k->fractions + q * n;
   const double *bottom = k->counts + n, *force = k->force;
   double *tmp = k->scratch, *b = k->scratch + n;
   double mt = 0.0, sr = 0.0, sc = 0.0, peak = -INFINITY;
   int taxels = 0, r0 = rows, r1 = -1, c0 = cols, c1 = -1;
-  for (int r = 0, i = 0; r < rows; r++) {
-    for (int c = 0; c < cols; c++, i++) {
+  /*
+   * Past the box both layers read 0: adding those taxels to a sum in raster order changes
+   * nothing, so the loops leave them out; b (read in the window, which may reach past the box)
+   * and tmp (summed pairwise) are zeroed there, the same arrays as over the whole map.
+   */
+  memset(b, 0, sizeof(double) * n);
+  memset(tmp, 0, sizeof(double) * n);
+  for (int r = box[0]; r < box[1]; r++) {
+    for (int c = box[2], i = r * cols + c; c < box[3]; c++, i++) {
       b[i] = fraction[i] * bottom[i];
       mt += t[i];
       sr += t[i] * r;
@@ -228,12 +273,15 @@ static void make_pair(sk_kernel *k, int q, sk_pair *p)
       peak = b[i] > peak ? b[i] : peak;
     }
   }
+  if ((box[1] - box[0]) * (box[3] - box[2]) < n) {
+    peak = peak > 0.0 ? peak : 0.0; /* the taxels past the box */
+  }
   p->row = mt > 0 ? sr / mt : 0.0;
   p->col = mt > 0 ? sc / mt : 0.0;
   p->peak = peak;
   double cut = WINDOW_SHARE * peak;
-  for (int r = 0, i = 0; r < rows; r++) {
-    for (int c = 0; c < cols; c++, i++) {
+  for (int r = box[0]; r < box[1]; r++) {
+    for (int c = box[2], i = r * cols + c; c < box[3]; c++, i++) {
       int touched = t[i] != 0.0, own = peak > 0 && b[i] > cut;
       taxels += touched;
       if (touched || own) {
@@ -291,9 +339,10 @@ void sk_pair_window(const sk_kernel *k, int q, double *out)
 
 int sk_pair_layers(sk_kernel *k)
 {
-  int n = k->n;
+  int n = k->n, cols = k->cols;
+  const int *box = k->box;
   const double *top = k->counts;
-  int count = components(top, k->rows, k->cols, k->labels, k->iscratch);
+  int count = components(top, k->rows, cols, box, k->labels, k->iscratch);
   if (!count) {
     return 0;
   }
@@ -313,8 +362,10 @@ int sk_pair_layers(sk_kernel *k)
     double *masses = k->scratch;
     int *order = k->iscratch;
     memset(masses, 0, sizeof(double) * (count + 1));
-    for (int i = 0; i < n; i++) {
-      masses[k->labels[i]] += top[i];
+    for (int r = box[0]; r < box[1]; r++) {
+      for (int i = r * cols + box[2]; i < r * cols + box[3]; i++) {
+        masses[k->labels[i]] += top[i];
+      }
     }
     /* The strongest top imprints first (a stable sort); the pipeline orders by force later. */
     kn = 0;
@@ -331,8 +382,11 @@ int sk_pair_layers(sk_kernel *k)
     kn = kn < k->kmax ? kn : k->kmax;
     for (int q = 0; q < kn; q++) {
       double *t = k->tops + q * n;
-      for (int i = 0; i < n; i++) {
-        t[i] = top[i] * (k->labels[i] == order[q] ? 1.0 : 0.0);
+      memset(t, 0, sizeof(double) * n);
+      for (int r = box[0]; r < box[1]; r++) {
+        for (int i = r * cols + box[2]; i < r * cols + box[3]; i++) {
+          t[i] = top[i] * (k->labels[i] == order[q] ? 1.0 : 0.0);
+        }
       }
     }
     sk_share_bottom(k, kn, top + n);

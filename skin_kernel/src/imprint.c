@@ -14,11 +14,22 @@
 #define SPREAD_STEPS 13
 #define REFINE_ROUNDS 3
 
-/* The unit bump over an h x w window of counts, centred on its centroid (imprint.bump). */
-static int bump(const double *counts, int h, int w, double spread, double power, double *gather,
-                double *phi)
+/*
+ * A saturated imprint's window (h x w counts and force) and what its bumps share whatever
+ * their spread: the squared distance of each taxel from the centroid of counts.
+ */
+typedef struct {
+  const double *counts, *force;
+  int m;
+  double censor, half_power, activation;
+  double *dist2;
+} imprint;
+
+/* The squared distances from the window's centroid of counts (imprint.bump); 0 without mass. */
+static int centre(imprint *im, int w, double *gather)
 {
-  int m = h * w;
+  const double *counts = im->counts;
+  int m = im->m;
   double mass = sk_sum(counts, m);
   if (!(mass > 0)) {
     return 0;
@@ -31,26 +42,31 @@ static int bump(const double *counts, int h, int w, double spread, double power,
     gather[j] = (double)(j % w) * counts[j];
   }
   double c0 = sk_sum(gather, m) / mass;
-  double s2 = spread * spread, half_power = 0.5 * power;
   for (int j = 0; j < m; j++) {
     double dr = (double)(j / w) - r0, dc = (double)(j % w) - c0;
-    double d2 = (dr * dr + dc * dc) / s2;
-    phi[j] = exp(-0.5 * pow(d2, half_power));
+    im->dist2[j] = dr * dr + dc * dc;
   }
   return 1;
 }
 
-/* The least-squares fit of one spread on the free taxels (imprint._fill): 0 without a bump. */
-static int fill(const double *counts, const double *force, int h, int w, double censor,
-                double spread, double power, double activation, double *gather, double *phi,
-                double *misfit, double *height)
+/* The unit bump of one spread (imprint.bump); a power of 1 is the number itself, exactly. */
+static void bump(const imprint *im, double spread, double *phi)
 {
-  int m = h * w;
-  if (!bump(counts, h, w, spread, power, gather, phi)) {
-    return 0;
+  double s2 = spread * spread, half_power = im->half_power;
+  for (int j = 0; j < im->m; j++) {
+    double d2 = im->dist2[j] / s2;
+    phi[j] = exp(-0.5 * (half_power == 1.0 ? d2 : pow(d2, half_power)));
   }
+}
+
+/* The least-squares fit of one spread on the free taxels (imprint._fill): 0 without a bump. */
+static int fill(const imprint *im, double spread, double *phi, double *misfit, double *height)
+{
+  const double *counts = im->counts, *force = im->force;
+  double censor = im->censor, activation = im->activation;
+  bump(im, spread, phi);
   double weight = 0.0, dot = 0.0;
-  for (int j = 0; j < m; j++) {
+  for (int j = 0; j < im->m; j++) {
     if (counts[j] > 0 && counts[j] < censor) {
       weight += phi[j] * phi[j];
       dot += (force[j] - activation) * phi[j];
@@ -60,7 +76,7 @@ static int fill(const double *counts, const double *force, int h, int w, double 
     return 0;
   }
   double a = dot / weight, sq = 0.0, below = 0.0;
-  for (int j = 0; j < m; j++) {
+  for (int j = 0; j < im->m; j++) {
     if (counts[j] >= censor) {
       /* A bump below a censored taxel's reading contradicts it (a lower bound). */
       double d = a * phi[j] - (force[j] - activation);
@@ -77,9 +93,7 @@ static int fill(const double *counts, const double *force, int h, int w, double 
 }
 
 /* The spread of the best fill over SPREAD_LOW..HIGH of the calibration's, a grid then finer. */
-static int best_spread(const double *counts, const double *force, int h, int w, double censor,
-                       double spread, double power, double activation, double *gather,
-                       double *phi, double *best)
+static int best_spread(const imprint *im, double spread, double *phi, double *best)
 {
   /* numpy.geomspace: powers of ten at even steps of the logarithm, the ends exact */
   double log_low = log10(SPREAD_LOW), log_high = log10(SPREAD_HIGH);
@@ -95,9 +109,7 @@ static int best_spread(const double *counts, const double *force, int h, int w, 
   for (int round = 0; round <= REFINE_ROUNDS; round++) {
     for (int i = 0; i < size; i++) {
       double misfit, height;
-      if (fill(counts, force, h, w, censor, grid[i], power, activation, gather, phi, &misfit,
-               &height)
-          && (!found || misfit < best_misfit)) {
+      if (fill(im, grid[i], phi, &misfit, &height) && (!found || misfit < best_misfit)) {
         best_misfit = misfit;
         *best = grid[i];
         found = 1;
@@ -124,15 +136,14 @@ double sk_imprint_force(const double *counts, const double *force, int h, int w,
   }
   double *gather = scratch, *phi = scratch + m, read;
   double best = spread, misfit, height;
-  int fitted = spread > 0 && censor > 0 && any;
+  imprint im = {counts, force, m, censor, 0.5 * power, activation, scratch + 2 * m};
+  int fitted = spread > 0 && censor > 0 && any && centre(&im, w, gather);
   if (fitted && spread >= MIN_FITTED_SPREAD) {
-    fitted = best_spread(counts, force, h, w, censor, spread, power, activation, gather, phi,
-                         &best);
+    fitted = best_spread(&im, spread, phi, &best);
   }
   /* the best spread's bump again: the same numbers as when it was chosen */
   if (fitted) {
-    fitted = fill(counts, force, h, w, censor, best, power, activation, gather, phi, &misfit,
-                  &height);
+    fitted = fill(&im, best, phi, &misfit, &height);
   }
   if (!fitted) {
     read = sk_sum(force, m);

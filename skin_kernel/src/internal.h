@@ -21,6 +21,7 @@ struct sk_kernel {
   double reals[SK_NREALS];
   /* the estimator's state, (2, n) each */
   double *baseline, *threshold, *noise, *gain;
+  double *leak_gate;                /* (2, n): a line is lifted at this count (crosstalk.py) */
   unsigned char *dead;
   int any_dead[2];
   unsigned char *clipped;           /* (2, n): the last scan's raw count at the ADC's full scale */
@@ -29,6 +30,11 @@ struct sk_kernel {
   double *table_force;              /* 2 x (full_scale + 1) */
   /* the last scan */
   double *counts, *force;           /* (2, n): tared counts, force */
+  /*
+   * rows box[0]..box[1] and columns box[2]..box[3] (half-open) hold every taxel of either
+   * layer whose tared count is not 0: the loops of the contact stage skip the rest
+   */
+  int box[4];
   int npairs;
   sk_pair *pairs;                   /* kmax */
   /* (kmax, n): each contact's own top map and its share (0..1) of every bottom taxel */
@@ -45,6 +51,11 @@ double sk_sum(const double *a, int n);
 
 /* condition.c */
 void sk_live_counts(sk_kernel *k);
+
+/* crosstalk.c: the count at which a line is lifted (k->leak_gate), once per kernel; each
+ * lifted scan's line leak taken out of k->counts */
+void sk_leak_gate(sk_kernel *k);
+void sk_remove_line_leak(sk_kernel *k);
 void sk_touch_counts(sk_kernel *k, const double *maps);
 void sk_force_of(sk_kernel *k);
 /* pair p's layers (bits 0, 1) holding a loaded taxel the ADC cut; with mark, such taxels of its
@@ -97,7 +108,7 @@ int sk_poc_scratch(int h, int w);
 
 /* imprint.c: one imprint's force sum (h x w counts and force), each taxel at censor counts or
  * more filled in by the activation plus a bump of spread (taxels) and power fitted to its rim's
- * force above the activation, the rim load added; scratch holds 2 h w doubles */
+ * force above the activation, the rim load added; scratch holds 3 h w doubles */
 double sk_imprint_force(const double *counts, const double *force, int h, int w,
                         double censor, double spread, double power, double activation,
                         double rim, double *scratch);

@@ -30,9 +30,9 @@ void sk_free(sk_kernel *k)
   if (!k) {
     return;
   }
-  double *arrays[] = {k->baseline, k->threshold, k->noise, k->gain, k->live, k->live_count,
-                      k->table_force, k->counts, k->force, k->tops, k->fractions,
-                      k->scratch, k->fit};
+  double *arrays[] = {k->baseline, k->threshold, k->noise, k->gain, k->leak_gate, k->live,
+                      k->live_count, k->table_force, k->counts, k->force, k->tops,
+                      k->fractions, k->scratch, k->fit};
   for (size_t i = 0; i < sizeof(arrays) / sizeof(arrays[0]); i++) {
     free(arrays[i]);
   }
@@ -74,6 +74,7 @@ sk_kernel *sk_new(const int *ints, const double *reals, const double *baseline,
   k->threshold = copy_of(threshold, 2 * n);
   k->noise = copy_of(noise, 2 * n);
   k->gain = gain ? copy_of(gain, 2 * n) : NULL;
+  k->leak_gate = copy_of(NULL, 2 * n);
   k->dead = malloc(2 * n);
   k->clipped = calloc(2 * n, 1);
   k->live = copy_of(NULL, 2 * n);
@@ -92,13 +93,14 @@ sk_kernel *sk_new(const int *ints, const double *reals, const double *baseline,
     /* the window's censored taxels and a 2-D fit's work (taxelfit.c: fit_censored) */
     shift_scratch += 6 * (size_t)n + 4 * ((size_t)line + 1);
   }
-  /* a saturated imprint's fill-in: its marked counts (2 windows), then sk_imprint_force's */
-  size_t imprint_scratch = 4 * (size_t)n;
+  /* a saturated imprint's fill-in: its marked counts (2 windows), then sk_imprint_force's 3 */
+  size_t imprint_scratch = 5 * (size_t)n;
   k->fit = copy_of(NULL, 4 * (size_t)n
                    + (shift_scratch > imprint_scratch ? shift_scratch : imprint_scratch));
   k->labels = malloc(sizeof(int) * n);
   k->iscratch = malloc(sizeof(int) * 4 * n);
-  if (!k->baseline || !k->threshold || !k->noise || (gain && !k->gain) || !k->dead || !k->clipped || !k->live
+  if (!k->baseline || !k->threshold || !k->noise || (gain && !k->gain) || !k->leak_gate
+      || !k->dead || !k->clipped || !k->live
       || !k->live_count || !k->table_force || !k->counts || !k->force
       || !k->pairs || !k->tops || !k->fractions || !k->scratch || !k->fit || !k->labels
       || !k->iscratch) {
@@ -107,6 +109,7 @@ sk_kernel *sk_new(const int *ints, const double *reals, const double *baseline,
   }
   memcpy(k->dead, dead, 2 * n);
   sk_live_counts(k);
+  sk_leak_gate(k);
   return k;
 }
 

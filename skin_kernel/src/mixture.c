@@ -16,16 +16,19 @@
 void sk_share_bottom(sk_kernel *k, int kn, const double *bottom)
 {
   int n = k->n, cols = k->cols;
+  const int *box = k->box; /* past it every map reads 0: the loops leave it out */
   int *loaded = k->iscratch;
   double *bv = k->scratch, *ks = k->scratch + n;
   double *mass = ks, *cr = ks + kn, *cc = ks + 2 * kn, *var = ks + 3 * kn, *lw = ks + 4 * kn;
   double *m = ks + 5 * kn, *logp = ks + 9 * kn, *lv = ks + 10 * kn, *norm = ks + 11 * kn;
   memset(k->fractions, 0, sizeof(double) * kn * n);
   int nl = 0;
-  for (int i = 0; i < n; i++) {
-    if (bottom[i] > 0) {
-      bv[nl] = bottom[i];
-      loaded[nl++] = i;
+  for (int r = box[0]; r < box[1]; r++) {
+    for (int i = r * cols + box[2]; i < r * cols + box[3]; i++) {
+      if (bottom[i] > 0) {
+        bv[nl] = bottom[i];
+        loaded[nl++] = i;
+      }
     }
   }
   if (!nl) {
@@ -35,8 +38,8 @@ void sk_share_bottom(sk_kernel *k, int kn, const double *bottom)
   for (int q = 0; q < kn; q++) {
     const double *t = k->tops + q * n;
     double s0 = 0.0, s1 = 0.0, s2 = 0.0, s3 = 0.0;
-    for (int r = 0, i = 0; r < k->rows; r++) {
-      for (int c = 0; c < cols; c++, i++) {
+    for (int r = box[0]; r < box[1]; r++) {
+      for (int c = box[2], i = r * cols + c; c < box[3]; c++, i++) {
         s0 += t[i];
         s1 += t[i] * r;
         s2 += t[i] * c;

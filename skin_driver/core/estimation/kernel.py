@@ -75,9 +75,10 @@ def load_library() -> ctypes.CDLL:
     if lib.sk_abi_version() != _ABI_VERSION:
         raise KernelMissing(f'skin_kernel: {path} is another version than this skin_driver; '
                             f'{_FIX}')
+    # sk_scan (kernel, maps, every_pair, out, status) has no argtypes: their checks cost 0.7 us
+    # a call, and Kernel passes the same c_void_p objects and a Python int every time.
     signatures = {'sk_new': (ptr, [ptr] * 8), 'sk_free': (None, [ptr]),
-                  'sk_scan': (ctypes.c_int, [ptr, ptr, ctypes.c_int, ptr, ptr]),
-                  'sk_dead': (None, [ptr, ptr])}
+                  'sk_scan': (ctypes.c_int, None), 'sk_dead': (None, [ptr, ptr])}
     for name, (restype, argtypes) in signatures.items():
         function = getattr(lib, name)
         function.restype = restype

@@ -229,9 +229,14 @@ def _family_only(args) -> int:
     """Score the family on a few skins (a small run on a shared machine); print its rows."""
     n = max(args.family_size, 2)
     sizes = {'paper': max(n // 10, 1), 'random': n, 'border': n // 2, 'multi': n // 2}
-    fam = bench_core.family(sizes, bench_core.family_methods(True),
-                            args.family_only.split(','), seed=args.seed,
-                            log=lambda s: print(s, file=sys.stderr, flush=True))
+    everything = os.sched_getaffinity(0)
+    _pin()  # its costs on one core, as in the whole benchmark
+    try:
+        fam = bench_core.family(sizes, bench_core.family_methods(True),
+                                args.family_only.split(','), seed=args.seed,
+                                log=lambda s: print(s, file=sys.stderr, flush=True))
+    finally:
+        os.sched_setaffinity(0, everything)
     fig = tables.figure
     for kind in tables.SCENES:
         print(f'{kind}: mean error deg (valid %)')
@@ -246,6 +251,14 @@ def _family_only(args) -> int:
             f'{fig(w[k]["ratio_to_oracle"], ".2f")} ({w[k]["ratio_to_oracle_skin"]}), / centroid '
             f'{fig(w[k]["ratio_to_centroid"], ".2f")} ({w[k]["ratio_to_centroid_skin"]})'
             for k in tables.SCENES))
+    for c in fam['costs']:
+        if 'alone' in c:
+            a = c['alone']
+            print(f'{c["skin"]} cost of {c["method"]} back to back: median '
+                  f'{fig(a["median_us"])} us (' + ', '.join(
+                      f'{k} {fig(v["median_us"])} us, {fig(v["contacts"], ".2f")} contacts'
+                      for k, v in a['scenes'].items())
+                  + f'); interleaved {fig(c["median_us"])} us')
     if args.out:
         os.makedirs(args.out, exist_ok=True)
         with open(os.path.join(args.out, 'family.json'), 'w') as f:

@@ -8,7 +8,6 @@ interleaved frame by frame in a shuffled order, so that machine noise hits them 
 from __future__ import annotations
 
 import math
-import time
 import warnings
 
 import numpy as np
@@ -24,6 +23,7 @@ from skin_driver.core.sim.experiments import (
 from skin_driver.core.sim.oracle import ORACLE, oracle_run
 from skin_driver.core.sim.physics import Press, render, SkinModel
 from skin_driver.core.sim.skins import family_skin, PATCH_M, skin_for_grid, skin_names
+from skin_driver.tools.bench.costs import alone_costs, back_to_back_us, interleaved_cost, timed
 from skin_driver.tools.evaluate.scoring import (
     angle_error_deg, direction_errors, evaluate, MethodRun, PAPER_TABLE, score_run)
 from skin_driver.tools.evaluate.tables import format_table
@@ -82,12 +82,6 @@ def _tared(ests: dict, model, rng, frames=12) -> dict:
     return {name: est.with_tare(tops, bottoms) for name, est in ests.items()}
 
 
-def _timed(est, top, bottom) -> tuple:
-    start = time.perf_counter()
-    contacts = est.process(top, bottom)
-    return time.perf_counter() - start, contacts
-
-
 def accuracy_speed(grids, shifts, noises, frames, methods, seed=0, log=print) -> list:
     """
     Return one row per (grid, noise, shift, method): mean azimuth error, valid share, cost.
@@ -110,7 +104,7 @@ def accuracy_speed(grids, shifts, noises, frames, methods, seed=0, log=print) ->
                     press = press_for_shift(model, shift, rng)
                     top, bottom = render(model, [press], rng)
                     for m in rng.permutation(methods):
-                        elapsed, contacts = _timed(ests[m], top, bottom)
+                        elapsed, contacts = timed(ests[m], top, bottom)
                         costs[m].append(elapsed)
                         if contacts and contacts[0].direction_valid:
                             errors[m].append(angle_error_deg(
@@ -177,24 +171,6 @@ def _tared_estimator(name, model, rng):
     return _tared({name: make_estimator(name, model)}, model, rng)[name]
 
 
-def _interleaved_cost(ests, frames, rng, repeats) -> dict:
-    costs = {m: [] for m in ests}
-    for est in ests.values():
-        est.process(*frames[0])
-    for _ in range(repeats):
-        for top, bottom in frames:
-            for m in rng.permutation(list(ests)):
-                costs[m].append(_timed(ests[m], top, bottom)[0])
-    return {m: {'median_us': 1e6 * float(np.median(c)), 'mean_us': 1e6 * float(np.mean(c)),
-                'p90_us': 1e6 * float(np.percentile(c, 90))} for m, c in costs.items()}
-
-
-def _back_to_back_us(est, frames, repeats) -> float:
-    """Return the median cost of ``est`` on ``frames`` run one after another, nothing between."""
-    costs = [_timed(est, top, bottom)[0] for _ in range(repeats) for top, bottom in frames]
-    return 1e6 * float(np.median(costs))
-
-
 def scaling(grids, contact_counts, methods, frames, repeats, seed=0, log=print) -> dict:
     """
     Return pipeline cost (contacts included) against taxel count and against contacts.
@@ -213,10 +189,10 @@ def scaling(grids, contact_counts, methods, frames, repeats, seed=0, log=print) 
         model = skin_for_grid(n)
         ests = {m: _tared_estimator(m, model, rng) for m in methods}
         maps = [render(model, [press_for_shift(model, 1.0, rng)], rng) for _ in range(frames)]
-        cost = _interleaved_cost(ests, maps, rng, repeats)
+        cost = interleaved_cost(ests, maps, rng, repeats)
         if DEFAULT_METHOD in ests:
-            cost[DEFAULT_METHOD]['alone_median_us'] = _back_to_back_us(ests[DEFAULT_METHOD],
-                                                                       maps, repeats)
+            cost[DEFAULT_METHOD]['alone_median_us'] = back_to_back_us(ests[DEFAULT_METHOD],
+                                                                      maps, repeats)
         by_grid += [{'grid': n, 'taxels': n * n, 'method': m, **c} for m, c in cost.items()]
         log(f'  scaling: {n}x{n} done')
     by_contacts = []
@@ -231,7 +207,7 @@ def scaling(grids, contact_counts, methods, frames, repeats, seed=0, log=print) 
                            for x, y in _contact_slots(k)]
                 maps.append(render(model, presses, rng))
             found = float(np.mean([len(ests[methods[0]].process(*m)) for m in maps]))
-            cost = _interleaved_cost(ests, maps, rng, repeats)
+            cost = interleaved_cost(ests, maps, rng, repeats)
             by_contacts += [{'grid': n, 'contacts': k, 'contacts_found': found, 'method': m,
                              **c} for m, c in cost.items()]
         log(f'  scaling: contacts at {n}x{n} done')
@@ -310,7 +286,8 @@ def family(sizes: dict, methods: list, skins: list = None, seed: int = 0, log=pr
     re-takes the offset at its spot. Only the scored frames (split 0) are scored and timed, each
     going to every method in a fresh shuffled order (contacts included, on the core the process
     is pinned to). Returns per (skin, scene, method) rows, the cost per (skin, method) over all
-    the skin's scored frames, each method's calibration notes per (skin, scene), and the
+    the skin's scored frames (the default's also back to back, :func:`alone_costs`, as
+    ``alone``), each method's calibration notes per (skin, scene), and the
     default's (reported azimuth sigma, measured error) pairs. With ``oracle`` the floor
     (:mod:`core.sim.oracle`, the simulator's own model fitted to each frame from the truth) is
     scored too, as method ``oracle``.
@@ -323,6 +300,7 @@ def family(sizes: dict, methods: list, skins: list = None, seed: int = 0, log=pr
     for skin in skins or skin_names():
         per_skin = {m: [] for m in methods}
         oracle_us = []
+        alone = []
         for kind in DIRECTION_KINDS:
             truth = []
             data = calibrated_scene(kind, skin, rng, sizes[kind], truth)
@@ -341,9 +319,12 @@ def family(sizes: dict, methods: list, skins: list = None, seed: int = 0, log=pr
             times = {m: [] for m in methods}
             for i in range(data.frames):
                 for m in order.permutation(methods):
-                    elapsed, found = _timed(ests[m], data.top[i], data.bottom[i])
+                    elapsed, found = timed(ests[m], data.top[i], data.bottom[i])
                     times[m].append(elapsed)
                     contacts[m].append(found)
+            if DEFAULT_METHOD in ests:
+                alone.append((kind, ests[DEFAULT_METHOD],
+                              [(data.top[i], data.bottom[i]) for i in range(data.frames)]))
             for m in methods:
                 run = MethodRun(m, ests[m].calibration, contacts[m],
                                 1e6 * float(np.mean(times[m])))
@@ -362,7 +343,9 @@ def family(sizes: dict, methods: list, skins: list = None, seed: int = 0, log=pr
             per_skin[ORACLE] = oracle_us
         costs += [{'skin': skin, 'method': m, 'frames': len(t),
                    'median_us': 1e6 * float(np.median(t)), 'mean_us': 1e6 * float(np.mean(t)),
-                   'p90_us': 1e6 * float(np.percentile(t, 90))} for m, t in per_skin.items()]
+                   'p90_us': 1e6 * float(np.percentile(t, 90))}
+                  | ({'alone': alone_costs(alone)} if m == DEFAULT_METHOD and alone else {})
+                  for m, t in per_skin.items()]
         log(f'  family: {skin} done')
     methods = list(methods) + ([ORACLE] if oracle else [])
     return {'skins': {s: family_skin(s).description for s in (skins or skin_names())},
@@ -386,6 +369,8 @@ def family_worst(rows, costs, methods) -> dict:
     ``ratio_to_centroid``, ``ratio_to_seed`` and ``ratio_to_oracle`` are the largest ratios of
     the method's mean error to the plain centroid difference's, to seed's and to the oracle's on
     the same skin and scene.
+    ``median_us`` is the dearest skin's median cost interleaved with the others,
+    ``alone_median_us`` back to back (the default only; None for the others).
     """
     index = {(r['skin'], r['scene'], r['method']): r for r in rows}
     out = {}
@@ -418,8 +403,12 @@ def family_worst(rows, costs, methods) -> dict:
         separate, separate_skin = _worst(mine, 'separate_share_far', lowest=True)
         cost, cost_skin = _worst([c for c in costs if c['method'] == m], 'median_us',
                                  lowest=False)
+        alone, alone_skin = _worst([{'skin': c['skin'], 'median_us': c['alone']['median_us']}
+                                    for c in costs if c['method'] == m and 'alone' in c],
+                                   'median_us', lowest=False)
         entry.update({'large_shift_valid_share': large, 'large_shift_skin': large_skin,
                       'separate_share_far': separate, 'separate_skin': separate_skin,
-                      'median_us': cost, 'cost_skin': cost_skin})
+                      'median_us': cost, 'cost_skin': cost_skin,
+                      'alone_median_us': alone, 'alone_skin': alone_skin})
         out[m] = entry
     return out

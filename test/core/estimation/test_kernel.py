@@ -50,6 +50,8 @@ def assert_same(compiled, described, top, bottom, tolerance=TOLERANCE, speck_tol
     got, want = compiled.process(top, bottom), described.process(top, bottom)
     assert len(got) == len(want)
     for g, w in zip(got, want):
+        # The same type with the same fields, however the kernel's Contact is made.
+        assert type(g) is type(w) and vars(g).keys() == vars(w).keys()
         a, b = figures(g), figures(w)
         assert np.isfinite(a).all()
         np.testing.assert_allclose(a, b, rtol=tolerance, atol=tolerance)
@@ -233,6 +235,45 @@ def test_dead_taxels_are_filled_and_revived_alike():
     assert_same(compiled, described, top, bottom)
     assert not compiled.conditioner.dead_masks()[0][8, 8]
     assert not described.conditioner.dead_masks()[0][8, 8]
+
+
+@pytest.mark.parametrize('row', [0, 1, 8])
+def test_a_dead_taxel_between_two_peaks_is_no_dip_alike(row):
+    # Two 4 mm tips two taxels apart make one imprint with peaks in columns 7 and 9; the dead
+    # taxel between them, filled in low, is taken on the path between the peaks as its higher
+    # neighbour: one contact. Near the map's edge too, where the loaded taxels' box is cut.
+    model = SkinModel(noise_counts=0)
+    rng = np.random.default_rng(row)
+    est = tared_with_dead_taxel(model, rng, (row, 8))
+    compiled, described = both_ways(est)
+    for centre_m, gap_m in ((0.04, 0.01), (0.04125, 0.0105)):
+        y = (row + 0.2) * 0.005
+        presses = [Press(centre_m - gap_m / 2, y, 12.0, 0.0, 0.0, 0.004),
+                   Press(centre_m + gap_m / 2, y, 11.0, 0.0, 0.0, 0.004)]
+        top, bottom = render(model, presses, rng)
+        top[row, 8] = 0
+        assert len(assert_same(compiled, described, top, bottom)) == 1
+
+
+@pytest.mark.parametrize('rows, cols', [(16, 16), (7, 12), (20, 17), (3, 40)])
+def test_line_leak_is_taken_alike_on_short_and_long_lines(rows, cols):
+    # Leak lifts every line through a press over the touch threshold (crosstalk.py): the
+    # kernel sorts lines of up to 16 taxels with a network and selects the median of longer
+    # ones, and settles lines away from the press without either; integer counts tie often.
+    rng = np.random.default_rng(rows * cols)
+    r, c = np.mgrid[:rows, :cols]
+    compiled, described = both_ways(ContactEstimator())
+    for _ in range(4):
+        y, x = rng.uniform(0, rows - 1), rng.uniform(0, cols - 1)
+        maps = []
+        for blur in (1.0, 2.0):
+            press = 2500.0 * np.exp(-((r - y) ** 2 + (c - x) ** 2) / (2 * blur))
+            leak = (0.03 * press.sum(axis=1, keepdims=True)
+                    + 0.02 * press.sum(axis=0, keepdims=True))
+            maps.append(np.round(press + leak + rng.integers(0, 25, (rows, cols))))
+        top, bottom = maps
+        assert ((top >= 40).sum(axis=1) >= 0.5 * min(rows, cols)).any()
+        assert_same(compiled, described, top, bottom, speck_tolerance=SPECK_TOLERANCE)
 
 
 def test_empty_maps_give_no_contact():

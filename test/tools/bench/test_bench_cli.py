@@ -25,6 +25,9 @@ def test_write_produces_json_markdown_and_plots(results, tmp_path):
                     '## 5. The skin family', '## 6. Force calibration on the skin family'):
         assert heading in text
     assert 'paper mean' in text
+    # The default's cost back to back, per skin and scene, beside the interleaved one.
+    assert 'run back to back, as a driver runs it' in text
+    assert '| skin | all scenes | p90 | paper | random | border | multi | interleaved |' in text
     for path in data['images'].values():
         assert path in text
         assert os.path.getsize(tmp_path / path) > 1000
@@ -89,4 +92,5 @@ def test_family_only_prints_every_scene_and_the_worst_with_the_oracle(capsys, tm
     for kind in ('paper', 'random', 'border', 'multi'):
         assert f'{kind}: mean error deg' in text
     assert 'oracle' in text and 'taxel_fit worst:' in text and '/ oracle' in text
+    assert 'default cost of taxel_fit back to back: median' in text
     assert (tmp_path / 'family.json').exists()

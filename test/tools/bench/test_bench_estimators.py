@@ -4,7 +4,7 @@ import math
 
 import numpy as np
 import pytest
-from skin_driver.tools.bench import estimators as bench_core
+from skin_driver.tools.bench import costs, estimators as bench_core
 
 
 def test_accuracy_rows_cover_every_method_and_hold_finite_figures(results):
@@ -70,6 +70,40 @@ def test_family_scores_every_skin_scene_and_method_and_names_the_worst(results):
         # Nothing estimates the azimuth better than the floor on its own frames.
         assert fam['worst']['taxel_fit'][kind]['ratio_to_oracle'] > 1.0
     assert all(s > 0 and 0 <= e <= 180 for s, e, _, _ in fam['sigma_vs_error'])
+
+
+def test_the_default_is_also_timed_back_to_back_per_skin_and_scene(results):
+    fam = results['family']
+    frames = {(r['skin'], r['scene']): r['frames'] for r in fam['rows']
+              if r['method'] == 'taxel_fit'}
+    alone = {c['skin']: c['alone'] for c in fam['costs'] if 'alone' in c}
+    # Only the default, on every skin, over all of its scored frames, each scene apart.
+    assert {(c['skin'], c['method']) for c in fam['costs'] if 'alone' in c} == {
+        ('default', 'taxel_fit'), ('soft', 'taxel_fit')}
+    for skin, a in alone.items():
+        assert a['frames'] == sum(n for (s, _), n in frames.items() if s == skin)
+        assert set(a['scenes']) == {'paper', 'random', 'border', 'multi'}
+        assert 0 < a['median_us'] <= a['p90_us']
+        # Two or three presses at once: more contacts per frame than one press.
+        assert a['scenes']['multi']['contacts'] > a['scenes']['random']['contacts'] > 0
+        assert all(v['per_contact_us'] > 0 for v in a['scenes'].values())
+    worst = fam['worst']['taxel_fit']
+    assert worst['alone_median_us'] == max(a['median_us'] for a in alone.values())
+    assert alone[worst['alone_skin']]['median_us'] == worst['alone_median_us']
+    assert fam['worst']['seed']['alone_median_us'] is None
+
+
+def test_alone_costs_give_the_cost_per_contact_only_of_frames_with_contacts():
+    class Counted:
+
+        def process(self, top, bottom):
+            return [object()] * int(top)
+
+    got = costs.alone_costs([('random', Counted(), [(0, 0), (2, 0), (2, 0)])], repeats=2)
+    assert got['frames'] == 3 and got['repeats'] == 2
+    scene = got['scenes']['random']
+    assert scene['contacts'] == pytest.approx(4 / 3)
+    assert 0 < scene['per_contact_us'] and scene['median_us'] > 0
 
 
 def test_every_family_method_gets_the_users_calibration_and_only_scored_frames_count(results):
