@@ -199,8 +199,8 @@ static int finish(sk_kernel *k, double *out)
 
 /*
  * Pair p's force sums with their rim loads, each saturated layer's filled in from its rim
- * (pipeline._censored). marked: p's window counts with the taxels the ADC cut at full scale
- * (censored there), when p->censored; 2 h w doubles of scratch follow it.
+ * (censoring.with_censored_sums). marked: p's window counts with the taxels the ADC cut at
+ * full scale (censored there), when p->censored; 2 h w doubles of scratch follow it.
  */
 static void imprint_forces(sk_kernel *k, sk_pair *p, const double *marked)
 {
