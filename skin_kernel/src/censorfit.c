@@ -84,18 +84,31 @@ static int fits_censored(const double *force, const double *censored, int m, int
 /* Parameters of a 2-D fit: mass, centre x, y, width x, y. */
 enum { P_MASS, P_X, P_Y, P_SX, P_SY, NPARAM };
 
-/* Squared misfit of params, a bound taxel's only below it (taxelfit._censored_cost). */
-static double censored_cost(const double *force, const double *bound, int h, int w,
-                            const double *params, double *scratch)
+/* A fit's cells: each axis's shares of a unit Gaussian and their derivatives by centre and width. */
+typedef struct {
+  double *gx, *dgx_mu, *dgx_s, *gy, *dgy_mu, *dgy_s;
+} cells;
+
+/* cells laid out in 3 (h + w) doubles of buf */
+static cells cells_in(double *buf, int h, int w)
 {
-  int nn = h > w ? h : w;
-  double *gx = scratch, *gy = gx + w, *dmu = gy + h, *ds = dmu + nn, *sq = ds + nn;
-  axis_cells(params[P_X], params[P_SX], w, gx, dmu, ds);
-  axis_cells(params[P_Y], params[P_SY], h, gy, dmu, ds);
+  cells c = {buf, buf + w, buf + 2 * w, buf + 3 * w, buf + 3 * w + h, buf + 3 * w + 2 * h};
+  return c;
+}
+
+/*
+ * Squared misfit of params, a bound taxel's only below it (taxelfit._censored_cost); the cells
+ * of params left in at, for the step that follows from them. sq: h w doubles.
+ */
+static double censored_cost(const double *force, const double *bound, int h, int w,
+                            const double *params, const cells *at, double *sq)
+{
+  axis_cells(params[P_X], params[P_SX], w, at->gx, at->dgx_mu, at->dgx_s);
+  axis_cells(params[P_Y], params[P_SY], h, at->gy, at->dgy_mu, at->dgy_s);
   for (int r = 0; r < h; r++) {
     for (int c = 0; c < w; c++) {
       int j = r * w + c;
-      double residual = force[j] - params[P_MASS] * (gy[r] * gx[c]);
+      double residual = force[j] - params[P_MASS] * (at->gy[r] * at->gx[c]);
       if (bound[j] > 0 && residual < 0.0) {
         residual = 0.0;
       }
@@ -122,47 +135,72 @@ static void damped(const double *params, const double *step, int h, int w, doubl
 }
 
 /*
+ * One row of the normal equations over n packed taxels: row[b] = sum of jac_a jac_b, rhs = sum
+ * of jac_a residual, each summed in taxel order. Six sums held in registers, not a 5 x 5 array
+ * in memory, whose every update waits on the last.
+ */
+static void normal_row(const double *jac, const double *residual, int stride, int n, int a,
+                       double row[5], double *rhs)
+{
+  const double *x = jac + a * stride;
+  double s0 = 0.0, s1 = 0.0, s2 = 0.0, s3 = 0.0, s4 = 0.0, r = 0.0;
+  for (int k = 0; k < n; k++) {
+    double v = x[k];
+    s0 += v * jac[k];
+    s1 += v * jac[stride + k];
+    s2 += v * jac[2 * stride + k];
+    s3 += v * jac[3 * stride + k];
+    s4 += v * jac[4 * stride + k];
+    r += v * residual[k];
+  }
+  row[0] = s0;
+  row[1] = s1;
+  row[2] = s2;
+  row[3] = s3;
+  row[4] = s4;
+  *rhs = r;
+}
+
+/*
  * Gauss-Newton on censored_cost from params, in place (taxelfit._gauss_newton); bound: 1 where
- * a taxel is a lower bound. Returns whether it converged. scratch: 5 max(h, w) + 2 (h + w) +
- * h w doubles.
+ * a taxel is a lower bound. Returns whether it converged. scratch: 6 (h + w) + 6 h w doubles.
  */
 static int gauss_newton(const double *force, const double *bound, int h, int w, double *params,
                         double fitted, int searched, double *scratch)
 {
-  double *gx = scratch, *dgx_mu = gx + w, *dgx_s = dgx_mu + w;
-  double *gy = dgx_s + w, *dgy_mu = gy + h, *dgy_s = dgy_mu + h;
-  double *cost_scratch = dgy_s + h;
+  int m = h * w;
+  /* the cells of params and of the trial step: an accepted trial's become params' own */
+  cells here = cells_in(scratch, h, w), there = cells_in(scratch + 3 * (h + w), h, w);
+  /* the taxels that count, packed: their Jacobian's columns (stride m), then their residuals;
+   * the residuals' room is the misfit's too, used only after they are */
+  double *jac = scratch + 6 * (h + w), *residual = jac + 5 * m, *sq = residual;
   double trial[NPARAM], whole[NPARAM];
-  double cost = censored_cost(force, bound, h, w, params, cost_scratch);
+  double cost = censored_cost(force, bound, h, w, params, &here, sq);
   for (int it = 0; it < ITERATIONS_2D; it++) {
     double mass = params[P_MASS];
-    axis_cells(params[P_X], params[P_SX], w, gx, dgx_mu, dgx_s);
-    axis_cells(params[P_Y], params[P_SY], h, gy, dgy_mu, dgy_s);
+    const double *gx = here.gx, *dgx_mu = here.dgx_mu, *dgx_s = here.dgx_s;
+    const double *gy = here.gy, *dgy_mu = here.dgy_mu, *dgy_s = here.dgy_s;
     /* a width at its floor has no column, as a fixed mass: the centre's step cannot count on it */
     double free_sx = params[P_SX] > MIN_WIDTH ? 1.0 : 0.0;
     double free_sy = params[P_SY] > MIN_WIDTH ? 1.0 : 0.0;
-    double normal[5][5] = {{0}}, rhs[5] = {0}, step[5];
+    double normal[5][5], rhs[5], step[5];
+    int n = 0;
     for (int r = 0; r < h; r++) {
       for (int c = 0; c < w; c++) {
         int j = r * w + c;
         double model = mass * (gy[r] * gx[c]);
+        jac[n] = gy[r] * gx[c] * fitted;
+        jac[m + n] = mass * (gy[r] * dgx_mu[c]);
+        jac[2 * m + n] = mass * (dgy_mu[r] * gx[c]);
+        jac[3 * m + n] = mass * (gy[r] * dgx_s[c]) * free_sx;
+        jac[4 * m + n] = mass * (dgy_s[r] * gx[c]) * free_sy;
+        residual[n] = force[j] - model;
         /* a bound taxel counts only while the model falls below its reading */
-        if (bound[j] > 0 && !(model < force[j])) {
-          continue;
-        }
-        double jac[5] = {gy[r] * gx[c] * fitted, mass * (gy[r] * dgx_mu[c]),
-                         mass * (dgy_mu[r] * gx[c]), mass * (gy[r] * dgx_s[c]) * free_sx,
-                         mass * (dgy_s[r] * gx[c]) * free_sy};
-        double residual = force[j] - model;
-        for (int a = 0; a < 5; a++) {
-          for (int b = 0; b < 5; b++) {
-            normal[a][b] += jac[a] * jac[b];
-          }
-          rhs[a] += jac[a] * residual;
-        }
+        n += !(bound[j] > 0) || model < force[j];
       }
     }
     for (int a = 0; a < 5; a++) {
+      normal_row(jac, residual, m, n, a, normal[a], &rhs[a]);
       normal[a][a] += 1e-12;
     }
     if (!solve5(normal, rhs, step)) {
@@ -177,14 +215,14 @@ static int gauss_newton(const double *force, const double *bound, int h, int w, 
       if (moves < TOLERANCE_2D) {
         return 1;
       }
-      cost = censored_cost(force, bound, h, w, params, cost_scratch);
+      cost = censored_cost(force, bound, h, w, params, &here, sq);
       continue;
     }
     double trial_cost = cost;
     int lower = 0;
     for (int half = 0; half < HALVINGS && !lower; half++) {
       damped(params, step, h, w, trial);
-      trial_cost = censored_cost(force, bound, h, w, trial, cost_scratch);
+      trial_cost = censored_cost(force, bound, h, w, trial, &there, sq);
       /* lower by more than its rounding, so that no tie decides where the fit goes */
       lower = trial_cost < cost * (1.0 - DECREASE);
       if (!lower) {
@@ -198,6 +236,9 @@ static int gauss_newton(const double *force, const double *bound, int h, int w, 
     }
     memcpy(params, trial, sizeof(trial));
     cost = trial_cost;
+    cells taken = there;
+    there = here;
+    here = taken;
   }
   return 0;
 }
@@ -207,7 +248,7 @@ static int gauss_newton(const double *force, const double *bound, int h, int w, 
  * (taxelfit.fit_censored_layer): found = (x, y) centre in, (x, y, mass) out; widths from the
  * marginal fits; a mass > 0 is held fixed, else fitted. Unsettled, the censored taxels within
  * PINNED of their reading are taken as readings and the fit polished. Returns 0 (found
- * untouched) when it does not settle. scratch: 6 max(h, w) + 2 (h + w) + 2 h w doubles.
+ * untouched) when it does not settle. scratch: 6 (h + w) + 7 h w doubles.
  */
 static int fit_censored(const double *force, const double *censored, int h, int w,
                         double *scratch, double *found, double sx, double sy, double given)

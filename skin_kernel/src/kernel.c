@@ -91,7 +91,7 @@ sk_kernel *sk_new(const int *ints, const double *reals, const double *baseline,
     shift_scratch += (size_t)sk_poc_scratch(rows, cols);
   } else if (k->method == SK_TAXEL_FIT) {
     /* the window's censored taxels and a 2-D fit's work (taxelfit.c: fit_censored) */
-    shift_scratch += 6 * (size_t)n + 4 * ((size_t)line + 1);
+    shift_scratch += 10 * (size_t)n + 4 * ((size_t)line + 1);
   }
   /* a saturated imprint's fill-in: its marked counts (2 windows), then sk_imprint_force's 3 */
   size_t imprint_scratch = 5 * (size_t)n;
