@@ -14,16 +14,16 @@
 #define SEARCHED 1e-5
 #define DECREASE 1e-12
 #define PINNED 1e-3
-#define TOLERANCE_2D 1e-10
+#define TOLERANCE_2D 1e-6
 
 /* A unit Gaussian's share of each of n cells and its derivatives by mu and s (taxelfit._axis_cells). */
 static void axis_cells(double mu, double s, int n, double *g, double *d_mu, double *d_s)
 {
-  double u0 = (-0.5 - mu) / s;
-  double pdf0 = exp(-0.5 * u0 * u0) * INV_SQRT2PI, cdf0 = sk_normal_cdf(u0), updf0 = u0 * pdf0;
+  double u0 = (-0.5 - mu) / s, gauss0 = exp(-0.5 * u0 * u0);
+  double pdf0 = gauss0 * INV_SQRT2PI, cdf0 = sk_normal_cdf_of(u0, gauss0), updf0 = u0 * pdf0;
   for (int i = 0; i < n; i++) {
-    double u1 = ((i + 1) - 0.5 - mu) / s;
-    double pdf1 = exp(-0.5 * u1 * u1) * INV_SQRT2PI, cdf1 = sk_normal_cdf(u1), updf1 = u1 * pdf1;
+    double u1 = ((i + 1) - 0.5 - mu) / s, gauss1 = exp(-0.5 * u1 * u1);
+    double pdf1 = gauss1 * INV_SQRT2PI, cdf1 = sk_normal_cdf_of(u1, gauss1), updf1 = u1 * pdf1;
     g[i] = cdf1 - cdf0;
     d_mu[i] = -(pdf1 - pdf0) / s;
     d_s[i] = -(updf1 - updf0) / s;

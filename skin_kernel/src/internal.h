@@ -82,6 +82,8 @@ void sk_pair_window(const sk_kernel *k, int q, double *out);
 /* taxelfit.c: numpy.clip of one number, and the normal CDF to 1.5e-7 (Abramowitz and Stegun) */
 double sk_clip(double x, double lo, double hi);
 double sk_normal_cdf(double u);
+/* the same, given gauss = exp(-u^2 / 2) (a density's, at hand) */
+double sk_normal_cdf_of(double u, double gauss);
 
 /*
  * censorfit.c: the saturated layers of a (2, h, w) window refitted in 2-D, in place on the

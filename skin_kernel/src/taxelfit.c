@@ -28,13 +28,19 @@ double sk_clip(double x, double lo, double hi)
   return x < lo ? lo : (x > hi ? hi : x);
 }
 
-double sk_normal_cdf(double u)
+double sk_normal_cdf_of(double u, double gauss)
 {
   double x = fabs(u) * (1.0 / sqrt(2.0));
   double t = 1.0 / (1.0 + AS_P * x);
   double poly = t * (AS[0] + t * (AS[1] + t * (AS[2] + t * (AS[3] + t * AS[4]))));
-  double half = 0.5 * poly * exp(-x * x);
+  double half = 0.5 * poly * gauss;
   return u >= 0 ? 1.0 - half : half;
+}
+
+double sk_normal_cdf(double u)
+{
+  double x = fabs(u) * (1.0 / sqrt(2.0));
+  return sk_normal_cdf_of(u, exp(-x * x));
 }
 
 /*

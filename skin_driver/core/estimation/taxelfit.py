@@ -72,8 +72,10 @@ _SEARCHED = 1e-5
 _DECREASE = 1e-12
 # A censored taxel this close to its reading (share of it) holds a kinked optimum's bound.
 _PINNED = 1e-3
-# The 2-D fit runs until its centre steps fall below this (taxels): converged, not merely close.
-_TOLERANCE_2D = 1e-10
+# The 2-D fit runs until its centre steps fall below this (taxels): a ten-thousandth of the noise
+# floor's shift error. Its last steps shrink about tenfold each, so every tenfold further costs
+# one more step (1e-10 cost the saturating skin's frames a sixth more time, for nothing).
+_TOLERANCE_2D = 1e-6
 # A film that turns on at a pressure steps to a few kOhm: a rim taxel conducting over any part
 # of its cell reads at least the step's counts, whatever its load (docs/estimation.md). Such
 # taxels sit on one floor: at least _STEP_TAXELS loaded taxels within _STEP_SPREAD (share of it)
@@ -91,12 +93,16 @@ _AS_P = 0.3275911
 _AS = (0.254829592, -0.284496736, 1.421413741, -1.453152027, 1.061405429)
 
 
-def _normal_cdf(u: np.ndarray) -> np.ndarray:
-    """Return the standard normal CDF of ``u`` (numpy has no erf)."""
+def _normal_cdf(u: np.ndarray, gauss: np.ndarray = None) -> np.ndarray:
+    """
+    Return the standard normal CDF of ``u`` (numpy has no erf).
+
+    ``gauss``: exp(-u^2 / 2), when the caller has it for the density already.
+    """
     x = np.abs(u) * (1.0 / math.sqrt(2.0))
     t = 1.0 / (1.0 + _AS_P * x)
     poly = t * (_AS[0] + t * (_AS[1] + t * (_AS[2] + t * (_AS[3] + t * _AS[4]))))
-    half = 0.5 * poly * np.exp(-x * x)
+    half = 0.5 * poly * (np.exp(-x * x) if gauss is None else gauss)
     return np.where(u >= 0, 1.0 - half, half)
 
 
@@ -170,8 +176,9 @@ def fit_cell_profiles(profiles: np.ndarray, mask: np.ndarray, cut: tuple = None)
 def _axis_cells(mu: float, s: float, n: int) -> tuple:
     """Return a unit Gaussian's share of each of ``n`` cells and its derivatives by mu and s."""
     u = (np.arange(n + 1, dtype=np.float64) - 0.5 - mu) / s
-    pdf = np.exp(-0.5 * u * u) * _INV_SQRT2PI
-    return np.diff(_normal_cdf(u)), -np.diff(pdf) / s, -np.diff(u * pdf) / s
+    gauss = np.exp(-0.5 * u * u)
+    pdf = gauss * _INV_SQRT2PI
+    return np.diff(_normal_cdf(u, gauss)), -np.diff(pdf) / s, -np.diff(u * pdf) / s
 
 
 def _censored_cost(force: np.ndarray, free: np.ndarray, params: tuple) -> float:
