@@ -100,11 +100,17 @@ static cells cells_in(double *buf, int h, int w)
  * Squared misfit of params, a bound taxel's only below it (taxelfit._censored_cost); the cells
  * of params left in at, for the step that follows from them. sq: h w doubles.
  */
-static double censored_cost(const double *force, const double *bound, int h, int w,
-                            const double *params, const cells *at, double *sq)
+/* the cells of params, in at */
+static void cells_at(const double *params, int h, int w, const cells *at)
 {
   axis_cells(params[P_X], params[P_SX], w, at->gx, at->dgx_mu, at->dgx_s);
   axis_cells(params[P_Y], params[P_SY], h, at->gy, at->dgy_mu, at->dgy_s);
+}
+
+static double censored_cost(const double *force, const double *bound, int h, int w,
+                            const double *params, const cells *at, double *sq)
+{
+  cells_at(params, h, w, at);
   for (int r = 0; r < h; r++) {
     for (int c = 0; c < w; c++) {
       int j = r * w + c;
@@ -135,30 +141,67 @@ static void damped(const double *params, const double *step, int h, int w, doubl
 }
 
 /*
- * One row of the normal equations over n packed taxels: row[b] = sum of jac_a jac_b, rhs = sum
- * of jac_a residual, each summed in taxel order. Six sums held in registers, not a 5 x 5 array
- * in memory, whose every update waits on the last.
+ * The normal equations over n packed taxels (columns of jac at stride): normal = jac' jac and
+ * rhs = jac' residual, each entry summed in taxel order. The 15 distinct entries and 5 sums
+ * in four passes of at most six sums, each held in a register (a 5 x 5 array in memory made
+ * every update wait on the last); the lower triangle mirrors the upper.
  */
-static void normal_row(const double *jac, const double *residual, int stride, int n, int a,
-                       double row[5], double *rhs)
+static void normal_equations(const double *jac, const double *residual, int stride, int n,
+                             double normal[5][5], double rhs[5])
 {
-  const double *x = jac + a * stride;
-  double s0 = 0.0, s1 = 0.0, s2 = 0.0, s3 = 0.0, s4 = 0.0, r = 0.0;
+  const double *j0 = jac, *j1 = jac + stride, *j2 = jac + 2 * stride, *j3 = jac + 3 * stride;
+  const double *j4 = jac + 4 * stride;
+  double s00 = 0.0, s01 = 0.0, s02 = 0.0, s03 = 0.0, s04 = 0.0, r0 = 0.0;
   for (int k = 0; k < n; k++) {
-    double v = x[k];
-    s0 += v * jac[k];
-    s1 += v * jac[stride + k];
-    s2 += v * jac[2 * stride + k];
-    s3 += v * jac[3 * stride + k];
-    s4 += v * jac[4 * stride + k];
-    r += v * residual[k];
+    double x0 = j0[k];
+    s00 += x0 * x0;
+    s01 += x0 * j1[k];
+    s02 += x0 * j2[k];
+    s03 += x0 * j3[k];
+    s04 += x0 * j4[k];
+    r0 += x0 * residual[k];
   }
-  row[0] = s0;
-  row[1] = s1;
-  row[2] = s2;
-  row[3] = s3;
-  row[4] = s4;
-  *rhs = r;
+  double s11 = 0.0, s12 = 0.0, s13 = 0.0, s14 = 0.0, r1 = 0.0, s22 = 0.0;
+  for (int k = 0; k < n; k++) {
+    double x1 = j1[k], x2 = j2[k];
+    s11 += x1 * x1;
+    s12 += x1 * x2;
+    s13 += x1 * j3[k];
+    s14 += x1 * j4[k];
+    r1 += x1 * residual[k];
+    s22 += x2 * x2;
+  }
+  double s23 = 0.0, s24 = 0.0, r2 = 0.0, s33 = 0.0, s34 = 0.0, r3 = 0.0;
+  for (int k = 0; k < n; k++) {
+    double x2 = j2[k], x3 = j3[k];
+    s23 += x2 * x3;
+    s24 += x2 * j4[k];
+    r2 += x2 * residual[k];
+    s33 += x3 * x3;
+    s34 += x3 * j4[k];
+    r3 += x3 * residual[k];
+  }
+  double s44 = 0.0, r4 = 0.0;
+  for (int k = 0; k < n; k++) {
+    double x4 = j4[k];
+    s44 += x4 * x4;
+    r4 += x4 * residual[k];
+  }
+  double upper[5][5] = {{s00, s01, s02, s03, s04},
+                        {0.0, s11, s12, s13, s14},
+                        {0.0, 0.0, s22, s23, s24},
+                        {0.0, 0.0, 0.0, s33, s34},
+                        {0.0, 0.0, 0.0, 0.0, s44}};
+  for (int a = 0; a < 5; a++) {
+    for (int b = 0; b < 5; b++) {
+      normal[a][b] = b >= a ? upper[a][b] : upper[b][a];
+    }
+  }
+  rhs[0] = r0;
+  rhs[1] = r1;
+  rhs[2] = r2;
+  rhs[3] = r3;
+  rhs[4] = r4;
 }
 
 /*
@@ -176,6 +219,7 @@ static int gauss_newton(const double *force, const double *bound, int h, int w, 
   double *jac = scratch + 6 * (h + w), *residual = jac + 5 * m, *sq = residual;
   double trial[NPARAM], whole[NPARAM];
   double cost = censored_cost(force, bound, h, w, params, &here, sq);
+  int cost_known = 1;
   for (int it = 0; it < ITERATIONS_2D; it++) {
     double mass = params[P_MASS];
     const double *gx = here.gx, *dgx_mu = here.dgx_mu, *dgx_s = here.dgx_s;
@@ -199,8 +243,8 @@ static int gauss_newton(const double *force, const double *bound, int h, int w, 
         n += !(bound[j] > 0) || model < force[j];
       }
     }
+    normal_equations(jac, residual, m, n, normal, rhs);
     for (int a = 0; a < 5; a++) {
-      normal_row(jac, residual, m, n, a, normal[a], &rhs[a]);
       normal[a][a] += 1e-12;
     }
     if (!solve5(normal, rhs, step)) {
@@ -210,13 +254,19 @@ static int gauss_newton(const double *force, const double *bound, int h, int w, 
     damped(params, step, h, w, whole);
     double moves = fmax(fabs(whole[P_X] - params[P_X]), fabs(whole[P_Y] - params[P_Y]));
     if (moves < SEARCHED || !searched) {
-      /* near the optimum the misfit is flat to its rounding: Gauss-Newton steps as they are */
+      /* near the optimum the misfit is flat to its rounding: Gauss-Newton steps as they are;
+       * their misfit is wanted only if a later step is searched */
       memcpy(params, whole, sizeof(whole));
       if (moves < TOLERANCE_2D) {
         return 1;
       }
-      cost = censored_cost(force, bound, h, w, params, &here, sq);
+      cells_at(params, h, w, &here);
+      cost_known = 0;
       continue;
+    }
+    if (!cost_known) {
+      cost = censored_cost(force, bound, h, w, params, &here, sq);
+      cost_known = 1;
     }
     double trial_cost = cost;
     int lower = 0;

@@ -400,6 +400,9 @@ def family_worst(rows, costs, methods) -> dict:
                            'ratio_to_oracle': ratios[ORACLE][0],
                            'ratio_to_oracle_skin': ratios[ORACLE][1]}
         large, large_skin = _worst(mine, 'large_shift_valid_share', lowest=True)
+        # How many presses the worst share is of: one press at the border can make it 0 %.
+        large_presses = max((r['large_shift_frames'] for r in mine if r['skin'] == large_skin
+                             and r['large_shift_valid_share'] == large), default=None)
         separate, separate_skin = _worst(mine, 'separate_share_far', lowest=True)
         cost, cost_skin = _worst([c for c in costs if c['method'] == m], 'median_us',
                                  lowest=False)
@@ -407,6 +410,7 @@ def family_worst(rows, costs, methods) -> dict:
                                     for c in costs if c['method'] == m and 'alone' in c],
                                    'median_us', lowest=False)
         entry.update({'large_shift_valid_share': large, 'large_shift_skin': large_skin,
+                      'large_shift_presses': large_presses,
                       'separate_share_far': separate, 'separate_skin': separate_skin,
                       'median_us': cost, 'cost_skin': cost_skin,
                       'alone_median_us': alone, 'alone_skin': alone_skin})

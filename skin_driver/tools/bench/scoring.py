@@ -79,8 +79,10 @@ def targets(res) -> list:
     return out
 
 
-def _share_target(name, share, skin, limit) -> dict:
+def _share_target(name, share, skin, limit, presses=None) -> dict:
     note = f'worst on {skin}' if skin else ''
+    if skin and presses is not None:
+        note += f' ({presses} such press{"" if presses == 1 else "es"} there)'
     if share is not None and share < limit:
         note += f', {100 * (limit - share):.1f} points short'
     return _target(name, None if share is None else 100 * share, f'>= {100 * limit:g} %',
@@ -91,7 +93,8 @@ def family_targets(worst) -> list:
     """Return the issue's targets over the whole family, each at its worst skin."""
     d = worst[DEFAULT_METHOD]
     out = [_share_target('family: valid share for shifts >= 1 taxel (default, worst skin)',
-                         d['large_shift_valid_share'], d['large_shift_skin'], 0.95)]
+                         d['large_shift_valid_share'], d['large_shift_skin'], 0.95,
+                         d.get('large_shift_presses'))]
     for kind in ('paper', 'random', 'border', 'multi'):
         r = d[kind]['ratio_to_centroid']
         out.append(_target(f'family {kind}: error default / plain centroid (worst skin)', r,

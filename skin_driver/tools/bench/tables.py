@@ -109,6 +109,14 @@ def _pct(v) -> str:
     return '-' if v is None else f'{100 * v:.0f} %'
 
 
+def _of_presses(w: dict) -> str:
+    """Return 'skin, N presses' of the worst valid share for shifts of a taxel or more."""
+    presses = w.get('large_shift_presses')
+    if presses is None:
+        return w['large_shift_skin']
+    return f'{w["large_shift_skin"]}, {presses} press{"" if presses == 1 else "es"}'
+
+
 def _worst_cell(w: dict) -> str:
     """Return 'error on skin, valid share on skin' of one scene's worst case."""
     return (f'{figure(w["mean_error_deg"], ".2f")} deg ({w["error_skin"]}); valid '
@@ -149,7 +157,7 @@ def _family_headline(fam) -> list:
     rows = []
     for m, w in fam['worst'].items():
         rows.append([m] + [_worst_cell(w[k]) for k in ('paper', 'random', 'border', 'multi')]
-                    + [f'{_pct(w["large_shift_valid_share"])} ({w["large_shift_skin"]})',
+                    + [f'{_pct(w["large_shift_valid_share"])} ({_of_presses(w)})',
                        f'{_pct(w["separate_share_far"])} ({w["separate_skin"]})',
                        f'{figure(w["median_us"], ".0f")} ({w["cost_skin"]})'])
     out += _table(['method', "paper's protocol", 'random spot', 'border', 'multi (per press)',

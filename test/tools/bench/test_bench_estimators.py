@@ -120,3 +120,16 @@ def test_every_family_method_gets_the_users_calibration_and_only_scored_frames_c
                                                              else [])
         # The same force curves for every method: they come from the same frames.
         assert parts[1] == notes[(skin, kind, 'taxel_fit')][1]
+
+
+def test_the_worst_valid_share_for_large_shifts_says_how_many_presses_it_is_of():
+    def row(skin, scene, share, presses):
+        return {'skin': skin, 'scene': scene, 'method': 'taxel_fit', 'mean_error_deg': 1.0,
+                'valid_share': 1.0, 'large_shift_valid_share': share,
+                'large_shift_frames': presses, 'separate_share_far': None}
+    rows = [row('stiff', 'random', 1.0, 4), row('stiff', 'border', 0.0, 1),
+            row('saturating', 'border', 0.53, 36), row('saturating', 'paper', None, 0)]
+    worst = bench_core.family_worst(rows, [], ['taxel_fit'])['taxel_fit']
+    # One border press with a shift of a taxel is the worst: the share says it is one.
+    assert (worst['large_shift_valid_share'], worst['large_shift_skin'],
+            worst['large_shift_presses']) == (0.0, 'stiff', 1)

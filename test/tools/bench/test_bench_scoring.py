@@ -102,3 +102,13 @@ def test_the_rclpy_floor_is_the_reference_of_the_cpu_ratio_not_a_target_of_its_o
 def test_where_the_cpu_goes_names_threads_and_stages(e2e):
     line = scoring.where_cpu_goes(e2e['runs'][1])
     assert line == 'driver: executor 10, reader 130; reader stages: read 10, decode 8'
+
+
+def test_the_large_shift_target_names_how_many_presses_its_worst_share_is_of(results):
+    worst = dict(results['family']['worst'])
+    default = dict(worst['taxel_fit'], large_shift_valid_share=0.0, large_shift_skin='stiff',
+                   large_shift_presses=1)
+    (target,) = [t for t in scoring.family_targets(dict(worst, taxel_fit=default))
+                 if 'shifts >= 1 taxel' in t['name']]
+    assert not target['met']
+    assert target['note'] == 'worst on stiff (1 such press there), 95.0 points short'
