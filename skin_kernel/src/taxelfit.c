@@ -175,12 +175,13 @@ static int fit_profiles(const double *profiles, int nn, const int *len, const st
     int solved = 1;
     for (int j = 0; j < 4 && solved; j++) {
       const double *p = profiles + j * nn;
-      double u0 = (-0.5 - mu[j]) / s[j];
-      double pdf0 = exp(-0.5 * u0 * u0) * INV_SQRT2PI, cdf0 = sk_normal_cdf(u0), updf0 = u0 * pdf0;
+      double u0 = (-0.5 - mu[j]) / s[j], gauss0 = exp(-0.5 * u0 * u0);
+      double pdf0 = gauss0 * INV_SQRT2PI, cdf0 = sk_normal_cdf_of(u0, gauss0), updf0 = u0 * pdf0;
       double normal[3][3] = {{0}}, rhs[3] = {0};
       for (int i = 0; i < len[j]; i++) {
-        double u1 = ((i + 1) - 0.5 - mu[j]) / s[j];
-        double pdf1 = exp(-0.5 * u1 * u1) * INV_SQRT2PI, cdf1 = sk_normal_cdf(u1), updf1 = u1 * pdf1;
+        double u1 = ((i + 1) - 0.5 - mu[j]) / s[j], gauss1 = exp(-0.5 * u1 * u1);
+        double pdf1 = gauss1 * INV_SQRT2PI, cdf1 = sk_normal_cdf_of(u1, gauss1);
+        double updf1 = u1 * pdf1;
         /* a fixed width has no column: its normal equation is the regulariser's, its step 0 */
         double jac[3] = {cdf1 - cdf0, amp[j] * (-(pdf1 - pdf0) / s[j]),
                          amp[j] * (-(updf1 - updf0) / s[j] * free[j])};
@@ -287,12 +288,12 @@ static double cut_variance(const double *profiles, int nn, const int *len, const
       continue;
     }
     double s = width[j];
-    double u0 = (-0.5 - mu[j]) / s;
-    double pdf0 = exp(-0.5 * u0 * u0) * INV_SQRT2PI, cdf0 = sk_normal_cdf(u0), updf0 = u0 * pdf0;
+    double u0 = (-0.5 - mu[j]) / s, gauss0 = exp(-0.5 * u0 * u0);
+    double pdf0 = gauss0 * INV_SQRT2PI, cdf0 = sk_normal_cdf_of(u0, gauss0), updf0 = u0 * pdf0;
     double n00 = 0.0, n01 = 0.0, n11 = 0.0, b0 = 0.0, b1 = 0.0;
     for (int i = 0; i < len[j]; i++) {
-      double u1 = ((i + 1) - 0.5 - mu[j]) / s;
-      double pdf1 = exp(-0.5 * u1 * u1) * INV_SQRT2PI, cdf1 = sk_normal_cdf(u1), updf1 = u1 * pdf1;
+      double u1 = ((i + 1) - 0.5 - mu[j]) / s, gauss1 = exp(-0.5 * u1 * u1);
+      double pdf1 = gauss1 * INV_SQRT2PI, cdf1 = sk_normal_cdf_of(u1, gauss1), updf1 = u1 * pdf1;
       double cell = cdf1 - cdf0, d_mu = -(pdf1 - pdf0) / s, d_s = -(updf1 - updf0) / s;
       n00 += cell * cell;
       n01 += cell * d_mu;

@@ -138,8 +138,9 @@ def fit_cell_profiles(profiles: np.ndarray, mask: np.ndarray, cut: tuple = None)
         free = np.where(fixed, 0.0, 1.0)
     for _ in range(_ITERATIONS):
         u = (edges - mu[:, None]) / s[:, None]
-        pdf = np.exp(-0.5 * u * u) * _INV_SQRT2PI
-        cells = np.diff(_normal_cdf(u), axis=1) * mask
+        gauss = np.exp(-0.5 * u * u)
+        pdf = gauss * _INV_SQRT2PI
+        cells = np.diff(_normal_cdf(u, gauss), axis=1) * mask
         d_mu = -np.diff(pdf, axis=1) * mask / s[:, None]
         # A fixed width has no column: its normal equation is the regulariser's, its step 0.
         d_s = -np.diff(u * pdf, axis=1) * mask / s[:, None] * free[:, None]
@@ -356,8 +357,9 @@ def _cut_variance(profiles: np.ndarray, mask: np.ndarray, mu: np.ndarray,
     total = 0.0
     for j in np.flatnonzero(cut):
         u = (np.arange(length[j] + 1, dtype=np.float64) - 0.5 - mu[j]) / width[j]
-        pdf = np.exp(-0.5 * u * u) * _INV_SQRT2PI
-        cells = np.diff(_normal_cdf(u))
+        gauss = np.exp(-0.5 * u * u)
+        pdf = gauss * _INV_SQRT2PI
+        cells = np.diff(_normal_cdf(u, gauss))
         d_mu = -np.diff(pdf) / width[j]
         d_s = -np.diff(u * pdf) / width[j]
         n00 = float(cells @ cells) + 1e-12
