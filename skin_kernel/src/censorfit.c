@@ -16,23 +16,6 @@
 #define PINNED 1e-3
 #define TOLERANCE_2D 1e-6
 
-/* A unit Gaussian's share of each of n cells and its derivatives by mu and s (taxelfit._axis_cells). */
-static void axis_cells(double mu, double s, int n, double *g, double *d_mu, double *d_s)
-{
-  double u0 = (-0.5 - mu) / s, gauss0 = exp(-0.5 * u0 * u0);
-  double pdf0 = gauss0 * INV_SQRT2PI, cdf0 = sk_normal_cdf_of(u0, gauss0), updf0 = u0 * pdf0;
-  for (int i = 0; i < n; i++) {
-    double u1 = ((i + 1) - 0.5 - mu) / s, gauss1 = exp(-0.5 * u1 * u1);
-    double pdf1 = gauss1 * INV_SQRT2PI, cdf1 = sk_normal_cdf_of(u1, gauss1), updf1 = u1 * pdf1;
-    g[i] = cdf1 - cdf0;
-    d_mu[i] = -(pdf1 - pdf0) / s;
-    d_s[i] = -(updf1 - updf0) / s;
-    pdf0 = pdf1;
-    cdf0 = cdf1;
-    updf0 = updf1;
-  }
-}
-
 /* Solve the 5 x 5 system a x = b by elimination with partial pivoting; 0 for a zero pivot. */
 static int solve5(double a[5][5], double b[5], double x[5])
 {
@@ -103,8 +86,8 @@ static cells cells_in(double *buf, int h, int w)
 /* the cells of params, in at */
 static void cells_at(const double *params, int h, int w, const cells *at)
 {
-  axis_cells(params[P_X], params[P_SX], w, at->gx, at->dgx_mu, at->dgx_s);
-  axis_cells(params[P_Y], params[P_SY], h, at->gy, at->dgy_mu, at->dgy_s);
+  sk_axis_cells(params[P_X], params[P_SX], w, at->gx, at->dgx_mu, at->dgx_s);
+  sk_axis_cells(params[P_Y], params[P_SY], h, at->gy, at->dgy_mu, at->dgy_s);
 }
 
 static double censored_cost(const double *force, const double *bound, int h, int w,
@@ -309,8 +292,8 @@ static int fit_censored(const double *force, const double *censored, int h, int 
   double params[NPARAM] = {given, found[0], found[1], sx, sy};
   if (!(given > 0)) {
     double *gx = work, *gy = gx + w, *dmu = gy + h, *ds = dmu + (h > w ? h : w);
-    axis_cells(found[0], sx, w, gx, dmu, ds);
-    axis_cells(found[1], sy, h, gy, dmu, ds);
+    sk_axis_cells(found[0], sx, w, gx, dmu, ds);
+    sk_axis_cells(found[1], sy, h, gy, dmu, ds);
     double weight = 0.0, along = 0.0;
     for (int r = 0; r < h; r++) {
       for (int c = 0; c < w; c++) {
@@ -329,8 +312,8 @@ static int fit_censored(const double *force, const double *censored, int h, int 
   int converged = gauss_newton(force, censored, h, w, params, fitted, 1, work);
   if (!converged) {
     double *gx = work, *gy = gx + w, *dmu = gy + h, *ds = dmu + (h > w ? h : w);
-    axis_cells(params[P_X], params[P_SX], w, gx, dmu, ds);
-    axis_cells(params[P_Y], params[P_SY], h, gy, dmu, ds);
+    sk_axis_cells(params[P_X], params[P_SX], w, gx, dmu, ds);
+    sk_axis_cells(params[P_Y], params[P_SY], h, gy, dmu, ds);
     for (int r = 0; r < h; r++) {
       for (int c = 0; c < w; c++) {
         int j = r * w + c;

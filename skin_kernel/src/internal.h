@@ -84,6 +84,8 @@ double sk_clip(double x, double lo, double hi);
 double sk_normal_cdf(double u);
 /* the same, given gauss = exp(-u^2 / 2) (a density's, at hand) */
 double sk_normal_cdf_of(double u, double gauss);
+/* a unit Gaussian's share of each of n cells and its derivatives by mu and s (taxelfit._axis_cells) */
+void sk_axis_cells(double mu, double s, int n, double *g, double *d_mu, double *d_s);
 
 /*
  * censorfit.c: the saturated layers of a (2, h, w) window refitted in 2-D, in place on the

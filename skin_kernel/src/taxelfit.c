@@ -43,6 +43,22 @@ double sk_normal_cdf(double u)
   return sk_normal_cdf_of(u, exp(-x * x));
 }
 
+void sk_axis_cells(double mu, double s, int n, double *g, double *d_mu, double *d_s)
+{
+  double u0 = (-0.5 - mu) / s, gauss0 = exp(-0.5 * u0 * u0);
+  double pdf0 = gauss0 * INV_SQRT2PI, cdf0 = sk_normal_cdf_of(u0, gauss0), updf0 = u0 * pdf0;
+  for (int i = 0; i < n; i++) {
+    double u1 = ((i + 1) - 0.5 - mu) / s, gauss1 = exp(-0.5 * u1 * u1);
+    double pdf1 = gauss1 * INV_SQRT2PI, cdf1 = sk_normal_cdf_of(u1, gauss1), updf1 = u1 * pdf1;
+    g[i] = cdf1 - cdf0;
+    d_mu[i] = -(pdf1 - pdf0) / s;
+    d_s[i] = -(updf1 - updf0) / s;
+    pdf0 = pdf1;
+    cdf0 = cdf1;
+    updf0 = updf1;
+  }
+}
+
 /*
  * Solve the 3 x 3 system a x = b as numpy.linalg.solve does with OpenBLAS (dgesv: left-looking
  * LU with partial pivoting, multipliers by the pivot's reciprocal, column-wise substitutions),
@@ -276,11 +292,12 @@ static int cut_by_edge(const double *profiles, int nn, const int *len, const dou
 /*
  * The variance (taxels**2, one axis of the shift) of the centres of the profiles cut by the
  * map's edge: each one's derivative by the width with the mass refitted, times CUT_WIDTH_SHARE
- * of the width (taxelfit._cut_variance).
+ * of the width (taxelfit._cut_variance). scratch: 3 nn doubles.
  */
 static double cut_variance(const double *profiles, int nn, const int *len, const double *mu,
-                           const double *width)
+                           const double *width, double *scratch)
 {
+  double *cell = scratch, *d_mu = scratch + nn, *d_s = scratch + 2 * nn;
   double total = 0.0;
   for (int j = 0; j < 4; j++) {
     const double *p = profiles + j * nn;
@@ -288,21 +305,14 @@ static double cut_variance(const double *profiles, int nn, const int *len, const
       continue;
     }
     double s = width[j];
-    double u0 = (-0.5 - mu[j]) / s, gauss0 = exp(-0.5 * u0 * u0);
-    double pdf0 = gauss0 * INV_SQRT2PI, cdf0 = sk_normal_cdf_of(u0, gauss0), updf0 = u0 * pdf0;
+    sk_axis_cells(mu[j], s, len[j], cell, d_mu, d_s);
     double n00 = 0.0, n01 = 0.0, n11 = 0.0, b0 = 0.0, b1 = 0.0;
     for (int i = 0; i < len[j]; i++) {
-      double u1 = ((i + 1) - 0.5 - mu[j]) / s, gauss1 = exp(-0.5 * u1 * u1);
-      double pdf1 = gauss1 * INV_SQRT2PI, cdf1 = sk_normal_cdf_of(u1, gauss1), updf1 = u1 * pdf1;
-      double cell = cdf1 - cdf0, d_mu = -(pdf1 - pdf0) / s, d_s = -(updf1 - updf0) / s;
-      n00 += cell * cell;
-      n01 += cell * d_mu;
-      n11 += d_mu * d_mu;
-      b0 += cell * d_s;
-      b1 += d_mu * d_s;
-      pdf0 = pdf1;
-      cdf0 = cdf1;
-      updf0 = updf1;
+      n00 += cell[i] * cell[i];
+      n01 += cell[i] * d_mu[i];
+      n11 += d_mu[i] * d_mu[i];
+      b0 += cell[i] * d_s[i];
+      b1 += d_mu[i] * d_s[i];
     }
     n00 += 1e-12;
     n11 += 1e-12;
@@ -403,7 +413,7 @@ void sk_taxel_fit(double *force, const double *counts, const double *censored, i
       }
     }
   }
-  *cut_var = cut_variance(profiles, nn, len, centre, fitted_width);
+  *cut_var = cut_variance(profiles, nn, len, centre, fitted_width, scratch + 4 * nn);
   sk_censored_centres(force, censored, h, w, scratch, centre, width);
   *dx = centre[1] - centre[0];
   *dy = centre[3] - centre[2];

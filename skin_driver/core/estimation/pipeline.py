@@ -223,9 +223,10 @@ class ContactEstimator:
             whole = method.function(np.stack((t, b)).astype(np.float64))
         out = []
         for pair in pairs:
-            window = force_window(pair, maps, force) if censoring or method.linear else None
-            marked = (marked_counts(pair, clipped, conditioner.config.fsr.full_scale)
-                      if censoring or method.linear else None)
+            window = marked = None
+            if censoring or method.linear:
+                window = force_window(pair, maps, force)
+                marked = marked_counts(pair, clipped, conditioner.config.fsr.full_scale)
             if censoring:
                 pair = with_censored_sums(pair, marked, window, curves)
             if whole is not None:

@@ -356,12 +356,7 @@ def _cut_variance(profiles: np.ndarray, mask: np.ndarray, mu: np.ndarray,
     cut = (profiles[:, 0] > 0) | (profiles[np.arange(4), length - 1] > 0)
     total = 0.0
     for j in np.flatnonzero(cut):
-        u = (np.arange(length[j] + 1, dtype=np.float64) - 0.5 - mu[j]) / width[j]
-        gauss = np.exp(-0.5 * u * u)
-        pdf = gauss * _INV_SQRT2PI
-        cells = np.diff(_normal_cdf(u, gauss))
-        d_mu = -np.diff(pdf) / width[j]
-        d_s = -np.diff(u * pdf) / width[j]
+        cells, d_mu, d_s = _axis_cells(mu[j], width[j], length[j])
         n00 = float(cells @ cells) + 1e-12
         n01 = float(cells @ d_mu)
         n11 = float(d_mu @ d_mu) + 1e-12
