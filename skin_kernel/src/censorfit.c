@@ -79,10 +79,6 @@ static cells cells_in(double *buf, int h, int w)
   return c;
 }
 
-/*
- * Squared misfit of params, a bound taxel's only below it (taxelfit._censored_cost); the cells
- * of params left in at, for the step that follows from them. sq: h w doubles.
- */
 /* the cells of params, in at */
 static void cells_at(const double *params, int h, int w, const cells *at)
 {
@@ -90,6 +86,10 @@ static void cells_at(const double *params, int h, int w, const cells *at)
   sk_axis_cells(params[P_Y], params[P_SY], h, at->gy, at->dgy_mu, at->dgy_s);
 }
 
+/*
+ * Squared misfit of params, a bound taxel's only below it (taxelfit._censored_cost); the cells
+ * of params left in at, for the step that follows from them. sq: h w doubles.
+ */
 static double censored_cost(const double *force, const double *bound, int h, int w,
                             const double *params, const cells *at, double *sq)
 {
@@ -290,10 +290,10 @@ static int fit_censored(const double *force, const double *censored, int h, int 
   double *bound = scratch, *work = scratch + m;
   double fitted = given > 0 ? 0.0 : 1.0;
   double params[NPARAM] = {given, found[0], found[1], sx, sy};
+  cells start = cells_in(work, h, w);
+  const double *gx = start.gx, *gy = start.gy;
   if (!(given > 0)) {
-    double *gx = work, *gy = gx + w, *dmu = gy + h, *ds = dmu + (h > w ? h : w);
-    sk_axis_cells(found[0], sx, w, gx, dmu, ds);
-    sk_axis_cells(found[1], sy, h, gy, dmu, ds);
+    cells_at(params, h, w, &start);
     double weight = 0.0, along = 0.0;
     for (int r = 0; r < h; r++) {
       for (int c = 0; c < w; c++) {
@@ -311,9 +311,7 @@ static int fit_censored(const double *force, const double *censored, int h, int 
   }
   int converged = gauss_newton(force, censored, h, w, params, fitted, 1, work);
   if (!converged) {
-    double *gx = work, *gy = gx + w, *dmu = gy + h, *ds = dmu + (h > w ? h : w);
-    sk_axis_cells(params[P_X], params[P_SX], w, gx, dmu, ds);
-    sk_axis_cells(params[P_Y], params[P_SY], h, gy, dmu, ds);
+    cells_at(params, h, w, &start);
     for (int r = 0; r < h; r++) {
       for (int c = 0; c < w; c++) {
         int j = r * w + c;
