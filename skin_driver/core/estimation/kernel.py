@@ -166,11 +166,12 @@ class Kernel:
         raise ValueError saying what is wrong.
         """
         if not (type(top) is np.ndarray and type(bottom) is np.ndarray
-                and top.shape == self.shape and bottom.shape == self.shape
-                and top.dtype.kind in 'uif' and bottom.dtype.kind in 'uif'):
+                and top.shape == self.shape and bottom.shape == self.shape):
             top, bottom = check_pair(top, bottom, self.shape)
-        scan, top_buffer, bottom_buffer, args = self._scans[
-            top.dtype == _COUNTS and bottom.dtype == _COUNTS]
+        counts = top.dtype == _COUNTS and bottom.dtype == _COUNTS
+        if not (counts or top.dtype.kind in 'uif' and bottom.dtype.kind in 'uif'):
+            top, bottom = check_pair(top, bottom, self.shape)
+        scan, top_buffer, bottom_buffer, args = self._scans[counts]
         with self._lock:
             top_buffer[...] = top
             bottom_buffer[...] = bottom
