@@ -20,21 +20,27 @@
 static int solve5(double a[5][5], double b[5], double x[5])
 {
   for (int j = 0; j < 5; j++) {
+    /* the pivot's size held, not read back through its row: each comparison waits on less */
     int p = j;
+    double largest = fabs(a[j][j]);
     for (int i = j + 1; i < 5; i++) {
-      p = fabs(a[i][j]) > fabs(a[p][j]) ? i : p;
+      double size = fabs(a[i][j]);
+      p = size > largest ? i : p;
+      largest = size > largest ? size : largest;
     }
-    if (a[p][j] == 0.0) {
+    if (largest == 0.0) {
       return 0;
     }
-    for (int m = 0; m < 5; m++) {
-      double t = a[j][m];
-      a[j][m] = a[p][m];
-      a[p][m] = t;
+    if (p != j) {
+      for (int m = 0; m < 5; m++) {
+        double t = a[j][m];
+        a[j][m] = a[p][m];
+        a[p][m] = t;
+      }
+      double t = b[j];
+      b[j] = b[p];
+      b[p] = t;
     }
-    double t = b[j];
-    b[j] = b[p];
-    b[p] = t;
     for (int i = j + 1; i < 5; i++) {
       double f = a[i][j] / a[j][j];
       for (int m = j; m < 5; m++) {
