@@ -20,21 +20,27 @@
 static int solve5(double a[5][5], double b[5], double x[5])
 {
   for (int j = 0; j < 5; j++) {
+    /* the pivot's size held, not read back through its row: each comparison waits on less */
     int p = j;
+    double largest = fabs(a[j][j]);
     for (int i = j + 1; i < 5; i++) {
-      p = fabs(a[i][j]) > fabs(a[p][j]) ? i : p;
+      double size = fabs(a[i][j]);
+      p = size > largest ? i : p;
+      largest = size > largest ? size : largest;
     }
-    if (a[p][j] == 0.0) {
+    if (largest == 0.0) {
       return 0;
     }
-    for (int m = 0; m < 5; m++) {
-      double t = a[j][m];
-      a[j][m] = a[p][m];
-      a[p][m] = t;
+    if (p != j) {
+      for (int m = 0; m < 5; m++) {
+        double t = a[j][m];
+        a[j][m] = a[p][m];
+        a[p][m] = t;
+      }
+      double t = b[j];
+      b[j] = b[p];
+      b[p] = t;
     }
-    double t = b[j];
-    b[j] = b[p];
-    b[p] = t;
     for (int i = j + 1; i < 5; i++) {
       double f = a[i][j] / a[j][j];
       for (int m = j; m < 5; m++) {
@@ -66,6 +72,9 @@ static int fits_censored(const double *force, const double *censored, int m, int
 
 /* Parameters of a 2-D fit: mass, centre x, y, width x, y. */
 enum { P_MASS, P_X, P_Y, P_SX, P_SY, NPARAM };
+
+/* A taxel's row of the Jacobian (one entry per parameter), then its residual */
+#define JAC_ROW (NPARAM + 1)
 
 /* A fit's cells: each axis's shares of a unit Gaussian and their derivatives by centre and width. */
 typedef struct {
@@ -124,51 +133,48 @@ static void damped(const double *params, const double *step, int h, int w, doubl
 }
 
 /*
- * The normal equations over n packed taxels (columns of jac at stride): normal = jac' jac and
- * rhs = jac' residual, each entry summed in taxel order. The 15 distinct entries and 5 sums
- * in four passes of at most six sums, each held in a register (a 5 x 5 array in memory made
- * every update wait on the last); the lower triangle mirrors the upper.
+ * The normal equations over n packed taxels, each a row of its 5 Jacobian entries and its
+ * residual: normal = jac' jac and rhs = jac' residual, each entry summed in taxel order. The
+ * 15 distinct entries and 5 sums in three passes of at most seven sums, each held in a register
+ * (a 5 x 5 array in memory made every update wait on the last); the lower triangle mirrors the
+ * upper.
  */
-static void normal_equations(const double *jac, const double *residual, int stride, int n,
-                             double normal[5][5], double rhs[5])
+static void normal_equations(const double *rows, int n, double normal[5][5], double rhs[5])
 {
-  const double *j0 = jac, *j1 = jac + stride, *j2 = jac + 2 * stride, *j3 = jac + 3 * stride;
-  const double *j4 = jac + 4 * stride;
   double s00 = 0.0, s01 = 0.0, s02 = 0.0, s03 = 0.0, s04 = 0.0, r0 = 0.0;
   for (int k = 0; k < n; k++) {
-    double x0 = j0[k];
+    const double *v = rows + JAC_ROW * k;
+    double x0 = v[0];
     s00 += x0 * x0;
-    s01 += x0 * j1[k];
-    s02 += x0 * j2[k];
-    s03 += x0 * j3[k];
-    s04 += x0 * j4[k];
-    r0 += x0 * residual[k];
+    s01 += x0 * v[1];
+    s02 += x0 * v[2];
+    s03 += x0 * v[3];
+    s04 += x0 * v[4];
+    r0 += x0 * v[5];
   }
-  double s11 = 0.0, s12 = 0.0, s13 = 0.0, s14 = 0.0, r1 = 0.0, s22 = 0.0;
+  double s11 = 0.0, s12 = 0.0, s13 = 0.0, s14 = 0.0, r1 = 0.0, s22 = 0.0, s23 = 0.0;
   for (int k = 0; k < n; k++) {
-    double x1 = j1[k], x2 = j2[k];
+    const double *v = rows + JAC_ROW * k;
+    double x1 = v[1], x2 = v[2];
     s11 += x1 * x1;
     s12 += x1 * x2;
-    s13 += x1 * j3[k];
-    s14 += x1 * j4[k];
-    r1 += x1 * residual[k];
+    s13 += x1 * v[3];
+    s14 += x1 * v[4];
+    r1 += x1 * v[5];
     s22 += x2 * x2;
+    s23 += x2 * v[3];
   }
-  double s23 = 0.0, s24 = 0.0, r2 = 0.0, s33 = 0.0, s34 = 0.0, r3 = 0.0;
+  double s24 = 0.0, r2 = 0.0, s33 = 0.0, s34 = 0.0, r3 = 0.0, s44 = 0.0, r4 = 0.0;
   for (int k = 0; k < n; k++) {
-    double x2 = j2[k], x3 = j3[k];
-    s23 += x2 * x3;
-    s24 += x2 * j4[k];
-    r2 += x2 * residual[k];
+    const double *v = rows + JAC_ROW * k;
+    double x2 = v[2], x3 = v[3], x4 = v[4], res = v[5];
+    s24 += x2 * x4;
+    r2 += x2 * res;
     s33 += x3 * x3;
-    s34 += x3 * j4[k];
-    r3 += x3 * residual[k];
-  }
-  double s44 = 0.0, r4 = 0.0;
-  for (int k = 0; k < n; k++) {
-    double x4 = j4[k];
+    s34 += x3 * x4;
+    r3 += x3 * res;
     s44 += x4 * x4;
-    r4 += x4 * residual[k];
+    r4 += x4 * res;
   }
   double upper[5][5] = {{s00, s01, s02, s03, s04},
                         {0.0, s11, s12, s13, s14},
@@ -197,9 +203,9 @@ static int gauss_newton(const double *force, const double *bound, int h, int w, 
   int m = h * w;
   /* the cells of params and of the trial step: an accepted trial's become params' own */
   cells here = cells_in(scratch, h, w), there = cells_in(scratch + 3 * (h + w), h, w);
-  /* the taxels that count, packed: their Jacobian's columns (stride m), then their residuals;
-   * the residuals' room is the misfit's too, used only after they are */
-  double *jac = scratch + 6 * (h + w), *residual = jac + 5 * m, *sq = residual;
+  /* the taxels that count, packed: a row of their Jacobian's entries and residual each; the
+   * rows' room is the misfit's too, used only after they are */
+  double *rows = scratch + 6 * (h + w), *sq = rows;
   double trial[NPARAM], whole[NPARAM];
   double cost = censored_cost(force, bound, h, w, params, &here, sq);
   int cost_known = 1;
@@ -215,18 +221,18 @@ static int gauss_newton(const double *force, const double *bound, int h, int w, 
     for (int r = 0; r < h; r++) {
       for (int c = 0; c < w; c++) {
         int j = r * w + c;
-        double model = mass * (gy[r] * gx[c]);
-        jac[n] = gy[r] * gx[c] * fitted;
-        jac[m + n] = mass * (gy[r] * dgx_mu[c]);
-        jac[2 * m + n] = mass * (dgy_mu[r] * gx[c]);
-        jac[3 * m + n] = mass * (gy[r] * dgx_s[c]) * free_sx;
-        jac[4 * m + n] = mass * (dgy_s[r] * gx[c]) * free_sy;
-        residual[n] = force[j] - model;
+        double model = mass * (gy[r] * gx[c]), *row = rows + JAC_ROW * n;
+        row[0] = gy[r] * gx[c] * fitted;
+        row[1] = mass * (gy[r] * dgx_mu[c]);
+        row[2] = mass * (dgy_mu[r] * gx[c]);
+        row[3] = mass * (gy[r] * dgx_s[c]) * free_sx;
+        row[4] = mass * (dgy_s[r] * gx[c]) * free_sy;
+        row[5] = force[j] - model;
         /* a bound taxel counts only while the model falls below its reading */
         n += !(bound[j] > 0) || model < force[j];
       }
     }
-    normal_equations(jac, residual, m, n, normal, rhs);
+    normal_equations(rows, n, normal, rhs);
     for (int a = 0; a < 5; a++) {
       normal[a][a] += 1e-12;
     }

@@ -29,6 +29,7 @@ struct sk_kernel {
   double *live, *live_count;        /* dead fill: live taxels and their count per 3 x 3 */
   double *table_force;              /* 2 x (full_scale + 1) */
   /* the last scan */
+  double *raw;                      /* (2, n): sk_scan_counts's maps as doubles */
   double *counts, *force;           /* (2, n): tared counts, force */
   /*
    * rows box[0]..box[1] and columns box[2]..box[3] (half-open) hold every taxel of either

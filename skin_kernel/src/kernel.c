@@ -31,7 +31,7 @@ void sk_free(sk_kernel *k)
     return;
   }
   double *arrays[] = {k->baseline, k->threshold, k->noise, k->gain, k->leak_gate, k->live,
-                      k->live_count, k->table_force, k->counts, k->force, k->tops,
+                      k->live_count, k->table_force, k->raw, k->counts, k->force, k->tops,
                       k->fractions, k->scratch, k->fit};
   for (size_t i = 0; i < sizeof(arrays) / sizeof(arrays[0]); i++) {
     free(arrays[i]);
@@ -80,6 +80,7 @@ sk_kernel *sk_new(const int *ints, const double *reals, const double *baseline,
   k->live = copy_of(NULL, 2 * n);
   k->live_count = copy_of(NULL, 2 * n);
   k->table_force = copy_of(tables, 2 * size);
+  k->raw = copy_of(NULL, 2 * n);
   k->counts = copy_of(NULL, 2 * n);
   k->force = copy_of(NULL, 2 * n);
   k->pairs = calloc(kcap, sizeof(sk_pair));
@@ -101,7 +102,7 @@ sk_kernel *sk_new(const int *ints, const double *reals, const double *baseline,
   k->iscratch = malloc(sizeof(int) * 4 * n);
   if (!k->baseline || !k->threshold || !k->noise || (gain && !k->gain) || !k->leak_gate
       || !k->dead || !k->clipped || !k->live
-      || !k->live_count || !k->table_force || !k->counts || !k->force
+      || !k->live_count || !k->table_force || !k->raw || !k->counts || !k->force
       || !k->pairs || !k->tops || !k->fractions || !k->scratch || !k->fit || !k->labels
       || !k->iscratch) {
     sk_free(k);
@@ -221,17 +222,9 @@ static void imprint_forces(sk_kernel *k, sk_pair *p, const double *marked)
   }
 }
 
-int sk_scan(sk_kernel *k, const double *maps, int every_pair, double *out, int *status)
+/* One scan of maps known to hold counts (sk_scan, sk_scan_counts). */
+static int scan(sk_kernel *k, const double *maps, int every_pair, double *out, int *status)
 {
-  int n2 = 2 * k->n;
-  for (int i = 0; i < n2; i++) {
-    if (!isfinite(maps[i])) {
-      return SK_ERR_NOT_FINITE;
-    }
-    if (maps[i] < 0) {
-      return SK_ERR_NEGATIVE;
-    }
-  }
   k->revived = 0;
   k->npairs = 0;
   sk_touch_counts(k, maps);
@@ -300,6 +293,30 @@ int sk_scan(sk_kernel *k, const double *maps, int every_pair, double *out, int *
   status[SK_STATUS_CENSORED] = censored;
   status[SK_STATUS_REVIVED] = k->revived;
   return finish(k, out);
+}
+
+int sk_scan(sk_kernel *k, const double *maps, int every_pair, double *out, int *status)
+{
+  int n2 = 2 * k->n;
+  for (int i = 0; i < n2; i++) {
+    if (!isfinite(maps[i])) {
+      return SK_ERR_NOT_FINITE;
+    }
+    if (maps[i] < 0) {
+      return SK_ERR_NEGATIVE;
+    }
+  }
+  return scan(k, maps, every_pair, out, status);
+}
+
+int sk_scan_counts(sk_kernel *k, const uint16_t *maps, int every_pair, double *out, int *status)
+{
+  /* exact as doubles: the scan is sk_scan's to the bit */
+  int n2 = 2 * k->n;
+  for (int i = 0; i < n2; i++) {
+    k->raw[i] = maps[i];
+  }
+  return scan(k, k->raw, every_pair, out, status);
 }
 
 void sk_dead(const sk_kernel *k, unsigned char *out)

@@ -34,7 +34,12 @@ double sk_normal_cdf_of(double u, double gauss)
   double t = 1.0 / (1.0 + AS_P * x);
   double poly = t * (AS[0] + t * (AS[1] + t * (AS[2] + t * (AS[3] + t * AS[4]))));
   double half = 0.5 * poly * gauss;
-  return u >= 0 ? 1.0 - half : half;
+  /*
+   * 1 - half from u = 0 on, else half (half is never -0, so 0 + half is half): exact, and
+   * without a branch, so that a loop over edges runs two at a time (sk_axis_cells)
+   */
+  double above = u >= 0;
+  return above + (1.0 - 2.0 * above) * half;
 }
 
 double sk_normal_cdf(double u)
@@ -45,17 +50,35 @@ double sk_normal_cdf(double u)
 
 void sk_axis_cells(double mu, double s, int n, double *g, double *d_mu, double *d_s)
 {
+  /*
+   * Edge by edge in separate passes, each cell's figures as in one: the exp calls apart, the
+   * long chains of the CDF's polynomial and the divisions of one edge do not wait on the next
+   * edge's call, and run two edges at a time. The arrays hold each edge's u, its Gaussian,
+   * then pdf, CDF and u pdf, until the cells are their differences.
+   */
+  for (int i = 0; i < n; i++) {
+    d_s[i] = ((i + 1) - 0.5 - mu) / s;
+  }
+  for (int i = 0; i < n; i++) {
+    d_mu[i] = exp(-0.5 * d_s[i] * d_s[i]);
+  }
+  for (int i = 0; i < n; i++) {
+    double u = d_s[i], gauss = d_mu[i], pdf = gauss * INV_SQRT2PI;
+    g[i] = sk_normal_cdf_of(u, gauss);
+    d_mu[i] = pdf;
+    d_s[i] = u * pdf;
+  }
   double u0 = (-0.5 - mu) / s, gauss0 = exp(-0.5 * u0 * u0);
   double pdf0 = gauss0 * INV_SQRT2PI, cdf0 = sk_normal_cdf_of(u0, gauss0), updf0 = u0 * pdf0;
-  for (int i = 0; i < n; i++) {
-    double u1 = ((i + 1) - 0.5 - mu) / s, gauss1 = exp(-0.5 * u1 * u1);
-    double pdf1 = gauss1 * INV_SQRT2PI, cdf1 = sk_normal_cdf_of(u1, gauss1), updf1 = u1 * pdf1;
-    g[i] = cdf1 - cdf0;
-    d_mu[i] = -(pdf1 - pdf0) / s;
-    d_s[i] = -(updf1 - updf0) / s;
-    pdf0 = pdf1;
-    cdf0 = cdf1;
-    updf0 = updf1;
+  for (int i = n - 1; i > 0; i--) {
+    g[i] = g[i] - g[i - 1];
+    d_mu[i] = -(d_mu[i] - d_mu[i - 1]) / s;
+    d_s[i] = -(d_s[i] - d_s[i - 1]) / s;
+  }
+  if (n > 0) {
+    g[0] = g[0] - cdf0;
+    d_mu[0] = -(d_mu[0] - pdf0) / s;
+    d_s[0] = -(d_s[0] - updf0) / s;
   }
 }
 
@@ -148,13 +171,15 @@ struct cut {
 /*
  * Fit cell-integrated Gaussians to 4 profiles of nn cells (the first len[j] real); returns 0
  * when a profile has no load, else the centres, widths and explained shares
- * (fit_cell_profiles); ``cut`` (or NULL) holds the widths of cut profiles fixed.
+ * (fit_cell_profiles); ``cut`` (or NULL) holds the widths of cut profiles fixed. scratch:
+ * 3 nn doubles.
  */
 static int fit_profiles(const double *profiles, int nn, const int *len, const struct cut *cut,
                         double *scratch, double *centre, double *width, double *explained)
 {
   double mass[4], mu[4], s[4], amp[4], start[4], start_width[4], low[4], high[4], free[4];
-  double *cells = scratch, *tmp = scratch + nn;
+  /* a profile's cells and their derivatives; the misfit's squares take the second's room */
+  double *cells = scratch, *d_mu = scratch + nn, *d_s = scratch + 2 * nn, *tmp = d_mu;
   for (int j = 0; j < 4; j++) {
     const double *p = profiles + j * nn;
     mass[j] = sk_sum(p, nn);
@@ -191,34 +216,30 @@ static int fit_profiles(const double *profiles, int nn, const int *len, const st
     int solved = 1;
     for (int j = 0; j < 4 && solved; j++) {
       const double *p = profiles + j * nn;
-      double u0 = (-0.5 - mu[j]) / s[j], gauss0 = exp(-0.5 * u0 * u0);
-      double pdf0 = gauss0 * INV_SQRT2PI, cdf0 = sk_normal_cdf_of(u0, gauss0), updf0 = u0 * pdf0;
-      double normal[3][3] = {{0}}, rhs[3] = {0};
+      sk_axis_cells(mu[j], s[j], len[j], cells, d_mu, d_s);
+      /*
+       * the normal equations' sums in registers (an array in memory made each update wait on
+       * the last); symmetric: the lower half mirrors the upper one to the bit. A fixed width
+       * has no column: its normal equation is the regulariser's, its step 0.
+       */
+      double n00 = 0.0, n01 = 0.0, n02 = 0.0, n11 = 0.0, n12 = 0.0, n22 = 0.0;
+      double r0 = 0.0, r1 = 0.0, r2 = 0.0;
       for (int i = 0; i < len[j]; i++) {
-        double u1 = ((i + 1) - 0.5 - mu[j]) / s[j], gauss1 = exp(-0.5 * u1 * u1);
-        double pdf1 = gauss1 * INV_SQRT2PI, cdf1 = sk_normal_cdf_of(u1, gauss1);
-        double updf1 = u1 * pdf1;
-        /* a fixed width has no column: its normal equation is the regulariser's, its step 0 */
-        double jac[3] = {cdf1 - cdf0, amp[j] * (-(pdf1 - pdf0) / s[j]),
-                         amp[j] * (-(updf1 - updf0) / s[j] * free[j])};
-        double residual = p[i] - amp[j] * jac[0];
-        /* symmetric: the lower half mirrors the upper one to the bit */
-        for (int a = 0; a < 3; a++) {
-          for (int b = a; b < 3; b++) {
-            normal[a][b] += jac[a] * jac[b];
-          }
-          rhs[a] += jac[a] * residual;
-        }
-        pdf0 = pdf1;
-        cdf0 = cdf1;
-        updf0 = updf1;
+        double j0 = cells[i], j1 = amp[j] * d_mu[i], j2 = amp[j] * (d_s[i] * free[j]);
+        double residual = p[i] - amp[j] * j0;
+        n00 += j0 * j0;
+        n01 += j0 * j1;
+        n02 += j0 * j2;
+        r0 += j0 * residual;
+        n11 += j1 * j1;
+        n12 += j1 * j2;
+        r1 += j1 * residual;
+        n22 += j2 * j2;
+        r2 += j2 * residual;
       }
-      for (int a = 0; a < 3; a++) {
-        normal[a][a] += 1e-12;
-        for (int b = 0; b < a; b++) {
-          normal[a][b] = normal[b][a];
-        }
-      }
+      double normal[3][3] = {{n00 + 1e-12, n01, n02}, {n01, n11 + 1e-12, n12},
+                             {n02, n12, n22 + 1e-12}};
+      double rhs[3] = {r0, r1, r2};
       solved = solve3(normal, rhs, step[j]);
     }
     if (!solved) {

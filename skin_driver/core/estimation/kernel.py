@@ -9,6 +9,8 @@ of the algorithm; the tests run both side by side (test/core/estimation/test_ker
 
 A :class:`Kernel` copies an estimator's state once (tare, gains, force tables, settings) and owns
 preallocated buffers, so a scan costs one copy of the maps into its buffer and one foreign call.
+Maps of uint16, as the driver and the datasets give them, are copied as they are (any value is
+a count, no check); others are checked and copied as float64.
 The dead-taxel marks a touch revives are handed back to the conditioner, which owns them.
 """
 
@@ -32,7 +34,7 @@ __all__ = ['METHODS', 'KernelSettings', 'Kernel', 'KernelMissing', 'load_library
 METHODS = {'centroid': 0, 'taxel_fit': 1, 'poc': 2}
 
 # skin_kernel.h's layout: bump both together.
-_ABI_VERSION = 5
+_ABI_VERSION = 6
 _INTS = 9
 _REALS = 23
 _NREC = 23
@@ -42,6 +44,7 @@ _NSTATUS = 3
 CONTACT_FIELDS = 14
 KEPT, DX, DY = range(CONTACT_FIELDS, CONTACT_FIELDS + 3)
 _REVIVED = 2  # sk_scan's status word SK_STATUS_REVIVED
+_COUNTS = np.dtype(np.uint16)  # sk_scan_counts's maps, native byte order
 
 _FIX = ('build it with `make setup` (or `colcon build` in the workspace) and source the '
         'workspace, e.g. `tools/with-env.sh`')
@@ -75,10 +78,12 @@ def load_library() -> ctypes.CDLL:
     if lib.sk_abi_version() != _ABI_VERSION:
         raise KernelMissing(f'skin_kernel: {path} is another version than this skin_driver; '
                             f'{_FIX}')
-    # sk_scan (kernel, maps, every_pair, out, status) has no argtypes: their checks cost 0.7 us
-    # a call, and Kernel passes the same c_void_p objects and a Python int every time.
+    # sk_scan and sk_scan_counts (kernel, maps, every_pair, out, status) have no argtypes: their
+    # checks cost 0.7 us a call, and Kernel passes the same c_void_p objects and a Python int
+    # every time.
     signatures = {'sk_new': (ptr, [ptr] * 8), 'sk_free': (None, [ptr]),
-                  'sk_scan': (ctypes.c_int, None), 'sk_dead': (None, [ptr, ptr])}
+                  'sk_scan': (ctypes.c_int, None), 'sk_scan_counts': (ctypes.c_int, None),
+                  'sk_dead': (None, [ptr, ptr])}
     for name, (restype, argtypes) in signatures.items():
         function = getattr(lib, name)
         function.restype = restype
@@ -135,15 +140,21 @@ class Kernel:
         self._handle = ctypes.c_void_p(handle)
         weakref.finalize(self, lib.sk_free, self._handle)
         self.shape = (rows, cols)
+        # A scan's maps: float64 (sk_scan), or uint16 counts as they come (sk_scan_counts).
         self._maps = np.zeros((2, rows, cols))
-        self._top, self._bottom = self._maps
+        self._counts = np.zeros((2, rows, cols), dtype=np.uint16)
         self._out = np.zeros((max(min(settings.max_contacts, rows * cols), 1), _NREC))
         # A ctypes array: reading a word of it costs a tenth of reading a numpy scalar.
         self._status = (ctypes.c_int * _NSTATUS)()
         outputs = (_address(self._out), ctypes.c_void_p(ctypes.addressof(self._status)))
-        # (reported contacts only, every contact): measure_shifts wants the light ones too.
-        self._scan_args = tuple((self._handle, _address(self._maps), every) + outputs
-                                for every in (0, 1))
+        # By whether the maps are uint16 counts: the function, its top and bottom buffers, and
+        # its arguments for reported contacts only and for every contact (measure_shifts wants
+        # the light ones too).
+        self._scans = tuple((scan, maps[0], maps[1],
+                             tuple((self._handle, _address(maps), every) + outputs
+                                   for every in (0, 1)))
+                            for scan, maps in ((lib.sk_scan, self._maps),
+                                               (lib.sk_scan_counts, self._counts)))
         self._lock = threading.Lock()
 
     def scan(self, top, bottom, every_pair: bool = False) -> tuple:
@@ -155,13 +166,16 @@ class Kernel:
         raise ValueError saying what is wrong.
         """
         if not (type(top) is np.ndarray and type(bottom) is np.ndarray
-                and top.shape == self.shape and bottom.shape == self.shape
-                and top.dtype.kind in 'uif' and bottom.dtype.kind in 'uif'):
+                and top.shape == self.shape and bottom.shape == self.shape):
             top, bottom = check_pair(top, bottom, self.shape)
+        counts = top.dtype == _COUNTS and bottom.dtype == _COUNTS
+        if not (counts or top.dtype.kind in 'uif' and bottom.dtype.kind in 'uif'):
+            top, bottom = check_pair(top, bottom, self.shape)
+        scan, top_buffer, bottom_buffer, args = self._scans[counts]
         with self._lock:
-            self._top[...] = top
-            self._bottom[...] = bottom
-            count = self._lib.sk_scan(*self._scan_args[every_pair])
+            top_buffer[...] = top
+            bottom_buffer[...] = bottom
+            count = scan(*args[every_pair])
             if count < 0:
                 check_pair(top, bottom, self.shape)
                 raise ValueError('top or bottom holds a value that is not a count')

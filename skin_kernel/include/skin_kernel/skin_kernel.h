@@ -14,12 +14,14 @@
 #ifndef SKIN_KERNEL_SKIN_KERNEL_H
 #define SKIN_KERNEL_SKIN_KERNEL_H
 
+#include <stdint.h>
+
 #ifdef __cplusplus
 extern "C" {
 #endif
 
 /* Bumped whenever a signature or a layout below changes; the binding checks it. */
-#define SK_ABI_VERSION 5
+#define SK_ABI_VERSION 6
 
 /* Integer settings, in this order. */
 enum {
@@ -85,6 +87,12 @@ void sk_free(sk_kernel *k);
  * every_pair, a contact too light to report (SK_KEPT 0) gets no shift (0) and no sigma (inf).
  */
 int sk_scan(sk_kernel *k, const double *maps, int every_pair, double *out, int *status);
+
+/*
+ * sk_scan of maps as the ADC gives them, (2, rows, cols) unsigned 16-bit counts: every value is
+ * a count, so there is no error to return.
+ */
+int sk_scan_counts(sk_kernel *k, const uint16_t *maps, int every_pair, double *out, int *status);
 
 /* Copy the dead-taxel marks in force, (2, rows, cols), to out. */
 void sk_dead(const sk_kernel *k, unsigned char *out);

@@ -276,6 +276,31 @@ def test_line_leak_is_taken_alike_on_short_and_long_lines(rows, cols):
         assert_same(compiled, described, top, bottom, speck_tolerance=SPECK_TOLERANCE)
 
 
+@pytest.mark.parametrize('top_dtype, bottom_dtype', [
+    ('float64', 'float64'), ('int64', 'int64'), ('float32', 'float32'), ('>u2', '>u2'),
+    ('uint16', 'float64')])
+def test_counts_of_other_dtypes_give_the_contacts_of_uint16_counts(top_dtype, bottom_dtype):
+    # uint16 maps (the driver's and the datasets') go to the kernel as they are, any other pair
+    # as float64 after its checks: the same counts give the same contacts to the bit, taxels at
+    # the ADC's full scale included.
+    data = make_scene('multi', 'saturating', np.random.default_rng(3), size=3)
+    est = ContactEstimator(EstimatorConfig(pitch_m=data.pitch_m))
+    est = est.with_tare(data.tare_top, data.tare_bottom)
+    full_scale = est.config.fsr.full_scale
+    assert data.top.dtype == np.uint16 and data.top.max() < full_scale
+    found = 0
+    for top, bottom in zip(data.top, data.bottom):
+        # the flat tops of the saturated imprints cut by the ADC
+        top, bottom = (np.where(m >= 0.95 * m.max(), full_scale, m).astype(np.uint16)
+                       for m in (top, bottom))
+        other = (top.astype(top_dtype), bottom.astype(bottom_dtype))
+        want, got = est.process(top, bottom), est.process(*other)
+        assert [figures(c).tolist() for c in got] == [figures(c).tolist() for c in want]
+        assert est.measure_shifts(*other) == est.measure_shifts(top, bottom)
+        found += len(want)
+    assert found >= 3
+
+
 def test_empty_maps_give_no_contact():
     compiled = ContactEstimator()
     zeros = np.zeros((16, 16), dtype=np.uint16)
