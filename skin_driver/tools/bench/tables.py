@@ -228,7 +228,8 @@ def _alone_table(fam) -> list:
         return []
     repeats = alone[0]['alone']['repeats']
     out = ['', f'The default ({DEFAULT_METHOD}) on the same frames run back to back, as a '
-           f"driver runs it (each scene's scored frames one after another, {repeats} times, "
+           f"driver runs it (each scene's scored frames one after another, in {repeats} passes "
+           "round the scenes, each frame its least pass: the machine's other jobs only add; "
            f'contacts included, the same pinned core; issue #16.5 asks for <= {ALONE_US:g} '
            'us): median us per frame pair, and per scene the mean contacts reported and the '
            'median us per contact:', '']

@@ -106,6 +106,34 @@ def test_alone_costs_give_the_cost_per_contact_only_of_frames_with_contacts():
     assert 0 < scene['per_contact_us'] and scene['median_us'] > 0
 
 
+def test_alone_costs_take_each_frames_least_pass_with_the_passes_round_the_scenes(monkeypatch):
+    # Scripted clocks, no timing: a burst of other jobs (the 9 s) spoils one pass of a frame.
+    calls = []
+    seconds = iter([1.0, 9.0, 3.0, 2.0, 1.0, 5.0, 3.0, 2.0])
+
+    def scripted(est, top, bottom):
+        calls.append(est.name)
+        return next(seconds), [object()] * int(top)
+
+    class Named:
+
+        def __init__(self, name):
+            self.name = name
+
+        def process(self, top, bottom):
+            return []
+
+    monkeypatch.setattr(costs, 'timed', scripted)
+    got = costs.alone_costs([('paper', Named('paper'), [(1, 0), (1, 0)]),
+                             ('multi', Named('multi'), [(2, 0), (2, 0)])], repeats=2)
+    # The passes go round the scenes: paper, multi, then paper, multi again.
+    assert calls == ['paper'] * 2 + ['multi'] * 2 + ['paper'] * 2 + ['multi'] * 2
+    assert got['scenes']['paper']['median_us'] == pytest.approx(1e6 * (1.0 + 5.0) / 2)
+    assert got['scenes']['multi']['median_us'] == pytest.approx(1e6 * (3.0 + 2.0) / 2)
+    assert got['scenes']['multi']['per_contact_us'] == pytest.approx(1e6 * 2.5 / 2)
+    assert got['median_us'] == pytest.approx(1e6 * 2.5) and got['frames'] == 4
+
+
 def test_every_family_method_gets_the_users_calibration_and_only_scored_frames_count(results):
     fam = results['family']
     # Only the scene's frames are scored: the 32 calibration frames (and in the paper's
