@@ -16,7 +16,8 @@ a tangential force and hence the polar angle. Calibrate it by pressing with know
 
 ``force_curves`` (top, bottom) replace the assumed FSR model once a force calibration has run
 (:mod:`forcecurve`); ``gains`` (top, bottom maps) even out taxels that read more or less than
-their neighbours (:mod:`gains`).
+their neighbours (:mod:`gains`). ``taxel_model`` is the skin's forward model learned from the
+force calibration's presses when the estimator in use fits one (``model_fit``, :mod:`taxelmodel`).
 
 A calibration knows its skin (:class:`SkinIdentity`: grid, pitch and, where there is one, the
 board's identity) and when each part was made (offset, force, compliance, gains). Loaded for
@@ -38,6 +39,7 @@ import yaml
 
 from .atomic import write_atomically
 from .forcecurve import ForceCurve
+from .taxelmodel import TaxelModel
 from .validate import check_map, check_number
 
 __all__ = ['Calibration', 'CalibrationMismatch', 'SkinIdentity', 'PARTS', 'calibrate_from_shifts',
@@ -49,7 +51,7 @@ _VERSIONS = (1, 2, 3)
 # The parts of a calibration, each made by its own session, and the fields each one sets.
 PARTS = {'offset': ('x_p_m', 'y_p_m', 'std_x_m', 'std_y_m', 'presses', 'zero_slope_m_per_n',
                     'zero_ref_n'),
-         'force': ('force_curves', 'force_presses'),
+         'force': ('force_curves', 'force_presses', 'taxel_model'),
          'compliance': ('compliance_m_per_n', 'compliance_presses'),
          'gains': ('gains',)}
 # Pitches that differ by less than this share are the same.
@@ -164,6 +166,7 @@ class Calibration:
     part_utc: tuple = ('', '', '', '')
     zero_slope_m_per_n: tuple = (0.0, 0.0)
     zero_ref_n: float = 0.0
+    taxel_model: TaxelModel = None
 
     def __post_init__(self):
         """Reject non-finite or negative values and malformed curves or gains."""
@@ -191,6 +194,8 @@ class Calibration:
         object.__setattr__(self, 'part_utc', tuple(self.part_utc))
         object.__setattr__(self, 'force_curves', _curves(self.force_curves))
         object.__setattr__(self, 'gains', _gains(self.gains))
+        if self.taxel_model is not None and not isinstance(self.taxel_model, TaxelModel):
+            raise ValueError(f'taxel_model must be a TaxelModel, got {self.taxel_model!r}')
 
     def zero_m(self, normal_force_n: float) -> tuple:
         """Return the raw shift (x, y) of a normal press of this force: where beta is 0 from."""
@@ -238,6 +243,8 @@ class Calibration:
                          f'({self.force_presses} presses)')
         if self.gains:
             parts.append('taxel gains')
+        if self.taxel_model:
+            parts.append(f'taxel model ({self.taxel_model.presses} presses)')
         if self.skin:
             parts.append(f'for {self.skin.describe()}')
         return '; '.join(parts) + (f'; made {self.made_utc}' if self.made_utc else '')
@@ -259,6 +266,7 @@ class Calibration:
         out['gains'] = (None if self.gains is None else
                         {layer: [list(row) for row in g] for layer, g in
                          zip(('top', 'bottom'), self.gains)})
+        out['taxel_model'] = None if self.taxel_model is None else self.taxel_model.to_dict()
         return out
 
     def save_yaml(self, path, make_parents: bool = False) -> None:
@@ -317,6 +325,8 @@ class Calibration:
             if gains is not None:
                 values['gains'] = tuple(np.array(gains[layer], dtype=np.float64)
                                         for layer in ('top', 'bottom'))
+            if doc.get('taxel_model') is not None:
+                values['taxel_model'] = TaxelModel.from_dict(doc['taxel_model'])
             cal = cls(**values)
         except (KeyError, TypeError, ValueError) as exc:
             raise ValueError(f'{path}: {exc}') from None

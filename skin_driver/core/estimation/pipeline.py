@@ -232,8 +232,9 @@ class ContactEstimator:
             if whole is not None:
                 est = whole
             elif method.linear:
-                est = method.function(np.concatenate((window, pair.maps,
-                                                      censored_taxels(marked, curves))))
+                stack = np.concatenate((window, pair.maps, censored_taxels(marked, curves)))
+                est = (method.function(stack, self._calibration.taxel_model)
+                       if method.modelled else method.function(stack))
             else:
                 est = method.function(pair.maps)
             if not (math.isfinite(est.dx) and math.isfinite(est.dy)):

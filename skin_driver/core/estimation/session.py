@@ -32,6 +32,8 @@ from .conditioning import mark_clipped
 from .forcefit import check_known_forces, fit_force_curve
 from .gains import gains_from_force_sums, limits_note
 from .presses import PressSegmenter
+from .shift import get_method
+from .taxellearn import film_start, learn_taxel_model, LearningPress
 
 __all__ = ['KINDS', 'PressRecord', 'Outcome', 'CalibrationRefused', 'CalibrationSession']
 
@@ -280,8 +282,10 @@ class CalibrationSession:
                     raise CalibrationRefused(f'{name} layer: {err}{self._clipping()}') from None
                 fits[name] = fits['bottom']
                 notes += f'; the top layer takes the bottom curve ({err})'
+        model, model_note = self._learn_taxel_model(known)
         new = self._updated(
-            force_curves=(fits['top'].curve, fits['bottom'].curve), force_presses=n)
+            force_curves=(fits['top'].curve, fits['bottom'].curve), force_presses=n,
+            taxel_model=model)
         # The pipeline's normal force is the bottom layer's sum: report that layer's fit.
         bottom = fits['bottom']
         rms = math.sqrt(float(np.mean(np.square(bottom.residuals_n))))
@@ -290,7 +294,31 @@ class CalibrationSession:
                             'their rims' for name, fit in fits.items() if fit.censored)
         return Outcome(new, n, bottom.fitted_n, bottom.residuals_n,
                        f'force curves from {n} presses over {known.min():.2f} to '
-                       f'{known.max():.2f} N; residual rms {rms:.3f} N{saturated}{notes}')
+                       f'{known.max():.2f} N; residual rms {rms:.3f} N{saturated}{notes}'
+                       f'{model_note}')
+
+    def _learn_taxel_model(self, known: np.ndarray) -> tuple:
+        """
+        Return (the skin's taxel model or None, a note): learned when the method in use fits one.
+
+        A model learned for another method would be stale the day the method changes, so a
+        force calibration for a method without one clears it.
+        """
+        estimator = self.estimator
+        if not get_method(estimator.config.method).modelled:
+            return None, ''
+        pitch = estimator.config.pitch_m
+        fsr = estimator.conditioner.config.fsr
+        presses = [LearningPress(r.counts, r.clipped, float(f),
+                                 (r.shift_m[0] / pitch, r.shift_m[1] / pitch)
+                                 if all(math.isfinite(v) for v in r.shift_m) else (0.0, 0.0))
+                   for r, f in zip(self.accepted, known)]
+        try:
+            model = learn_taxel_model(presses, pitch, film_start(fsr), fsr.full_scale)
+        except ValueError as err:
+            return None, f'; no taxel model ({err})'
+        return model, (f'; taxel model from {model.presses} presses (misfit '
+                       f'{model.misfit_counts:.1f} counts rms)')
 
     def _clipping(self) -> str:
         """Return a note naming the presses whose taxels read the ADC's full scale ('' if none)."""

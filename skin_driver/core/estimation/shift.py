@@ -21,6 +21,11 @@ Registered names (stable; the benchmark compares them on the whole family of sim
   cycles per taxel, so it fails on fine grids (imprints tens of taxels wide).
 * ``centroid`` -- difference of the weighted centroids of the two imprints: no assumption about
   the imprint's shape, about two thirds of the cost, a little less accurate on most skins.
+* ``model_fit`` -- the skin's own forward model of the taxels (:mod:`taxelmodel`), learned by
+  the force calibration from its presses, fitted to the window's counts from ``taxel_fit``'s
+  estimate. Near the oracle's floor where the model holds the skin's physics
+  (docs/estimation.md, "The forward model"), but Python only: milliseconds a contact, not yet
+  for a live driver's every scan. Without a learned model it gives ``taxel_fit``'s estimate.
 
 Reference, for comparison only (``REFERENCES``; a node cannot select it): ``seed`` --
 ``cv2.phaseCorrelate`` on the whole raw maps, no window, exactly as the paper.
@@ -37,6 +42,7 @@ import cv2
 import numpy as np
 
 from .taxelfit import cell_fit_shift
+from .taxelmodel import DX, DY, fit_contact, start_of, TaxelModel
 from .validate import check_pair
 
 __all__ = ['ShiftEstimate', 'Method', 'METHODS', 'DEFAULT_METHOD', 'REFERENCES', 'get_method',
@@ -76,7 +82,8 @@ class Method:
     ``whole_map`` methods get the whole raw count maps instead of one contact's window;
     ``linear`` ones get a (6, h, w) stack: the window's force maps (counts linearised by each
     layer's force curve), its counts, then 1 where a taxel is saturated (its reading a lower
-    bound: at its force curve's censoring counts or cut by the ADC), else 0.
+    bound: at its force curve's censoring counts or cut by the ADC), else 0. ``modelled`` ones
+    also get the calibration's :class:`taxelmodel.TaxelModel` (or None).
     """
 
     name: str
@@ -84,6 +91,7 @@ class Method:
     whole_map: bool = False
     description: str = ''
     linear: bool = False
+    modelled: bool = False
 
 
 def _pad_size(n: int) -> int:
@@ -228,12 +236,30 @@ def taxel_fit(maps: np.ndarray) -> ShiftEstimate:
     return NO_SHIFT if found is None else ShiftEstimate(*found)
 
 
+def model_fit(maps: np.ndarray, model: TaxelModel = None) -> ShiftEstimate:
+    """
+    Estimate the shift by fitting the skin's taxel model to the window's counts.
+
+    ``maps`` is the (6, h, w) stack of a ``linear`` method. The fit starts at ``taxel_fit``'s
+    estimate and keeps its confidence and cut variance (the validity rule stays the default's).
+    """
+    first = taxel_fit(maps)
+    if model is None or first is NO_SHIFT or maps.shape[0] != 6:
+        return first
+    fit = fit_contact(model, maps[2:4], maps[4:] > 0, start_of(maps[:2], first[:2], model))
+    return ShiftEstimate(float(fit.u[DX]), float(fit.u[DY]), first.confidence,
+                         first.cut_variance)
+
+
 METHODS = {m.name: m for m in (
     Method('poc', poc, False, 'band-limited phase-plane POC on the contact window'),
     Method('centroid', centroid, False,
            "difference of the layers' weighted centroids in the contact's window"),
     Method('taxel_fit', taxel_fit, False,
            'cell-integrated profiles fitted to the linearised window (default)', linear=True),
+    Method('model_fit', model_fit, False,
+           "the skin's learned taxel model fitted to the window's counts (Python, slow)",
+           linear=True, modelled=True),
 )}
 
 DEFAULT_METHOD = 'taxel_fit'

@@ -40,9 +40,10 @@ from functools import lru_cache
 import math
 from typing import Sequence
 
-import cv2
 import numpy as np
 
+# How a taxel samples a profile is the estimation's description too (cellops).
+from ..estimation.cellops import axis_operator as _axis_operator, blur as _blur, gather as _gather
 from ..estimation.fsr import FsrModel
 
 __all__ = ['SkinModel', 'Press', 'render', 'render_force', 'render_expected', 'expected_counts',
@@ -177,57 +178,6 @@ def _hertz(x: np.ndarray, y: np.ndarray, cx: float, cy: float, press: Press) -> 
         b = a * press.aspect
         r2 = ((dx * c + dy * s) / a) ** 2 + ((dy * c - dx * s) / b) ** 2
     return np.sqrt(np.maximum(1.0 - r2, 0.0))
-
-
-def _cell_weights(sub: int, fill: float) -> np.ndarray:
-    # Overlap of each fine pixel with the centred active interval of one taxel cell.
-    edges = np.arange(sub + 1) / sub
-    lo, hi = 0.5 - fill / 2.0, 0.5 + fill / 2.0
-    return np.clip(np.minimum(edges[1:], hi) - np.maximum(edges[:-1], lo), 0.0, None) * sub
-
-
-@lru_cache(maxsize=512)
-def _gather(cells: int, sub: int, fill: float) -> np.ndarray:
-    """Return the (cells x cells*sub) matrix that sums a fine axis over each active cell."""
-    gather = np.zeros((cells, cells * sub))
-    weights = _cell_weights(sub, fill)
-    for k in range(cells):
-        gather[k, k * sub:(k + 1) * sub] = weights
-    gather.flags.writeable = False
-    return gather
-
-
-@lru_cache(maxsize=512)
-def _blur(n: int, blur_px: float) -> np.ndarray:
-    """Return the (n x n) Gaussian blur of a fine axis (OpenCV's kernel, zero borders)."""
-    size = int(round(blur_px * 4 * 2 + 1)) | 1
-    kernel = cv2.getGaussianKernel(size, blur_px, cv2.CV_64F).ravel()
-    half = size // 2
-    offset = np.arange(n)[None, :] - np.arange(n)[:, None] + half
-    inside = (offset >= 0) & (offset < size)
-    blur = np.where(inside, kernel[np.clip(offset, 0, size - 1)], 0.0)
-    blur.flags.writeable = False
-    return blur
-
-
-@lru_cache(maxsize=512)
-def _axis_operator(cells: int, sub: int, fill: float, blur_px: float) -> np.ndarray:
-    """
-    Return the (cells x cells*sub) matrix that blurs a fine axis and integrates it per taxel.
-
-    The pressure model is a fine supersampled image, blurred by a Gaussian and summed over each
-    taxel's active square. Blur and cell sums are both linear and separable, so along each axis
-    they fold into one small matrix: ``cells = A_y @ fine @ A_x.T``. The Gaussian is OpenCV's
-    own kernel (``cv2.getGaussianKernel`` with the size ``cv2.GaussianBlur`` picks for float
-    images) with zero borders, so the result equals blurring the full image with
-    ``cv2.GaussianBlur(..., borderType=BORDER_CONSTANT)`` and summing, at a fraction of the cost.
-    """
-    gather = _gather(cells, sub, fill)
-    if blur_px <= 0:
-        return gather
-    operator = gather @ _blur(cells * sub, blur_px)
-    operator.flags.writeable = False
-    return operator
 
 
 def _support(coords: np.ndarray, centre: float, radius: float) -> tuple:

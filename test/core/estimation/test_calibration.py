@@ -8,6 +8,11 @@ from skin_driver.core.estimation.calibration import calibrate_from_shifts, Calib
 from skin_driver.core.estimation.calibration import CalibrationMismatch, compliance_from_presses
 from skin_driver.core.estimation.calibration import SkinIdentity
 from skin_driver.core.estimation.forcecurve import ForceCurve
+from skin_driver.core.estimation.taxelmodel import TaxelModel
+
+MODEL = TaxelModel(pitch_m=0.005, fill_factor=0.88, cover_spread_m=0.001, layer_spread_m=0.002,
+                   film_scale=0.67, film_exponent=0.53, film_ceiling=3.3, film_activation_n=0.01,
+                   presses=16, misfit_counts=2.3)
 
 
 def test_mean_and_spread_of_normal_presses():
@@ -93,6 +98,17 @@ def test_round_trip_with_curves_gains_skin_and_part_times_and_older_versions_sti
     old.write_text(old.read_text().replace('version: 1', 'version: 4'))
     with pytest.raises(ValueError, match='unsupported calibration version 4'):
         Calibration.load_yaml(old)
+
+
+def test_a_learned_taxel_model_is_kept_in_the_file_and_a_bad_one_refused(tmp_path):
+    cal = Calibration(1e-4, -2e-4, presses=12).updated(taxel_model=MODEL)
+    assert cal.made('force') and 'taxel model (16 presses)' in cal.describe()
+    path = tmp_path / 'cal.yaml'
+    cal.save_yaml(path)
+    assert Calibration.load_yaml(path) == cal
+    path.write_text(path.read_text().replace('fill_factor: 0.88', 'fill_factor: 1.5'))
+    with pytest.raises(ValueError, match='cal.yaml: taxel model fill_factor must be in'):
+        Calibration.load_yaml(path)
 
 
 @pytest.mark.parametrize('skin, message', [

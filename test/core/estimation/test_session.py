@@ -165,3 +165,25 @@ def test_inconsistent_requests_are_refused_at_once(kind, args, message):
 def test_requests_no_presses_could_satisfy_are_refused_before_any_press(kind, args, message):
     with pytest.raises(CalibrationRefused, match=message):
         CalibrationSession(ContactEstimator(), kind, **args)
+
+
+def test_a_force_calibration_for_the_model_fit_learns_the_skin_and_another_clears_it():
+    est, rng = tared()
+    modelled = est.with_config(EstimatorConfig(method='model_fit'))
+    session = CalibrationSession(modelled, 'force', forces_n=FORCES)
+    places = rng.uniform(0.02, 0.055, (FORCES.size, 2))
+    feed(session, modelled, rng, [Press(x, y, f, radius_m=0.004)
+                                  for (x, y), f in zip(places, FORCES)])
+    outcome = session.finish()
+    model = outcome.calibration.taxel_model
+    assert model is not None and model.presses == FORCES.size
+    assert f'taxel model from {FORCES.size} presses' in outcome.message
+    # SKIN's layer and cover blurs are the simulator's defaults; the presses teach them.
+    assert model.layer_spread_m == pytest.approx(SKIN.spread_m, rel=0.05)
+    assert model.cover_spread_m == pytest.approx(SKIN.cover_spread_m, rel=0.15)
+    # A force calibration for a method without a model leaves no stale one behind.
+    plain = est.with_calibration(outcome.calibration)
+    session = CalibrationSession(plain, 'force', forces_n=FORCES)
+    feed(session, plain, rng, [Press(x, y, f, radius_m=0.004)
+                               for (x, y), f in zip(places, FORCES)])
+    assert session.finish().calibration.taxel_model is None

@@ -24,7 +24,7 @@ def test_all_methods_registered_with_stable_names():
     for name in REQUIRED:
         assert direction.get_method(name).name == name
     assert direction.DEFAULT_METHOD == 'taxel_fit'
-    assert direction.method_names() == ['taxel_fit', 'centroid', 'poc']
+    assert direction.method_names() == ['taxel_fit', 'centroid', 'model_fit', 'poc']
 
 
 def test_the_papers_method_is_a_reference_a_node_cannot_select():
@@ -38,7 +38,7 @@ def test_the_papers_method_is_a_reference_a_node_cannot_select():
 
 def test_unknown_method_lists_names():
     with pytest.raises(ValueError,
-                       match='unknown direction method .*taxel_fit, centroid, poc'):
+                       match='unknown direction method .*taxel_fit, centroid, model_fit, poc'):
         direction.get_method('nope')
 
 

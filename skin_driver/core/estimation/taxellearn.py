@@ -1,0 +1,196 @@
+"""
+Learn a skin's :class:`taxelmodel.TaxelModel` from presses of known normal force.
+
+The presses a force calibration records (tared counts at full load, each with its known force)
+hold the skin: the cover and layer blurs, the pads' fill and the film's law. One
+Levenberg-Marquardt fit takes them all together, the skin's seven numbers shared and each
+press's place, shift and tip radius its own, its normal force held at the known one (the film's
+law and the force trade against each other otherwise). Learned on counts, not on force maps:
+the film's curve read through a separate calibration misreads the imprints' rims, and that
+error comes back as sampling bias (docs/estimation.md, "The forward model").
+
+The fit starts from a film law given by the caller (the driver's assumed FSR) and a blur of a
+fifth and two fifths of a taxel: starts only; what the presses say replaces them.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+import math
+from typing import Sequence
+
+import numpy as np
+
+from .fsr import FsrModel
+from .taxelmodel import (levenberg_marquardt, LOG_FORCE, MAX_MOVES, residuals, start_of, STEPS,
+                         sub_for, TaxelModel)
+
+__all__ = ['LearningPress', 'learn_taxel_model', 'film_start']
+
+# Per-press parameters the learning frees: centre, shift and radius (the force is known).
+_FREE = np.array((True, True, False, True, True, True, False, False))
+_SKIN_STEP = 0.01
+_SKIN_MOVE = 0.3
+# Starts of the blurs, taxels (cover, layer), and of the pads' fill: the misfit of narrow pads
+# has a side minimum at a wide fill, so the learning starts from two and keeps the better.
+_START_BLURS = (0.2, 0.4)
+_START_FILLS = (0.9, 0.75)
+_MARGIN = 2
+# The activation is learned in log units, so it starts above zero even for a film without one.
+_LEAST_LOAD = 1e-4
+
+
+@dataclass(frozen=True)
+class LearningPress:
+    """
+    One press of known normal force, as a force calibration recorded it.
+
+    Its tared counts (2, rows, cols), its saturated taxels (same shape) or None, and its raw
+    shift (taxels, dx along columns) as the estimator measured it.
+    """
+
+    counts: np.ndarray
+    censored: np.ndarray
+    normal_force_n: float
+    shift_taxels: tuple
+
+
+def film_start(fsr: FsrModel) -> tuple:
+    """
+    Return (film_scale, film_exponent, film_ceiling, film_activation_n) of an FSR's law.
+
+    The learning's start: the driver's assumed FSR.
+    """
+    n = fsr.exponent
+    scale = fsr.r_series_ohm / fsr.r_max_ohm * fsr.force_at_r_max_n ** -n
+    return scale, n, fsr.r_series_ohm / fsr.r_min_ohm, fsr.activation_n
+
+
+def _model(pitch: float, full_scale: float, g: np.ndarray) -> TaxelModel:
+    cover, layer = math.exp(g[0]), math.exp(g[1])
+    return TaxelModel(pitch_m=pitch, fill_factor=1.0 / (1.0 + math.exp(-g[2])),
+                      cover_spread_m=cover * pitch, layer_spread_m=layer * pitch,
+                      film_scale=math.exp(g[3]), film_exponent=math.exp(g[4]),
+                      film_ceiling=math.exp(g[5]), film_activation_n=math.exp(g[6]),
+                      full_scale=full_scale)
+
+
+def _window(press: LearningPress) -> tuple:
+    """Return (counts, censored) cut to the press's imprints and a margin."""
+    loaded = np.flatnonzero(press.counts.any(axis=0).any(axis=1))
+    cols = np.flatnonzero(press.counts.any(axis=0).any(axis=0))
+    h, w = press.counts.shape[1:]
+    r0, r1 = max(loaded[0] - _MARGIN, 0), min(loaded[-1] + _MARGIN + 1, h)
+    c0, c1 = max(cols[0] - _MARGIN, 0), min(cols[-1] + _MARGIN + 1, w)
+    censored = (None if press.censored is None
+                else np.asarray(press.censored, dtype=bool)[:, r0:r1, c0:c1])
+    return np.asarray(press.counts, dtype=np.float64)[:, r0:r1, c0:c1], censored
+
+
+def learn_taxel_model(presses: Sequence[LearningPress], pitch_m: float, film: tuple,
+                      full_scale: float, iterations: int = 40) -> TaxelModel:
+    """
+    Return the skin's taxel model learned from ``presses`` (module docstring).
+
+    ``film`` is the (scale, exponent, ceiling, activation) to start from (:func:`film_start`).
+    Raises ValueError when no press has load on both layers.
+    """
+    windows = [(_window(p), p) for p in presses
+               if np.asarray(p.counts)[0].any() and np.asarray(p.counts)[1].any()]
+    if not windows:
+        raise ValueError('no press loaded both layers: the taxel model cannot be learned')
+    best = None
+    for fill in _START_FILLS:
+        found = _learn_from(windows, pitch_m, full_scale, film, fill, iterations)
+        if best is None or found[1] < best[1]:
+            best = found
+    g, cost = best
+    taxels = sum(c.size for (c, _), _ in windows)
+    return replace(_model(pitch_m, full_scale, g), presses=len(windows),
+                   misfit_counts=math.sqrt(cost / taxels))
+
+
+def _learn_from(windows: list, pitch: float, full_scale: float, film: tuple, fill: float,
+                iterations: int) -> tuple:
+    """Return (skin parameters, misfit) of the joint fit started at the pads' ``fill``."""
+    g = np.array((math.log(_START_BLURS[0]), math.log(_START_BLURS[1]),
+                  math.log(fill / (1.0 - fill)), math.log(film[0]),
+                  math.log(film[1]), math.log(film[2]), math.log(max(film[3], _LEAST_LOAD))))
+    model = _model(pitch, full_scale, g)
+    presses_u, subs = [], []
+    for (counts, censored), press in windows:
+        u = start_of(counts, press.shift_taxels, model)
+        u[LOG_FORCE] = math.log(press.normal_force_n)
+        sub = sub_for(u)
+        u, _ = levenberg_marquardt(
+            lambda v, c=counts, m=censored, s=sub: residuals(model, c, m, v, s), u, _FREE, 6)
+        presses_u.append(u)
+        subs.append(sub)
+    g, _, cost = _joint(pitch, full_scale, g, presses_u, subs, [w for w, _ in windows],
+                        iterations)
+    return g, cost
+
+
+def _joint(pitch: float, full_scale: float, g: np.ndarray, presses_u: list, subs: list,
+           windows: list, iterations: int) -> tuple:
+    """Return (g, press parameters, misfit) of the joint fit of skin and presses."""
+    idx = np.flatnonzero(_FREE)
+    steps, moves = STEPS[idx], MAX_MOVES[idx]
+    ng, npress = g.size, idx.size
+    size = ng + npress * len(windows)
+
+    def all_residuals(g, us):
+        model = _model(pitch, full_scale, g)
+        return [residuals(model, c, m, u, s) for (c, m), u, s in zip(windows, us, subs)]
+
+    r = all_residuals(g, presses_u)
+    cost = sum(float(x @ x) for x in r)
+    damping = 1e-3
+    for _ in range(iterations):
+        normal = np.zeros((size, size))
+        grad = np.zeros(size)
+        skin_jac = []
+        for j in range(ng):
+            shifted = g.copy()
+            shifted[j] += _SKIN_STEP
+            skin_jac.append([(a - b) / _SKIN_STEP
+                             for a, b in zip(all_residuals(shifted, presses_u), r)])
+        model = _model(pitch, full_scale, g)
+        for k, ((counts, censored), u, sub) in enumerate(zip(windows, presses_u, subs)):
+            jp = np.empty((r[k].size, npress))
+            for col, (j, h) in enumerate(zip(idx, steps)):
+                v = u.copy()
+                v[j] += h
+                jp[:, col] = (residuals(model, counts, censored, v, sub) - r[k]) / h
+            jg = np.column_stack([skin_jac[j][k] for j in range(ng)])
+            own = slice(ng + npress * k, ng + npress * (k + 1))
+            normal[:ng, :ng] += jg.T @ jg
+            normal[:ng, own] += jg.T @ jp
+            normal[own, :ng] += jp.T @ jg
+            normal[own, own] += jp.T @ jp
+            grad[:ng] += jg.T @ r[k]
+            grad[own] += jp.T @ r[k]
+        for _ in range(6):
+            try:
+                move = np.linalg.solve(normal + damping * np.diag(np.diag(normal) + 1e-12),
+                                       -grad)
+            except np.linalg.LinAlgError:
+                return g, presses_u, cost
+            skin_move = np.clip(move[:ng], -_SKIN_MOVE, _SKIN_MOVE)
+            press_moves = move[ng:].reshape(len(windows), npress)
+            press_moves /= np.maximum(1.0, np.abs(press_moves / moves).max(axis=1))[:, None]
+            trial_u = []
+            for u, m in zip(presses_u, press_moves):
+                v = u.copy()
+                v[idx] += m
+                trial_u.append(v)
+            r2 = all_residuals(g + skin_move, trial_u)
+            cost2 = sum(float(x @ x) for x in r2)
+            if cost2 < cost:
+                g, presses_u, r, cost = g + skin_move, trial_u, r2, cost2
+                damping *= 0.3
+                break
+            damping *= 10.0
+        else:
+            break
+    return g, presses_u, cost

@@ -1,0 +1,277 @@
+"""
+A forward model of the taxels with the skin's own parameters, and its fit to one contact.
+
+Where :mod:`taxelfit` describes each imprint by Gaussians, this model renders the counts a
+press gives and fits them (issue #16, docs/estimation.md "The forward model"):
+
+* the tip loads the top layer with a Hertz profile ``sqrt(1 - r**2)`` over an ellipse (semi-axes
+  ``a`` and ``a * aspect``, turned by ``orientation``) whose integral is the normal force;
+* the cover blurs it by a Gaussian (``cover_spread_m``); the bottom layer sees it blurred by
+  the elastic layer too (``layer_spread_m``, added in quadrature) and displaced by the shift;
+* each taxel sums the load over its active pad (``fill_factor`` of the pitch, :mod:`cellops`);
+* the film turns a taxel's load ``f`` into counts through the divider:
+  ``counts = full_scale * g / (1 + g)``, ``g = min(film_scale * (f - film_activation_n)**
+  film_exponent, film_ceiling)`` (an FSR is open below its activation load; its conductance then
+  grows as a power of force up to its resistance floor). The activation matters: the law is
+  steep at small loads, so a blur's tails would read hundreds of counts without it.
+
+None of the skin's numbers is assumed: :mod:`taxellearn` learns them from the presses of known
+force a force calibration records, and the calibration keeps them (:class:`TaxelModel`). A
+contact is fitted by Levenberg-Marquardt on its window's tared counts, taxels the film or the
+ADC saturated taken as lower bounds; a round tip first, then an elliptical one from four
+orientations, the least misfit kept (the misfit of narrow imprints is rugged, so one start
+stops in side minima).
+"""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass
+import math
+
+import numpy as np
+
+from .cellops import axis_operator
+from .validate import check_number
+
+__all__ = ['TaxelModel', 'PressFit', 'render_counts', 'residuals', 'levenberg_marquardt',
+           'fit_contact', 'start_of']
+
+# Per-press parameters: centre x, y (taxels of the window), log normal force (N), shift dx, dy
+# (taxels), log tip radius (taxels), log aspect, orientation (rad).
+X, Y, LOG_FORCE, DX, DY, LOG_RADIUS, LOG_ASPECT, ORIENTATION = range(8)
+# Finite-difference steps and the largest step a Levenberg-Marquardt move may take, per
+# parameter (taxels, log units, radians): a narrow imprint's misfit is rugged beyond them.
+STEPS = np.array((0.02, 0.02, 0.01, 0.02, 0.02, 0.03, 0.03, 0.05))
+MAX_MOVES = np.array((0.5, 0.5, 0.5, 1.0, 1.0, 0.3, 0.3, 0.5))
+# Radii and aspects a fit may take (log units): beyond them a runaway fit renders huge grids.
+_LOG_RADIUS = (math.log(0.05), math.log(4.0))
+_LOG_ASPECT = (-0.9, 0.9)
+# Fine samples per taxel: at least 24, and twelve over the smaller semi-axis (docs/estimation.md).
+_SUB = (24, 48)
+_ORIENTATIONS = (0.0, math.pi / 4, math.pi / 2, 3 * math.pi / 4)
+_ELLIPSE_START = math.log(0.8)
+
+
+@dataclass(frozen=True)
+class TaxelModel:
+    """
+    A skin's taxels as the forward model sees them (module docstring); SI units.
+
+    ``presses`` is how many presses taught it and ``misfit_counts`` their rms residual.
+    """
+
+    pitch_m: float
+    fill_factor: float
+    cover_spread_m: float
+    layer_spread_m: float
+    film_scale: float
+    film_exponent: float
+    film_ceiling: float
+    film_activation_n: float = 0.0
+    full_scale: float = 4095.0
+    presses: int = 0
+    misfit_counts: float = 0.0
+
+    def __post_init__(self):
+        """Reject a model that renders nothing sensible."""
+        for name in ('pitch_m', 'film_scale', 'film_exponent', 'film_ceiling', 'full_scale'):
+            check_number(getattr(self, name), f'taxel model {name}', positive=True)
+        for name in ('cover_spread_m', 'layer_spread_m', 'film_activation_n', 'misfit_counts'):
+            check_number(getattr(self, name), f'taxel model {name}', non_negative=True)
+        if not 0 < self.fill_factor <= 1:
+            raise ValueError(f'taxel model fill_factor must be in (0, 1], got {self.fill_factor}')
+
+    def counts(self, force_n: np.ndarray) -> np.ndarray:
+        """Return the film's counts for per-taxel loads (newtons)."""
+        load = np.maximum(force_n - self.film_activation_n, 0.0)
+        g = np.minimum(self.film_scale * load ** self.film_exponent,
+                       self.film_ceiling)
+        return self.full_scale * g / (1.0 + g)
+
+    def blurs_taxels(self) -> tuple:
+        """Return the (top, bottom) Gaussian blur in taxels."""
+        cover = self.cover_spread_m / self.pitch_m
+        return cover, math.hypot(cover, self.layer_spread_m / self.pitch_m)
+
+    def to_dict(self) -> dict:
+        """Return the model as plain numbers (the calibration file)."""
+        return {k: float(v) if k != 'presses' else int(v) for k, v in asdict(self).items()}
+
+    @classmethod
+    def from_dict(cls, doc) -> 'TaxelModel':
+        """Build the model from its mapping; raise ValueError on a missing or bad field."""
+        if not isinstance(doc, dict):
+            raise ValueError('taxel_model must be a mapping')
+        names = set(cls.__dataclass_fields__)
+        unknown = set(doc) - names
+        if unknown:
+            raise ValueError(f'taxel_model has unknown fields {sorted(unknown)}')
+        return cls(**doc)
+
+
+@dataclass(frozen=True)
+class PressFit:
+    """A fitted press: its parameters (see the module's indices) and its misfit (counts**2)."""
+
+    u: np.ndarray
+    misfit: float
+
+
+def _layer(shape: tuple, cx: float, cy: float, u: np.ndarray, blur: float, fill: float,
+           sub: int) -> np.ndarray:
+    """Return one layer's per-taxel load (the press's normal force spread over the window)."""
+    h, w = shape
+    a = math.exp(min(max(u[LOG_RADIUS], _LOG_RADIUS[0]), _LOG_RADIUS[1]))
+    aspect = math.exp(min(max(u[LOG_ASPECT], _LOG_ASPECT[0]), _LOG_ASPECT[1]))
+    reach = a * max(aspect, 1.0)
+    # The fine axes run past the window by what the blur and the tip reach, so that load just
+    # off the window still blurs onto it.
+    margin = int(math.ceil(reach + 4.0 * blur)) + 1
+    step = 1.0 / sub
+
+    def axis(centre, cells):
+        # The fine samples within the tip's reach of its centre (index 0 is the first sample
+        # of the cell ``-margin``): the profile is zero beyond them.
+        origin = margin + 0.5
+        lo = max(int(math.floor((centre - reach + origin) * sub - 0.5)), 0)
+        hi = min(int(math.ceil((centre + reach + origin) * sub - 0.5)) + 1,
+                 (cells + 2 * margin) * sub)
+        if hi <= lo:
+            return None
+        return lo, (np.arange(lo, hi) + 0.5) * step - origin
+
+    ax, ay = axis(cx, w), axis(cy, h)
+    if ax is None or ay is None:
+        return np.zeros(shape)
+    (x0, xs), (y0, ys) = ax, ay
+    dx, dy = (xs - cx)[None, :], (ys - cy)[:, None]
+    if aspect == 1.0:
+        r2 = (dx * dx + dy * dy) / (a * a)
+    else:
+        c, s = math.cos(u[ORIENTATION]), math.sin(u[ORIENTATION])
+        r2 = ((dx * c + dy * s) / a) ** 2 + ((dy * c - dx * s) / (a * aspect)) ** 2
+    fine = np.sqrt(np.maximum(1.0 - r2, 0.0))
+    total = fine.sum()
+    if total <= 0:
+        return np.zeros(shape)
+    blur_px = blur * sub
+    op_y = axis_operator(h + 2 * margin, sub, fill, blur_px)[margin:margin + h,
+                                                             y0:y0 + ys.size]
+    op_x = axis_operator(w + 2 * margin, sub, fill, blur_px)[margin:margin + w,
+                                                             x0:x0 + xs.size]
+    return (op_y @ fine @ op_x.T) * (math.exp(u[LOG_FORCE]) / total)
+
+
+def render_counts(model: TaxelModel, shape: tuple, u: np.ndarray, sub: int) -> np.ndarray:
+    """Return the (2, h, w) counts of one press ``u`` on a window of ``shape``."""
+    top_blur, bottom_blur = model.blurs_taxels()
+    fill = float(model.fill_factor)
+    top = _layer(shape, u[X], u[Y], u, top_blur, fill, sub)
+    bottom = _layer(shape, u[X] + u[DX], u[Y] + u[DY], u, bottom_blur, fill, sub)
+    return model.counts(np.stack((top, bottom)))
+
+
+def residuals(model: TaxelModel, counts: np.ndarray, censored: np.ndarray, u: np.ndarray,
+              sub: int) -> np.ndarray:
+    """Return the counts' residuals, a censored taxel's only where the model reads below it."""
+    r = render_counts(model, counts.shape[1:], u, sub) - counts
+    if censored is not None:
+        r = np.where(censored & (r > 0), 0.0, r)
+    return r.ravel()
+
+
+def levenberg_marquardt(residual, u: np.ndarray, free: np.ndarray, iterations: int) -> tuple:
+    """
+    Return (u, misfit) minimising ``residual(u) @ residual(u)`` over the ``free`` parameters.
+
+    Forward-difference Jacobian (steps :data:`STEPS`), each move scaled into :data:`MAX_MOVES`.
+    """
+    u = np.array(u, dtype=np.float64)
+    idx = np.flatnonzero(free)
+    steps, moves = STEPS[idx], MAX_MOVES[idx]
+    r = residual(u)
+    cost = float(r @ r)
+    damping = 1e-3
+
+    def jacobian(u, r):
+        jac = np.empty((r.size, idx.size))
+        for k, (j, h) in enumerate(zip(idx, steps)):
+            v = u.copy()
+            v[j] += h
+            jac[:, k] = (residual(v) - r) / h
+        return jac
+
+    jac = jacobian(u, r)
+    for _ in range(iterations):
+        normal = jac.T @ jac
+        try:
+            move = np.linalg.solve(normal + damping * np.diag(np.diag(normal) + 1e-12),
+                                   -jac.T @ r)
+        except np.linalg.LinAlgError:
+            break
+        move /= max(1.0, float(np.abs(move / moves).max()))
+        trial = u.copy()
+        trial[idx] += move
+        r2 = residual(trial)
+        cost2 = float(r2 @ r2)
+        if cost2 < cost:
+            u, r, cost = trial, r2, cost2
+            damping *= 0.3
+            if np.abs(move).max() < 1e-4:
+                break
+            jac = jacobian(u, r)
+        else:
+            damping *= 10.0
+    return u, cost
+
+
+def start_of(maps: np.ndarray, shift: tuple, model: TaxelModel) -> np.ndarray:
+    """
+    Return a press's start from its window's (2, h, w) force maps and a first shift (taxels).
+
+    Centre: the top's centroid; force: the larger layer sum over the pad's share; radius: the
+    top's second moment less the cover blur and the pad's own (a Hertz disc's is a**2 / 5).
+    """
+    top = maps[0]
+    mass = top.sum()
+    h, w = top.shape
+    xs, ys = np.arange(w, dtype=np.float64), np.arange(h, dtype=np.float64)
+    cx = float(top.sum(axis=0) @ xs / mass)
+    cy = float(top.sum(axis=1) @ ys / mass)
+    var = float((top.sum(axis=0) @ (xs - cx) ** 2 + top.sum(axis=1) @ (ys - cy) ** 2)
+                / (2.0 * mass))
+    cover = model.blurs_taxels()[0]
+    radius = math.sqrt(5.0 * max(var - cover * cover - 1.0 / 12.0, 0.01))
+    force = max(float(maps[0].sum()), float(maps[1].sum())) / model.fill_factor ** 2
+    u = np.zeros(8)
+    u[X], u[Y], u[DX], u[DY] = cx, cy, shift[0], shift[1]
+    u[LOG_FORCE] = math.log(max(force, 1e-3))
+    u[LOG_RADIUS] = math.log(min(max(radius, 0.1), 3.0))
+    return u
+
+
+def sub_for(u: np.ndarray) -> int:
+    """Return the fine samples per taxel for a press of ``u``'s size (fixed through a fit)."""
+    small = math.exp(u[LOG_RADIUS]) * min(math.exp(u[LOG_ASPECT]), 1.0)
+    return int(min(max(math.ceil(12.0 / max(small, 1e-3)), _SUB[0]), _SUB[1]))
+
+
+def fit_contact(model: TaxelModel, counts: np.ndarray, censored: np.ndarray, u0: np.ndarray,
+                iterations: int = 10) -> PressFit:
+    """Return the least-misfit fit of one contact's (2, h, w) counts (module docstring)."""
+    sub = sub_for(u0)
+
+    def residual(u):
+        return residuals(model, counts, censored, u, sub)
+
+    round_free = np.array([True] * 6 + [False] * 2)
+    u, cost = levenberg_marquardt(residual, u0, round_free, iterations)
+    best = PressFit(u, cost)
+    every = np.ones(8, dtype=bool)
+    for orientation in _ORIENTATIONS:
+        v = u.copy()
+        v[LOG_ASPECT], v[ORIENTATION] = _ELLIPSE_START, orientation
+        found, found_cost = levenberg_marquardt(residual, v, every, iterations)
+        if found_cost < best.misfit:
+            best = PressFit(found, found_cost)
+    return best
