@@ -298,6 +298,39 @@ class CalibrationServices:
                          'presses': 0 if forces else (goal.presses
                                                       or self._param('calibration.presses'))}
 
+    async def _off_the_executor(self, work):
+        """
+        Return ``work()`` run on a thread of its own, raising what it raises.
+
+        A fit may take seconds (a force calibration that learns the taxel model): the executor
+        goes on with scans, diagnostics and cancel requests meanwhile, polling for the end.
+        """
+        box = {}
+        finished = threading.Event()
+
+        def run():
+            try:
+                box['result'] = work()
+            except Exception as err:  # noqa: B902 - handed to the awaiting action as it is
+                box['error'] = err
+            finally:
+                finished.set()
+
+        threading.Thread(target=run, name='calibration fit', daemon=True).start()
+        future = Future()
+
+        def watch():
+            if finished.is_set() and not future.done():
+                future.set_result(True)
+        timer = self._node.create_timer(POLL_S, watch)
+        try:
+            await future
+        finally:
+            self._node.destroy_timer(timer)
+        if 'error' in box:
+            raise box['error']
+        return box['result']
+
     def _gains_args(self, goal) -> tuple:
         return request_problem(goal.presses, goal.timeout), {'presses': goal.presses or 1}
 
@@ -358,7 +391,7 @@ class CalibrationServices:
             return result
         path = self.path
         try:
-            outcome = session.finish()
+            outcome = await self._off_the_executor(session.finish)
             # The node's own state: its folder (by default under ROS_HOME) is made as needed.
             outcome.calibration.save_yaml(path, make_parents=True)
         except (CalibrationRefused, OSError, ValueError) as err:

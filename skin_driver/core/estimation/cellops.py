@@ -15,7 +15,7 @@ from functools import lru_cache
 import cv2
 import numpy as np
 
-__all__ = ['cell_weights', 'gather', 'blur', 'axis_operator']
+__all__ = ['cell_weights', 'gather', 'blur', 'blur_block', 'axis_operator']
 
 
 def cell_weights(sub: int, fill: float) -> np.ndarray:
@@ -47,6 +47,29 @@ def blur(n: int, blur_px: float) -> np.ndarray:
     out = np.where(inside, kernel[np.clip(offset, 0, size - 1)], 0.0)
     out.flags.writeable = False
     return out
+
+
+def blur_block(out_first: int, out_n: int, in_first: int, in_n: int,
+               blur_px: float) -> np.ndarray:
+    """
+    Return the block of :func:`blur` from fine samples ``in_first``.. to ``out_first``..
+
+    Built on the spot, never cached: a fit that learns the blur asks for a new one every step,
+    and the whole matrices of long axes would fill the memory.
+    """
+    if blur_px <= 0:
+        out = np.zeros((out_n, in_n))
+        rows = np.arange(in_n) + in_first - out_first
+        inside = (rows >= 0) & (rows < out_n)
+        out[rows[inside], np.flatnonzero(inside)] = 1.0
+        return out
+    size = int(round(blur_px * 4 * 2 + 1)) | 1
+    kernel = cv2.getGaussianKernel(size, blur_px, cv2.CV_64F).ravel()
+    half = size // 2
+    offset = ((np.arange(in_n) + in_first)[None, :] - (np.arange(out_n) + out_first)[:, None]
+              + half)
+    inside = (offset >= 0) & (offset < size)
+    return np.where(inside, kernel[np.clip(offset, 0, size - 1)], 0.0)
 
 
 @lru_cache(maxsize=512)

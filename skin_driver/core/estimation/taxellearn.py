@@ -2,8 +2,9 @@
 Learn a skin's :class:`taxelmodel.TaxelModel` from presses of known normal force.
 
 The presses a force calibration records (tared counts at full load, each with its known force)
-hold the skin: the cover and layer blurs, the pads' fill and the film's law. One
-Levenberg-Marquardt fit takes them all together, the skin's seven numbers shared and each
+hold the skin: the cover and layer blurs, the pads' fill and the film's law (with or without a
+turn-on). One Levenberg-Marquardt fit takes them all together, the skin's seven (nine with a
+turn-on) numbers shared and each
 press's place, shift and tip radius its own, its normal force held at the known one (the film's
 law and the force trade against each other otherwise). Learned on counts, not on force maps:
 the film's curve read through a separate calibration misreads the imprints' rims, and that
@@ -22,8 +23,8 @@ from typing import Sequence
 import numpy as np
 
 from .fsr import FsrModel
-from .taxelmodel import (levenberg_marquardt, LOG_FORCE, MAX_MOVES, residuals, start_of, STEPS,
-                         sub_for, TaxelModel)
+from .taxelmodel import (best_radius, levenberg_marquardt, LOG_FORCE, MAX_MOVES, residuals,
+                         start_of, STEPS, sub_for, TaxelModel)
 
 __all__ = ['LearningPress', 'learn_taxel_model', 'film_start']
 
@@ -36,6 +37,11 @@ _SKIN_MOVE = 0.3
 _START_BLURS = (0.2, 0.4)
 _START_FILLS = (0.9, 0.75)
 _MARGIN = 2
+# A film with a turn-on starts at 20 kPa over a 5 mm taxel's area (N); kept when it explains
+# the presses better than the smooth film (a skin's film has one or not).
+_START_TURN_ON = 0.5
+# The share of the loaded taxels below the counts a step starts at.
+_STEP_QUANTILE = 0.02
 # The activation is learned in log units, so it starts above zero even for a film without one.
 _LEAST_LOAD = 1e-4
 
@@ -67,12 +73,15 @@ def film_start(fsr: FsrModel) -> tuple:
 
 
 def _model(pitch: float, full_scale: float, g: np.ndarray) -> TaxelModel:
+    """Return the model of the skin parameters ``g`` (log units; 7, or 9 with a turn-on)."""
     cover, layer = math.exp(g[0]), math.exp(g[1])
+    turn_on = {} if g.size == 7 else {'turn_on_pa': math.exp(g[7]) / (pitch * pitch),
+                                      'film_step': math.exp(g[8])}
     return TaxelModel(pitch_m=pitch, fill_factor=1.0 / (1.0 + math.exp(-g[2])),
                       cover_spread_m=cover * pitch, layer_spread_m=layer * pitch,
                       film_scale=math.exp(g[3]), film_exponent=math.exp(g[4]),
                       film_ceiling=math.exp(g[5]), film_activation_n=math.exp(g[6]),
-                      full_scale=full_scale)
+                      full_scale=full_scale, **turn_on)
 
 
 def _window(press: LearningPress) -> tuple:
@@ -101,29 +110,45 @@ def learn_taxel_model(presses: Sequence[LearningPress], pitch_m: float, film: tu
         raise ValueError('no press loaded both layers: the taxel model cannot be learned')
     best = None
     for fill in _START_FILLS:
-        found = _learn_from(windows, pitch_m, full_scale, film, fill, iterations)
+        found = _learn_from(windows, pitch_m, full_scale, _start(film, fill), iterations)
         if best is None or found[1] < best[1]:
             best = found
+    # A film with a turn-on is learned from the smooth film's skin; its step starts at the
+    # counts a loaded taxel reads at least (a smooth film's lowest reading is the touch
+    # threshold, which makes a step too small to matter).
+    loaded = np.concatenate([c[c > 0] for (c, _), _ in windows])
+    low = float(np.quantile(loaded, _STEP_QUANTILE)) if loaded.size else 1.0
+    turn_on = np.log((_START_TURN_ON, low / max(full_scale - low, 1.0)))
+    found = _learn_from(windows, pitch_m, full_scale, np.concatenate((best[0], turn_on)),
+                        iterations)
+    if found[1] < best[1]:
+        best = found
     g, cost = best
     taxels = sum(c.size for (c, _), _ in windows)
     return replace(_model(pitch_m, full_scale, g), presses=len(windows),
                    misfit_counts=math.sqrt(cost / taxels))
 
 
-def _learn_from(windows: list, pitch: float, full_scale: float, film: tuple, fill: float,
+def _start(film: tuple, fill: float) -> np.ndarray:
+    """Return the skin parameters of a smooth film to start from (log units)."""
+    return np.array((math.log(_START_BLURS[0]), math.log(_START_BLURS[1]),
+                     math.log(fill / (1.0 - fill)), math.log(film[0]), math.log(film[1]),
+                     math.log(film[2]), math.log(max(film[3], _LEAST_LOAD))))
+
+
+def _learn_from(windows: list, pitch: float, full_scale: float, g: np.ndarray,
                 iterations: int) -> tuple:
-    """Return (skin parameters, misfit) of the joint fit started at the pads' ``fill``."""
-    g = np.array((math.log(_START_BLURS[0]), math.log(_START_BLURS[1]),
-                  math.log(fill / (1.0 - fill)), math.log(film[0]),
-                  math.log(film[1]), math.log(film[2]), math.log(max(film[3], _LEAST_LOAD))))
+    """Return (skin parameters, misfit) of the joint fit started at ``g`` (:func:`_model`)."""
     model = _model(pitch, full_scale, g)
     presses_u, subs = [], []
     for (counts, censored), press in windows:
         u = start_of(counts, press.shift_taxels, model)
         u[LOG_FORCE] = math.log(press.normal_force_n)
         sub = sub_for(u)
-        u, _ = levenberg_marquardt(
-            lambda v, c=counts, m=censored, s=sub: residuals(model, c, m, v, s), u, _FREE, 6)
+
+        def residual(v, c=counts, m=censored, s=sub):
+            return residuals(model, c, m, v, s)
+        u, _ = levenberg_marquardt(residual, best_radius(residual, u), _FREE, 6)
         presses_u.append(u)
         subs.append(sub)
     g, _, cost = _joint(pitch, full_scale, g, presses_u, subs, [w for w, _ in windows],

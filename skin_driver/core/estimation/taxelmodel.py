@@ -13,7 +13,12 @@ press gives and fits them (issue #16, docs/estimation.md "The forward model"):
   ``counts = full_scale * g / (1 + g)``, ``g = min(film_scale * (f - film_activation_n)**
   film_exponent, film_ceiling)`` (an FSR is open below its activation load; its conductance then
   grows as a power of force up to its resistance floor). The activation matters: the law is
-  steep at small loads, so a blur's tails would read hundreds of counts without it.
+  steep at small loads, so a blur's tails would read hundreds of counts without it;
+* a film may also stay open where its local pressure (after the blur) is below
+  ``turn_on_pa``: a taxel then reads only the load where it is exceeded, and with
+  ``film_step`` (a conductance ratio like ``g``) it reads at least that as soon as any of it
+  conducts. Imprints get cliffs at their rims; the blur and the cut then act on the fine
+  grid, a few times the cost of a smooth film's render.
 
 None of the skin's numbers is assumed: :mod:`taxellearn` learns them from the presses of known
 force a force calibration records, and the calibration keeps them (:class:`TaxelModel`). A
@@ -30,11 +35,11 @@ import math
 
 import numpy as np
 
-from .cellops import axis_operator
+from .cellops import axis_operator, blur_block, gather
 from .validate import check_number
 
 __all__ = ['TaxelModel', 'PressFit', 'render_counts', 'residuals', 'levenberg_marquardt',
-           'fit_contact', 'start_of']
+           'best_radius', 'fit_contact', 'start_of', 'sub_for']
 
 # Per-press parameters: centre x, y (taxels of the window), log normal force (N), shift dx, dy
 # (taxels), log tip radius (taxels), log aspect, orientation (rad).
@@ -48,6 +53,8 @@ _LOG_RADIUS = (math.log(0.05), math.log(4.0))
 _LOG_ASPECT = (-0.9, 0.9)
 # Fine samples per taxel: at least 24, and twelve over the smaller semi-axis (docs/estimation.md).
 _SUB = (24, 48)
+_ROBUST_SHARE = 0.05
+_RADIUS_SCALES = (0.5, 0.63, 0.8, 1.0, 1.25, 1.6)
 _ORIENTATIONS = (0.0, math.pi / 4, math.pi / 2, 3 * math.pi / 4)
 _ELLIPSE_START = math.log(0.8)
 
@@ -68,6 +75,8 @@ class TaxelModel:
     film_exponent: float
     film_ceiling: float
     film_activation_n: float = 0.0
+    turn_on_pa: float = 0.0
+    film_step: float = 0.0
     full_scale: float = 4095.0
     presses: int = 0
     misfit_counts: float = 0.0
@@ -76,7 +85,8 @@ class TaxelModel:
         """Reject a model that renders nothing sensible."""
         for name in ('pitch_m', 'film_scale', 'film_exponent', 'film_ceiling', 'full_scale'):
             check_number(getattr(self, name), f'taxel model {name}', positive=True)
-        for name in ('cover_spread_m', 'layer_spread_m', 'film_activation_n', 'misfit_counts'):
+        for name in ('cover_spread_m', 'layer_spread_m', 'film_activation_n', 'turn_on_pa',
+                     'film_step', 'misfit_counts'):
             check_number(getattr(self, name), f'taxel model {name}', non_negative=True)
         if not 0 < self.fill_factor <= 1:
             raise ValueError(f'taxel model fill_factor must be in (0, 1], got {self.fill_factor}')
@@ -86,6 +96,8 @@ class TaxelModel:
         load = np.maximum(force_n - self.film_activation_n, 0.0)
         g = np.minimum(self.film_scale * load ** self.film_exponent,
                        self.film_ceiling)
+        if self.film_step > 0:
+            g = np.where(force_n > 0, np.maximum(g, self.film_step), g)
         return self.full_scale * g / (1.0 + g)
 
     def blurs_taxels(self) -> tuple:
@@ -118,8 +130,12 @@ class PressFit:
 
 
 def _layer(shape: tuple, cx: float, cy: float, u: np.ndarray, blur: float, fill: float,
-           sub: int) -> np.ndarray:
-    """Return one layer's per-taxel load (the press's normal force spread over the window)."""
+           sub: int, turn_on: float = 0.0) -> np.ndarray:
+    """
+    Return one layer's per-taxel load (the press's normal force spread over the window).
+
+    ``turn_on``: the film's turn-on load per taxel area (newtons), 0 for none.
+    """
     h, w = shape
     a = math.exp(min(max(u[LOG_RADIUS], _LOG_RADIUS[0]), _LOG_RADIUS[1]))
     aspect = math.exp(min(max(u[LOG_ASPECT], _LOG_ASPECT[0]), _LOG_ASPECT[1]))
@@ -155,29 +171,65 @@ def _layer(shape: tuple, cx: float, cy: float, u: np.ndarray, blur: float, fill:
     if total <= 0:
         return np.zeros(shape)
     blur_px = blur * sub
+    fine *= math.exp(u[LOG_FORCE]) / total
+    if turn_on > 0:
+        return _sensed(fine, (h, w), margin, sub, (y0, x0), fill, blur_px,
+                       turn_on / (sub * sub))
     op_y = axis_operator(h + 2 * margin, sub, fill, blur_px)[margin:margin + h,
                                                              y0:y0 + ys.size]
     op_x = axis_operator(w + 2 * margin, sub, fill, blur_px)[margin:margin + w,
                                                              x0:x0 + xs.size]
-    return (op_y @ fine @ op_x.T) * (math.exp(u[LOG_FORCE]) / total)
+    return op_y @ fine @ op_x.T
+
+
+def _sensed(fine: np.ndarray, shape: tuple, margin: int, sub: int, start: tuple, fill: float,
+            blur_px: float, threshold: float) -> np.ndarray:
+    """
+    Return the per-taxel load a turn-on film senses: blurred on the fine grid, cut, summed.
+
+    ``fine`` holds newtons per fine sample from index ``start`` (y, x) of the extended axes;
+    ``threshold`` is the turn-on load per fine sample.
+    """
+    reach = int(math.ceil(4.0 * blur_px)) + 1
+    ops = []
+    for n, cells, first in ((fine.shape[0], shape[0], start[0]),
+                            (fine.shape[1], shape[1], start[1])):
+        total = (cells + 2 * margin) * sub
+        lo, hi = max(first - reach, 0), min(first + n + reach, total)
+        spread = blur_block(lo, hi - lo, first, n, blur_px)
+        sums = gather(cells + 2 * margin, sub, fill)[margin:margin + cells, lo:hi]
+        ops.append((spread, sums))
+    (spread_y, sums_y), (spread_x, sums_x) = ops
+    load = spread_y @ fine @ spread_x.T
+    load[load <= threshold] = 0.0
+    return sums_y @ load @ sums_x.T
 
 
 def render_counts(model: TaxelModel, shape: tuple, u: np.ndarray, sub: int) -> np.ndarray:
     """Return the (2, h, w) counts of one press ``u`` on a window of ``shape``."""
     top_blur, bottom_blur = model.blurs_taxels()
     fill = float(model.fill_factor)
-    top = _layer(shape, u[X], u[Y], u, top_blur, fill, sub)
-    bottom = _layer(shape, u[X] + u[DX], u[Y] + u[DY], u, bottom_blur, fill, sub)
+    turn_on = model.turn_on_pa * model.pitch_m ** 2
+    top = _layer(shape, u[X], u[Y], u, top_blur, fill, sub, turn_on)
+    bottom = _layer(shape, u[X] + u[DX], u[Y] + u[DY], u, bottom_blur, fill, sub, turn_on)
     return model.counts(np.stack((top, bottom)))
 
 
 def residuals(model: TaxelModel, counts: np.ndarray, censored: np.ndarray, u: np.ndarray,
               sub: int) -> np.ndarray:
-    """Return the counts' residuals, a censored taxel's only where the model reads below it."""
+    """
+    Return the counts' residuals, a censored taxel's only where the model reads below it.
+
+    Residuals beyond a twentieth of the ADC's range weigh as their length, not its square
+    (pseudo-Huber): such a taxel is on the other side of a film's cliff (a rim taxel that a
+    taxel's own gain turned on or off), not noise, and a few of them would outweigh the rest.
+    """
     r = render_counts(model, counts.shape[1:], u, sub) - counts
     if censored is not None:
         r = np.where(censored & (r > 0), 0.0, r)
-    return r.ravel()
+    scale = model.full_scale * _ROBUST_SHARE
+    r = r.ravel() / scale
+    return np.sign(r) * scale * np.sqrt(2.0 * (np.sqrt(1.0 + r * r) - 1.0))
 
 
 def levenberg_marquardt(residual, u: np.ndarray, free: np.ndarray, iterations: int) -> tuple:
@@ -256,6 +308,24 @@ def sub_for(u: np.ndarray) -> int:
     return int(min(max(math.ceil(12.0 / max(small, 1e-3)), _SUB[0]), _SUB[1]))
 
 
+def best_radius(residual, u: np.ndarray) -> np.ndarray:
+    """
+    Return ``u`` with the tip radius of least misfit among a few around its own.
+
+    The moments a start takes its radius from misread flat-topped or stepped imprints, and a
+    fit started at the wrong size stops on the film's cliffs.
+    """
+    best, least = u, math.inf
+    for scale in _RADIUS_SCALES:
+        v = u.copy()
+        v[LOG_RADIUS] += math.log(scale)
+        r = residual(v)
+        cost = float(r @ r)
+        if cost < least:
+            best, least = v, cost
+    return best
+
+
 def fit_contact(model: TaxelModel, counts: np.ndarray, censored: np.ndarray, u0: np.ndarray,
                 iterations: int = 10) -> PressFit:
     """Return the least-misfit fit of one contact's (2, h, w) counts (module docstring)."""
@@ -264,6 +334,7 @@ def fit_contact(model: TaxelModel, counts: np.ndarray, censored: np.ndarray, u0:
     def residual(u):
         return residuals(model, counts, censored, u, sub)
 
+    u0 = best_radius(residual, u0)
     round_free = np.array([True] * 6 + [False] * 2)
     u, cost = levenberg_marquardt(residual, u0, round_free, iterations)
     best = PressFit(u, cost)

@@ -72,3 +72,16 @@ def test_a_model_round_trips_through_its_mapping_and_rejects_what_no_skin_has():
         TaxelModel(0.005, 0.9, 0.001, 0.002, 0.67, -0.5, 3.3)
     with pytest.raises(ValueError, match='unknown fields'):
         TaxelModel.from_dict({**MODEL.to_dict(), 'gain': 1.0})
+
+
+def test_a_turn_on_film_reads_nothing_below_it_and_at_least_its_step_where_it_conducts():
+    # A thick cover spreads the rims thin enough for the turn-on to open them.
+    smooth = TaxelModel(0.005, 0.9, 0.003, 0.002, 0.67, 0.53, 3.3, 0.01)
+    stepped = TaxelModel(0.005, 0.9, 0.003, 0.002, 0.67, 0.53, 3.3, 0.01, turn_on_pa=20000.0,
+                         film_step=0.25)
+    smooth_top, _ = render_counts(smooth, SHAPE, press(), 24)
+    top, _ = render_counts(stepped, SHAPE, press(), 24)
+    step = 4095.0 * 0.25 / 1.25
+    assert ((top == 0) | (top >= step - 1e-9)).all()
+    # The rims the smooth film reads faintly are open on the stepped one.
+    assert ((smooth_top > 0) & (top == 0)).any()
