@@ -24,6 +24,10 @@ if [ -z "${ROS_DISTRO:-}" ] && [ -d "$_skin_root/install/skin_driver" ]; then
 fi
 # The sources win over the installed copy, so an edit is live without a rebuild.
 export PYTHONPATH="$_skin_root${PYTHONPATH:+:$PYTHONPATH}"
+# The estimation's matrices are small: BLAS threads only fight the process's own threads and
+# the other jobs for the cores (model_fit's turn-on renders ran 3-8x slower with two of them
+# on a busy two-core machine). One unless the user chose otherwise.
+export OPENBLAS_NUM_THREADS="${OPENBLAS_NUM_THREADS:-1}"
 # Keep DDS discovery on this machine unless the user chose otherwise.
 export ROS_AUTOMATIC_DISCOVERY_RANGE="${ROS_AUTOMATIC_DISCOVERY_RANGE:-LOCALHOST}"
 case $_skin_flags in *u*) set -u ;; esac

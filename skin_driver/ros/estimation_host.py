@@ -32,7 +32,7 @@ from rclpy.event_handler import PublisherEventCallbacks
 from sensor_msgs.msg import Image
 from skin_driver.core.estimation.heatmap import colour_map, grey_levels
 from skin_driver.core.estimation.pipeline import ContactEstimator, EstimatorConfig
-from skin_driver.core.estimation.shift import DEFAULT_METHOD, method_names
+from skin_driver.core.estimation.shift import DEFAULT_METHOD, get_method, method_names
 from skin_driver.core.estimation.tare import RecentScans
 from skin_driver.core.protocol.realtime import StageCpu
 from skin_driver.ros import conversions, diagnostics, qos
@@ -105,6 +105,13 @@ class EstimationHost:
         node.add_post_set_parameters_callback(self._apply_new_parameters)
         node.get_logger().info(
             f"estimating with '{self._p('method')}'; {self.calibration.note}")
+        self._caution()
+
+    def _caution(self) -> None:
+        """Warn of what the method in use asks of a live driver (its own words)."""
+        caution = get_method(self._p('method')).caution
+        if caution:
+            self.node.get_logger().warning(caution)
 
     # ---- parameters -------------------------------------------------------------------------
     def _declare_parameters(self) -> None:
@@ -175,6 +182,8 @@ class EstimationHost:
     def _rebuild(self, names) -> None:
         self._swap(lambda old: old.with_config(self._config(old.config.pitch_m)))
         self.node.get_logger().info(f"estimator rebuilt for {', '.join(names)}")
+        if 'method' in names:
+            self._caution()
 
     @property
     def rebuilding(self) -> bool:

@@ -83,7 +83,8 @@ class Method:
     ``linear`` ones get a (6, h, w) stack: the window's force maps (counts linearised by each
     layer's force curve), its counts, then 1 where a taxel is saturated (its reading a lower
     bound: at its force curve's censoring counts or cut by the ADC), else 0. ``modelled`` ones
-    also get the calibration's :class:`taxelmodel.TaxelModel` (or None).
+    also get the calibration's :class:`taxelmodel.TaxelModel` (or None). ``caution`` is what a
+    live host must say when it runs the method ('' when nothing).
     """
 
     name: str
@@ -92,6 +93,7 @@ class Method:
     description: str = ''
     linear: bool = False
     modelled: bool = False
+    caution: str = ''
 
 
 def _pad_size(n: int) -> int:
@@ -259,7 +261,9 @@ METHODS = {m.name: m for m in (
            'cell-integrated profiles fitted to the linearised window (default)', linear=True),
     Method('model_fit', model_fit, False,
            "the skin's learned taxel model fitted to the window's counts (Python, slow)",
-           linear=True, modelled=True),
+           linear=True, modelled=True,
+           caution=('model_fit runs in Python, 0.1-1 s a contact: a live driver falls behind '
+                    'its scans and drops them; it is meant for the evaluator and studies')),
 )}
 
 DEFAULT_METHOD = 'taxel_fit'

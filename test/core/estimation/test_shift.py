@@ -110,3 +110,9 @@ def test_an_empty_layer_gives_no_shift():
         method = direction.get_method(name).function
         assert method(np.stack((top, np.zeros_like(top)))) == direction.NO_SHIFT
         assert method(np.stack((np.zeros_like(top), bottom))) == direction.NO_SHIFT
+
+
+def test_only_the_python_model_fit_carries_a_caution_for_live_hosts():
+    cautions = {name: direction.get_method(name).caution for name in direction.method_names()}
+    assert 'drops' in cautions.pop('model_fit')
+    assert set(cautions.values()) == {''}
