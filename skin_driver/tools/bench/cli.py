@@ -45,6 +45,7 @@ FULL = {
     'stage_repeats': 1000,
     'family_sizes': {'paper': 8, 'random': 150, 'border': 80, 'multi': 80},
     'family_all_methods': True, 'calibration_frames': 150,
+    'forward_frames': 40, 'forward_skins': None,
 }
 QUICK = {
     'grids': [16, 32], 'shifts': [0.5, 2.0], 'noises': [6.0], 'frames': 3,
@@ -54,6 +55,7 @@ QUICK = {
     'priorities': [0],
     'family_sizes': {'paper': 1, 'random': 15, 'border': 10, 'multi': 10},
     'family_all_methods': False, 'calibration_frames': 15,
+    'forward_frames': 4, 'forward_skins': ['default'],
 }
 
 
@@ -162,6 +164,9 @@ def _in_process(cfg, args, res, log) -> None:
     res['family'] = bench_core.family(cfg['family_sizes'],
                                       bench_core.family_methods(cfg['family_all_methods']),
                                       seed=args.seed, log=log)
+    log('7. the forward model beside the oracle')
+    res['forward'] = bench_core.forward_family(cfg['forward_frames'], cfg['forward_skins'],
+                                               seed=args.seed, log=log)
     log('6. force calibration on the family')
     res['calibration'] = calibration_accuracy(cfg['calibration_frames'], seed=args.seed, log=log)
     log('4. scale')

@@ -286,7 +286,7 @@ def _family_estimator(data, method: str) -> tuple:
 
 
 def family(sizes: dict, methods: list, skins: list = None, seed: int = 0, log=print,
-           oracle: bool = True) -> dict:
+           oracle: bool = True, kinds: tuple = DIRECTION_KINDS) -> dict:
     """
     Score every method on every scene of every skin of the family, side by side.
 
@@ -301,7 +301,7 @@ def family(sizes: dict, methods: list, skins: list = None, seed: int = 0, log=pr
     ``alone``), each method's calibration notes per (skin, scene), and the
     default's (reported azimuth sigma, measured error) pairs. With ``oracle`` the floor
     (:mod:`core.sim.oracle`, the simulator's own model fitted to each frame from the truth) is
-    scored too, as method ``oracle``.
+    scored too, as method ``oracle``. ``kinds`` are the scenes scored (``sizes`` has theirs).
     """
     rng = np.random.default_rng(seed)
     # The order of the methods is drawn apart, so that the scenes are the same draws however
@@ -312,7 +312,7 @@ def family(sizes: dict, methods: list, skins: list = None, seed: int = 0, log=pr
         per_skin = {m: [] for m in methods}
         oracle_us = []
         alone = []
-        for kind in DIRECTION_KINDS:
+        for kind in kinds:
             truth = []
             data = calibrated_scene(kind, skin, rng, sizes[kind], truth)
             prepared = {m: _family_estimator(data, m) for m in methods if m != PYTHON_DEFAULT}
@@ -363,6 +363,21 @@ def family(sizes: dict, methods: list, skins: list = None, seed: int = 0, log=pr
             'sizes': sizes, 'methods': methods, 'rows': rows, 'costs': costs,
             'calibration_notes': notes, 'sigma_vs_error': sigma,
             'worst': family_worst(rows, costs, methods)}
+
+
+# The estimator the forward-model section scores beside the default and the oracle.
+FORWARD = 'model_fit'
+
+
+def forward_family(size: int, skins: list = None, seed: int = 0, log=print) -> dict:
+    """
+    Return ``model_fit`` and the default scored beside the oracle at ``size`` random spots a skin.
+
+    The family's way (:func:`family`), random spots only: the Python fit takes 0.1-1 s a
+    contact and its calibration a minute, so the other scenes would take hours.
+    """
+    return family({'random': size}, [DEFAULT_METHOD, FORWARD], skins, seed, log,
+                  kinds=('random',))
 
 
 def _worst(rows, key, lowest: bool):

@@ -100,6 +100,8 @@ def markdown(res, images) -> str:
         out += _family_section(res['family'], images)
     if 'calibration' in res:
         out += _calibration_section(res['calibration'])
+    if 'forward' in res:
+        out += _forward_section(res['forward'])
     if 'e2e' in res:
         out += _e2e_section(res, images)
     return '\n'.join(out) + '\n'
@@ -243,6 +245,38 @@ def _alone_table(fam) -> list:
                        if k in a['scenes'] else '-' for k in SCENES]
                     + [figure(c['median_us'], '.0f')])
     return out + _table(['skin', 'all scenes', 'p90'] + list(SCENES) + ['interleaved'], rows)
+
+
+def _forward_section(fw) -> list:
+    """Return section 7: ``model_fit`` beside the default and the oracle, per skin."""
+    by = {(r['skin'], r['method']): r for r in fw['rows']}
+    default, forward = fw['methods'][0], fw['methods'][1]
+    rows, ratios = [], []
+    for skin in fw['skins']:
+        d, f, o = (by.get((skin, m)) or {} for m in (default, forward, 'oracle'))
+        floor = o.get('mean_error_deg')
+
+        def over(r):
+            e = r.get('mean_error_deg')
+            return e / floor if e is not None and floor else None
+        ratios.append((over(f), skin))
+        rows.append((f'`{skin}`', figure(d.get('mean_error_deg'), '.2f'),
+                     figure(f.get('mean_error_deg'), '.2f'), figure(floor, '.2f'),
+                     figure(over(d), '.1f'), figure(over(f), '.1f'),
+                     figure(f.get('mean_us') and f['mean_us'] / 1000.0, '.0f')))
+    rated = [(r, skin) for r, skin in ratios if r is not None]
+    worst = max(rated) if rated else (None, '-')
+    out = ['## 7. The forward model (`model_fit`) beside the oracle', '',
+           f'Random spots, {fw["sizes"]["random"]} frames a skin after the same calibration '
+           f"frames (section 5's way); `{forward}` learns the skin from the force "
+           "calibration's presses and fits its forward model of the taxels to each contact "
+           '(docs/estimation.md, "The forward model"). Mean azimuth error of the tilted '
+           "presses each one calls valid, deg; its cost is Python's, per frame. Worst "
+           f'`{forward}` / oracle: {figure(worst[0], ".1f")} (`{worst[1]}`; issue #16 asks '
+           '1.5).', '']
+    out += _table(['skin', f'`{default}`', f'`{forward}`', 'oracle', f'`{default}` / oracle',
+                   f'`{forward}` / oracle', f'`{forward}` ms/frame'], rows)
+    return out + ['']
 
 
 def _calibration_section(cal) -> list:

@@ -21,6 +21,7 @@ def results():
                                     bench_core.family_methods(False), skins=['default', 'soft'],
                                     log=lambda s: None),
         'calibration': calibration_accuracy(10, skins=['saturating'], log=lambda s: None),
+        'forward': bench_core.forward_family(3, ['default'], log=lambda s: None),
         'how': {'command': 'test', 'pinned_cpu': 0, 'repetitions': 'tiny'},
         'elapsed_s': 1.0, 'generated_utc': 'now',
     }

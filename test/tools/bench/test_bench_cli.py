@@ -94,3 +94,19 @@ def test_family_only_prints_every_scene_and_the_worst_with_the_oracle(capsys, tm
     assert 'oracle' in text and 'taxel_fit worst:' in text and '/ oracle' in text
     assert 'default cost of taxel_fit back to back: median' in text
     assert (tmp_path / 'family.json').exists()
+
+
+def test_the_forward_model_section_puts_model_fit_beside_the_default_and_the_oracle(
+        results, tmp_path):
+    res = dict(results)
+    res['machine'] = dict(res['machine'], load_after=[0.0, 0.0, 0.0])
+    res['targets'] = scoring.targets(res)
+    bench.write(res, str(tmp_path))
+    text = (tmp_path / 'benchmarks.md').read_text()
+    section = text[text.index('## 7. The forward model (`model_fit`) beside the oracle'):]
+    assert ('| skin | `taxel_fit` | `model_fit` | oracle | `taxel_fit` / oracle | '
+            '`model_fit` / oracle | `model_fit` ms/frame |') in section
+    row = next(line for line in section.splitlines() if line.startswith('| `default` |'))
+    # Every cell measured: the three errors, both ratios and the cost.
+    assert all(cell.strip() not in ('', '-') for cell in row.split('|')[2:8])
+    assert 'Worst `model_fit` / oracle: ' in section and '(`default`;' in section
