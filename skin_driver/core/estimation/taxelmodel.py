@@ -51,7 +51,8 @@ MAX_MOVES = np.array((0.5, 0.5, 0.5, 1.0, 1.0, 0.3, 0.3, 0.5))
 # Radii and aspects a fit may take (log units): beyond them a runaway fit renders huge grids.
 _LOG_RADIUS = (math.log(0.05), math.log(4.0))
 _LOG_ASPECT = (-0.9, 0.9)
-# Fine samples per taxel: at least 24, and twelve over the smaller semi-axis (docs/estimation.md).
+# Fine samples per taxel: at least 24 (where this render equals the simulator's to 1e-11
+# counts) and twelve over the smaller semi-axis.
 _SUB = (24, 48)
 _ROBUST_SHARE = 0.05
 _RADIUS_SCALES = (0.5, 0.63, 0.8, 1.0, 1.25, 1.6)
