@@ -38,8 +38,8 @@ import numpy as np
 from .cellops import axis_operator, blur_block, gather
 from .validate import check_number
 
-__all__ = ['TaxelModel', 'PressFit', 'render_counts', 'residuals', 'levenberg_marquardt',
-           'best_radius', 'fit_contact', 'start_of', 'sub_for']
+__all__ = ['TaxelModel', 'PressFit', 'hertz_profile', 'render_counts', 'residuals',
+           'levenberg_marquardt', 'best_radius', 'fit_contact', 'start_of', 'sub_for']
 
 # Per-press parameters: centre x, y (taxels of the window), log normal force (N), shift dx, dy
 # (taxels), log tip radius (taxels), log aspect, orientation (rad).
@@ -130,6 +130,24 @@ class PressFit:
     misfit: float
 
 
+def hertz_profile(x: np.ndarray, y: np.ndarray, cx: float, cy: float, a: float,
+                  aspect: float = 1.0, orientation: float = 0.0) -> np.ndarray:
+    """
+    Return a Hertz tip's pressure shape ``sqrt(1 - r**2)`` on the grid of ``x`` by ``y``.
+
+    The ellipse has semi-axes ``a`` and ``a * aspect``, the first turned by ``orientation``
+    from +x; rows follow ``y``. The simulator's presses take the same shape.
+    """
+    if aspect == 1.0:
+        r2 = (((x - cx) ** 2)[None, :] + ((y - cy) ** 2)[:, None]) / (a * a)
+    else:
+        c, s = math.cos(orientation), math.sin(orientation)
+        dx, dy = (x - cx)[None, :], (y - cy)[:, None]
+        b = a * aspect
+        r2 = ((dx * c + dy * s) / a) ** 2 + ((dy * c - dx * s) / b) ** 2
+    return np.sqrt(np.maximum(1.0 - r2, 0.0))
+
+
 def _layer(shape: tuple, cx: float, cy: float, u: np.ndarray, blur: float, fill: float,
            sub: int, turn_on: float = 0.0) -> np.ndarray:
     """
@@ -161,13 +179,7 @@ def _layer(shape: tuple, cx: float, cy: float, u: np.ndarray, blur: float, fill:
     if ax is None or ay is None:
         return np.zeros(shape)
     (x0, xs), (y0, ys) = ax, ay
-    dx, dy = (xs - cx)[None, :], (ys - cy)[:, None]
-    if aspect == 1.0:
-        r2 = (dx * dx + dy * dy) / (a * a)
-    else:
-        c, s = math.cos(u[ORIENTATION]), math.sin(u[ORIENTATION])
-        r2 = ((dx * c + dy * s) / a) ** 2 + ((dy * c - dx * s) / (a * aspect)) ** 2
-    fine = np.sqrt(np.maximum(1.0 - r2, 0.0))
+    fine = hertz_profile(xs, ys, cx, cy, a, aspect, u[ORIENTATION])
     total = fine.sum()
     if total <= 0:
         return np.zeros(shape)

@@ -45,6 +45,7 @@ import numpy as np
 # How a taxel samples a profile is the estimation's description too (cellops).
 from ..estimation.cellops import axis_operator as _axis_operator, blur as _blur, gather as _gather
 from ..estimation.fsr import FsrModel
+from ..estimation.taxelmodel import hertz_profile
 
 __all__ = ['SkinModel', 'Press', 'render', 'render_force', 'render_expected', 'expected_counts',
            'layer_shift_m', 'taxel_spread', 'contact_radius_m']
@@ -168,18 +169,6 @@ def contact_radius_m(model: SkinModel, press: Press) -> float:
     return press.radius_m * load ** (1.0 / 3.0)
 
 
-def _hertz(x: np.ndarray, y: np.ndarray, cx: float, cy: float, press: Press) -> np.ndarray:
-    a = press.radius_m
-    if press.aspect == 1.0:
-        r2 = (((x - cx) ** 2)[None, :] + ((y - cy) ** 2)[:, None]) / (a * a)
-    else:
-        c, s = math.cos(press.orientation_rad), math.sin(press.orientation_rad)
-        dx, dy = (x - cx)[None, :], (y - cy)[:, None]
-        b = a * press.aspect
-        r2 = ((dx * c + dy * s) / a) ** 2 + ((dy * c - dx * s) / b) ** 2
-    return np.sqrt(np.maximum(1.0 - r2, 0.0))
-
-
 def _support(coords: np.ndarray, centre: float, radius: float) -> tuple:
     """Return the index range of the fine samples within ``radius`` of ``centre`` on one axis."""
     inside = np.flatnonzero((coords - centre) ** 2 < radius * radius)
@@ -234,7 +223,8 @@ def _press_maps(model: SkinModel, press: Press) -> tuple:
         # The Hertz profile is zero outside the disc: evaluate it on the disc's bounding box only.
         x0, x1 = _support(xs, cx, a)
         y0, y1 = _support(ys, cy, a)
-        fine = _hertz(xs[x0:x1], ys[y0:y1], cx, cy, press)
+        fine = hertz_profile(xs[x0:x1], ys[y0:y1], cx, cy, press.radius_m, press.aspect,
+                             press.orientation_rad)
         # The integral of the Hertz profile over its ellipse is 2/3 pi a b (in samples of h^2).
         total = (2.0 / 3.0 * math.pi * press.radius_m ** 2 * press.aspect / (h * h)
                  if clipped else fine.sum())
