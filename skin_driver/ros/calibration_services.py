@@ -298,6 +298,14 @@ class CalibrationServices:
                          'presses': 0 if forces else (goal.presses
                                                       or self._param('calibration.presses'))}
 
+    async def _polled(self, future: Future, watch):
+        """Return ``future``'s result, calling ``watch`` (which may set it) every POLL_S."""
+        timer = self._node.create_timer(POLL_S, watch)
+        try:
+            return await future
+        finally:
+            self._node.destroy_timer(timer)
+
     async def _off_the_executor(self, work):
         """
         Return ``work()`` run on a thread of its own, raising what it raises.
@@ -322,11 +330,7 @@ class CalibrationServices:
         def watch():
             if finished.is_set() and not future.done():
                 future.set_result(True)
-        timer = self._node.create_timer(POLL_S, watch)
-        try:
-            await future
-        finally:
-            self._node.destroy_timer(timer)
+        await self._polled(future, watch)
         if 'error' in box:
             raise box['error']
         return box['result']
@@ -369,13 +373,11 @@ class CalibrationServices:
             elif time.monotonic() > deadline:
                 future.set_result('timeout')
         self._session, self._future, self._goal = session, future, goal_handle
-        timer = self._node.create_timer(POLL_S, watch)
         self._node.get_logger().info(
             f'calibration ({kind}): make {session.wanted} presses within {timeout:.0f} s')
         try:
-            outcome = await future
+            outcome = await self._polled(future, watch)
         finally:
-            self._node.destroy_timer(timer)
             self._session = self._future = self._goal = None
         result.presses_used = len(session.accepted)
         made = f'{len(session.accepted)} of {session.wanted} presses'
