@@ -67,7 +67,7 @@ def test_calibration_frames_make_force_and_alpha_right_on_another_skin():
     plain = scoring.evaluate_method(scored, 'poc')['summary']
     assert plain['force_mean_error_pct'] > 30.0
     data = add_calibration_frames(scored, skin, rng)
-    assert data.split.tolist() == [1] * 32 + [0] * 40
+    assert data.split.tolist() == [3] * 16 + [1] * 32 + [0] * 40
     report = scoring.evaluate_method(data, 'poc')
     summary = report['summary']
     assert summary['frames'] == 32  # only the scored tilted frames (one in five is normal)

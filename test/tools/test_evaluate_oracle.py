@@ -28,8 +28,9 @@ def test_the_paper_scene_after_calibration_frames_scores_the_tilted_presses_agai
     args = ['--skin', 'film', '--scene', 'paper', '--size', '1', '--calibration-frames']
     assert cli.main(args + ['--json']) == 0
     report = json.loads(capsys.readouterr().out)
-    # 32 calibration frames and the paper's normal press, which re-takes the offset at its spot.
-    assert report['calibration_frames'] == 33 and report['tilted_frames'] == 8
+    # 16 plate frames, 32 calibration presses and the paper's normal press, which re-takes the
+    # offset at its spot.
+    assert report['calibration_frames'] == 49 and report['tilted_frames'] == 8
     assert report['methods']['oracle']['summary']['valid_share'] == 1.0
     notes = report['methods']['taxel_fit']['calibration_notes']
     assert notes[-1].startswith('offset: offset from 1 normal presses')
@@ -53,4 +54,4 @@ def test_contacts_are_numbered_by_their_frame_in_the_dataset(tmp_path):
     with open(out) as f:
         frames = {int(row['frame']) for row in csv.DictReader(f)}
     scored = set(np.flatnonzero(data.split == 0).tolist())
-    assert frames and frames <= scored and min(frames) >= 32
+    assert frames and frames <= scored and min(frames) >= 48

@@ -270,6 +270,16 @@ class Conditioner:
         st = self._stacked()
         return np.ones(st.baseline.shape) if st.gain is None else st.gain.copy()
 
+    def sensitivity_maps(self) -> np.ndarray:
+        """
+        Return both layers' per-taxel sensitivity (the inverse of the gains), None without gains.
+
+        A taxel of sensitivity 1.1 reads the load of 1.1 nominal ones: what a forward model of
+        the taxels multiplies its load by before the film (:mod:`taxelmodel`).
+        """
+        st = self._stacked()
+        return None if st.gain is None else 1.0 / st.gain
+
     def set_dead(self, top_dead, bottom_dead) -> None:
         """Mark dead or stuck taxels (boolean maps, True = ignore and fill from neighbours)."""
         for i, (mask, name) in enumerate(((top_dead, 'top_dead'), (bottom_dead, 'bottom_dead'))):

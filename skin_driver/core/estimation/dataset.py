@@ -6,8 +6,9 @@ raw counts), ``pitch_m`` (scalar), ``azimuth_deg`` (N, NaN where undefined), ``a
 0 for normal presses); optional ``force_n``, ``x_m``, ``y_m`` (N each) and ``tare_top``,
 ``tare_bottom`` (M x rows x cols no-touch frames); optional per-press ground truth ``press_*``
 (N x K, NaN-padded, for frames with several presses) and ``split`` (N, uint8: 1 marks a
-calibration frame, 2 a normal press at the place of use that re-takes the offset after them, 0 a
-scored frame; without it every frame is scored); ``format_version`` = 2.
+calibration frame, 2 a normal press at the place of use that re-takes the offset after them, 3 a
+rigid plate loading the whole skin evenly (the per-taxel gains, taken first), 0 a scored frame;
+without it every frame is scored); ``format_version`` = 2.
 Version 1 files (no ``press_*``, no ``split``) load unchanged.
 """
 
@@ -104,9 +105,9 @@ class Dataset:
         if self.split is not None:
             split = np.asarray(self.split)
             if split.shape != (n,) or split.dtype.kind not in 'uib' or not np.isin(
-                    split, (0, 1, 2)).all():
-                raise ValueError(f'split must be ({n},) integers 0 (scored), 1 (calibration) or '
-                                 '2 (offset at the place of use)')
+                    split, (0, 1, 2, 3)).all():
+                raise ValueError(f'split must be ({n},) integers 0 (scored), 1 (calibration), '
+                                 '2 (offset at the place of use) or 3 (plate for the gains)')
             set_(self, 'split', split.astype(np.uint8))
         if (self.tare_top is None) != (self.tare_bottom is None):
             raise ValueError('tare_top and tare_bottom must be given together')

@@ -218,6 +218,7 @@ class ContactEstimator:
         censoring = bool(curves) and any(c.censor_counts or c.rim_load_n for c in curves)
         method = self._method
         noise = conditioner.count_noise()
+        sensitivity = conditioner.sensitivity_maps() if method.modelled else None
         whole = None
         if method.whole_map:
             whole = method.function(np.stack((t, b)).astype(np.float64))
@@ -233,7 +234,8 @@ class ContactEstimator:
                 est = whole
             elif method.linear:
                 stack = np.concatenate((window, pair.maps, censored_taxels(marked, curves)))
-                est = (method.function(stack, self._calibration.taxel_model)
+                est = (method.function(stack, self._calibration.taxel_model,
+                                       _window_of(sensitivity, pair))
                        if method.modelled else method.function(stack))
             else:
                 est = method.function(pair.maps)
@@ -371,3 +373,12 @@ def _contact(r: list) -> Contact:
         'azimuth_rad': r[6], 'azimuth_sigma_rad': r[7], 'alpha_rad': r[8],
         'force_xyz_n': (r[9], r[10], r[11]), 'confidence': r[12], 'direction_valid': r[13] > 0})
     return contact
+
+
+def _window_of(maps: np.ndarray, pair) -> np.ndarray:
+    """Return the (2, h, w) part of full ``maps`` under ``pair``'s window (None for None)."""
+    if maps is None:
+        return None
+    r, c = pair.origin
+    h, w = pair.maps.shape[1:]
+    return maps[:, r:r + h, c:c + w]

@@ -4,7 +4,9 @@ An estimator made ready for recorded frames: tared and calibrated from the frame
 The evaluator and the benchmark score an estimator on a dataset (:mod:`dataset`) as a user would
 run it on that skin: tared from the dataset's no-touch frames, then calibrated through the same
 :class:`session.CalibrationSession` that the live calibrations run. With a ``split`` (dataset
-format 2) the split = 1 frames calibrate fully: alpha = 0 frames give (x_p, y_p) and, with
+format 2) the split = 3 frames (a plate over the whole skin) give the per-taxel gains, in the
+forces of curves fitted to the normal presses of known force; then the split = 1 frames
+calibrate fully: alpha = 0 frames give (x_p, y_p) and, with
 ``force_n``, the force curves; tilted ones with ``force_n`` the compliance. Then the split = 2
 frames, normal presses where the scored presses are made (the paper's protocol takes (x_p, y_p)
 at its own spot), re-take (x_p, y_p) alone, in the newtons of the curves just fitted. Without a
@@ -84,7 +86,21 @@ def prepared_estimator(data: Dataset, method: str, config: EstimatorConfig = Non
     if data.tare_top is not None:
         est = est.with_tare(data.tare_top, data.tare_bottom)
     if data.split is not None:
-        est, notes = calibrate_from_frames(est, data, np.flatnonzero(data.split == 1))
+        notes = []
+        presses = np.flatnonzero(data.split == 1)
+        plates = np.flatnonzero(data.split == 3)
+        if plates.size:
+            # A gain is the ratio of a taxel's force to its neighbours': only the skin's own
+            # force curves give it (the assumed film's exponent would bend it), and they are
+            # fitted again once the gains even the presses out.
+            normal = presses[data.alpha_deg[presses] == 0]
+            known = normal[data.force_n[normal] > 0] if data.force_n is not None else normal[:0]
+            if known.size:
+                est, _ = _session(est, data, known, 'force', forces_n=data.force_n[known])
+            est, note = _session(est, data, plates, 'gains')
+            notes.append(note)
+        est, press_notes = calibrate_from_frames(est, data, presses)
+        notes += press_notes
         at_use = np.flatnonzero(data.split == 2)
         if at_use.size:
             est, offset_notes = calibrate_from_frames(est, data, at_use, full=False)

@@ -309,9 +309,11 @@ class CalibrationSession:
             return None, ''
         pitch = estimator.config.pitch_m
         fsr = estimator.conditioner.config.fsr
+        sensitivity = estimator.conditioner.sensitivity_maps()
         presses = [LearningPress(r.counts, r.clipped, float(f),
                                  (r.shift_m[0] / pitch, r.shift_m[1] / pitch)
-                                 if all(math.isfinite(v) for v in r.shift_m) else (0.0, 0.0))
+                                 if all(math.isfinite(v) for v in r.shift_m) else (0.0, 0.0),
+                                 sensitivity)
                    for r, f in zip(self.accepted, known)]
         try:
             model = learn_taxel_model(presses, pitch, film_start(fsr), fsr.full_scale)

@@ -83,8 +83,9 @@ class Method:
     ``linear`` ones get a (6, h, w) stack: the window's force maps (counts linearised by each
     layer's force curve), its counts, then 1 where a taxel is saturated (its reading a lower
     bound: at its force curve's censoring counts or cut by the ADC), else 0. ``modelled`` ones
-    also get the calibration's :class:`taxelmodel.TaxelModel` (or None). ``caution`` is what a
-    live host must say when it runs the method ('' when nothing).
+    also get the calibration's :class:`taxelmodel.TaxelModel` (or None) and the window's taxel
+    sensitivity (the inverse of the calibrated gains, (2, h, w), or None without gains).
+    ``caution`` is what a live host must say when it runs the method ('' when nothing).
     """
 
     name: str
@@ -238,17 +239,21 @@ def taxel_fit(maps: np.ndarray) -> ShiftEstimate:
     return NO_SHIFT if found is None else ShiftEstimate(*found)
 
 
-def model_fit(maps: np.ndarray, model: TaxelModel = None) -> ShiftEstimate:
+def model_fit(maps: np.ndarray, model: TaxelModel = None,
+              sensitivity: np.ndarray = None) -> ShiftEstimate:
     """
     Estimate the shift by fitting the skin's taxel model to the window's counts.
 
-    ``maps`` is the (6, h, w) stack of a ``linear`` method. The fit starts at ``taxel_fit``'s
-    estimate and keeps its confidence and cut variance (the validity rule stays the default's).
+    ``maps`` is the (6, h, w) stack of a ``linear`` method; ``sensitivity`` the window's
+    per-taxel sensitivity (the inverse of the calibrated gains) or None. The fit starts at
+    ``taxel_fit``'s estimate and keeps its confidence and cut variance (the validity rule stays
+    the default's).
     """
     first = taxel_fit(maps)
     if model is None or first is NO_SHIFT or maps.shape[0] != 6:
         return first
-    fit = fit_contact(model, maps[2:4], maps[4:] > 0, start_of(maps[:2], first[:2], model))
+    fit = fit_contact(model, maps[2:4], maps[4:] > 0, start_of(maps[:2], first[:2], model),
+                      sensitivity=sensitivity)
     return ShiftEstimate(float(fit.u[DX]), float(fit.u[DY]), first.confidence,
                          first.cut_variance)
 

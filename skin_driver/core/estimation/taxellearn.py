@@ -51,14 +51,16 @@ class LearningPress:
     """
     One press of known normal force, as a force calibration recorded it.
 
-    Its tared counts (2, rows, cols), its saturated taxels (same shape) or None, and its raw
-    shift (taxels, dx along columns) as the estimator measured it.
+    Its tared counts (2, rows, cols), its saturated taxels (same shape) or None, its raw
+    shift (taxels, dx along columns) as the estimator measured it, and the taxels' sensitivity
+    (same shape: the inverse of the calibrated gains) or None for even taxels.
     """
 
     counts: np.ndarray
     censored: np.ndarray
     normal_force_n: float
     shift_taxels: tuple
+    sensitivity: np.ndarray = None
 
 
 def film_start(fsr: FsrModel) -> tuple:
@@ -85,7 +87,7 @@ def _model(pitch: float, full_scale: float, g: np.ndarray) -> TaxelModel:
 
 
 def _window(press: LearningPress) -> tuple:
-    """Return (counts, censored) cut to the press's imprints and a margin."""
+    """Return (counts, censored, sensitivity) cut to the press's imprints and a margin."""
     loaded = np.flatnonzero(press.counts.any(axis=0).any(axis=1))
     cols = np.flatnonzero(press.counts.any(axis=0).any(axis=0))
     h, w = press.counts.shape[1:]
@@ -93,7 +95,9 @@ def _window(press: LearningPress) -> tuple:
     c0, c1 = max(cols[0] - _MARGIN, 0), min(cols[-1] + _MARGIN + 1, w)
     censored = (None if press.censored is None
                 else np.asarray(press.censored, dtype=bool)[:, r0:r1, c0:c1])
-    return np.asarray(press.counts, dtype=np.float64)[:, r0:r1, c0:c1], censored
+    sensitivity = (None if press.sensitivity is None
+                   else np.asarray(press.sensitivity, dtype=np.float64)[:, r0:r1, c0:c1])
+    return np.asarray(press.counts, dtype=np.float64)[:, r0:r1, c0:c1], censored, sensitivity
 
 
 def learn_taxel_model(presses: Sequence[LearningPress], pitch_m: float, film: tuple,
@@ -116,7 +120,7 @@ def learn_taxel_model(presses: Sequence[LearningPress], pitch_m: float, film: tu
     # A film with a turn-on is learned from the smooth film's skin; its step starts at the
     # counts a loaded taxel reads at least (a smooth film's lowest reading is the touch
     # threshold, which makes a step too small to matter).
-    loaded = np.concatenate([c[c > 0] for (c, _), _ in windows])
+    loaded = np.concatenate([c[c > 0] for (c, _, _), _ in windows])
     low = float(np.quantile(loaded, _STEP_QUANTILE)) if loaded.size else 1.0
     turn_on = np.log((_START_TURN_ON, low / max(full_scale - low, 1.0)))
     found = _learn_from(windows, pitch_m, full_scale, np.concatenate((best[0], turn_on)),
@@ -124,7 +128,7 @@ def learn_taxel_model(presses: Sequence[LearningPress], pitch_m: float, film: tu
     if found[1] < best[1]:
         best = found
     g, cost = best
-    taxels = sum(c.size for (c, _), _ in windows)
+    taxels = sum(c.size for (c, _, _), _ in windows)
     return replace(_model(pitch_m, full_scale, g), presses=len(windows),
                    misfit_counts=math.sqrt(cost / taxels))
 
@@ -141,13 +145,13 @@ def _learn_from(windows: list, pitch: float, full_scale: float, g: np.ndarray,
     """Return (skin parameters, misfit) of the joint fit started at ``g`` (:func:`_model`)."""
     model = _model(pitch, full_scale, g)
     presses_u, subs = [], []
-    for (counts, censored), press in windows:
+    for (counts, censored, sensitivity), press in windows:
         u = start_of(counts, press.shift_taxels, model)
         u[LOG_FORCE] = math.log(press.normal_force_n)
         sub = sub_for(u)
 
-        def residual(v, c=counts, m=censored, s=sub):
-            return residuals(model, c, m, v, s)
+        def residual(v, c=counts, m=censored, s=sub, k=sensitivity):
+            return residuals(model, c, m, v, s, k)
         u, _ = levenberg_marquardt(residual, best_radius(residual, u), _FREE, 6)
         presses_u.append(u)
         subs.append(sub)
@@ -166,7 +170,7 @@ def _joint(pitch: float, full_scale: float, g: np.ndarray, presses_u: list, subs
 
     def all_residuals(g, us):
         model = _model(pitch, full_scale, g)
-        return [residuals(model, c, m, u, s) for (c, m), u, s in zip(windows, us, subs)]
+        return [residuals(model, c, m, u, s, k) for (c, m, k), u, s in zip(windows, us, subs)]
 
     r = all_residuals(g, presses_u)
     cost = sum(float(x @ x) for x in r)
@@ -181,12 +185,12 @@ def _joint(pitch: float, full_scale: float, g: np.ndarray, presses_u: list, subs
             skin_jac.append([(a - b) / _SKIN_STEP
                              for a, b in zip(all_residuals(shifted, presses_u), r)])
         model = _model(pitch, full_scale, g)
-        for k, ((counts, censored), u, sub) in enumerate(zip(windows, presses_u, subs)):
+        for k, ((counts, censored, sens), u, sub) in enumerate(zip(windows, presses_u, subs)):
             jp = np.empty((r[k].size, npress))
             for col, (j, h) in enumerate(zip(idx, steps)):
                 v = u.copy()
                 v[j] += h
-                jp[:, col] = (residuals(model, counts, censored, v, sub) - r[k]) / h
+                jp[:, col] = (residuals(model, counts, censored, v, sub, sens) - r[k]) / h
             jg = np.column_stack([skin_jac[j][k] for j in range(ng)])
             own = slice(ng + npress * k, ng + npress * (k + 1))
             normal[:ng, :ng] += jg.T @ jg

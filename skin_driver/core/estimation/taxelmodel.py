@@ -218,18 +218,25 @@ def _sensed(fine: np.ndarray, shape: tuple, margin: int, sub: int, start: tuple,
     return sums_y @ load @ sums_x.T
 
 
-def render_counts(model: TaxelModel, shape: tuple, u: np.ndarray, sub: int) -> np.ndarray:
-    """Return the (2, h, w) counts of one press ``u`` on a window of ``shape``."""
+def render_counts(model: TaxelModel, shape: tuple, u: np.ndarray, sub: int,
+                  sensitivity: np.ndarray = None) -> np.ndarray:
+    """
+    Return the (2, h, w) counts of one press ``u`` on a window of ``shape``.
+
+    ``sensitivity`` (2, h, w) multiplies each taxel's load before the film: the inverse of the
+    calibrated per-taxel gains (:mod:`gains`), None for even taxels.
+    """
     top_blur, bottom_blur = model.blurs_taxels()
     fill = float(model.fill_factor)
     turn_on = model.turn_on_pa * model.pitch_m ** 2
     top = _layer(shape, u[X], u[Y], u, top_blur, fill, sub, turn_on)
     bottom = _layer(shape, u[X] + u[DX], u[Y] + u[DY], u, bottom_blur, fill, sub, turn_on)
-    return model.counts(np.stack((top, bottom)))
+    load = np.stack((top, bottom))
+    return model.counts(load if sensitivity is None else load * sensitivity)
 
 
 def residuals(model: TaxelModel, counts: np.ndarray, censored: np.ndarray, u: np.ndarray,
-              sub: int) -> np.ndarray:
+              sub: int, sensitivity: np.ndarray = None) -> np.ndarray:
     """
     Return the counts' residuals, a censored taxel's only where the model reads below it.
 
@@ -237,7 +244,7 @@ def residuals(model: TaxelModel, counts: np.ndarray, censored: np.ndarray, u: np
     (pseudo-Huber): such a taxel is on the other side of a film's cliff (a rim taxel that a
     taxel's own gain turned on or off), not noise, and a few of them would outweigh the rest.
     """
-    r = render_counts(model, counts.shape[1:], u, sub) - counts
+    r = render_counts(model, counts.shape[1:], u, sub, sensitivity) - counts
     if censored is not None:
         r = np.where(censored & (r > 0), 0.0, r)
     scale = model.full_scale * _ROBUST_SHARE
@@ -340,12 +347,16 @@ def best_radius(residual, u: np.ndarray) -> np.ndarray:
 
 
 def fit_contact(model: TaxelModel, counts: np.ndarray, censored: np.ndarray, u0: np.ndarray,
-                iterations: int = 10) -> PressFit:
-    """Return the least-misfit fit of one contact's (2, h, w) counts (module docstring)."""
+                iterations: int = 10, sensitivity: np.ndarray = None) -> PressFit:
+    """
+    Return the least-misfit fit of one contact's (2, h, w) counts (module docstring).
+
+    ``sensitivity``: the window's per-taxel load factors (:func:`render_counts`) or None.
+    """
     sub = sub_for(u0)
 
     def residual(u):
-        return residuals(model, counts, censored, u, sub)
+        return residuals(model, counts, censored, u, sub, sensitivity)
 
     u0 = best_radius(residual, u0)
     round_free = np.array([True] * 6 + [False] * 2)

@@ -29,7 +29,7 @@ import math
 
 import numpy as np
 
-from .physics import layer_shift_m, Press, render, SkinModel
+from .physics import layer_shift_m, Press, render, render_plate, SkinModel
 from .skins import family_skin, FamilySkin
 from ..estimation.dataset import Dataset
 from ..estimation.validate import check_int
@@ -307,14 +307,17 @@ def add_calibration_frames(data: Dataset, model: SkinModel, rng: np.random.Gener
                            alpha_range_deg: tuple = (20.0, 45.0),
                            radius_m: float = CALIBRATION_RADIUS_M,
                            border_m: float = 0.015, at_use: np.ndarray = None,
-                           truth_out: list = None) -> Dataset:
+                           truth_out: list = None, plates: int = 16) -> Dataset:
     """
     Return ``data`` with calibration frames of ``model`` in front (dataset format 2 ``split``).
 
-    The calibration frames are what a user with a force gauge or a robot makes: ``normal``
-    presses straight down with forces spread evenly over ``normal_force_range_n``, then
-    ``tilted`` presses of known force and alpha at random azimuths, all at random places at
-    least ``border_m`` inside the skin with an indenter of ``radius_m``. ``data``'s frames keep
+    The calibration frames are what a user with a force gauge or a robot makes: first
+    ``plates`` frames of a rigid plate over the whole skin, weighted so that a taxel reads about
+    half the ADC's range or its film is well past its turn-on (split 3: the per-taxel gains,
+    :mod:`estimation.gains`), then ``normal`` presses straight down with forces spread evenly
+    over ``normal_force_range_n``, then ``tilted`` presses of known force and alpha at random
+    azimuths, all at random places at least ``border_m`` inside the skin with an indenter of
+    ``radius_m``. ``data``'s frames keep
     their order and become the scored frames (split 0), except those marked in ``at_use``
     (normal presses where the scored ones are made), which re-take the offset (split 2); its tare
     frames are kept. ``truth_out``, when given, is extended by the calibration frames' presses
@@ -339,9 +342,18 @@ def add_calibration_frames(data: Dataset, model: SkinModel, rng: np.random.Gener
                              radius_m))
         azimuths.append(beta)
     maps = [render(model, [p], rng) for p in presses]
-    k = len(presses)
+    # Drawn after the presses, so that a skin's presses are those it had before plates.
+    # The user weighs the plate until a taxel reads about half the range: more where the film
+    # turns on only at a higher pressure.
+    plate_load = max(float(model.fsr.counts_to_force(model.fsr.full_scale / 2.0)),
+                     1.5 * model.turn_on_pa * (model.fill_factor * model.pitch_m) ** 2)
+    maps = [render_plate(model, plate_load, rng) for _ in range(int(plates))] + maps
+    span = np.array(((model.cols - 1) / 2.0, (model.rows - 1) / 2.0)) * model.pitch_m
+    plate_force = plate_load * model.rows * model.cols
+    k = len(maps)
     if truth_out is not None:
-        truth_out.extend([p] for p in presses)
+        truth_out.extend([[]] * int(plates) + [[p] for p in presses])
+    azimuths = [math.nan] * int(plates) + azimuths
     own_split = np.zeros(data.frames, np.uint8)
     if at_use is not None:
         own_split[np.asarray(at_use, dtype=bool)] = 2
@@ -351,29 +363,32 @@ def add_calibration_frames(data: Dataset, model: SkinModel, rng: np.random.Gener
         return None if own is None else np.concatenate([np.asarray(values), own])
 
     def press_truth(name, values):
-        # The calibration frames hold one press each: slot 0, the other slots empty.
+        # A press frame holds one press: slot 0, the other slots empty; a plate frame none.
         own = getattr(data, name)
         if own is None:
             return None
         pad = np.full((k,) + own.shape[1:], np.nan)
-        pad[:, 0] = values
+        pad[int(plates):, 0] = values
         return np.concatenate([pad, own])
 
+    n_plates = int(plates)
     return Dataset(
         top=np.concatenate([np.stack([t for t, _ in maps]), data.top]),
         bottom=np.concatenate([np.stack([b for _, b in maps]), data.bottom]),
         pitch_m=data.pitch_m,
         azimuth_deg=np.concatenate([azimuths, data.azimuth_deg]),
-        alpha_deg=np.concatenate([[math.degrees(p.alpha_rad) for p in presses],
+        alpha_deg=np.concatenate([[0.0] * n_plates, [math.degrees(p.alpha_rad) for p in presses],
                                   data.alpha_deg]),
-        force_n=joined('force_n', [p.force_n for p in presses]),
-        x_m=joined('x_m', [p.x_m for p in presses]), y_m=joined('y_m', [p.y_m for p in presses]),
+        force_n=joined('force_n', [plate_force] * n_plates + [p.force_n for p in presses]),
+        x_m=joined('x_m', [span[0]] * n_plates + [p.x_m for p in presses]),
+        y_m=joined('y_m', [span[1]] * n_plates + [p.y_m for p in presses]),
         tare_top=data.tare_top, tare_bottom=data.tare_bottom,
-        split=np.concatenate([np.ones(k, dtype=np.uint8), own_split]),
+        split=np.concatenate([np.full(n_plates, 3, dtype=np.uint8),
+                              np.ones(len(presses), dtype=np.uint8), own_split]),
         press_x_m=press_truth('press_x_m', [p.x_m for p in presses]),
         press_y_m=press_truth('press_y_m', [p.y_m for p in presses]),
         press_force_n=press_truth('press_force_n', [p.force_n for p in presses]),
-        press_azimuth_deg=press_truth('press_azimuth_deg', azimuths),
+        press_azimuth_deg=press_truth('press_azimuth_deg', azimuths[n_plates:]),
         press_alpha_deg=press_truth('press_alpha_deg',
                                     [math.degrees(p.alpha_rad) for p in presses]),
         press_shift_m=press_truth('press_shift_m', [model.compliance_m_per_n

@@ -47,8 +47,8 @@ from ..estimation.cellops import axis_operator as _axis_operator, blur as _blur,
 from ..estimation.fsr import FsrModel
 from ..estimation.taxelmodel import hertz_profile
 
-__all__ = ['SkinModel', 'Press', 'render', 'render_force', 'render_expected', 'expected_counts',
-           'layer_shift_m', 'taxel_spread', 'contact_radius_m']
+__all__ = ['SkinModel', 'Press', 'render', 'render_plate', 'render_force', 'render_expected',
+           'expected_counts', 'layer_shift_m', 'taxel_spread', 'contact_radius_m']
 
 
 @dataclass(frozen=True)
@@ -349,3 +349,17 @@ def render(model: SkinModel, presses: Sequence[Press],
     """Return (top, bottom) uint16 ADC count maps (rows x cols, 0..4095) of the presses."""
     top_f, bottom_f = render_force(model, presses)
     return _electronics(model, top_f, 0, rng), _electronics(model, bottom_f, 1, rng)
+
+
+def render_plate(model: SkinModel, load_n: float, rng: np.random.Generator) -> tuple:
+    """
+    Return (top, bottom) uint16 ADC count maps of a rigid plate loading every taxel evenly.
+
+    ``load_n`` is each taxel's share of the plate's weight (newtons on its active pad). The
+    blur of an even pressure is even, so both layers take it whole; a film that turns on takes
+    it only above its turn-on pressure.
+    """
+    pressure = load_n / (model.fill_factor * model.pitch_m) ** 2
+    sensed = load_n if pressure > model.turn_on_pa else 0.0
+    force = np.full((model.rows, model.cols), float(sensed))
+    return _electronics(model, force, 0, rng), _electronics(model, force, 1, rng)

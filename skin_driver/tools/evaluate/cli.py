@@ -12,9 +12,10 @@ Usage::
 The single normal presses calibrate (x_p, y_p); every single tilted press's strongest contact is
 compared with the ground-truth azimuth; frames with several presses are matched press by press
 (docs/dataset.md). With a ``split`` array (dataset format 2) only the calibration frames
-(split = 1) calibrate, and more fully: alpha = 0 frames with ``force_n`` give (x_p, y_p) and the
-force curves, tilted ones with ``force_n`` the compliance; split = 2 frames (normal presses at
-the place of use) then re-take (x_p, y_p); only split = 0 frames are scored.
+(split = 1, after the plate frames of split = 3, which give the taxel gains) calibrate, and more
+fully: alpha = 0 frames with ``force_n`` give (x_p, y_p) and the force curves, tilted ones
+with ``force_n`` the compliance; split = 2 frames (normal presses at the place of use) then
+re-take (x_p, y_p); only split = 0 frames are scored.
 ``--calibration-frames`` adds such frames to a generated dataset (or to the --skin data). With
 ``--skin`` the oracle (:mod:`core.sim.oracle`, the simulator's forward model fitted to each
 frame, started at the truth) is scored beside the methods, and each method's error is given in
@@ -69,7 +70,8 @@ def _parser() -> argparse.ArgumentParser:
     parser.add_argument('--seed', type=_seed, default=0,
                         help='random seed for generated data (0 or more)')
     parser.add_argument('--calibration-frames', action='store_true',
-                        help='with --generate or --skin: put 16 normal presses over 5-60 N and '
+                        help='with --generate or --skin: put 16 frames of a plate over the '
+                        'skin (split = 3: the taxel gains), 16 normal presses over 5-60 N and '
                         '16 tilted presses of known load in front, as calibration frames '
                         '(split = 1); in the paper scene its normal presses at its spot '
                         're-take the offset (split = 2)')

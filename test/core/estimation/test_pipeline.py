@@ -6,9 +6,12 @@ import numpy as np
 import pytest
 
 from skin_driver.core.estimation.calibration import calibrate_from_shifts, Calibration
+from skin_driver.core.estimation.fsr import FsrModel
 from skin_driver.core.estimation.pipeline import Contact, ContactEstimator, EstimatorConfig
 from skin_driver.core.estimation.shift import resolve
-from skin_driver.core.sim.physics import Press, render, SkinModel
+from skin_driver.core.estimation.taxellearn import film_start
+from skin_driver.core.estimation.taxelmodel import TaxelModel
+from skin_driver.core.sim.physics import layer_shift_m, Press, render, SkinModel, taxel_spread
 
 
 SPOT = (0.037, 0.038)
@@ -158,3 +161,23 @@ def test_sigma_holds_the_spread_of_the_zero_however_many_presses_made_it():
         shift_taxels = math.hypot(*c.shift_m) / pitch
     assert sigmas[1] > sigmas[0]
     assert sigmas[1] >= math.atan2(0.1, shift_taxels)
+
+
+@pytest.mark.parametrize('press', [Press(0.0312, 0.0277, 25.0, 0.5, 2.0, radius_m=0.004),
+                                   Press(0.041, 0.037, 15.0, 0.6, -1.0, radius_m=0.003)])
+def test_the_model_fit_renders_each_taxel_with_its_calibrated_gain(press):
+    # Taxels up to 10 % apart; the taxel model is the simulator's own skin, so what is left
+    # once the gains are in the calibration is the fit's own error.
+    skin = SkinModel(gain_spread=0.1, noise_counts=0.0, baseline_counts=0.0, seed=4)
+    model = TaxelModel(skin.pitch_m, skin.fill_factor, skin.cover_spread_m, skin.spread_m,
+                       *film_start(FsrModel()))
+    sensitivity, _ = taxel_spread(skin)
+    top, bottom = render(skin, [press], np.random.default_rng(0))
+    truth = np.divide(layer_shift_m(skin, press), skin.pitch_m)
+    errors = []
+    for gains in (None, tuple(1.0 / sensitivity)):
+        cal = Calibration(0.0, 0.0).updated(taxel_model=model, gains=gains)
+        est = ContactEstimator(EstimatorConfig(method='model_fit')).with_calibration(cal)
+        (contact,) = est.process(top, bottom)
+        errors.append(np.abs(np.divide(contact.shift_m, skin.pitch_m) - truth).max())
+    assert errors[1] < 1e-3 < 5e-3 < errors[0]

@@ -7,7 +7,7 @@ import pytest
 
 from skin_driver.core.estimation.fsr import FsrModel
 from skin_driver.core.sim.physics import layer_shift_m, Press, render, render_force, \
-    SkinModel
+    render_plate, SkinModel, taxel_spread
 
 
 def test_fsr_round_trip_and_monotonic():
@@ -114,3 +114,18 @@ def test_a_plate_larger_than_the_skin_loads_it_as_on_a_larger_skin():
     shifted = Press(0.0375 + offset, 0.0375 + offset, 1200.0, 0.0, 0.0, 0.1)
     for on_small, on_large in zip(render_force(small, [plate]), render_force(large, [shifted])):
         np.testing.assert_allclose(on_small, on_large[24:40, 24:40], rtol=1e-3)
+
+
+def test_a_plate_loads_every_taxel_alike_and_a_film_reads_it_only_past_its_turn_on():
+    rng = np.random.default_rng(0)
+    even = SkinModel(noise_counts=0.0)
+    top, bottom = render_plate(even, 2.0, rng)
+    assert (top == top[0, 0]).all() and (bottom == top).all() and top[0, 0] > 1000
+    # Taxels of different gains read it differently: the gain calibration's input.
+    uneven = SkinModel(noise_counts=0.0, gain_spread=0.1, seed=3)
+    top, _ = render_plate(uneven, 2.0, rng)
+    sensitivity, _ = taxel_spread(uneven)
+    assert np.corrcoef(top.ravel(), sensitivity[0].ravel())[0, 1] > 0.99
+    # 2 N on a 4.5 mm pad is 99 kPa: a film that turns on at 150 kPa stays open.
+    top, bottom = render_plate(SkinModel(noise_counts=0.0, turn_on_pa=1.5e5), 2.0, rng)
+    assert (top == even.baseline_counts).all() and (bottom == even.baseline_counts).all()

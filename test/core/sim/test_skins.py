@@ -121,12 +121,14 @@ def test_a_calibrated_scene_is_the_same_scene_after_the_users_calibration_frames
     scene = make_scene(kind, 'film', np.random.default_rng(4), size)
     truth = []
     data = calibrated_scene(kind, 'film', np.random.default_rng(4), size, truth)
-    assert len(truth) == data.frames == 32 + scene.frames
-    assert data.split[:32].tolist() == [1] * 32
-    own = data.split[32:]
+    assert len(truth) == data.frames == 48 + scene.frames
+    # First the plate for the gains (no press), then the presses of the calibration.
+    assert data.split[:48].tolist() == [3] * 16 + [1] * 32
+    assert truth[:16] == [[]] * 16 and np.isnan(data.press_x_m[:16]).all()
+    own = data.split[48:]
     # The scene's frames are the very draws of the scene alone.
-    assert np.array_equal(data.top[32:], scene.top)
-    assert [p[0].x_m for p in truth[32:]] == pytest.approx(scene.x_m.tolist())
+    assert np.array_equal(data.top[48:], scene.top)
+    assert [p[0].x_m for p in truth[48:]] == pytest.approx(scene.x_m.tolist())
     if kind == 'paper':
         # The paper's protocol takes (x_p, y_p) at its spot: its normal presses do (split 2).
         assert own.tolist() == [2 if a == 0 else 0 for a in scene.alpha_deg]
@@ -137,13 +139,25 @@ def test_a_calibrated_scene_is_the_same_scene_after_the_users_calibration_frames
 def test_normal_presses_at_the_place_of_use_re_take_the_offset_after_the_calibration():
     data = calibrated_scene('paper', 'film', np.random.default_rng(0), 3)
     est, notes = prepared_estimator(data, 'taxel_fit')
-    assert [n.split(':')[0] for n in notes] == ['offset', 'force', 'compliance', 'offset']
+    assert [n.split(':')[0] for n in notes] == [
+        'gains', 'offset', 'force', 'compliance', 'offset']
     assert notes[-1].endswith('(at the place of use)') and 'from 3 normal presses' in notes[-1]
     calibration = est.calibration
     assert calibration.presses == 3 and calibration.force_presses == 16
     assert calibration.compliance_presses == 16
     # The scored frames stay apart: the split 2 frames are normal presses, never scored.
     assert not (data.alpha_deg[data.scored_frames()] == 0).any()
+
+
+def test_the_plate_frames_give_the_taxel_gains_before_the_presses_calibrate():
+    # 'noisy' has taxels up to 10 % apart (and 10 counts of noise): the plate finds them.
+    data = calibrated_scene('random', 'noisy', np.random.default_rng(0), 2)
+    est, notes = prepared_estimator(data, 'taxel_fit')
+    assert notes[0].startswith('gains: taxel gains from 16 presses covering 100 %')
+    sensitivity, _ = taxel_spread(family_skin('noisy').model)
+    evened = est.conditioner.gain_maps() * sensitivity
+    assert np.std(sensitivity) > 0.05
+    assert np.std(evened / np.median(evened)) < 0.4 * np.std(sensitivity)
 
 
 def test_paper_scene_presses_the_skins_own_force_at_the_eight_betas():

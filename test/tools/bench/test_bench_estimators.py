@@ -136,18 +136,18 @@ def test_alone_costs_take_each_frames_least_pass_with_the_passes_round_the_scene
 
 def test_every_family_method_gets_the_users_calibration_and_only_scored_frames_count(results):
     fam = results['family']
-    # Only the scene's frames are scored: the 32 calibration frames (and in the paper's
-    # protocol its normal press, which re-takes the offset) never are.
+    # Only the scene's frames are scored: the 16 plate and 32 calibration frames (and in the
+    # paper's protocol its normal press, which re-takes the offset) never are.
     frames = {(r['skin'], r['scene']): r['frames'] for r in fam['rows']}
     assert frames[('default', 'paper')] == 8 and frames[('soft', 'random')] == 5
     notes = {(n['skin'], n['scene'], n['method']): n['notes'] for n in fam['calibration_notes']}
     assert {m for _, _, m in notes} == {'taxel_fit', 'seed', 'plain_centroid'}
     for (skin, kind, method), parts in notes.items():
         names = [p.split(':')[0] for p in parts]
-        assert names == ['offset', 'force', 'compliance'] + (['offset'] if kind == 'paper'
-                                                             else [])
-        # The same force curves for every method: they come from the same frames.
-        assert parts[1] == notes[(skin, kind, 'taxel_fit')][1]
+        assert names == ['gains', 'offset', 'force', 'compliance'] + (
+            ['offset'] if kind == 'paper' else [])
+        # The same gains and force curves for every method: they come from the same frames.
+        assert parts[:3:2] == notes[(skin, kind, 'taxel_fit')][:3:2]
 
 
 def test_the_worst_valid_share_for_large_shifts_says_how_many_presses_it_is_of():
