@@ -17,7 +17,9 @@ a tangential force and hence the polar angle. Calibrate it by pressing with know
 ``force_curves`` (top, bottom) replace the assumed FSR model once a force calibration has run
 (:mod:`forcecurve`); ``gains`` (top, bottom maps) even out taxels that read more or less than
 their neighbours (:mod:`gains`). ``taxel_model`` is the skin's forward model learned from the
-force calibration's presses when the estimator in use fits one (``model_fit``, :mod:`taxelmodel`).
+force calibration's presses when the estimator in use fits one (``model_fit``, :mod:`taxelmodel`);
+``leak_share`` the passive matrix's leak along a line, as a share of the line's load, that the
+same presses showed (:mod:`crosstalk`; 0 where none did), which a plate for the gains needs.
 
 A calibration knows its skin (:class:`SkinIdentity`: grid, pitch and, where there is one, the
 board's identity) and when each part was made (offset, force, compliance, gains). Loaded for
@@ -51,7 +53,7 @@ _VERSIONS = (1, 2, 3)
 # The parts of a calibration, each made by its own session, and the fields each one sets.
 PARTS = {'offset': ('x_p_m', 'y_p_m', 'std_x_m', 'std_y_m', 'presses', 'zero_slope_m_per_n',
                     'zero_ref_n'),
-         'force': ('force_curves', 'force_presses', 'taxel_model'),
+         'force': ('force_curves', 'force_presses', 'taxel_model', 'leak_share'),
          'compliance': ('compliance_m_per_n', 'compliance_presses'),
          'gains': ('gains',)}
 # Pitches that differ by less than this share are the same.
@@ -167,6 +169,7 @@ class Calibration:
     zero_slope_m_per_n: tuple = (0.0, 0.0)
     zero_ref_n: float = 0.0
     taxel_model: TaxelModel = None
+    leak_share: float = 0.0
 
     def __post_init__(self):
         """Reject non-finite or negative values and malformed curves or gains."""
@@ -176,6 +179,7 @@ class Calibration:
         check_number(self.std_y_m, 'std_y_m', non_negative=True)
         check_number(self.compliance_m_per_n, 'compliance_m_per_n', non_negative=True)
         check_number(self.zero_ref_n, 'zero_ref_n', non_negative=True)
+        check_number(self.leak_share, 'leak_share', non_negative=True)
         if len(self.zero_slope_m_per_n) != 2:
             raise ValueError('zero_slope_m_per_n must be (x, y) metres per newton')
         object.__setattr__(self, 'zero_slope_m_per_n', tuple(
@@ -241,6 +245,8 @@ class Calibration:
         if self.force_curves:
             parts.append(f'force curve up to {self.force_curves[1].counts[-1]:.0f} counts '
                          f'({self.force_presses} presses)')
+        if self.leak_share:
+            parts.append(f'line leak {100 * self.leak_share:.2f} %')
         if self.gains:
             parts.append('taxel gains')
         if self.taxel_model:
@@ -267,6 +273,7 @@ class Calibration:
                         {layer: [list(row) for row in g] for layer, g in
                          zip(('top', 'bottom'), self.gains)})
         out['taxel_model'] = None if self.taxel_model is None else self.taxel_model.to_dict()
+        out['leak_share'] = float(self.leak_share)
         return out
 
     def save_yaml(self, path, make_parents: bool = False) -> None:
@@ -327,6 +334,8 @@ class Calibration:
                                         for layer in ('top', 'bottom'))
             if doc.get('taxel_model') is not None:
                 values['taxel_model'] = TaxelModel.from_dict(doc['taxel_model'])
+            if doc.get('leak_share') is not None:
+                values['leak_share'] = float(doc['leak_share'])
             cal = cls(**values)
         except (KeyError, TypeError, ValueError) as exc:
             raise ValueError(f'{path}: {exc}') from None

@@ -23,7 +23,7 @@ from typing import NamedTuple
 import cv2
 import numpy as np
 
-from .crosstalk import leak_gate, remove_line_leak
+from .crosstalk import leak_gate, leak_share, remove_line_leak
 from .fsr import FsrModel
 from .validate import check_map, check_number, check_pair, check_stack
 
@@ -346,6 +346,19 @@ class Conditioner:
             for i, fill in st.dead:
                 c[i] = fill(c[i])
         return c
+
+    def leak_share(self, t: np.ndarray, b: np.ndarray) -> float:
+        """
+        Return the line leak a scan of one press shows, as a share of a line's load (NaN: none).
+
+        Measured on the tared counts, before the per-scan clean-up takes it out
+        (:func:`crosstalk.leak_share`): a force calibration keeps it for the gains' plate.
+        """
+        t, b = np.asarray(t, dtype=np.float64), np.asarray(b, dtype=np.float64)
+        if self._shape != t.shape:
+            self._ensure(t.shape)
+        st = self._stacked()
+        return leak_share(np.stack((t - st.baseline[0], b - st.baseline[1])), st.leak_gate)
 
     def _level_clipped(self, c: np.ndarray, t: np.ndarray, b: np.ndarray) -> None:
         """Put the taxels the ADC cut at their layer's highest tared count, in place."""

@@ -12,7 +12,9 @@ A leak is a few per cent of the load on its line: a median that is more than ``M
 what the line carries above it is a load that covers most of the line (a palm, a uniform weight
 for the gain calibration), and is left alone. The peak is no measure of it: on a fine grid a
 press covers dozens of taxels of a line, whose leak then reaches a third of the peak, and more
-where the ADC cut the peak.
+where the ADC cut the peak. A press's lines tell the leak as a share of a line's load
+(:func:`leak_share`), which a force calibration keeps; with it the gain calibration takes the
+leak off its plate (:func:`without_leak`).
 
 The polish runs only on scans where a line is lifted: most of its taxels over a gate. After a
 tare the gate is ``LEAK_SIGMAS`` times each taxel's measured noise, so a leak under the touch
@@ -26,7 +28,8 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ['remove_line_leak', 'leak_gate', 'MAX_LEAK', 'LEAK_SIGMAS']
+__all__ = ['remove_line_leak', 'leak_gate', 'leak_share', 'without_leak', 'MAX_LEAK',
+           'LEAK_SIGMAS']
 
 # Largest median, as a share of the line's load above it, that is taken for leak.
 MAX_LEAK = 0.05
@@ -43,18 +46,20 @@ def leak_gate(noise: np.ndarray, threshold: np.ndarray, tared: bool) -> np.ndarr
     return LEAK_SIGMAS * noise if tared else threshold
 
 
-def remove_line_leak(counts: np.ndarray, gate: np.ndarray) -> None:
+def remove_line_leak(counts: np.ndarray, gate: np.ndarray) -> tuple:
     """
     Subtract from a (layers, rows, cols) stack of tared counts, in place, each line's leak.
 
     ``gate`` (same shape, :func:`leak_gate`): a scan is cleaned as soon as one line is mostly
     at its gate or over, since a leak under the touch threshold still adds to every loaded
     taxel of its lines; scans where none is are left as they are, at the cost of one comparison.
+    Returns each line's leak as a share of its load, (rows, cols) per layer (0 where a line
+    leaked nothing), or None for a scan left as it was.
     """
     over = counts >= gate
     half = 0.5 * min(counts.shape[1:])
     if not ((over.sum(axis=2) >= half).any() or (over.sum(axis=1) >= half).any()):
-        return
+        return None
     # The leak is a sum of a row term and a column term: one sweep of each removes both.
     leaks = []
     for axis in (2, 1):
@@ -64,6 +69,43 @@ def remove_line_leak(counts: np.ndarray, gate: np.ndarray) -> None:
     # (the line's leak over its load) of its own count too much, which is given back.
     share = [_share(leak, counts.sum(axis=axis)) for leak, axis in zip(leaks, (2, 1))]
     counts /= 1.0 - share[0][:, :, None] - share[1][:, None, :]
+    return tuple(share)
+
+
+def leak_share(counts: np.ndarray, gate: np.ndarray) -> float:
+    """
+    Return the skin's leak, as a share of a line's load, that a scan of one press shows (NaN).
+
+    The median over the lines that leaked (:func:`remove_line_leak` on a copy of the tared
+    ``counts``); NaN when no line did. A press leaks along its own rows and columns only, onto
+    taxels that carry no load of their own, so its lines tell the matrix's leak apart from
+    the load: what a plate over the whole skin cannot (:func:`without_leak`).
+    """
+    shares = remove_line_leak(np.array(counts, dtype=np.float64), gate)
+    if shares is None:
+        return float('nan')
+    leaked = np.concatenate([s[s > 0] for s in shares])
+    return float(np.median(leaked)) if leaked.size else float('nan')
+
+
+def without_leak(counts: np.ndarray, share: float) -> np.ndarray:
+    """
+    Return a (layers, rows, cols) stack of tared counts with a known line ``share`` taken out.
+
+    A load that covers whole lines (a plate for the gains) is left alone by the per-scan
+    clean-up, whose medians would take it for leak; with the skin's leak known, each taxel's
+    own reading ``c`` follows from ``counts = c + share * (row sum + column sum - 2 c)`` (sums
+    of ``c``). Summed over a line, and over the map, that gives the lines' own sums first.
+    """
+    m = np.asarray(counts, dtype=np.float64)
+    if share <= 0:
+        return m.copy()
+    rows, cols = m.shape[1:]
+    keep = 1.0 - 2.0 * share
+    total = m.sum(axis=(1, 2), keepdims=True) / (keep + share * (rows + cols))
+    row = (m.sum(axis=2, keepdims=True) - share * total) / (keep + share * cols)
+    col = (m.sum(axis=1, keepdims=True) - share * total) / (keep + share * rows)
+    return (m - share * (row + col)) / keep
 
 
 def _leak(counts: np.ndarray, axis: int) -> np.ndarray:

@@ -29,6 +29,7 @@ import numpy as np
 
 from .calibration import calibrate_zero, Calibration, compliance_from_presses, SkinIdentity
 from .conditioning import mark_clipped
+from .crosstalk import without_leak
 from .forcefit import check_known_forces, fit_force_curve
 from .gains import gains_from_force_sums, limits_note
 from .presses import PressSegmenter
@@ -54,7 +55,8 @@ class PressRecord:
     counts above baseline (2 x rows x cols, 0 where untouched), ``wrench_n`` the reference
     sensor's mean force (x, y, z) in the skin frame when one was fed, ``clipped`` where the
     raw counts read the ADC's full scale (2 x rows x cols, None where no taxel did): those
-    readings are cut, and a force fit censors them.
+    readings are cut, and a force fit censors them. ``leak_share`` is the line leak the press
+    showed as a share of a line's load (:func:`crosstalk.leak_share`; NaN where none did).
     """
 
     peak_force_n: float
@@ -64,6 +66,7 @@ class PressRecord:
     shift_growth_m: float = 0.0
     wrench_n: Optional[tuple] = None
     clipped: Optional[np.ndarray] = None
+    leak_share: float = math.nan
 
 
 @dataclass(frozen=True)
@@ -177,10 +180,12 @@ class CalibrationSession:
                    if m is not None]
         wrenches = [w for _, _, w in press.plateau if w is not None]
         wrench = tuple(np.mean(wrenches, axis=0)) if wrenches else None
+        leaks = [conditioner.leak_share(t, b) for t, b, _ in press.plateau]
         return self.add_press(PressRecord(
             peak_force_n=press.peak_force_n, shift_m=press.plateau_shift_m, counts=counts,
             looks_normal=press.looks_normal, shift_growth_m=press.shift_growth_m,
-            wrench_n=wrench, clipped=np.any(clipped, axis=0) if clipped else None))
+            wrench_n=wrench, clipped=np.any(clipped, axis=0) if clipped else None,
+            leak_share=_median_of_finite(leaks)))
 
     def record(self, top_counts, bottom_counts, contacts, wrench_n=None) -> PressRecord:
         """Return the record of a press seen in one scan at full load (no stream needed)."""
@@ -188,13 +193,14 @@ class CalibrationSession:
         conditioner = self.estimator.conditioner
         counts = conditioner.touch_counts(top_counts, bottom_counts)
         clipped = conditioner.clipped(top_counts, bottom_counts)
+        leak = conditioner.leak_share(top_counts, bottom_counts)
         if not contacts:
             return PressRecord(0.0, (math.nan, math.nan), counts, wrench_n=wrench_n,
-                               clipped=clipped)
+                               clipped=clipped, leak_share=leak)
         c = contacts[0]
         zero = cal.zero_m(c.force_n)
         return PressRecord(c.force_n, (c.shift_m[0] + zero[0], c.shift_m[1] + zero[1]),
-                           counts, wrench_n=wrench_n, clipped=clipped)
+                           counts, wrench_n=wrench_n, clipped=clipped, leak_share=leak)
 
     def add_press(self, record: PressRecord) -> str:
         """Add one press; return a note saying whether it counts (for a person)."""
@@ -283,9 +289,11 @@ class CalibrationSession:
                 fits[name] = fits['bottom']
                 notes += f'; the top layer takes the bottom curve ({err})'
         model, model_note = self._learn_taxel_model(known)
+        # The matrix's leak: what the presses' lines showed (0 where none leaked).
+        leak = _median_of_finite([r.leak_share for r in self.accepted])
         new = self._updated(
             force_curves=(fits['top'].curve, fits['bottom'].curve), force_presses=n,
-            taxel_model=model)
+            taxel_model=model, leak_share=leak if math.isfinite(leak) else 0.0)
         # The pipeline's normal force is the bottom layer's sum: report that layer's fit.
         bottom = fits['bottom']
         rms = math.sqrt(float(np.mean(np.square(bottom.residuals_n))))
@@ -367,8 +375,12 @@ class CalibrationSession:
     def _fit_gains(self) -> Outcome:
         n = len(self.accepted)
         conditioner = self.estimator.conditioner
-        # What each taxel sensed, without the gains in force: those are being replaced.
-        sums = sum(conditioner.force_of(r.counts) for r in self.accepted) / conditioner.gain_maps()
+        # What each taxel sensed, without the gains in force: those are being replaced. A plate
+        # loads whole lines, which the per-scan clean-up leaves alone: the leak the force
+        # calibration's presses showed comes off here (the spread presses' lines are cleaned).
+        leak = self.estimator.calibration.leak_share
+        sums = sum(conditioner.force_of(without_leak(r.counts, leak)) for r in self.accepted
+                   ) / conditioner.gain_maps()
         gains, covered = gains_from_force_sums(sums, n)
         new = self._updated(gains=(gains[0], gains[1]))
         share = float(covered.mean())
@@ -378,3 +390,9 @@ class CalibrationSession:
                        f'{100 * share:.0f} % of the taxels: {gains.min():.2f} to '
                        f'{gains.max():.2f}' + (f'; {warning}' if warning else ''),
                        covered=share, warnings=(warning,) if warning else ())
+
+
+def _median_of_finite(values) -> float:
+    """Return the median of the finite ``values`` (NaN when there is none)."""
+    finite = [v for v in values if math.isfinite(v)]
+    return float(np.median(finite)) if finite else math.nan

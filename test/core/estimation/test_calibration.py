@@ -111,6 +111,16 @@ def test_a_learned_taxel_model_is_kept_in_the_file_and_a_bad_one_refused(tmp_pat
         Calibration.load_yaml(path)
 
 
+def test_the_matrix_leak_is_kept_in_the_file_with_the_force_part(tmp_path):
+    cal = Calibration().updated(leak_share=0.012)
+    assert cal.made('force') and not cal.made('gains')
+    path = tmp_path / 'cal.yaml'
+    cal.save_yaml(path)
+    assert Calibration.load_yaml(path).leak_share == 0.012
+    with pytest.raises(ValueError, match='leak_share'):
+        Calibration(leak_share=-0.01)
+
+
 @pytest.mark.parametrize('skin, message', [
     (SkinIdentity(64, 64, 0.00125), 'made for 16 x 16 taxels at 5.000 mm pitch, board left '
                                     'palm, this skin is 64 x 64 taxels at 1.250 mm pitch'),

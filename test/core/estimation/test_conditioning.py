@@ -3,8 +3,9 @@
 import numpy as np
 import pytest
 from skin_driver.core.estimation.conditioning import Conditioner, ConditioningConfig
+from skin_driver.core.estimation.crosstalk import without_leak
 from skin_driver.core.estimation.fsr import FsrModel
-from skin_driver.core.sim.physics import Press, render, SkinModel
+from skin_driver.core.sim.physics import Press, render, render_plate, SkinModel
 from skin_driver.core.sim.skins import family_skin
 
 
@@ -188,3 +189,24 @@ def test_before_a_tare_a_leak_over_the_touch_threshold_still_comes_off():
     assert (off[1] > 0).sum() > 2000
     rows, cols = np.nonzero(Conditioner().touch_counts(top, bottom)[1])
     assert np.ptp(rows) < 20 and np.ptp(cols) < 20
+
+
+def test_a_press_shows_the_matrix_leak_and_a_plate_is_cleared_of_it_once_it_is_known():
+    # 1.2 % of a line's load leaks onto each of its taxels: a press shows it along its lines.
+    leaky = SkinModel(noise_counts=4.0, crosstalk=0.012)
+    cond, _, rng = _tared(leaky)
+    share = cond.leak_share(*render(leaky, [Press(0.0412, 0.0388, 25.0, radius_m=0.004)], rng))
+    assert share == pytest.approx(0.012, rel=0.1)
+    # No press, no leak to see.
+    assert np.isnan(cond.leak_share(*render(leaky, [], rng)))
+    # A plate loads whole lines: the per-scan clean-up leaves it alone (its medians are load),
+    # and each taxel reads about a third more than its own load. With the leak known, what
+    # is left is the taxel's own reading.
+    quiet = SkinModel(noise_counts=0.0, crosstalk=0.012)
+    cond, _, rng = _tared(quiet)
+    plate = cond.touch_counts(*render_plate(quiet, 1.0, rng))
+    own = Conditioner()
+    own.tare(*[np.stack([f] * 2) for f in render(SkinModel(noise_counts=0.0), [], rng)])
+    alone = own.touch_counts(*render_plate(SkinModel(noise_counts=0.0), 1.0, rng))
+    assert plate.mean() > 1.3 * alone.mean()
+    np.testing.assert_allclose(without_leak(plate, 0.012), alone, atol=1.0)

@@ -7,12 +7,14 @@ import pytest
 
 from skin_driver.core.estimation.dataset import Dataset, load_dataset, save_dataset
 from skin_driver.core.estimation.prepared import prepared_estimator
+from skin_driver.core.estimation.session import CalibrationSession
 from skin_driver.core.sim.experiments import (
     calibrated_scene, CALIBRATION_RADIUS_M, make_scene, PAPER_BETAS_DEG, press_for_shift,
     SCENE_KINDS)
 from skin_driver.core.sim.physics import (
     layer_shift_m, Press, render, render_force, SkinModel, taxel_spread)
-from skin_driver.core.sim.skins import family_skin, get_skin, skin_for_grid, skin_names
+from skin_driver.core.sim.skins import (family_skin, FamilySkin, get_skin, skin_for_grid,
+                                        skin_names)
 
 
 def test_family_names_at_least_eight_seeded_skins_with_a_description():
@@ -158,6 +160,29 @@ def test_the_plate_frames_give_the_taxel_gains_before_the_presses_calibrate():
     evened = est.conditioner.gain_maps() * sensitivity
     assert np.std(sensitivity) > 0.05
     assert np.std(evened / np.median(evened)) < 0.4 * np.std(sensitivity)
+
+
+def test_the_plate_gains_take_off_the_leak_the_force_presses_showed():
+    # Hard case: a passive matrix leaking 1.2 % of a line's load onto each of its taxels, and
+    # taxels 10 % apart. Under a plate every line is loaded, so every taxel reads a third more.
+    model = SkinModel(crosstalk=0.012, gain_spread=0.1, seed=5)
+    skin = FamilySkin('leaky', 'crosstalk and gains', model, 20.0, (10.0, 30.0))
+    data = calibrated_scene('random', skin, np.random.default_rng(0), 2)
+    est, _ = prepared_estimator(data, 'taxel_fit')
+    assert est.calibration.leak_share == pytest.approx(0.012, rel=0.1)
+    # The same plate frames with the leak left on.
+    blind = est.with_calibration(est.calibration.updated(leak_share=0.0))
+    session = CalibrationSession(blind, 'gains', presses=16)
+    for i in np.flatnonzero(data.split == 3):
+        top, bottom = data.top[i], data.bottom[i]
+        session.add_press(session.record(top, bottom, blind.process(top, bottom)))
+    blind = blind.with_calibration(session.finish().calibration)
+    sensitivity = np.log(taxel_spread(skin.model)[0]).ravel()
+
+    def follows(e):
+        # How much of the true pattern the gains undo (1: all of it).
+        return np.polyfit(sensitivity, -np.log(e.conditioner.gain_maps()).ravel(), 1)[0]
+    assert abs(follows(est) - 1.0) < 0.05 < 0.08 < abs(follows(blind) - 1.0)
 
 
 def test_paper_scene_presses_the_skins_own_force_at_the_eight_betas():
