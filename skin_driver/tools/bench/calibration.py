@@ -48,7 +48,7 @@ def calibration_accuracy(size: int, skins: list = None, seed: int = 0, log=print
     Return per (skin, scene) the default estimator's and the oracle's |F| and alpha errors.
 
     ``size`` frames per scene (one in five a normal press, not scored for alpha and |F|), after
-    the user's 32 calibration frames. ``worst`` holds, per scene, the largest errors over the
+    the user's 48 calibration frames. ``worst`` holds, per scene, the largest errors over the
     skins and where.
     """
     rng = np.random.default_rng(seed)

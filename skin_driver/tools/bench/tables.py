@@ -132,7 +132,9 @@ SCENES = DIRECTION_KINDS
 CALIBRATION_TEXT = (
     'Calibration, the same for every method (plain centroid included) on each scene, as a '
     "user following the README's recipe (the evaluator's `--calibration-frames`): tared from "
-    'no-touch frames, then 32 calibration frames in front of the scene, never scored: 16 '
+    'no-touch frames, then 48 calibration frames in front of the scene, never scored: 16 '
+    'of a plate over the whole skin give the per-taxel gains (after force curves fitted to the '
+    'normal presses; the line leak the presses show taken off the plate), 16 '
     'normal presses of known load (5-60 N, random spots) give the force curves and the offset '
     '(x_p, y_p), 16 tilted presses of known load the compliance, each through the live '
     "calibration session (`core.estimation.prepared`). In the paper's protocol the scene's "
@@ -282,8 +284,9 @@ def _forward_section(fw) -> list:
 def _calibration_section(cal) -> list:
     """Return the |F| and alpha errors after calibration, per skin, beside the oracle's."""
     out = ['## 6. Force calibration on the skin family', '',
-           f'Each skin tared and calibrated as in section 5 (32 calibration frames: 16 normal '
-           'presses of known load at 5-60 N and 16 tilted ones, an 8 mm round indenter), then '
+           f'Each skin tared and calibrated as in section 5 (48 calibration frames: 16 of a '
+           'plate, 16 normal presses of known load at 5-60 N and 16 tilted ones, an 8 mm round '
+           'indenter), then '
            f'{cal["size"]} frames of a scene, one in five a normal press: `one_tip` presses with '
            "the calibration's own indenter (issue #17's protocol), `random` with indenters of "
            '3-7 mm, some elliptical. Error: mean |error| of |F| (%) and of alpha (deg) over the '
