@@ -376,11 +376,13 @@ class CalibrationSession:
         n = len(self.accepted)
         conditioner = self.estimator.conditioner
         # What each taxel sensed, without the gains in force: those are being replaced. A plate
-        # loads whole lines, which the per-scan clean-up leaves alone: the leak the force
-        # calibration's presses showed comes off here (the spread presses' lines are cleaned).
+        # loads whole lines, which the per-scan clean-up leaves alone (its record shows no
+        # leak): the leak the force calibration's presses showed comes off here. A spread
+        # press's lines were cleaned with its scan.
         leak = self.estimator.calibration.leak_share
-        sums = sum(conditioner.force_of(without_leak(r.counts, leak)) for r in self.accepted
-                   ) / conditioner.gain_maps()
+        sums = sum(conditioner.force_of(without_leak(r.counts, leak)
+                                        if math.isnan(r.leak_share) else r.counts)
+                   for r in self.accepted) / conditioner.gain_maps()
         gains, covered = gains_from_force_sums(sums, n)
         new = self._updated(gains=(gains[0], gains[1]))
         share = float(covered.mean())

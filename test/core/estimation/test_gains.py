@@ -6,6 +6,7 @@ from skin_driver.core.estimation.fsr import FsrModel
 from skin_driver.core.estimation.gains import gains_from_force_sums, limits_note
 from skin_driver.core.estimation.pipeline import ContactEstimator, EstimatorConfig
 from skin_driver.core.estimation.session import CalibrationRefused, CalibrationSession
+from skin_driver.core.sim.physics import Press, render, SkinModel
 
 FSR = FsrModel()
 # A fixed pattern: every taxel 0.75 to 1.25 times as sensitive as it should be.
@@ -73,3 +74,26 @@ def test_a_plate_smaller_than_the_skin_makes_gains_at_their_limits_and_says_wher
 def test_an_even_load_warns_of_nothing():
     gains = np.ones((2, 16, 16))
     assert limits_note(gains, gains > 0) == ''
+
+
+def test_spread_presses_on_a_leaky_matrix_lose_their_leak_once():
+    # Each press's lines are cleaned with its own scan; the leak a force calibration kept is
+    # for a plate's frames (which no scan cleans), never a second time for a press.
+    skin = SkinModel(crosstalk=0.012, gain_spread=0.1, seed=5)
+    rng = np.random.default_rng(0)
+    rest = [render(skin, [], rng) for _ in range(10)]
+    est = ContactEstimator(EstimatorConfig()).with_tare(np.stack([t for t, _ in rest]),
+                                                        np.stack([b for _, b in rest]))
+    spots = np.linspace(0.005, 0.07, 7)
+    frames = [render(skin, [Press(x, y, 20.0, radius_m=0.004)], rng) for x in spots
+              for y in spots]
+    found = []
+    for leak in (0.0, 0.012):
+        known = est.with_calibration(est.calibration.updated(leak_share=leak))
+        session = CalibrationSession(known, 'gains', presses=len(frames))
+        for top, bottom in frames:
+            record = session.record(top, bottom, known.process(top, bottom))
+            assert record.leak_share == pytest.approx(0.012, rel=0.3)
+            session.add_press(record)
+        found.append(np.stack(session.finish().calibration.gain_maps()))
+    np.testing.assert_array_equal(found[0], found[1])
