@@ -44,6 +44,27 @@ def test_presses_at_one_spot_and_force_re_take_the_zero_and_keep_the_measured_sl
                           prior_slope_m_per_n=(1e-5, 0.0)).zero_slope_m_per_n[0] == 0.0
 
 
+def test_presses_at_about_one_force_measure_no_slope_however_their_shifts_move():
+    # The paper's protocol re-takes the zero from presses within 3 % of 20 N. What their shifts
+    # do over that range is the estimator's bias at the spot (here 0.1 mm per newton, standing
+    # far out of the noise); a slope taken from it would move a 45 deg press, 6 N lighter, by
+    # 0.6 mm. Expected: no slope, or the one measured before; the zero is their mean.
+    rng = np.random.default_rng(3)
+    forces = rng.uniform(19.7, 20.3, 8)
+    shifts = np.stack((3e-4 + 1e-4 * (forces - 20.0), -1e-4 + 0.0 * forces), axis=1)
+    shifts += rng.normal(0.0, 2e-6, shifts.shape)
+    alone = calibrate_zero(shifts, forces, math.inf)
+    assert alone.zero_slope_m_per_n == (0.0, 0.0)
+    assert (alone.x_p_m, alone.y_p_m) == pytest.approx(tuple(shifts.mean(axis=0)))
+    kept = calibrate_zero(shifts, forces, math.inf, prior_slope_m_per_n=(1e-5, -2e-6))
+    assert kept.zero_slope_m_per_n == (1e-5, -2e-6)
+    # Twice the force apart, the same presses measure it.
+    wide = np.linspace(10.0, 20.0, 8)
+    measured = calibrate_zero(np.stack((3e-4 + 1e-4 * (wide - 20.0), 0.0 * wide), axis=1)
+                              + rng.normal(0.0, 2e-6, (8, 2)), wide, math.inf)
+    assert measured.zero_slope_m_per_n[0] == pytest.approx(1e-4, rel=0.01)
+
+
 def test_zero_slope_survives_the_calibration_file(tmp_path):
     cal = Calibration(1e-4, 2e-4, presses=5, zero_slope_m_per_n=(1e-5, -3e-6), zero_ref_n=20.0)
     cal.save_yaml(tmp_path / 'c.yaml')
