@@ -38,7 +38,7 @@ def call(executor, node, srv_type, name, request, timeout_s=20.0):
     """Call a service from a helper client and spin until it answers."""
     client = node.create_client(srv_type, name)
     try:
-        return harness.call_service(executor, client, request, timeout_s, ready_s=5.0)
+        return harness.call_service(executor, client, request, timeout_s)
     finally:
         node.destroy_client(client)
 
@@ -47,6 +47,6 @@ def send_goal(executor, node, action_type, name, goal, timeout_s=20.0, feedback=
     """Send an action goal from a helper client: (status, result), (None, None) if rejected."""
     client = ActionClient(node, action_type, name)
     try:
-        return harness.send_goal(executor, client, goal, timeout_s, feedback, ready_s=5.0)
+        return harness.send_goal(executor, client, goal, timeout_s, feedback)
     finally:
         client.destroy()

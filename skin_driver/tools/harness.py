@@ -220,7 +220,14 @@ def wait_for(executor, condition: Callable[[], bool], timeout_s: float, what: st
         raise RuntimeError(f'gave up waiting for {what} after {timeout_s:.0f} s')
 
 
-def call_service(executor, client, request, timeout_s: float, ready_s: float = 10.0):
+# How long a service or action server may take to be discovered: on a loaded two-core machine
+# (a test suite on both cores and a family evaluation beside it) an action server of a node
+# started a moment before took more than the tests' 5 s; waiting longer costs nothing when it
+# is up.
+READY_S = 30.0
+
+
+def call_service(executor, client, request, timeout_s: float, ready_s: float = READY_S):
     """Call a service and spin until it answers; raise RuntimeError when it does not."""
     if not client.wait_for_service(timeout_sec=ready_s):
         raise RuntimeError(f'service {client.srv_name} did not come up')
@@ -230,7 +237,8 @@ def call_service(executor, client, request, timeout_s: float, ready_s: float = 1
     return future.result()
 
 
-def send_goal(executor, client, goal, timeout_s: float, feedback=None, ready_s: float = 10.0):
+def send_goal(executor, client, goal, timeout_s: float, feedback=None,
+              ready_s: float = READY_S):
     """
     Send an action goal and spin until it ends: (status, result), or (None, None) if rejected.
 
