@@ -395,6 +395,10 @@ def family_worst(rows, costs, methods) -> dict:
     ``ratio_to_centroid``, ``ratio_to_seed`` and ``ratio_to_oracle`` are the largest ratios of
     the method's mean error to the plain centroid difference's, to seed's and to the oracle's on
     the same skin and scene.
+    ``oracle_error_deg`` and ``oracle_valid_share`` are the oracle's error on the method's worst
+    skin and its valid share on the skin of the method's lowest one (what the frames hold);
+    ``multi``'s ``ratio_to_single`` is the largest ratio of the per-press error with two or
+    three presses to the single-press error at random spots on the same skin (issue #16's 1.2).
     ``median_us`` is the dearest skin's median cost interleaved with the others,
     ``alone_median_us`` back to back (the default only; None for the others).
     """
@@ -424,7 +428,18 @@ def family_worst(rows, costs, methods) -> dict:
                            'ratio_to_seed': ratios['seed'][0],
                            'ratio_to_seed_skin': ratios['seed'][1],
                            'ratio_to_oracle': ratios[ORACLE][0],
-                           'ratio_to_oracle_skin': ratios[ORACLE][1]}
+                           'ratio_to_oracle_skin': ratios[ORACLE][1],
+                           'oracle_error_deg': index.get((error_skin, kind, ORACLE),
+                                                         {}).get('mean_error_deg'),
+                           'oracle_valid_share': index.get((valid_skin, kind, ORACLE),
+                                                           {}).get('valid_share')}
+            if kind == 'multi':
+                single = {r['skin']: r['mean_error_deg'] for r in mine if r['scene'] == 'random'}
+                alone = [(r['mean_error_deg'] / single[r['skin']], r['skin']) for r in sel
+                         if r['mean_error_deg'] is not None
+                         and single.get(r['skin'])]
+                single, single_skin = max(alone) if alone else (None, None)
+                entry[kind].update(ratio_to_single=single, ratio_to_single_skin=single_skin)
         large, large_skin = _worst(mine, 'large_shift_valid_share', lowest=True)
         # How many presses the worst share is of: one press at the border can make it 0 %.
         large_presses = max((r['large_shift_frames'] for r in mine if r['skin'] == large_skin

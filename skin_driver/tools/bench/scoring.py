@@ -46,6 +46,8 @@ def targets(res) -> list:
         out.append(_target('random presses valid share (default)',
                            100 * (r['valid_share'] or 0), '>= 95 %',
                            (r['valid_share'] or 0) >= 0.95, spec='.1f'))
+    if 'accuracy' in res:
+        out.append(grid_target(res['accuracy']['summary']))
     if 'family' in res:
         out += family_targets(res['family']['worst'])
     if 'calibration' in res:
@@ -116,6 +118,7 @@ def family_targets(worst) -> list:
     out.append(_target("family paper's protocol: error default / seed (worst skin)", r, '<= 0.20',
                        r is not None and r <= 0.2,
                        f'worst on {d["paper"]["ratio_to_seed_skin"]}' if r else ''))
+    out += _absolute_targets(d)
     out.append(_share_target('family: presses >= 3 taxels apart found apart (default, worst)',
                              d['separate_share_far'], d['separate_skin'], 0.98))
     v = d['median_us']
@@ -134,6 +137,54 @@ def family_targets(worst) -> list:
                            + (f', {alone / ALONE_US:.2f} x the limit' if alone > ALONE_US
                               else '') + f'; {v:.0f} us interleaved with the others', '.0f'))
     return out
+
+
+def _beside_oracle(share) -> str:
+    return '' if share is None else f"; the oracle's {100 * share:.0f} % there"
+
+
+def _absolute_targets(d) -> list:
+    """
+    Return issue #16's own limits on the default's worst skin.
+
+    Error and valid share in the paper's protocol and at the border, and the per-press error
+    with several presses against the same skin's single press at random spots. Each note names
+    the oracle's figure on that skin: what the frames themselves hold.
+    """
+    out = []
+    for kind, what, error_limit, valid_limit in (('paper', "paper's protocol", 0.5, 0.95),
+                                                 ('border', 'border', 5.0, 0.80)):
+        w = d[kind]
+        v, skin, floor = w['mean_error_deg'], w['error_skin'], w.get('oracle_error_deg')
+        note = '' if v is None else f'worst on {skin}'
+        if v is not None and v > error_limit:
+            note += f', {v / error_limit:.1f} x the limit'
+        if floor is not None and v is not None:
+            note += f"; the oracle's {floor:.2f} deg there"
+        out.append(_target(f'family {what}: mean error (default, worst skin)', v,
+                           f'<= {error_limit:g} deg', v is not None and v <= error_limit, note))
+        share = _share_target(f'family {what}: valid share (default, worst skin)',
+                              w['valid_share'], w['valid_skin'], valid_limit)
+        share['note'] += _beside_oracle(w.get('oracle_valid_share'))
+        out.append(share)
+    r, skin = d['multi'].get('ratio_to_single'), d['multi'].get('ratio_to_single_skin')
+    out.append(_target("family multi: per-press error / the same skin's single press at random "
+                       'spots (default, worst skin)', r, '<= 1.2', r is not None and r <= 1.2,
+                       '' if r is None else f'worst on {skin}'
+                       + (f', {r / 1.2:.1f} x the limit' if r > 1.2 else '')))
+    return out
+
+
+def grid_target(summary) -> dict:
+    """Return issue #16.4: the default no worse than the centroid at any grid (worst ratio)."""
+    ratios = [(d['mean_error_deg'] / c['mean_error_deg'], d['grid'])
+              for d in summary if d['method'] == DEFAULT_METHOD
+              for c in summary if c['method'] == 'centroid' and c['grid'] == d['grid']
+              and d['mean_error_deg'] is not None and c['mean_error_deg']]
+    r, grid = max(ratios, default=(None, None))
+    return _target('error default / centroid at 16 to 128 taxels a side (worst grid, issue #16.4)',
+                   r, '<= 1', r is not None and r <= 1.0,
+                   '' if r is None else f'worst at {grid} x {grid}')
 
 
 def calibration_targets(worst) -> list:

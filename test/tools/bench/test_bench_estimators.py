@@ -161,3 +161,24 @@ def test_the_worst_valid_share_for_large_shifts_says_how_many_presses_it_is_of()
     # One border press with a shift of a taxel is the worst: the share says it is one.
     assert (worst['large_shift_valid_share'], worst['large_shift_skin'],
             worst['large_shift_presses']) == (0.0, 'stiff', 1)
+
+
+def test_the_worst_case_holds_the_oracles_figures_there_and_the_multi_press_ratio():
+    def row(skin, scene, method, error, valid):
+        return {'skin': skin, 'scene': scene, 'method': method, 'mean_error_deg': error,
+                'valid_share': valid, 'large_shift_valid_share': None, 'large_shift_frames': 0,
+                'separate_share_far': None}
+    rows = [row('soft', 'random', 'taxel_fit', 0.2, 1.0),
+            row('soft', 'multi', 'taxel_fit', 19.0, 0.95),
+            row('sharp', 'random', 'taxel_fit', 4.0, 0.8),
+            row('sharp', 'multi', 'taxel_fit', 6.0, 0.88),
+            row('stiff', 'border', 'taxel_fit', 2.0, 0.38),
+            row('sharp', 'border', 'taxel_fit', 7.0, 0.6),
+            row('stiff', 'border', 'oracle', 0.26, 0.97),
+            row('sharp', 'border', 'oracle', 0.45, 0.64)]
+    worst = bench_core.family_worst(rows, [], ['taxel_fit'])['taxel_fit']
+    assert (worst['border']['oracle_error_deg'], worst['border']['oracle_valid_share']) == (
+        0.45, 0.97)
+    # soft: 19 / 0.2 with several presses against sharp's 6 / 4.
+    assert worst['multi']['ratio_to_single_skin'] == 'soft'
+    assert abs(worst['multi']['ratio_to_single'] - 95.0) < 1e-9

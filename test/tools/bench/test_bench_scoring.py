@@ -112,3 +112,47 @@ def test_the_large_shift_target_names_how_many_presses_its_worst_share_is_of(res
                  if 'shifts >= 1 taxel' in t['name']]
     assert not target['met']
     assert target['note'] == 'worst on stiff (1 such press there), 95.0 points short'
+
+
+def _scene(error, error_skin, valid, valid_skin, oracle_error, oracle_valid):
+    return {'mean_error_deg': error, 'error_skin': error_skin, 'valid_share': valid,
+            'valid_skin': valid_skin, 'oracle_error_deg': oracle_error,
+            'oracle_valid_share': oracle_valid}
+
+
+def test_issue_16s_own_limits_name_the_worst_skin_and_the_oracles_figure_there(results):
+    worst = dict(results['family']['worst'])
+    default = dict(worst['taxel_fit'],
+                   paper=dict(worst['taxel_fit']['paper'],
+                              **_scene(2.1, 'film', 1.0, 'blurred', 0.11, 1.0)),
+                   border=dict(worst['taxel_fit']['border'],
+                               **_scene(4.0, 'sharp', 0.38, 'stiff', 0.45, 0.97)),
+                   multi=dict(worst['taxel_fit']['multi'], ratio_to_single=100.0,
+                              ratio_to_single_skin='soft'))
+    targets = {t['name']: t for t in scoring.family_targets(dict(worst, taxel_fit=default))}
+    paper = targets["family paper's protocol: mean error (default, worst skin)"]
+    assert (paper['measured'], paper['limit'], paper['met']) == ('2.10', '<= 0.5 deg', False)
+    assert paper['note'] == "worst on film, 4.2 x the limit; the oracle's 0.11 deg there"
+    assert targets["family paper's protocol: valid share (default, worst skin)"]['met']
+    border = targets['family border: mean error (default, worst skin)']
+    assert border['met'] and border['note'] == "worst on sharp; the oracle's 0.45 deg there"
+    valid = targets['family border: valid share (default, worst skin)']
+    assert (valid['measured'], valid['limit'], valid['met']) == ('38.0', '>= 80 %', False)
+    assert valid['note'] == "worst on stiff, 42.0 points short; the oracle's 97 % there"
+    multi = targets["family multi: per-press error / the same skin's single press at random "
+                    'spots (default, worst skin)']
+    assert not multi['met'] and multi['note'] == 'worst on soft, 83.3 x the limit'
+
+
+def test_the_grid_target_is_the_worst_ratio_to_the_centroid_over_the_grids():
+    def row(grid, method, error):
+        return {'grid': grid, 'method': method, 'mean_error_deg': error}
+    summary = [row(16, 'taxel_fit', 1.0), row(16, 'centroid', 4.0), row(64, 'taxel_fit', 0.9),
+               row(64, 'centroid', 0.6), row(64, 'poc', 30.0)]
+    target = scoring.grid_target(summary)
+    assert (target['measured'], target['met'], target['note']) == ('1.50', False,
+                                                                   'worst at 64 x 64')
+    summary[2]['mean_error_deg'] = 0.5
+    assert scoring.grid_target(summary)['met']
+    # No grid measured for both: nothing measured is no pass.
+    assert not scoring.grid_target(summary[:1])['met']
