@@ -347,7 +347,8 @@ int sk_pair_layers(sk_kernel *k)
   if (!count) {
     return 0;
   }
-  count = split_peaks(k, top, count);
+  /* the saddle is judged on the load (contacts.pair_layers) */
+  count = split_peaks(k, k->force, count);
   if (k->kmax < 1) {
     return 0;
   }

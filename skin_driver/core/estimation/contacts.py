@@ -11,7 +11,8 @@ so neighbouring presses keep their own bottom imprints even when those overlap.
 Each contact comes out as one :class:`LayerPair`: a window holding the contact's top taxels and
 its share of the bottom load, ready for any shift estimator, plus the figures the pipeline needs.
 The geometry is found on one pair of maps (the pipeline gives the tared counts, free of any
-assumed FSR curve) and the forces are summed on another (the force maps) over the same taxels.
+assumed FSR curve) and the forces are summed on another (the force maps) over the same taxels;
+whether two peaks are two presses is judged on the force map, where the dip between them is.
 """
 
 from __future__ import annotations
@@ -24,8 +25,8 @@ import numpy as np
 
 __all__ = ['LayerPair', 'pair_layers']
 
-# A second peak of one connected top group is another contact only if the load between them
-# drops below this share of the lower peak, and the peaks are at least MIN_PEAK_DISTANCE apart.
+# A second peak of one connected top group is another contact only if the load (force) between
+# them drops below this share of the lower peak, and they are at least MIN_PEAK_DISTANCE apart.
 SADDLE_RATIO = 0.85
 MIN_PEAK_DISTANCE = 2
 _MIXTURE_ITERATIONS = 3
@@ -76,7 +77,9 @@ def pair_layers(maps: np.ndarray, max_contacts: int = 32, dead: np.ndarray = Non
     n, labels = cv2.connectedComponents(loaded, connectivity=8, ltype=cv2.CV_32S)
     if n <= 1:
         return []
-    labels, n = _split_peaks(top, labels, n, dead)
+    # The saddle is judged on the load: the counts of a film near the end of its curve flatten
+    # the dip between two fingers close together (docs/estimation.md, "Contacts").
+    labels, n = _split_peaks(force[0], labels, n, dead)
     if max_contacts < 1:
         return []
     if n == 2:

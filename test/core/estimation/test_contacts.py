@@ -67,6 +67,20 @@ def test_two_presses_joined_by_a_shallow_saddle_are_two_contacts():
     assert first.bottom_force_n + second.bottom_force_n == pytest.approx(bottom.sum(), rel=0.03)
 
 
+def test_two_fingers_whose_counts_barely_dip_are_split_by_the_load_between_them():
+    # Two presses 2 taxels apart on a film near the end of its curve: the counts between them
+    # stay at 0.94 of the weaker peak, the load drops to 0.78 of it (the force maps' saddle).
+    # Expected: two contacts, one on each peak; judged on the counts alone they were one.
+    force = _gauss((16, 16), 6, 8, 0.7, 10.0) + _gauss((16, 16), 8, 8, 0.7, 12.0)
+    force[force < 0.2] = 0.0
+    counts = 4000.0 * force / (force + 3.0)
+    assert counts[7, 8] / counts[6, 8] > 0.9 and force[7, 8] / force[6, 8] < 0.8
+    maps = np.stack((counts, np.roll(counts, 1, axis=1)))
+    assert len(pair_layers(maps)) == 1
+    pairs = pair_layers(maps, force=np.stack((force, np.roll(force, 1, axis=1))))
+    assert sorted((round(p.row), round(p.col)) for p in pairs) == [(6, 8), (8, 8)]
+
+
 def test_a_flat_topped_imprint_with_two_close_maxima_is_one_contact():
     # A large indenter loads a plateau whose noise makes two maxima one taxel apart.
     top = np.zeros((16, 16))
