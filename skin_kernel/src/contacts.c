@@ -82,10 +82,10 @@ static int components(const double *top, int rows, int cols, const int *box, int
 }
 
 /*
- * Whether peak p stands apart from the higher peak q: the load along the straight line between
- * them, interpolated between taxels, drops below SADDLE_RATIO of p (contacts._separate).
+ * Whether peaks p and q stand apart: the load along the straight line between them,
+ * interpolated between taxels, drops below SADDLE_RATIO of the lower one's (contacts._separate).
  */
-static int separate(const double *top, const double *values, int rows, int cols, int p, int q)
+static int separate(const double *load, const double *values, int rows, int cols, int p, int q)
 {
   int pr = p / cols, pc = p % cols, qr = q / cols, qc = q % cols;
   int dr = abs(pr - qr), dc = abs(pc - qc);
@@ -109,7 +109,7 @@ static int separate(const double *top, const double *values, int rows, int cols,
       + fr * (1 - fc) * values[r1 * cols + c0] + fr * fc * values[r1 * cols + c1];
     lowest = v < lowest ? v : lowest;
   }
-  return lowest < SADDLE_RATIO * top[p];
+  return lowest < SADDLE_RATIO * (load[p] < load[q] ? load[p] : load[q]);
 }
 
 /* Rank among group `label`'s kept peaks of the one nearest to taxel i (the first if tied). */
@@ -131,8 +131,11 @@ static int nearest(const int *kept, const int *kept_label, int nkept, int label,
   return which;
 }
 
-/* Give each clear peak of a connected group its own label; the nearest peak takes a taxel. */
-static int split_peaks(sk_kernel *k, const double *top, int count)
+/*
+ * Give each clear peak of a connected group its own label; the nearest peak takes a taxel.
+ * The peaks are the readings' (top); the saddle between two is judged on the load.
+ */
+static int split_peaks(sk_kernel *k, const double *top, const double *load, int count)
 {
   int rows = k->rows, cols = k->cols, n = k->n;
   const int *box = k->box;
@@ -167,9 +170,12 @@ static int split_peaks(sk_kernel *k, const double *top, int count)
   }
   /* A filled-in dead taxel is no evidence of a dip: the path takes its higher neighbour. */
   const unsigned char *dead = k->any_dead[0] ? k->dead : NULL;
+  if (dead) {
+    dilate3(load, cols, around, values, dil);
+  }
   for (int r = around[0]; r < around[1]; r++) {
     for (int i = r * cols + around[2]; i < r * cols + around[3]; i++) {
-      values[i] = dead && dead[i] ? dil[i] : top[i];
+      values[i] = dead && dead[i] ? dil[i] : load[i];
     }
   }
   int nkept = 0, ngroups = 0, split = 0;
@@ -178,7 +184,7 @@ static int split_peaks(sk_kernel *k, const double *top, int count)
     for (int j = 0; j < nkept && apart; j++) {
       if (kept_label[j] == label) {
         seen = 1;
-        apart = separate(top, values, rows, cols, p, kept[j]);
+        apart = separate(load, values, rows, cols, p, kept[j]);
       }
     }
     if (!seen) {
@@ -347,8 +353,7 @@ int sk_pair_layers(sk_kernel *k)
   if (!count) {
     return 0;
   }
-  /* the saddle is judged on the load (contacts.pair_layers) */
-  count = split_peaks(k, k->force, count);
+  count = split_peaks(k, top, k->force, count);
   if (k->kmax < 1) {
     return 0;
   }

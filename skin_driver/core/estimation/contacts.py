@@ -77,9 +77,7 @@ def pair_layers(maps: np.ndarray, max_contacts: int = 32, dead: np.ndarray = Non
     n, labels = cv2.connectedComponents(loaded, connectivity=8, ltype=cv2.CV_32S)
     if n <= 1:
         return []
-    # The saddle is judged on the load: the counts of a film near the end of its curve flatten
-    # the dip between two fingers close together (docs/estimation.md, "Contacts").
-    labels, n = _split_peaks(force[0], labels, n, dead)
+    labels, n = _split_peaks(top, force[0], labels, n, dead)
     if max_contacts < 1:
         return []
     if n == 2:
@@ -97,8 +95,15 @@ def pair_layers(maps: np.ndarray, max_contacts: int = 32, dead: np.ndarray = Non
     return [_pair(t, b, tf, bf) for t, b, tf, bf in zip(tops, shares, top_forces, bottom_forces)]
 
 
-def _split_peaks(top: np.ndarray, labels: np.ndarray, n: int, dead) -> tuple:
-    """Give each clear peak of a connected top group its own label; nearest peak wins a taxel."""
+def _split_peaks(top: np.ndarray, load: np.ndarray, labels: np.ndarray, n: int,
+                 dead) -> tuple:
+    """
+    Give each clear peak of a connected top group its own label; nearest peak wins a taxel.
+
+    The peaks are the readings' (``top``); whether two are apart is judged on the ``load``
+    between them: the counts of a film near the end of its curve flatten the dip between two
+    fingers close together (docs/estimation.md, "Contacts").
+    """
     peaks = (top >= cv2.dilate(top, _DILATE)) & (top > 0)
     pr, pc = np.nonzero(peaks)
     if pr.size <= n - 1:
@@ -109,7 +114,7 @@ def _split_peaks(top: np.ndarray, labels: np.ndarray, n: int, dead) -> tuple:
     for i in order.tolist():
         r, c, k = int(pr[i]), int(pc[i]), int(labels[pr[i], pc[i]])
         mine = kept.setdefault(k, [])
-        if all(_separate(top, (r, c), q, dead) for q in mine):
+        if all(_separate(load, (r, c), q, dead) for q in mine):
             mine.append((r, c))
     if all(len(v) == 1 for v in kept.values()):
         return labels, n
@@ -128,14 +133,15 @@ def _split_peaks(top: np.ndarray, labels: np.ndarray, n: int, dead) -> tuple:
     return out, next_label
 
 
-def _separate(top: np.ndarray, p: tuple, q: tuple, dead) -> bool:
+def _separate(load: np.ndarray, p: tuple, q: tuple, dead) -> bool:
     """
-    Return True when the peak ``p`` stands apart from the higher peak ``q``.
+    Return True when the peaks ``p`` and ``q`` stand apart.
 
     The load is followed along the straight line between them, interpolated between taxels (a
     line between diagonal neighbours passes their shared corner, where two blobs that only
-    touch at a corner meet low).
+    touch at a corner meet low), and must drop below SADDLE_RATIO of the lower one's.
     """
+    top = load
     steps = max(abs(p[0] - q[0]), abs(p[1] - q[1]))
     if steps < MIN_PEAK_DISTANCE:
         return False
@@ -153,7 +159,7 @@ def _separate(top: np.ndarray, p: tuple, q: tuple, dead) -> bool:
         values = np.where(dead, cv2.dilate(top, _DILATE), top)
     path = ((1 - fr) * (1 - fc) * values[r0, c0] + (1 - fr) * fc * values[r0, c1]
             + fr * (1 - fc) * values[r1, c0] + fr * fc * values[r1, c1])
-    return float(path.min()) < SADDLE_RATIO * float(top[p])
+    return float(path.min()) < SADDLE_RATIO * min(float(top[p]), float(top[q]))
 
 
 def _share_bottom(tops: np.ndarray, bottom: np.ndarray) -> np.ndarray:

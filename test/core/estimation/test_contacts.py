@@ -81,6 +81,21 @@ def test_two_fingers_whose_counts_barely_dip_are_split_by_the_load_between_them(
     assert sorted((round(p.row), round(p.col)) for p in pairs) == [(6, 8), (8, 8)]
 
 
+def test_a_second_press_whose_peak_reads_less_load_than_a_flank_is_still_its_own_contact():
+    # Two presses 2 taxels apart (a `loaded` skin's frame): the weaker press's peak taxel reads
+    # more counts than its neighbour on the stronger press's flank, but after that taxel's gain
+    # less force (5.27 N against 5.34 N). Expected: two contacts; the force map alone has one
+    # peak there.
+    counts, force = np.zeros((16, 16)), np.zeros((16, 16))
+    counts[3, 4:6], force[3, 4:6] = (787, 973), (0.16, 0.24)
+    counts[4, 4:8], force[4, 4:8] = (2715, 2516, 1795, 1200), (7.47, 5.34, 1.39, 0.41)
+    counts[5, 4:8], force[5, 4:8] = (373, 0, 2536, 1933), (0.03, 0.0, 5.27, 1.72)
+    maps = np.stack((counts, np.roll(counts, 1, axis=0)))
+    pairs = pair_layers(maps, force=np.stack((force, np.roll(force, 1, axis=0))))
+    assert sorted((round(p.row), round(p.col)) for p in pairs) == [(4, 4), (5, 6)]
+    assert len(pair_layers(np.stack((force, np.roll(force, 1, axis=0))))) == 1
+
+
 def test_a_flat_topped_imprint_with_two_close_maxima_is_one_contact():
     # A large indenter loads a plateau whose noise makes two maxima one taxel apart.
     top = np.zeros((16, 16))
