@@ -1,6 +1,6 @@
 /*
  * The 1-sigma uncertainty of one axis of a contact's shift, from its own data: the counts'
- * noise through each centroid, the pixel-locking error of a narrow imprint, the map's edge (the
+ * noise through each centroid, a shared bottom load's assignment, the pixel-locking error of a narrow imprint, the map's edge (the
  * shift method's own uncertainty of its cut profiles, else a flat fifth of a taxel) and the
  * calibration. Python description: uncertainty.shift_sigma (and its module docstring).
  */
@@ -30,6 +30,10 @@ double sk_sigma(const sk_kernel *k, const sk_pair *p, const double *window, int 
           /* A contact's share of a layer carries the same share of that layer's noise. */
           double share = full[i] > 0 ? v / full[i] : 0.0;
           e2 *= share * share;
+          /* its bottom share is a guess: a Bernoulli variance of each taxel's load */
+          if (layer == 1) {
+            e2 += full[i] * full[i] * share * (1.0 - share);
+          }
         }
         double basis[5] = {1.0, r, c, (double)r * r, (double)c * c};
         for (int b = 0; b < 5; b++) {

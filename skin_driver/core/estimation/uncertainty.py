@@ -4,14 +4,16 @@ The uncertainty of a contact's shift, from the contact's own data (Python descri
 Each taxel's count noise (measured by the tare) gives the noise of each imprint's centroid; an
 imprint narrower than a taxel adds the pixel-locking error of its sampled centroid, whose size
 follows from the imprint's measured width (a Gaussian profile of variance ``v - 1/12`` sampled on
-unit cells has a first harmonic of amplitude ``exp(-2 pi^2 (v - 1/12)) / pi`` taxels); an imprint
-cut by the map's edge adds the shift method's own uncertainty of its cut profiles (``taxel_fit``:
-how far the centre follows the width, :func:`taxelfit.cell_fit_shift`; at least a fifth of a
-taxel for a contact sharing the bottom load with others), else a fifth of a taxel; the
-calibration adds the spread of its zero about the normal presses
-and its standard error (the zero a new press meets, :mod:`pipeline`). The root sum of squares is
-``sigma``, one axis of the shift (see :mod:`pipeline`). The compiled kernel's ``sigma.c`` does
-the same; the tests hold it to this.
+unit cells has a first harmonic of amplitude ``exp(-2 pi^2 (v - 1/12)) / pi`` taxels); a contact
+sharing the bottom load with others adds the spread its share's centroid would have were each
+bottom taxel's load its own with the mixture's probability (a taxel wholly its own or wholly
+another's adds nothing); an imprint cut by the map's edge adds the shift method's own
+uncertainty of its cut profiles (``taxel_fit``: how far the centre follows the width,
+:func:`taxelfit.cell_fit_shift`; at least a fifth of a taxel for a contact sharing the bottom
+load with others), else a fifth of a taxel; the calibration adds the spread of its zero about
+the normal presses and its standard error (the zero a new press meets, :mod:`pipeline`). The
+root sum of squares is ``sigma``, one axis of the shift (see :mod:`pipeline`). The compiled
+kernel's ``sigma.c`` does the same; the tests hold it to this.
 """
 
 from __future__ import annotations
@@ -61,6 +63,9 @@ def shift_sigma(pair: LayerPair, maps: np.ndarray, noise: np.ndarray, alone: boo
         full = maps[:, r0:r0 + h, c0:c0 + w]
         share = np.divide(pair.maps, full, out=np.zeros_like(full), where=full > 0)
         err2 *= share * share
+        # Its bottom share is a guess: each taxel's load is its own with the mixture's
+        # probability, a Bernoulli variance of the load times the share's complement.
+        err2[1] += full[1] * full[1] * share[1] * (1.0 - share[1])
     basis = _axis_basis((h, w))
     moments = (pair.maps.reshape(2, -1) @ basis).tolist()
     noises = (err2.reshape(2, -1) @ basis).tolist()
