@@ -110,11 +110,15 @@ def _split_peaks(top: np.ndarray, load: np.ndarray, labels: np.ndarray, n: int,
         return labels, n
     heights = top[pr, pc]
     order = np.argsort(-heights, kind='stable')
+    values = load
+    if dead is not None:
+        # A filled-in taxel is no evidence of a dip: the path takes its higher neighbour.
+        values = np.where(dead, cv2.dilate(load, _DILATE), load)
     kept = {}
     for i in order.tolist():
         r, c, k = int(pr[i]), int(pc[i]), int(labels[pr[i], pc[i]])
         mine = kept.setdefault(k, [])
-        if all(_separate(load, (r, c), q, dead) for q in mine):
+        if all(_separate(load, values, (r, c), q) for q in mine):
             mine.append((r, c))
     if all(len(v) == 1 for v in kept.values()):
         return labels, n
@@ -133,33 +137,29 @@ def _split_peaks(top: np.ndarray, load: np.ndarray, labels: np.ndarray, n: int,
     return out, next_label
 
 
-def _separate(load: np.ndarray, p: tuple, q: tuple, dead) -> bool:
+def _separate(load: np.ndarray, values: np.ndarray, p: tuple, q: tuple) -> bool:
     """
     Return True when the peaks ``p`` and ``q`` stand apart.
 
-    The load is followed along the straight line between them, interpolated between taxels (a
-    line between diagonal neighbours passes their shared corner, where two blobs that only
-    touch at a corner meet low), and must drop below SADDLE_RATIO of the lower one's.
+    The load (``values``: ``load`` with its dead taxels filled) is followed along the straight
+    line between them, interpolated between taxels (a line between diagonal neighbours passes
+    their shared corner, where two blobs that only touch at a corner meet low), and must drop
+    below SADDLE_RATIO of the lower peak's ``load``.
     """
-    top = load
     steps = max(abs(p[0] - q[0]), abs(p[1] - q[1]))
     if steps < MIN_PEAK_DISTANCE:
         return False
     t = np.linspace(0.0, 1.0, 4 * steps + 1)
     r = p[0] + (q[0] - p[0]) * t
     c = p[1] + (q[1] - p[1]) * t
-    r0 = np.clip(np.floor(r).astype(np.intp), 0, max(top.shape[0] - 2, 0))
-    c0 = np.clip(np.floor(c).astype(np.intp), 0, max(top.shape[1] - 2, 0))
-    r1 = np.minimum(r0 + 1, top.shape[0] - 1)
-    c1 = np.minimum(c0 + 1, top.shape[1] - 1)
+    r0 = np.clip(np.floor(r).astype(np.intp), 0, max(load.shape[0] - 2, 0))
+    c0 = np.clip(np.floor(c).astype(np.intp), 0, max(load.shape[1] - 2, 0))
+    r1 = np.minimum(r0 + 1, load.shape[0] - 1)
+    c1 = np.minimum(c0 + 1, load.shape[1] - 1)
     fr, fc = r - r0, c - c0
-    values = top
-    if dead is not None:
-        # A filled-in taxel is no evidence of a dip: the path takes its higher neighbour.
-        values = np.where(dead, cv2.dilate(top, _DILATE), top)
     path = ((1 - fr) * (1 - fc) * values[r0, c0] + (1 - fr) * fc * values[r0, c1]
             + fr * (1 - fc) * values[r1, c0] + fr * fc * values[r1, c1])
-    return float(path.min()) < SADDLE_RATIO * min(float(top[p]), float(top[q]))
+    return float(path.min()) < SADDLE_RATIO * min(float(load[p]), float(load[q]))
 
 
 def _share_bottom(tops: np.ndarray, bottom: np.ndarray) -> np.ndarray:

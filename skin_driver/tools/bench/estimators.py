@@ -435,11 +435,10 @@ def family_worst(rows, costs, methods) -> dict:
                                                            {}).get('valid_share')}
             if kind == 'multi':
                 single = {r['skin']: r['mean_error_deg'] for r in mine if r['scene'] == 'random'}
-                alone = [(r['mean_error_deg'] / single[r['skin']], r['skin']) for r in sel
-                         if r['mean_error_deg'] is not None
-                         and single.get(r['skin'])]
-                single, single_skin = max(alone) if alone else (None, None)
-                entry[kind].update(ratio_to_single=single, ratio_to_single_skin=single_skin)
+                to_single = [(r['mean_error_deg'] / single[r['skin']], r['skin']) for r in sel
+                             if r['mean_error_deg'] is not None and single.get(r['skin'])]
+                ratio, skin = max(to_single, default=(None, None))
+                entry[kind].update(ratio_to_single=ratio, ratio_to_single_skin=skin)
         large, large_skin = _worst(mine, 'large_shift_valid_share', lowest=True)
         # How many presses the worst share is of: one press at the border can make it 0 %.
         large_presses = max((r['large_shift_frames'] for r in mine if r['skin'] == large_skin
