@@ -28,13 +28,13 @@ import numpy as np
 from .validate import check_pair
 
 __all__ = ['METHODS', 'KernelSettings', 'Kernel', 'KernelMissing', 'load_library',
-           'CONTACT_FIELDS', 'KEPT', 'DX', 'DY']
+           'CONTACT_FIELDS', 'KEPT', 'DX', 'DY', 'fit_contact']
 
 # Shift methods the kernel runs, by their registered names (skin_kernel.h: SK_CENTROID, ...).
 METHODS = {'centroid': 0, 'taxel_fit': 1, 'poc': 2}
 
 # skin_kernel.h's layout: bump both together.
-_ABI_VERSION = 6
+_ABI_VERSION = 7
 _INTS = 9
 _REALS = 23
 _NREC = 23
@@ -83,7 +83,9 @@ def load_library() -> ctypes.CDLL:
     # every time.
     signatures = {'sk_new': (ptr, [ptr] * 8), 'sk_free': (None, [ptr]),
                   'sk_scan': (ctypes.c_int, None), 'sk_scan_counts': (ctypes.c_int, None),
-                  'sk_dead': (None, [ptr, ptr])}
+                  'sk_dead': (None, [ptr, ptr]),
+                  'sk_model_fit': (ctypes.c_int, [ptr, ctypes.c_int, ctypes.c_int, ptr, ptr,
+                                                  ptr, ptr, ctypes.c_int, ptr, ptr])}
     for name, (restype, argtypes) in signatures.items():
         function = getattr(lib, name)
         function.restype = restype
@@ -187,3 +189,35 @@ class Kernel:
         out = np.zeros((2,) + self.shape, dtype=np.uint8)
         self._lib.sk_dead(self._handle, _address(out))
         return out.astype(bool)
+
+
+def fit_contact(model, counts: np.ndarray, censored: np.ndarray, u0: np.ndarray,
+                iterations: int = 10, sensitivity: np.ndarray = None):
+    """
+    Return :func:`taxelmodel.fit_contact` of the same arguments, compiled (``sk_model_fit``).
+
+    ``model`` is a :class:`taxelmodel.TaxelModel`; raises KernelMissing without the kernel.
+    """
+    from .taxelmodel import PressFit
+    lib = load_library()
+    counts = np.ascontiguousarray(counts, dtype=np.float64)
+    rows, cols = counts.shape[1:]
+    numbers = np.array([model.pitch_m, model.fill_factor, model.cover_spread_m,
+                        model.layer_spread_m, model.film_scale, model.film_exponent,
+                        model.film_ceiling, model.film_activation_n, model.turn_on_pa,
+                        model.film_step, model.full_scale], dtype=np.float64)
+    marks = (None if censored is None
+             else np.ascontiguousarray(np.broadcast_to(censored, counts.shape), dtype=np.uint8))
+    factors = (None if sensitivity is None
+               else np.ascontiguousarray(np.broadcast_to(sensitivity, counts.shape),
+                                         dtype=np.float64))
+    start = np.ascontiguousarray(u0, dtype=np.float64)
+    u = np.zeros(8)
+    misfit = np.zeros(1)
+    status = lib.sk_model_fit(_address(numbers), rows, cols, _address(counts),
+                              None if marks is None else _address(marks),
+                              None if factors is None else _address(factors), _address(start),
+                              int(iterations), _address(u), _address(misfit))
+    if status != 0:
+        raise MemoryError(f'skin_kernel: no memory to fit a {rows} x {cols} window')
+    return PressFit(u, float(misfit[0]))

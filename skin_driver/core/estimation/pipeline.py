@@ -17,6 +17,8 @@ is within the noise and carries no direction.
 Compiled: for the registered methods all of the above runs in the compiled kernel (package
 ``skin_kernel``, :mod:`kernel`), one call per scan; this module and the ones it calls are the
 algorithm's description, run with ``compiled=False``, and the tests hold the kernel to it.
+``model_fit`` runs this module's steps and compiles only its fit of each contact (the kernel's
+``sk_model_fit``), which is all but a few per cent of its cost.
 
 Normal force: the taxels sense only ``fill_factor**2`` of the skin area, so the summed taxel
 forces of a contact are divided by it. The bottom layer's sum is used because the elastic layer
@@ -132,8 +134,9 @@ class ContactEstimator:
     Estimate contacts (location, force, direction) from raw top and bottom count maps.
 
     The registered methods (:data:`kernel.METHODS`) run in the compiled kernel, one call per
-    scan; the Python code of this module and the ones it calls describes that algorithm and runs
-    with ``compiled=False`` (the tests compare the two) and with a reference ``shift``.
+    scan (``model_fit`` its per-contact fit); the Python code of this module and the ones it
+    calls describes that algorithm and runs with ``compiled=False`` (the tests compare the two)
+    and with a reference ``shift``.
     """
 
     def __init__(self, config: EstimatorConfig = None, calibration: Calibration = None,
@@ -163,7 +166,7 @@ class ContactEstimator:
         self._compiled = compiled
         self._use_kernel = (compiled and shift is None
                             and self._method.name in compiled_kernel.METHODS)
-        if self._use_kernel:
+        if self._use_kernel or (compiled and self._method.modelled):
             # A missing kernel stops the estimator's maker (a node at start-up), not a scan.
             compiled_kernel.load_library()
         self._kernel = None
@@ -235,7 +238,7 @@ class ContactEstimator:
             elif method.linear:
                 stack = np.concatenate((window, pair.maps, censored_taxels(marked, curves)))
                 est = (method.function(stack, self._calibration.taxel_model,
-                                       _window_of(sensitivity, pair))
+                                       _window_of(sensitivity, pair), self._compiled)
                        if method.modelled else method.function(stack))
             else:
                 est = method.function(pair.maps)

@@ -373,8 +373,8 @@ def forward_family(size: int, skins: list = None, seed: int = 0, log=print) -> d
     """
     Return ``model_fit`` and the default scored beside the oracle at ``size`` random spots a skin.
 
-    The family's way (:func:`family`), random spots only: the Python fit takes 0.1-1 s a
-    contact and its calibration a minute, so the other scenes would take hours.
+    The family's way (:func:`family`), random spots only: its calibration learns the skin in
+    Python, up to a minute a scene, so the other scenes would take an hour more.
     """
     return family({'random': size}, [DEFAULT_METHOD, FORWARD], skins, seed, log,
                   kinds=('random',))

@@ -21,7 +21,7 @@ extern "C" {
 #endif
 
 /* Bumped whenever a signature or a layout below changes; the binding checks it. */
-#define SK_ABI_VERSION 6
+#define SK_ABI_VERSION 7
 
 /* Integer settings, in this order. */
 enum {
@@ -65,6 +65,15 @@ enum { SK_STATUS_PAIRS, SK_STATUS_CENSORED, SK_STATUS_REVIVED, SK_NSTATUS };
 /* sk_scan's errors (negative return values). */
 enum { SK_ERR_NOT_FINITE = -1, SK_ERR_NEGATIVE = -2 };
 
+/* A skin's forward model of the taxels (taxelmodel.TaxelModel), SI units, in this order. */
+enum {
+  SK_MODEL_PITCH, SK_MODEL_FILL, SK_MODEL_COVER, SK_MODEL_LAYER, /* blurs: spreads, m */
+  SK_MODEL_SCALE, SK_MODEL_EXPONENT, SK_MODEL_CEILING, SK_MODEL_ACTIVATION, /* the film's law */
+  SK_MODEL_TURN_ON, SK_MODEL_STEP, /* a film that stays open below a pressure (Pa) */
+  SK_MODEL_FULL_SCALE,
+  SK_MODEL_NREALS
+};
+
 typedef struct sk_kernel sk_kernel;
 
 int sk_abi_version(void);
@@ -96,6 +105,17 @@ int sk_scan_counts(sk_kernel *k, const uint16_t *maps, int every_pair, double *o
 
 /* Copy the dead-taxel marks in force, (2, rows, cols), to out. */
 void sk_dead(const sk_kernel *k, unsigned char *out);
+
+/*
+ * Fit a skin's forward model (model: SK_MODEL_NREALS numbers) to one contact's window: counts
+ * (2, rows, cols) tared counts, censored (2, rows, cols) 1 where a taxel is a lower bound (NULL:
+ * none), sensitivity (2, rows, cols) each taxel's load factor (NULL: 1), u0 the start (8
+ * numbers: x, y, log force, dx, dy, log radius, log aspect, orientation). Writes the least-misfit
+ * press to u_out and its misfit (counts**2) to misfit_out; returns 0, or -1 when out of memory.
+ */
+int sk_model_fit(const double *model, int rows, int cols, const double *counts,
+                 const unsigned char *censored, const double *sensitivity, const double *u0,
+                 int iterations, double *u_out, double *misfit_out);
 
 #ifdef __cplusplus
 }

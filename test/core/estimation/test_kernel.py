@@ -10,6 +10,7 @@ Gauss-Newton fit of narrow windows is ill-conditioned enough to turn a changed o
 operations into 1e-5 taxels; 1e-9 catches that and any real divergence.
 """
 
+from dataclasses import replace
 import math
 import os
 import subprocess
@@ -19,9 +20,14 @@ import numpy as np
 import pytest
 
 from skin_driver.core.estimation.calibration import Calibration
+from skin_driver.core.estimation.kernel import fit_contact as compiled_fit_contact
 from skin_driver.core.estimation.pipeline import ContactEstimator, EstimatorConfig
 from skin_driver.core.estimation.prepared import prepared_estimator
 from skin_driver.core.estimation.shift import REFERENCES
+from skin_driver.core.estimation.taxelmodel import (
+    DX as model_dx, DY as model_dy, fit_contact, LOG_ASPECT as model_aspect,
+    LOG_FORCE as model_force, LOG_RADIUS as model_radius, ORIENTATION as model_orientation,
+    render_counts, start_of, TaxelModel, X as model_x, Y as model_y)
 from skin_driver.core.sim.experiments import calibrated_scene, make_scene
 from skin_driver.core.sim.physics import Press, render, SkinModel
 from skin_driver.core.sim.skins import family_skin, skin_names
@@ -396,3 +402,77 @@ def test_a_missing_kernel_stops_the_estimators_maker_naming_the_fix():
     out = subprocess.run([sys.executable, '-c', code], capture_output=True, text=True, env=env)
     assert out.stdout == 'description made\n' and out.returncode != 0
     assert 'KernelMissing' in out.stderr and 'make setup' in out.stderr
+
+
+# ---- the forward model's fit of one contact (sk_model_fit) against taxelmodel.fit_contact ----
+FILM = TaxelModel(pitch_m=0.005, fill_factor=0.9, cover_spread_m=0.001, layer_spread_m=0.002,
+                  film_scale=0.67, film_exponent=0.53, film_ceiling=3.3, film_activation_n=0.01)
+WINDOW = (10, 10)
+
+
+def _press(dx, dy, force=20.0, radius=0.8, aspect=1.0, orientation=0.0):
+    u = np.zeros(8)
+    u[model_x], u[model_y], u[model_dx], u[model_dy] = 4.3, 5.1, dx, dy
+    u[model_force], u[model_radius] = math.log(force), math.log(radius)
+    u[model_aspect], u[model_orientation] = math.log(aspect), orientation
+    return u
+
+
+def _noisy(counts):
+    # With the ADC's noise the misfit has a clear least: noise-free, it falls to rounding noise,
+    # where two orders of summation walk apart (and a round tip's turn means nothing at all).
+    return counts + np.random.default_rng(0).normal(0.0, 5.0, counts.shape)
+
+
+def _assert_fits_alike(model, counts, censored, start, sensitivity=None):
+    python = fit_contact(model, counts, censored, start, sensitivity=sensitivity)
+    compiled = compiled_fit_contact(model, counts, censored, start, sensitivity=sensitivity)
+    np.testing.assert_allclose(compiled.u[:model_orientation], python.u[:model_orientation],
+                               rtol=0, atol=TOLERANCE)
+    # A nearly round tip's turn is barely defined (the misfit hardly moves with it): a few ulp
+    # of another order of summation move it by up to 1e-8 rad (measured), nothing else.
+    assert compiled.u[model_orientation] == pytest.approx(python.u[model_orientation], abs=1e-6)
+    assert compiled.misfit == pytest.approx(python.misfit, rel=TOLERANCE)
+    return compiled
+
+
+@pytest.mark.parametrize('model, truth', [
+    (FILM, _press(0.5, 0.0)),                                  # half a taxel: the worst locking
+    (FILM, _press(1.3, -0.7, radius=1.4)),
+    (FILM, _press(0.3, 0.4, aspect=1.6, orientation=0.6)),     # an elliptical tip, turned
+    (replace(FILM, cover_spread_m=0.0, layer_spread_m=0.0), _press(0.6, 0.2)),  # no blur at all
+    (replace(FILM, cover_spread_m=0.0015, turn_on_pa=20000.0, film_step=0.25),  # a film's cliffs
+     _press(0.4, -0.3, force=12.0, radius=1.2)),
+])
+def test_the_forward_model_fits_a_contact_alike(model, truth):
+    counts = _noisy(render_counts(model, WINDOW, truth, 24))
+    start = start_of(counts / 100.0, (truth[model_dx] + 0.3, truth[model_dy] - 0.3), model)
+    fit = _assert_fits_alike(model, counts, None, start)
+    # The model's own press under the ADC's noise: the fit finds its shift.
+    assert fit.u[model_dx] == pytest.approx(truth[model_dx], abs=0.01)
+    assert fit.u[model_dy] == pytest.approx(truth[model_dy], abs=0.01)
+
+
+def test_censored_taxels_and_taxel_sensitivities_are_fitted_alike():
+    # Hard case: the peak saturated (lower bounds cut low) on taxels 10 % apart in sensitivity.
+    pattern = np.random.default_rng(2).uniform(0.9, 1.1, (2,) + WINDOW)
+    counts = _noisy(render_counts(FILM, WINDOW, _press(0.7, 0.5, force=200.0), 24, pattern))
+    censored = counts >= 0.9 * counts.max()
+    cut = np.where(censored, 0.9 * counts.max() - 50.0, counts)
+    start = start_of(counts / 100.0, (1.0, 0.2), FILM)
+    fit = _assert_fits_alike(FILM, cut, censored, start, pattern)
+    assert fit.u[model_dx] == pytest.approx(0.7, abs=0.01)
+    assert fit.u[model_dy] == pytest.approx(0.5, abs=0.01)
+
+
+def test_model_fit_fits_each_contact_compiled_as_its_description_does():
+    # The whole pipeline with a calibration that carries a taxel model: both paths alike.
+    truth = _press(0.6, -0.4)
+    truth[model_x], truth[model_y] = 7.2, 8.4
+    top, bottom = _noisy(render_counts(FILM, (16, 16), truth, 24)).clip(0.0, None)
+    est = ContactEstimator(EstimatorConfig(method='model_fit'), Calibration(taxel_model=FILM))
+    compiled, python = (est.process(top, bottom),
+                        est.with_compiled(False).process(top, bottom))
+    assert len(compiled) == len(python) == 1
+    np.testing.assert_allclose(figures(compiled[0]), figures(python[0]), rtol=TOLERANCE,
+                               atol=TOLERANCE)
