@@ -48,9 +48,10 @@ class DirectionNode(Node):
             self._frames.start()
 
     def destroy_node(self):
-        """Stop taking frames, then destroy the node."""
+        """Stop taking frames and estimating, then destroy the node."""
         if self._frames is not None:
             self._frames.stop()
+        self.host.close()
         return super().destroy_node()
 
     def _frame_failed(self, err: Exception) -> None:

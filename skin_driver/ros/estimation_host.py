@@ -10,9 +10,11 @@ straight from the driver's serial reader thread: parameters, services and diagno
 the same whichever way the scans arrive.
 
 Threads: process() is the hot path and may run on any one thread; everything else runs on the
-executor. The host is the one owner of the live estimator, which never changes once built: the
-hot path takes no lock and reads it once per scan, and every change (tare, calibration,
-parameters, a new taxel pitch) builds a new estimator from the current one under a lock
+executor. An estimator slower than the scans (``model_fit`` with a learned taxel model) takes
+the newest scan on a thread of its own instead, so that the hot path is never held up. The host
+is the one owner of the live estimator, which never changes once built: the hot path takes no
+lock and reads it once per scan, and every change (tare, calibration, parameters, a new taxel
+pitch) builds a new estimator from the current one under a lock
 (:meth:`EstimationHost._swap`) and puts it in force by one reference assignment. Work a lower
 rate does as well (heatmaps, markers, diagnostics) runs on timers, on the latest scan only, and
 heatmaps and markers only while someone subscribes to them. Contacts, contact and wrench leave
@@ -39,7 +41,7 @@ from skin_driver.ros import conversions, diagnostics, qos
 from skin_driver.ros.calibration_services import CalibrationServices
 from skin_driver.ros.estimator_params import estimator_config, ESTIMATOR_PARAMETERS
 from skin_driver.ros.frames import default_frame_id
-from skin_driver.ros.hot_path import Listened
+from skin_driver.ros.hot_path import LatestOnly, Listened
 from skin_driver.ros.params import accept_whole_numbers, check, declare, ParameterError
 from skin_msgs.msg import TactileContact, TactileContactArray
 from std_srvs.srv import Trigger
@@ -63,6 +65,10 @@ class EstimationHost:
                                                self.put_calibration)
         self._recent = RecentScans(self._p('tare.frames'))
         self._frames = self._bad_frames = self._contacts = 0
+        # Scans handed to process() and scans estimation took up: a slow estimator leaves the
+        # difference (its own thread, _newest, made on the first scan it cannot keep up with).
+        self._received = self._taken = 0
+        self._newest = None
         self._cost_sum = self._cost_max = 0.0
         self._cost_count = 0
         self._latest = None
@@ -212,7 +218,34 @@ class EstimationHost:
     # ---- hot path ---------------------------------------------------------------------------
     def process(self, header, sequence: int, device_time_us: int, pitch_m: float,
                 top: np.ndarray, bottom: np.ndarray) -> None:
-        """Estimate the contacts of one scan and publish them; count a bad scan and go on."""
+        """
+        Estimate the contacts of one scan and publish them; count a bad scan and go on.
+
+        An estimator slower than the scans (``ContactEstimator.every_scan`` false) estimates on a
+        thread of its own, each time the newest scan: the scans in between are left, and the
+        caller (the serial reader, fused) is never held up. A switch of method lets the scan in
+        flight there finish.
+        """
+        self._received += 1
+        scan = (header, sequence, device_time_us, pitch_m, top, bottom)
+        if self._estimator.every_scan:
+            self._estimate(scan)
+            return
+        if self._newest is None:
+            self._newest = LatestOnly(self._estimate, 'skin-estimate', self._estimate_failed)
+        self._newest.offer(scan)
+
+    def close(self) -> None:
+        """Stop the thread of a slow estimator, if one ran (after the scan in progress)."""
+        if self._newest is not None:
+            self._newest.stop()
+
+    def _estimate_failed(self, err: Exception) -> None:
+        self.node.get_logger().error(f'scan not estimated: {err!r}', throttle_duration_sec=5.0)
+
+    def _estimate(self, scan) -> None:
+        header, sequence, device_time_us, pitch_m, top, bottom = scan
+        self._taken += 1
         cpu = self._cpu
         cpu.begin()
         try:
@@ -368,6 +401,8 @@ class EstimationHost:
         values = {
             'method': self._p('method'), 'frame rate [Hz]': rate,
             'frames': self._frames, 'bad frames': self._bad_frames,
+            'frames left for newer ones (estimator slower than the scans)':
+                max(self._received - self._taken, 0),
             'contacts': self._contacts,
             'mean cost [us]': 1e6 * total / count if count else 0.0,
             'max cost [us]': 1e6 * worst,

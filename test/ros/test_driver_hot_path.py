@@ -1,12 +1,15 @@
-"""The driver's hot path: viewers' topics only while watched, a refused real-time request."""
+"""The driver's hot path: watched topics only, a refused real-time request, a slow estimator."""
 
 import os
 
+import numpy as np
 from pipeline import pipeline, scene
 import pytest
 from rclpy.qos import qos_profile_sensor_data
 from rosutil import spin_until
 from sensor_msgs.msg import Image
+from skin_driver.core.estimation.calibration import Calibration
+from skin_driver.core.estimation.taxelmodel import TaxelModel
 from skin_driver.core.protocol.realtime import NORMAL
 from skin_driver.ros.conversions import status_values
 from visualization_msgs.msg import MarkerArray
@@ -16,6 +19,9 @@ pytestmark = pytest.mark.ros
 # Generous: only bounds a hung test on a loaded machine.
 WAIT_S = 15.0
 PRESS = [{'time_s': 0.0, 'duration_s': 1000.0}]
+# A forward model of the taxels near the simulated skin's (any will do: it makes model_fit fit).
+MODEL = TaxelModel(pitch_m=0.005, fill_factor=0.9, cover_spread_m=0.001, layer_spread_m=0.002,
+                   film_scale=0.67, film_exponent=0.53, film_ceiling=3.3, film_activation_n=0.01)
 
 
 def _link_values(executor, probe):
@@ -58,3 +64,33 @@ def test_a_refused_realtime_priority_reads_at_normal_priority_with_a_warning(
         # Reading goes on at normal priority.
         assert spin_until(executor, lambda: probe.frame_count > 10, WAIT_S)
     assert 'serial reader: SCHED_FIFO 60 not permitted' in capfd.readouterr().err
+
+
+def test_a_slow_estimator_takes_the_newest_scan_and_holds_up_no_read(tmp_path):
+    # model_fit with a taxel model fits each contact in milliseconds: fused, at 500 scans a
+    # second, the reader decodes on and the contacts come from the newest scans.
+    path = tmp_path / 'calibration.yaml'
+    Calibration(taxel_model=MODEL).save_yaml(path)
+    with pipeline(tmp_path, scene(PRESS), rate_hz=500.0, fused=True,
+                  direction={'method': 'model_fit', 'calibration_file': str(path)}) as (
+            _, _, _, probe, executor):
+        assert spin_until(executor, lambda: len(probe.record.received_s) > 20, WAIT_S)
+        probe.statuses.clear()
+
+        def estimation():
+            status = probe.latest('contact estimation')
+            return None if status is None else status_values(status)
+        assert spin_until(executor, lambda: estimation() is not None, WAIT_S)
+        values = estimation()
+        assert int(values['frames left for newer ones (estimator slower than the scans)']) > 0
+        assert int(values['bad frames']) == 0
+        # The reader decodes on (this harness's board shares the process and its GIL, so a few
+        # scans go missing whatever the estimator).
+        link = _link_values(executor, probe)
+        assert int(link['sequence gaps']) < int(link['frames']) / 4
+        # Each message is a scan the estimation took up when it was the newest: no queue of
+        # scans grows behind the fits (one would age them by seconds within this test).
+        record = probe.record
+        ages = np.subtract(record.received_s[-10:], record.stamp_s[-10:])
+        assert ages.max() < 0.5
+        assert record.contacts[-10:] == [1] * 10

@@ -200,6 +200,17 @@ class ContactEstimator:
                                 compiled)
 
     @property
+    def every_scan(self) -> bool:
+        """
+        Return whether this estimator keeps up with a live skin's every scan.
+
+        A method that is not (``Method.every_scan``) keeps up all the same while it has nothing
+        to fit with (``model_fit`` without the calibration's taxel model is ``taxel_fit``).
+        """
+        return self._method.every_scan or (self._method.modelled
+                                           and self._calibration.taxel_model is None)
+
+    @property
     def compliance_m_per_n(self) -> float:
         """Return the compliance in use: the calibrated one, else the configured one."""
         return self.calibration.compliance_m_per_n or self.config.compliance_m_per_n

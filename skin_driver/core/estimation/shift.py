@@ -88,6 +88,8 @@ class Method:
     sensitivity (the inverse of the calibrated gains, (2, h, w), or None without gains) and
     whether to fit compiled (the kernel's ``sk_model_fit``) or by the Python description.
     ``caution`` is what a live host must say when it runs the method ('' when nothing).
+    ``every_scan`` False: the method takes longer than a scan of a live skin, so a live host
+    estimates the newest scan it can instead of every one (:attr:`ContactEstimator.every_scan`).
     """
 
     name: str
@@ -97,6 +99,7 @@ class Method:
     linear: bool = False
     modelled: bool = False
     caution: str = ''
+    every_scan: bool = True
 
 
 def _pad_size(n: int) -> int:
@@ -272,8 +275,9 @@ METHODS = {m.name: m for m in (
            "the skin's learned taxel model fitted to the window's counts (slow)",
            linear=True, modelled=True,
            caution=('model_fit fits each contact in milliseconds (tens on a film that turns '
-                    'on): a live driver keeps up with a few contacts at 30 scans a second, and '
-                    'at faster scans falls behind and drops them')),
+                    'on): contacts come from the newest scan each time a fit ends, not from '
+                    'every scan'),
+           every_scan=False),
 )}
 
 DEFAULT_METHOD = 'taxel_fit'

@@ -181,3 +181,13 @@ def test_the_model_fit_renders_each_taxel_with_its_calibrated_gain(press):
         (contact,) = est.process(top, bottom)
         errors.append(np.abs(np.divide(contact.shift_m, skin.pitch_m) - truth).max())
     assert errors[1] < 1e-3 < 5e-3 < errors[0]
+
+
+@pytest.mark.parametrize('method, model, expected', [
+    ('taxel_fit', None, True),
+    ('model_fit', None, True),      # nothing to fit with: it is taxel_fit
+    ('model_fit', TaxelModel(0.005, 0.9, 0.001, 0.002, 0.67, 0.53, 3.3), False),
+])
+def test_only_a_fit_of_the_taxel_model_cannot_keep_up_with_every_scan(method, model, expected):
+    est = ContactEstimator(EstimatorConfig(method=method), Calibration(taxel_model=model))
+    assert est.every_scan is expected

@@ -112,7 +112,9 @@ def test_an_empty_layer_gives_no_shift():
         assert method(np.stack((np.zeros_like(top), bottom))) == direction.NO_SHIFT
 
 
-def test_only_the_slow_model_fit_carries_a_caution_for_live_hosts():
+def test_only_the_slow_model_fit_carries_a_caution_and_skips_scans_on_live_hosts():
     cautions = {name: direction.get_method(name).caution for name in direction.method_names()}
-    assert 'drops' in cautions.pop('model_fit')
+    assert 'newest scan' in cautions.pop('model_fit')
     assert set(cautions.values()) == {''}
+    slow = [n for n in direction.method_names() if not direction.get_method(n).every_scan]
+    assert slow == ['model_fit']
