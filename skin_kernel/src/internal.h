@@ -121,4 +121,12 @@ double sk_imprint_force(const double *counts, const double *force, int h, int w,
 /* sigma.c: 1-sigma uncertainty of one axis of pair p's shift (taxels) */
 double sk_sigma(const sk_kernel *k, const sk_pair *p, const double *window, int alone);
 
+/* model_fit (modelfit.c): the fit's start from a contact's force window, taken before
+ * sk_taxel_fit changes that window; then the fit from the start and taxel_fit's shift, which
+ * overwrites *dx, *dy (left as they are when the fit cannot be made). */
+void sk_model_start(const double *model, const double *force, int h, int w, double *start);
+void sk_model_refit(const double *model, const double *counts, const double *marks,
+                    const double *sensitivity, int h, int w, double *start, double *dx,
+                    double *dy);
+
 #endif

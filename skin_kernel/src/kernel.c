@@ -222,6 +222,29 @@ static void imprint_forces(sk_kernel *k, sk_pair *p, const double *marked)
   }
 }
 
+/* model_fit's fit of pair p's window (its counts in k->fit), each taxel's load times its
+ * sensitivity (the inverse of its gain) where the kernel has gains. */
+static void model_refit(sk_kernel *k, sk_pair *p, const double *model, const double *marks,
+                        double *start)
+{
+  int m = p->h * p->w;
+  double *sensitivity = NULL;
+  if (k->has_gain) {
+    sensitivity = malloc(sizeof(double) * 2 * (size_t)m);
+    if (!sensitivity) return;
+    for (int layer = 0; layer < 2; layer++) {
+      for (int r = 0; r < p->h; r++) {
+        for (int c = 0; c < p->w; c++) {
+          sensitivity[layer * m + r * p->w + c] =
+              1.0 / k->gain[layer * k->n + (p->r0 + r) * k->cols + p->c0 + c];
+        }
+      }
+    }
+  }
+  sk_model_refit(model, k->fit, marks, sensitivity, p->h, p->w, start, &p->dx, &p->dy);
+  free(sensitivity);
+}
+
 /* One scan of maps known to hold counts (sk_scan, sk_scan_counts). */
 static int scan(sk_kernel *k, const double *maps, int every_pair, double *out, int *status)
 {
@@ -264,7 +287,7 @@ static int scan(sk_kernel *k, const double *maps, int every_pair, double *out, i
       continue;
     }
     double *scratch = k->fit + 4 * m;
-    if (k->method == SK_TAXEL_FIT) {
+    if (k->method == SK_TAXEL_FIT || k->method == SK_MODEL_FIT) {
       /*
        * saturated taxels: at the curve's censoring counts, or cut by the ADC (pipeline.py);
        * a pair with none is not censored, and its marks are all 0
@@ -276,8 +299,18 @@ static int scan(sk_kernel *k, const double *maps, int every_pair, double *out, i
           marks[j] = p->censored && censor > 0 && marks[j] >= censor ? 1.0 : 0.0;
         }
       }
+      /* model_fit: taxel_fit's shift, refitted by the calibration's taxel model if it has one */
+      const double *model = k->reals + SK_TAXEL_MODEL;
+      int modelled = k->method == SK_MODEL_FIT && model[SK_MODEL_PITCH] > 0;
+      double start[8];
+      if (modelled) {
+        sk_model_start(model, k->fit + 2 * m, p->h, p->w, start);
+      }
       sk_taxel_fit(k->fit + 2 * m, k->fit, marks, p->h, p->w, scratch + 2 * m, &p->dx, &p->dy,
                    &p->confidence, &p->cut_var);
+      if (modelled && isfinite(p->dx) && isfinite(p->dy)) {
+        model_refit(k, p, model, marks, start);
+      }
     } else if (k->method == SK_POC) {
       sk_poc(k->fit, p->h, p->w, scratch, &p->dx, &p->dy, &p->confidence);
     } else {

@@ -12,7 +12,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "skin_kernel/skin_kernel.h"
+#include "internal.h"
 
 enum { X, Y, LOG_FORCE, DX, DY, LOG_RADIUS, LOG_ASPECT, ORIENTATION, NU };
 
@@ -506,4 +506,59 @@ done:
   free(work);
   free_ctx(&c);
   return status;
+}
+
+/* The fit's start (taxelmodel.start_of): the top layer's centroid, its second moment less the
+ * cover's blur and the pad's own (a Hertz disc's is a**2 / 5), the larger layer's force over the
+ * pad's share; the shift is set by sk_model_refit. */
+void sk_model_start(const double *model, const double *force, int h, int w, double *start)
+{
+  double *along = malloc(sizeof(double) * (size_t)(h + w));
+  for (int j = 0; j < NU; j++) start[j] = 0.0;
+  if (!along) {
+    start[LOG_FORCE] = NAN;
+    return;
+  }
+  double *along_x = along, *along_y = along + w;
+  for (int c = 0; c < w; c++) along_x[c] = 0.0;
+  for (int r = 0; r < h; r++) {
+    for (int c = 0; c < w; c++) along_x[c] += force[r * w + c];
+    along_y[r] = sk_sum(force + r * w, w);
+  }
+  double mass = sk_sum(force, h * w), sx = 0.0, sy = 0.0;
+  for (int c = 0; c < w; c++) sx += along_x[c] * c;
+  for (int r = 0; r < h; r++) sy += along_y[r] * r;
+  double cx = sx / mass, cy = sy / mass, vx = 0.0, vy = 0.0;
+  for (int c = 0; c < w; c++) vx += along_x[c] * ((c - cx) * (c - cx));
+  for (int r = 0; r < h; r++) vy += along_y[r] * ((r - cy) * (r - cy));
+  free(along);
+  double var = (vx + vy) / (2.0 * mass);
+  double cover = model[SK_MODEL_COVER] / model[SK_MODEL_PITCH];
+  double radius = sqrt(5.0 * fmax(var - cover * cover - 1.0 / 12.0, 0.01));
+  double top = mass, bottom = sk_sum(force + h * w, h * w);
+  double fill = model[SK_MODEL_FILL];
+  double load = (top > bottom ? top : bottom) / (fill * fill);
+  start[X] = cx;
+  start[Y] = cy;
+  start[LOG_FORCE] = log(fmax(load, 1e-3));
+  start[LOG_RADIUS] = log(fmin(fmax(radius, 0.1), 3.0));
+}
+
+/* model_fit's fit of one contact (shift.model_fit) from `start` and taxel_fit's (*dx, *dy). */
+void sk_model_refit(const double *model, const double *counts, const double *marks,
+                    const double *sensitivity, int h, int w, double *start, double *dx,
+                    double *dy)
+{
+  int n = 2 * h * w;
+  unsigned char *censored = malloc((size_t)n);
+  if (!censored) return;
+  for (int i = 0; i < n; i++) censored[i] = marks[i] > 0.0;
+  start[DX] = *dx;
+  start[DY] = *dy;
+  double u[NU], misfit;
+  if (sk_model_fit(model, h, w, counts, censored, sensitivity, start, 10, u, &misfit) == 0) {
+    *dx = u[DX];
+    *dy = u[DY];
+  }
+  free(censored);
 }

@@ -28,15 +28,15 @@ import numpy as np
 from .validate import check_pair
 
 __all__ = ['METHODS', 'KernelSettings', 'Kernel', 'KernelMissing', 'load_library',
-           'CONTACT_FIELDS', 'KEPT', 'DX', 'DY', 'fit_contact']
+           'CONTACT_FIELDS', 'KEPT', 'DX', 'DY', 'fit_contact', 'model_numbers']
 
 # Shift methods the kernel runs, by their registered names (skin_kernel.h: SK_CENTROID, ...).
-METHODS = {'centroid': 0, 'taxel_fit': 1, 'poc': 2}
+METHODS = {'centroid': 0, 'taxel_fit': 1, 'poc': 2, 'model_fit': 3}
 
 # skin_kernel.h's layout: bump both together.
-_ABI_VERSION = 7
+_ABI_VERSION = 8
 _INTS = 9
-_REALS = 23
+_REALS = 34
 _NREC = 23
 _NSTATUS = 3
 # A record's first CONTACT_FIELDS numbers are pipeline.Contact's fields in order, the shift and
@@ -100,7 +100,7 @@ class KernelSettings(NamedTuple):
     max_contacts: int
     remove_crosstalk: bool
     fill_dead: bool
-    reals: tuple         # skin_kernel.h's SK_PITCH ... SK_ACTIVATION_BOTTOM, in order
+    reals: tuple         # skin_kernel.h's SK_PITCH ... SK_TAXEL_MODEL's numbers, in order
     baseline: np.ndarray  # (2, rows, cols) each, like threshold, noise, gain (or None), dead
     threshold: np.ndarray
     noise: np.ndarray
@@ -191,6 +191,15 @@ class Kernel:
         return out.astype(bool)
 
 
+def model_numbers(model) -> tuple:
+    """Return a :class:`taxelmodel.TaxelModel` as skin_kernel.h's SK_MODEL_* numbers (0s: none)."""
+    if model is None:
+        return (0.0,) * 11
+    return (model.pitch_m, model.fill_factor, model.cover_spread_m, model.layer_spread_m,
+            model.film_scale, model.film_exponent, model.film_ceiling, model.film_activation_n,
+            model.turn_on_pa, model.film_step, model.full_scale)
+
+
 def fit_contact(model, counts: np.ndarray, censored: np.ndarray, u0: np.ndarray,
                 iterations: int = 10, sensitivity: np.ndarray = None):
     """
@@ -202,10 +211,7 @@ def fit_contact(model, counts: np.ndarray, censored: np.ndarray, u0: np.ndarray,
     lib = load_library()
     counts = np.ascontiguousarray(counts, dtype=np.float64)
     rows, cols = counts.shape[1:]
-    numbers = np.array([model.pitch_m, model.fill_factor, model.cover_spread_m,
-                        model.layer_spread_m, model.film_scale, model.film_exponent,
-                        model.film_ceiling, model.film_activation_n, model.turn_on_pa,
-                        model.film_step, model.full_scale], dtype=np.float64)
+    numbers = np.array(model_numbers(model), dtype=np.float64)
     marks = (None if censored is None
              else np.ascontiguousarray(np.broadcast_to(censored, counts.shape), dtype=np.uint8))
     factors = (None if sensitivity is None

@@ -17,8 +17,8 @@ is within the noise and carries no direction.
 Compiled: for the registered methods all of the above runs in the compiled kernel (package
 ``skin_kernel``, :mod:`kernel`), one call per scan; this module and the ones it calls are the
 algorithm's description, run with ``compiled=False``, and the tests hold the kernel to it.
-``model_fit`` runs this module's steps and compiles only its fit of each contact (the kernel's
-``sk_model_fit``), which is all but a few per cent of its cost.
+``model_fit`` too: the kernel refits ``taxel_fit``'s shift of each contact with the
+calibration's taxel model (``sk_model_fit``).
 
 Normal force: the taxels sense only ``fill_factor**2`` of the skin area, so the summed taxel
 forces of a contact are divided by it. The bottom layer's sum is used because the elastic layer
@@ -134,7 +134,7 @@ class ContactEstimator:
     Estimate contacts (location, force, direction) from raw top and bottom count maps.
 
     The registered methods (:data:`kernel.METHODS`) run in the compiled kernel, one call per
-    scan (``model_fit`` its per-contact fit); the Python code of this module and the ones it
+    scan; the Python code of this module and the ones it
     calls describes that algorithm and runs with ``compiled=False`` (the tests compare the two)
     and with a reference ``shift``.
     """
@@ -166,7 +166,7 @@ class ContactEstimator:
         self._compiled = compiled
         self._use_kernel = (compiled and shift is None
                             and self._method.name in compiled_kernel.METHODS)
-        if self._use_kernel or (compiled and self._method.modelled):
+        if self._use_kernel:
             # A missing kernel stops the estimator's maker (a node at start-up), not a scan.
             compiled_kernel.load_library()
         self._kernel = None
@@ -249,7 +249,7 @@ class ContactEstimator:
             elif method.linear:
                 stack = np.concatenate((window, pair.maps, censored_taxels(marked, curves)))
                 est = (method.function(stack, self._calibration.taxel_model,
-                                       _window_of(sensitivity, pair), self._compiled)
+                                       _window_of(sensitivity, pair))
                        if method.modelled else method.function(stack))
             else:
                 est = method.function(pair.maps)
@@ -328,7 +328,8 @@ class ContactEstimator:
                          *(c.rim_load_n if c is not None else 0.0 for c in curves),
                          *(c.spread_taxels if c is not None else 0.0 for c in curves),
                          *(c.bump_power if c is not None else 2.0 for c in curves),
-                         *(c.activation_n if c is not None else 0.0 for c in curves))
+                         *(c.activation_n if c is not None else 0.0 for c in curves),
+                         *compiled_kernel.model_numbers(cal.taxel_model))
                 cond = self.conditioner.config
                 self._kernel = compiled_kernel.Kernel(compiled_kernel.KernelSettings(
                     self._method.name, cfg.max_contacts, cond.remove_crosstalk, cond.fill_dead,

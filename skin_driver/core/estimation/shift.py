@@ -41,7 +41,6 @@ from typing import Callable, NamedTuple
 import cv2
 import numpy as np
 
-from .kernel import fit_contact as compiled_fit_contact
 from .taxelfit import cell_fit_shift
 from .taxelmodel import DX, DY, fit_contact, start_of, TaxelModel
 from .validate import check_pair
@@ -84,9 +83,8 @@ class Method:
     ``linear`` ones get a (6, h, w) stack: the window's force maps (counts linearised by each
     layer's force curve), its counts, then 1 where a taxel is saturated (its reading a lower
     bound: at its force curve's censoring counts or cut by the ADC), else 0. ``modelled`` ones
-    also get the calibration's :class:`taxelmodel.TaxelModel` (or None), the window's taxel
-    sensitivity (the inverse of the calibrated gains, (2, h, w), or None without gains) and
-    whether to fit compiled (the kernel's ``sk_model_fit``) or by the Python description.
+    also get the calibration's :class:`taxelmodel.TaxelModel` (or None) and the window's taxel
+    sensitivity (the inverse of the calibrated gains, (2, h, w), or None without gains).
     ``caution`` is what a live host must say when it runs the method ('' when nothing).
     ``every_scan`` False: the method takes longer than a scan of a live skin, so a live host
     estimates the newest scan it can instead of every one (:attr:`ContactEstimator.every_scan`).
@@ -245,22 +243,20 @@ def taxel_fit(maps: np.ndarray) -> ShiftEstimate:
 
 
 def model_fit(maps: np.ndarray, model: TaxelModel = None,
-              sensitivity: np.ndarray = None, compiled: bool = False) -> ShiftEstimate:
+              sensitivity: np.ndarray = None) -> ShiftEstimate:
     """
     Estimate the shift by fitting the skin's taxel model to the window's counts.
 
     ``maps`` is the (6, h, w) stack of a ``linear`` method; ``sensitivity`` the window's
-    per-taxel sensitivity (the inverse of the calibrated gains) or None; ``compiled`` fits with
-    the kernel (:func:`kernel.fit_contact`), else with :func:`taxelmodel.fit_contact`, its
-    description. The fit starts at ``taxel_fit``'s estimate and keeps its confidence and cut
-    variance (the validity rule stays the default's).
+    per-taxel sensitivity (the inverse of the calibrated gains) or None. The fit starts at
+    ``taxel_fit``'s estimate and keeps its confidence and cut variance (the validity rule stays
+    the default's).
     """
     first = taxel_fit(maps)
     if model is None or first is NO_SHIFT or maps.shape[0] != 6:
         return first
-    fit = (compiled_fit_contact if compiled else fit_contact)(
-        model, maps[2:4], maps[4:] > 0, start_of(maps[:2], first[:2], model),
-        sensitivity=sensitivity)
+    fit = fit_contact(model, maps[2:4], maps[4:] > 0, start_of(maps[:2], first[:2], model),
+                      sensitivity=sensitivity)
     return ShiftEstimate(float(fit.u[DX]), float(fit.u[DY]), first.confidence,
                          first.cut_variance)
 

@@ -273,8 +273,8 @@ def _forward_section(fw) -> list:
            f"frames (section 5's way); `{forward}` learns the skin from the force "
            "calibration's presses and fits its forward model of the taxels to each contact "
            '(docs/estimation.md, "The forward model"). Mean azimuth error of the tilted '
-           'presses each one calls valid, deg; its cost per frame, contacts included (each '
-           "contact's fit compiled, the rest of its pipeline Python). Worst "
+           'presses each one calls valid, deg; its cost per frame, contacts included (compiled, '
+           'one call a scan). Worst '
            f'`{forward}` / oracle: {figure(worst[0], ".1f")} (`{worst[1]}`; issue #16 asks '
            '1.5).', '']
     out += _table(['skin', f'`{default}`', f'`{forward}`', 'oracle', f'`{default}` / oracle',

@@ -21,7 +21,7 @@ extern "C" {
 #endif
 
 /* Bumped whenever a signature or a layout below changes; the binding checks it. */
-#define SK_ABI_VERSION 7
+#define SK_ABI_VERSION 8
 
 /* Integer settings, in this order. */
 enum {
@@ -32,7 +32,16 @@ enum {
 };
 
 /* Shift methods. */
-enum { SK_CENTROID = 0, SK_TAXEL_FIT = 1, SK_POC = 2 };
+enum { SK_CENTROID = 0, SK_TAXEL_FIT = 1, SK_POC = 2, SK_MODEL_FIT = 3 };
+
+/* A skin's forward model of the taxels (taxelmodel.TaxelModel), SI units, in this order. */
+enum {
+  SK_MODEL_PITCH, SK_MODEL_FILL, SK_MODEL_COVER, SK_MODEL_LAYER, /* blurs: spreads, m */
+  SK_MODEL_SCALE, SK_MODEL_EXPONENT, SK_MODEL_CEILING, SK_MODEL_ACTIVATION, /* the film's law */
+  SK_MODEL_TURN_ON, SK_MODEL_STEP, /* a film that stays open below a pressure (Pa) */
+  SK_MODEL_FULL_SCALE,
+  SK_MODEL_NREALS
+};
 
 /* Real settings, in this order (SI units; the calibration's numbers included). */
 enum {
@@ -44,7 +53,8 @@ enum {
   SK_SPREAD_TOP, SK_SPREAD_BOTTOM, /* a saturated imprint's bump: spread (taxels), power */
   SK_POWER_TOP, SK_POWER_BOTTOM,   /* (imprint.py) */
   SK_ACTIVATION_TOP, SK_ACTIVATION_BOTTOM, /* force of every conducting taxel, not the bump's */
-  SK_NREALS
+  SK_TAXEL_MODEL, /* SK_MODEL_NREALS numbers: the calibration's taxel model (pitch 0: none) */
+  SK_NREALS = SK_TAXEL_MODEL + SK_MODEL_NREALS
 };
 
 /* One output record per contact, SK_NREC doubles, strongest (normal force) first. */
@@ -64,15 +74,6 @@ enum { SK_STATUS_PAIRS, SK_STATUS_CENSORED, SK_STATUS_REVIVED, SK_NSTATUS };
 
 /* sk_scan's errors (negative return values). */
 enum { SK_ERR_NOT_FINITE = -1, SK_ERR_NEGATIVE = -2 };
-
-/* A skin's forward model of the taxels (taxelmodel.TaxelModel), SI units, in this order. */
-enum {
-  SK_MODEL_PITCH, SK_MODEL_FILL, SK_MODEL_COVER, SK_MODEL_LAYER, /* blurs: spreads, m */
-  SK_MODEL_SCALE, SK_MODEL_EXPONENT, SK_MODEL_CEILING, SK_MODEL_ACTIVATION, /* the film's law */
-  SK_MODEL_TURN_ON, SK_MODEL_STEP, /* a film that stays open below a pressure (Pa) */
-  SK_MODEL_FULL_SCALE,
-  SK_MODEL_NREALS
-};
 
 typedef struct sk_kernel sk_kernel;
 

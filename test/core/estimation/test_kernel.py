@@ -465,12 +465,17 @@ def test_censored_taxels_and_taxel_sensitivities_are_fitted_alike():
     assert fit.u[model_dy] == pytest.approx(0.5, abs=0.01)
 
 
-def test_model_fit_fits_each_contact_compiled_as_its_description_does():
-    # The whole pipeline with a calibration that carries a taxel model: both paths alike.
+@pytest.mark.parametrize('gains', [False, True])
+def test_model_fit_fits_each_contact_compiled_as_its_description_does(gains):
+    # The whole pipeline with a calibration that carries a taxel model (and taxels 10 % apart
+    # in sensitivity, their gains calibrated): both paths alike.
     truth = _press(0.6, -0.4)
     truth[model_x], truth[model_y] = 7.2, 8.4
-    top, bottom = _noisy(render_counts(FILM, (16, 16), truth, 24)).clip(0.0, None)
-    est = ContactEstimator(EstimatorConfig(method='model_fit'), Calibration(taxel_model=FILM))
+    pattern = np.random.default_rng(3).uniform(0.9, 1.1, (2, 16, 16)) if gains else None
+    top, bottom = _noisy(render_counts(FILM, (16, 16), truth, 24, pattern)).clip(0.0, None)
+    calibration = Calibration(taxel_model=FILM,
+                              gains=None if pattern is None else tuple(1.0 / pattern))
+    est = ContactEstimator(EstimatorConfig(method='model_fit'), calibration)
     compiled, python = (est.process(top, bottom),
                         est.with_compiled(False).process(top, bottom))
     assert len(compiled) == len(python) == 1
