@@ -16,7 +16,7 @@ from skin_driver.core.estimation import kernel as compiled_kernel
 from skin_driver.core.estimation.pipeline import ContactEstimator, EstimatorConfig
 from skin_driver.core.estimation.prepared import prepared_estimator
 from skin_driver.core.estimation.shift import (
-    centroid, DEFAULT_METHOD, Method, method_names, NO_SHIFT, REFERENCES, resolve,
+    centroid, DEFAULT_METHOD, get_method, Method, method_names, NO_SHIFT, REFERENCES, resolve,
     ShiftEstimate)
 from skin_driver.core.sim.experiments import (
     calibrated_scene, DIRECTION_KINDS, make_random_experiment, make_seed_experiment,
@@ -56,14 +56,15 @@ def skimage_shift(maps: np.ndarray) -> ShiftEstimate:
 PYTHON_DEFAULT = f'{DEFAULT_METHOD}_python'
 
 
-def scan_methods() -> list:
+def scan_methods(modelled: bool = False) -> list:
     """
     Return the registered methods the bench runs: those of the compiled kernel, default first.
 
-    ``model_fit`` is left out: its Python fit takes a fraction of a second a contact, hours over
-    the family's scenes; the evaluator measures it beside the oracle (docs/estimation.md).
+    ``model_fit`` (a modelled method) only with ``modelled``: it needs the taxel model a force
+    calibration learns, and the uncalibrated sections would score ``taxel_fit`` under its name.
     """
-    return [m for m in method_names() if m in compiled_kernel.METHODS]
+    return [m for m in method_names()
+            if m in compiled_kernel.METHODS and (modelled or not get_method(m).modelled)]
 
 
 def bench_methods(with_reference: bool = True) -> list:
@@ -235,10 +236,11 @@ def family_methods(everything: bool = True) -> list:
     Return the family benchmark's methods: default, seed, the plain centroid, the others.
 
     The default's Python description (PYTHON_DEFAULT) comes second: its cost beside the
-    compiled kernel's, its scores equal to the default's.
+    compiled kernel's, its scores equal to the default's. ``model_fit`` is among the others: each
+    scene's calibration learns its taxel model (up to a minute a scene, in Python).
     """
     first = [DEFAULT_METHOD, PYTHON_DEFAULT, 'seed', PLAIN_CENTROID]
-    return first + ([m for m in scan_methods() if m not in first] if everything else [])
+    return first + ([m for m in scan_methods(True) if m not in first] if everything else [])
 
 
 def plain_centroid_estimator(data, threshold_counts: float = 40.0) -> tuple:
