@@ -65,9 +65,7 @@ class EstimationHost:
                                                self.put_calibration)
         self._recent = RecentScans(self._p('tare.frames'))
         self._frames = self._bad_frames = self._contacts = 0
-        # Scans handed to process() and scans estimation took up: a slow estimator leaves the
-        # difference (its own thread, _newest, made on the first scan it cannot keep up with).
-        self._received = self._taken = 0
+        # A slow estimator's thread, made on the first scan it cannot keep up with.
         self._newest = None
         self._cost_sum = self._cost_max = 0.0
         self._cost_count = 0
@@ -226,7 +224,6 @@ class EstimationHost:
         caller (the serial reader, fused) is never held up. A switch of method lets the scan in
         flight there finish.
         """
-        self._received += 1
         scan = (header, sequence, device_time_us, pitch_m, top, bottom)
         if self._estimator.every_scan:
             self._estimate(scan)
@@ -245,7 +242,6 @@ class EstimationHost:
 
     def _estimate(self, scan) -> None:
         header, sequence, device_time_us, pitch_m, top, bottom = scan
-        self._taken += 1
         cpu = self._cpu
         cpu.begin()
         try:
@@ -402,7 +398,7 @@ class EstimationHost:
             'method': self._p('method'), 'frame rate [Hz]': rate,
             'frames': self._frames, 'bad frames': self._bad_frames,
             'frames left for newer ones (estimator slower than the scans)':
-                max(self._received - self._taken, 0),
+                0 if self._newest is None else self._newest.dropped,
             'contacts': self._contacts,
             'mean cost [us]': 1e6 * total / count if count else 0.0,
             'max cost [us]': 1e6 * worst,

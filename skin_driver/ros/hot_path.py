@@ -59,14 +59,17 @@ class LatestOnly:
         self._on_error = on_error
         self._name = name
         self._item = None
+        # Items replaced before their job started (read by any thread: an int, set under _ready).
+        self.dropped = 0
         self._stopped = False
         self._ready = threading.Condition()
         self._thread = threading.Thread(target=self._run, name=name, daemon=True)
         self._thread.start()
 
     def offer(self, item) -> None:
-        """Hand over ``item``; one not yet started is replaced."""
+        """Hand over ``item``; one not yet started is replaced (and counted in ``dropped``)."""
         with self._ready:
+            self.dropped += self._item is not None
             self._item = item
             self._ready.notify()
 

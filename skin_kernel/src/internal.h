@@ -121,6 +121,11 @@ double sk_imprint_force(const double *counts, const double *force, int h, int w,
 /* sigma.c: 1-sigma uncertainty of one axis of pair p's shift (taxels) */
 double sk_sigma(const sk_kernel *k, const sk_pair *p, const double *window, int alone);
 
+/* taxelfit.c: a layer's column profiles (summed over rows, in row order) and row profiles
+ * (numpy's pairwise sums), each buffer nn = max(h, w) long */
+void sk_profiles_of(const double *layer, int h, int w, int nn, double *along_x,
+                    double *along_y);
+
 /* model_fit (modelfit.c): the fit's start from a contact's force window, taken before
  * sk_taxel_fit changes that window; then the fit from the start and taxel_fit's shift, which
  * overwrites *dx, *dy (left as they are when the fit cannot be made). */

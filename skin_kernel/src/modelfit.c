@@ -126,24 +126,27 @@ static void band(int start, int len, int n, int *lo, int *hi) {
   if (*hi < *lo) *hi = *lo;
 }
 
+/* The fine samples n from `first` reach by the blur, within an axis of `total`: [*lo, +count). */
+static int spread_span(int first, int n, int reach, int total, int *lo) {
+  int hi;
+  band(first - reach, n + 2 * reach, total, lo, &hi);
+  return hi - *lo;
+}
+
 /* A film that turns on where the blurred fine load exceeds its threshold: blur on the fine
- * grid, cut, then sum per pad (taxelmodel._sensed). */
-static void sensed(fit_ctx *c, const double *fine, int ny, int nx, int y0, int x0, int margin,
-                   const axis_tab *tab, double *out) {
+ * grid, cut, then sum per pad (taxelmodel._sensed). Layer `which`: 0 top, 1 bottom. */
+static void sensed(fit_ctx *c, int which, const double *fine, int ny, int nx, int y0, int x0,
+                   int margin, double *out) {
   int h = c->h, w = c->w, sub = c->sub;
-  double blur = c->blur[tab == &c->tabs[0] ? 0 : 1];
+  const axis_tab *tab = &c->tabs[which];
   double threshold = c->turn_on / ((double)sub * sub);
-  int half = tab->kernel ? tab->half : 0, size = 2 * half + 1;
+  int half = tab->half, size = 2 * half + 1;
   static const double one = 1.0;
   const double *kern = tab->kernel ? tab->kernel : &one;
-  int reach_px = (int)ceil(4.0 * (blur * sub)) + 1;
-  int lo_y = y0 - reach_px < 0 ? 0 : y0 - reach_px;
-  int hi_y = y0 + ny + reach_px > (h + 2 * margin) * sub ? (h + 2 * margin) * sub
-                                                           : y0 + ny + reach_px;
-  int lo_x = x0 - reach_px < 0 ? 0 : x0 - reach_px;
-  int hi_x = x0 + nx + reach_px > (w + 2 * margin) * sub ? (w + 2 * margin) * sub
-                                                           : x0 + nx + reach_px;
-  int my = hi_y - lo_y, mx = hi_x - lo_x;
+  int reach_px = (int)ceil(4.0 * (c->blur[which] * sub)) + 1;
+  int lo_y, lo_x;
+  int my = spread_span(y0, ny, reach_px, (h + 2 * margin) * sub, &lo_y);
+  int mx = spread_span(x0, nx, reach_px, (w + 2 * margin) * sub, &lo_x);
   if (reserve(&c->tmp, &c->tmp_cap, (size_t)my * nx) ||
       reserve(&c->load, &c->load_cap, (size_t)my * mx + (size_t)h * mx)) {
     c->failed = 1;
@@ -249,7 +252,7 @@ static void render_layer(fit_ctx *c, double cx, double cy, const double *u, int 
   const axis_tab *tab = &c->tabs[which];
 
   if (c->turn_on > 0.0) {
-    sensed(c, fine, ny, nx, y0, x0, margin, tab, out);
+    sensed(c, which, fine, ny, nx, y0, x0, margin, out);
     return;
   }
   /* out = op_y (h x ny) @ fine @ op_x.T (nx x w); each cell sees only the fine samples its
@@ -513,18 +516,15 @@ done:
  * pad's share; the shift is set by sk_model_refit. */
 void sk_model_start(const double *model, const double *force, int h, int w, double *start)
 {
-  double *along = malloc(sizeof(double) * (size_t)(h + w));
+  int nn = h > w ? h : w;
+  double *along = malloc(sizeof(double) * 2 * (size_t)nn);
   for (int j = 0; j < NU; j++) start[j] = 0.0;
   if (!along) {
     start[LOG_FORCE] = NAN;
     return;
   }
-  double *along_x = along, *along_y = along + w;
-  for (int c = 0; c < w; c++) along_x[c] = 0.0;
-  for (int r = 0; r < h; r++) {
-    for (int c = 0; c < w; c++) along_x[c] += force[r * w + c];
-    along_y[r] = sk_sum(force + r * w, w);
-  }
+  double *along_x = along, *along_y = along + nn;
+  sk_profiles_of(force, h, w, nn, along_x, along_y);
   double mass = sk_sum(force, h * w), sx = 0.0, sy = 0.0;
   for (int c = 0; c < w; c++) sx += along_x[c] * c;
   for (int r = 0; r < h; r++) sy += along_y[r] * r;

@@ -387,8 +387,8 @@ static void on_step(double *force, const double *counts, int m)
 }
 
 /* Column profiles (summed over rows, in row order) and row profiles (numpy's pairwise sums). */
-static void profiles_of(const double *layer, int h, int w, int nn, double *along_x,
-                        double *along_y)
+void sk_profiles_of(const double *layer, int h, int w, int nn, double *along_x,
+                    double *along_y)
 {
   for (int i = 0; i < nn; i++) {
     along_x[i] = 0.0;
@@ -413,7 +413,7 @@ void sk_taxel_fit(double *force, const double *counts, const double *censored, i
   for (int layer = 0; layer < 2; layer++) {
     /* A layer flat at its peak hit the end of its force curve: fit it on its counts. */
     const double *maps = plateau(force + layer * m, m) ? counts + layer * m : force + layer * m;
-    profiles_of(maps, h, w, nn, profiles + layer * nn, profiles + (2 + layer) * nn);
+    sk_profiles_of(maps, h, w, nn, profiles + layer * nn, profiles + (2 + layer) * nn);
   }
   double centre[4], width[4], explained[4];
   *cut_var = 0.0;
@@ -452,7 +452,7 @@ void sk_centroid(const double *counts, int h, int w, double *scratch, double *dx
   double centre[4];
   for (int layer = 0; layer < 2; layer++) {
     double *along_x = scratch, *along_y = scratch + nn;
-    profiles_of(counts + layer * m, h, w, nn, along_x, along_y);
+    sk_profiles_of(counts + layer * m, h, w, nn, along_x, along_y);
     double mass = sk_sum(along_x, w), sx = 0.0, sy = 0.0;
     if (!(mass > 0)) {
       *dx = *dy = *confidence = NAN;

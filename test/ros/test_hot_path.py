@@ -63,6 +63,7 @@ def test_latest_only_serves_the_newest_item_and_survives_a_failing_job():
         worker.stop()
     assert seen == ['block', 'last']
     assert errors == ['viewer gone']
+    assert worker.dropped == 2  # 'old' and 'older', replaced before they started
 
 
 @contextlib.contextmanager

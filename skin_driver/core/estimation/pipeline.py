@@ -134,9 +134,8 @@ class ContactEstimator:
     Estimate contacts (location, force, direction) from raw top and bottom count maps.
 
     The registered methods (:data:`kernel.METHODS`) run in the compiled kernel, one call per
-    scan; the Python code of this module and the ones it
-    calls describes that algorithm and runs with ``compiled=False`` (the tests compare the two)
-    and with a reference ``shift``.
+    scan; the Python code of this module and the ones it calls describes that algorithm and runs
+    with ``compiled=False`` (the tests compare the two) and with a reference ``shift``.
     """
 
     def __init__(self, config: EstimatorConfig = None, calibration: Calibration = None,
