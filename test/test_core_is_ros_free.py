@@ -2,7 +2,7 @@
 The core must run where no ROS is installed, and its wings keep one import rule.
 
 No core module imports rclpy or a message package; ``estimation`` never imports ``sim``;
-``protocol`` imports neither.
+``protocol`` imports neither; ``common`` (checks, atomic writes) imports none of them.
 """
 
 import ast
@@ -20,7 +20,8 @@ ROS_FREE_TOOLS = ['skin_driver.tools.evaluate.cli', 'skin_driver.tools.sim',
 FORBIDDEN = ('rclpy', 'rosidl', 'builtin_interfaces', 'std_msgs', 'geometry_msgs', 'sensor_msgs',
              'skin_msgs', 'visualization_msgs', 'diagnostic_msgs', 'std_srvs', 'launch')
 # What each wing may not import (besides ROS).
-WING_RULES = {'protocol': ('estimation', 'sim'), 'estimation': ('sim', 'protocol'), 'sim': ()}
+WING_RULES = {'common': ('estimation', 'sim', 'protocol'), 'protocol': ('estimation', 'sim'),
+              'estimation': ('sim', 'protocol'), 'sim': ()}
 
 
 def _core_modules():

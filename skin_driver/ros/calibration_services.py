@@ -39,9 +39,9 @@ from rcl_interfaces.msg import SetParametersResult
 from rclpy.action import ActionServer, CancelResponse, GoalResponse
 from rclpy.callback_groups import MutuallyExclusiveCallbackGroup
 from rclpy.task import Future
-from skin_driver.core.estimation.calibration import (Calibration, CalibrationMismatch, PARTS,
-                                                     SkinIdentity)
-from skin_driver.core.estimation.session import CalibrationRefused, CalibrationSession
+from skin_driver.core.estimation.calibration.calibration import (Calibration, CalibrationMismatch,
+                                                                 PARTS, SkinIdentity)
+from skin_driver.core.estimation.calibration.session import CalibrationRefused, CalibrationSession
 from skin_driver.ros import conversions, qos
 from skin_driver.ros.params import declare
 from skin_driver.ros.paths import ros_home

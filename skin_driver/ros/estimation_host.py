@@ -32,10 +32,10 @@ import numpy as np
 from rcl_interfaces.msg import SetParametersResult
 from rclpy.event_handler import PublisherEventCallbacks
 from sensor_msgs.msg import Image
-from skin_driver.core.estimation.heatmap import colour_map, grey_levels
-from skin_driver.core.estimation.pipeline import ContactEstimator, EstimatorConfig
-from skin_driver.core.estimation.shift import DEFAULT_METHOD, get_method, method_names
-from skin_driver.core.estimation.tare import RecentScans
+from skin_driver.core.estimation.calibration.tare import RecentScans
+from skin_driver.core.estimation.scan.heatmap import colour_map, grey_levels
+from skin_driver.core.estimation.scan.pipeline import ContactEstimator, EstimatorConfig
+from skin_driver.core.estimation.shift.methods import DEFAULT_METHOD, get_method, method_names
 from skin_driver.core.protocol.realtime import StageCpu
 from skin_driver.ros import conversions, diagnostics, qos
 from skin_driver.ros.calibration_services import CalibrationServices

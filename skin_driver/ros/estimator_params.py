@@ -10,7 +10,7 @@ from __future__ import annotations
 import os
 from typing import Any, Mapping
 
-from skin_driver.core.estimation.pipeline import EstimatorConfig
+from skin_driver.core.estimation.scan.pipeline import EstimatorConfig
 import yaml
 
 __all__ = ['ESTIMATOR_PARAMETERS', 'DIRECTION_NODE', 'estimator_config',

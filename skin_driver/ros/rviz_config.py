@@ -12,7 +12,7 @@ import os
 import re
 
 from ament_index_python.packages import get_package_prefix, PackageNotFoundError
-from skin_driver.core.estimation.atomic import write_atomically
+from skin_driver.core.common.atomic import write_atomically
 from skin_driver.ros.frames import default_frame_id
 from skin_driver.ros.paths import ros_home
 

@@ -4,7 +4,7 @@ import gc
 
 import rclpy
 from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
-from skin_driver.core.estimation.kernel import KernelMissing
+from skin_driver.core.estimation.scan.kernel import KernelMissing
 from skin_driver.ros.params import ParameterError
 
 

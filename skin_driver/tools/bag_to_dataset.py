@@ -17,9 +17,9 @@ import os
 import pathlib
 import sys
 
-from skin_driver.core.estimation.atomic import check_writable
-from skin_driver.core.estimation.dataset import save_dataset
-from skin_driver.core.estimation.recording import layers_of, Recording
+from skin_driver.core.common.atomic import check_writable
+from skin_driver.core.estimation.data.dataset import save_dataset
+from skin_driver.core.estimation.data.recording import layers_of, Recording
 from skin_driver.tools.recording_args import add_recording_arguments, labels_of
 
 SKIN_FRAME = 'skin_msgs/msg/SkinFrame'

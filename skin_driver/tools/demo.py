@@ -23,10 +23,10 @@ import numpy as np
 from rclpy.action import ActionClient
 from rclpy.executors import ExternalShutdownException
 from rclpy.node import Node
-from skin_driver.core.estimation.calibration import Calibration
-from skin_driver.core.estimation.heatmap import text_map
-from skin_driver.core.estimation.pipeline import ContactEstimator, EstimatorConfig
-from skin_driver.core.estimation.shift import DEFAULT_METHOD, REFERENCES
+from skin_driver.core.estimation.calibration.calibration import Calibration
+from skin_driver.core.estimation.scan.heatmap import text_map
+from skin_driver.core.estimation.scan.pipeline import ContactEstimator, EstimatorConfig
+from skin_driver.core.estimation.shift.methods import DEFAULT_METHOD, REFERENCES
 from skin_driver.core.sim.scene import find_scene, scene_from_dict
 from skin_driver.ros import conversions
 from skin_driver.tools.evaluate.scoring import summarise

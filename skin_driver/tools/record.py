@@ -19,9 +19,9 @@ import time
 
 import rclpy
 from rclpy.executors import ExternalShutdownException
-from skin_driver.core.estimation.atomic import check_writable
-from skin_driver.core.estimation.dataset import save_dataset
-from skin_driver.core.estimation.recording import Recording
+from skin_driver.core.common.atomic import check_writable
+from skin_driver.core.estimation.data.dataset import save_dataset
+from skin_driver.core.estimation.data.recording import Recording
 from skin_driver.ros import conversions, qos
 from skin_driver.tools.recording_args import add_recording_arguments, labels_of
 from skin_msgs.msg import SkinFrame

@@ -3,7 +3,7 @@
 import argparse
 import math
 
-from skin_driver.core.estimation.recording import Labels
+from skin_driver.core.estimation.data.recording import Labels
 
 
 def add_recording_arguments(parser: argparse.ArgumentParser) -> None:

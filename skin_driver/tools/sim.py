@@ -15,8 +15,8 @@ import sys
 import threading
 import time
 
-from skin_driver.core.estimation.atomic import check_writable
-from skin_driver.core.estimation.dataset import save_dataset
+from skin_driver.core.common.atomic import check_writable
+from skin_driver.core.estimation.data.dataset import save_dataset
 from skin_driver.core.protocol.link import default_port
 from skin_driver.core.sim.board import SimulatedSkin
 from skin_driver.core.sim.experiments import render_scene

@@ -21,7 +21,7 @@ import pytest
 from rclpy.parameter import Parameter
 from rclpy.qos import qos_profile_sensor_data
 from rosutil import ros_context, spin_until
-from skin_driver.core.estimation import calibration as calib
+from skin_driver.core.estimation.calibration import calibration as calib
 from skin_driver.ros import conversions
 from skin_driver.ros.conversions import status_values
 from skin_driver.ros.direction_node import DirectionNode
@@ -216,7 +216,7 @@ def test_failed_write_of_a_new_calibration_keeps_the_previous_one(tmp_path):
 
 WRITER = textwrap.dedent("""
     import sys
-    from skin_driver.core.estimation.calibration import Calibration
+    from skin_driver.core.estimation.calibration.calibration import Calibration
     path = sys.argv[1]
     i = 0
     while True:

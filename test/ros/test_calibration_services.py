@@ -12,8 +12,8 @@ from rclpy.action import ActionClient
 from rclpy.parameter import Parameter
 from rclpy.qos import qos_profile_sensor_data
 from rosutil import ros_context, spin_until
-from skin_driver.core.estimation.calibration import Calibration, SkinIdentity
-from skin_driver.core.estimation.forcecurve import ForceCurve
+from skin_driver.core.estimation.calibration.calibration import Calibration, SkinIdentity
+from skin_driver.core.estimation.model.forcecurve import ForceCurve
 from skin_driver.ros.calibration_services import default_calibration_file
 from skin_driver.ros.conversions import status_values
 from skin_driver.ros.direction_node import DirectionNode

@@ -7,8 +7,8 @@ from geometry_msgs.msg import WrenchStamped
 import numpy as np
 import pytest
 from rclpy.serialization import deserialize_message, serialize_message
-from skin_driver.core.estimation.heatmap import grey_levels
-from skin_driver.core.estimation.pipeline import Contact
+from skin_driver.core.estimation.scan.heatmap import grey_levels
+from skin_driver.core.estimation.scan.pipeline import Contact
 from skin_driver.ros import conversions
 from skin_msgs.msg import SkinFrame, TactileContact, TactileContactArray
 from std_msgs.msg import Header

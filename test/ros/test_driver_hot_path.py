@@ -8,8 +8,8 @@ import pytest
 from rclpy.qos import qos_profile_sensor_data
 from rosutil import spin_until
 from sensor_msgs.msg import Image
-from skin_driver.core.estimation.calibration import Calibration
-from skin_driver.core.estimation.taxelmodel import TaxelModel
+from skin_driver.core.estimation.calibration.calibration import Calibration
+from skin_driver.core.estimation.model.taxelmodel import TaxelModel
 from skin_driver.core.protocol.realtime import NORMAL
 from skin_driver.ros.conversions import status_values
 from visualization_msgs.msg import MarkerArray

@@ -10,7 +10,7 @@ import pytest
 import rclpy
 from rclpy.lifecycle import TransitionCallbackReturn
 from rosutil import ros_context, spin_until
-from skin_driver.core.estimation import calibration as calib
+from skin_driver.core.estimation.calibration import calibration as calib
 from skin_driver.core.sim.board import SimulatedSkin
 from skin_driver.ros.conversions import status_values
 from skin_driver.ros.direction_node import DirectionNode

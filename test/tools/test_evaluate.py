@@ -5,8 +5,8 @@ import json
 import numpy as np
 import pytest
 
-from skin_driver.core.estimation.dataset import save_dataset
-from skin_driver.core.estimation.fsr import FsrModel
+from skin_driver.core.estimation.data.dataset import save_dataset
+from skin_driver.core.estimation.model.fsr import FsrModel
 from skin_driver.core.sim.experiments import (add_calibration_frames, make_random_experiment,
                                               make_seed_experiment)
 from skin_driver.core.sim.physics import SkinModel

@@ -6,9 +6,9 @@ import math
 
 import numpy as np
 import pytest
-from skin_driver.core.estimation.calibration import Calibration
-from skin_driver.core.estimation.dataset import Dataset
-from skin_driver.core.estimation.pipeline import Contact, EstimatorConfig
+from skin_driver.core.estimation.calibration.calibration import Calibration
+from skin_driver.core.estimation.data.dataset import Dataset
+from skin_driver.core.estimation.scan.pipeline import Contact, EstimatorConfig
 from skin_driver.core.sim.skins import skin_names
 from skin_driver.ros.estimator_params import estimator_config, load_direction_parameters
 from skin_driver.tools.evaluate import cli, scoring

@@ -5,7 +5,7 @@ import json
 
 import numpy as np
 
-from skin_driver.core.estimation.dataset import save_dataset
+from skin_driver.core.estimation.data.dataset import save_dataset
 from skin_driver.core.sim.experiments import calibrated_scene
 from skin_driver.tools.evaluate import cli
 

@@ -4,7 +4,7 @@ import numpy as np
 from pipeline import overrides, scene
 import pytest
 from rosutil import ros_context, spin_until
-from skin_driver.core.estimation.dataset import load_dataset
+from skin_driver.core.estimation.data.dataset import load_dataset
 from skin_driver.core.sim.board import SimulatedSkin
 from skin_driver.ros.driver_node import SkinDriverNode
 from skin_driver.tools.harness import spawn, stop

@@ -30,7 +30,7 @@ from . import physics
 from .line import damage
 from .pty_line import PtyLine
 from .scene import load_scene, Scene
-from ..estimation.validate import check_int, check_number
+from ..common.validate import check_int, check_number
 from ..protocol.wire import encode_counts, encode_frame, frame_size, frame_with_counts, MAX_SEQ
 
 # Below this period frames are written in batches: one wake-up per BATCH_S instead of per frame.

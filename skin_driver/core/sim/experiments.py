@@ -31,8 +31,8 @@ import numpy as np
 
 from .physics import layer_shift_m, Press, render, render_plate, SkinModel
 from .skins import family_skin, FamilySkin
-from ..estimation.dataset import Dataset
-from ..estimation.validate import check_int
+from ..common.validate import check_int
+from ..estimation.data.dataset import Dataset
 
 __all__ = ['SCENE_KINDS', 'DIRECTION_KINDS', 'CALIBRATION_RADIUS_M', 'PAPER_ALPHA_DEG',
            'PAPER_BETAS_DEG', 'paper_presses', 'make_scene', 'make_seed_experiment',

@@ -25,7 +25,7 @@ from typing import Sequence
 import numpy as np
 
 from .physics import expected_counts, Press, render_force, SkinModel
-from ..estimation.pipeline import Contact
+from ..estimation.scan.pipeline import Contact
 
 __all__ = ['ORACLE', 'fit_presses', 'oracle_contacts', 'oracle_run']
 

@@ -43,9 +43,10 @@ from typing import Sequence
 import numpy as np
 
 # How a taxel samples a profile is the estimation's description too (cellops).
-from ..estimation.cellops import axis_operator as _axis_operator, blur as _blur, gather as _gather
-from ..estimation.fsr import FsrModel
-from ..estimation.taxelmodel import hertz_profile
+from ..estimation.model.cellops import (axis_operator as _axis_operator, blur as _blur,
+                                        gather as _gather)
+from ..estimation.model.fsr import FsrModel
+from ..estimation.model.taxelmodel import hertz_profile
 
 __all__ = ['SkinModel', 'Press', 'render', 'render_plate', 'render_force', 'render_expected',
            'expected_counts', 'layer_shift_m', 'taxel_spread', 'contact_radius_m']

@@ -43,7 +43,7 @@ import yaml
 from .experiments import PAPER_FORCE_N, paper_presses
 from .physics import Press, SkinModel
 from .skins import family_skin
-from ..estimation.fsr import FsrModel
+from ..estimation.model.fsr import FsrModel
 
 PRESS_FIELDS = ('time_s', 'x_m', 'y_m', 'force_n', 'alpha_deg', 'beta_deg', 'radius_m',
                 'duration_s')

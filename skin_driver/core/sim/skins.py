@@ -23,7 +23,7 @@ import math
 import numpy as np
 
 from .physics import SkinModel
-from ..estimation.fsr import FsrModel
+from ..estimation.model.fsr import FsrModel
 
 __all__ = ['FamilySkin', 'HELD_OUT', 'GRID', 'skin_names', 'get_skin', 'family_skin',
            'held_out_skin', 'on_grid', 'model_on_grid', 'skin_for_grid', 'PATCH_M']

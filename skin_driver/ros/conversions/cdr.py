@@ -14,7 +14,7 @@ from builtin_interfaces.msg import Time
 from geometry_msgs.msg import Vector3, Wrench, WrenchStamped
 import numpy as np
 from rclpy.serialization import deserialize_message, serialize_message
-from skin_driver.core.estimation.recording import layers_of
+from skin_driver.core.estimation.data.recording import layers_of
 from skin_msgs.msg import SkinFrame, TactileContact, TactileContactArray
 from std_msgs.msg import Header
 from visualization_msgs.msg import MarkerArray

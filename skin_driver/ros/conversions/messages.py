@@ -11,9 +11,9 @@ from geometry_msgs.msg import (Point, Quaternion, Transform, TransformStamped, V
                                Wrench, WrenchStamped)
 import numpy as np
 from sensor_msgs.msg import Image
-from skin_driver.core.estimation.heatmap import colour_map, grey_levels
-from skin_driver.core.estimation.recording import layers_of
-from skin_driver.core.estimation.wrench import net_wrench, torque_about_origin
+from skin_driver.core.estimation.data.recording import layers_of
+from skin_driver.core.estimation.scan.heatmap import colour_map, grey_levels
+from skin_driver.core.estimation.scan.wrench import net_wrench, torque_about_origin
 from skin_msgs.action import Calibrate, CalibrateCompliance, CalibrateForce, CalibrateGains
 from skin_msgs.msg import SkinFrame, TactileContact, TactileContactArray
 from std_msgs.msg import ColorRGBA, Header
@@ -98,7 +98,7 @@ def contact_fields(contact) -> tuple:
 
 def contact_to_msg(header: Header, contact, out: TactileContact = None) -> TactileContact:
     """
-    Convert a core Contact (:mod:`skin_driver.core.estimation.pipeline`) into a message.
+    Convert a core Contact (:mod:`skin_driver.core.estimation.scan.pipeline`) into a message.
 
     With ``out`` the message is filled in place and returned: publish() serialises at once, so
     one message can carry scan after scan. A refused contact leaves ``out`` as it was.

@@ -17,8 +17,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from skin_driver.core.estimation.prepared import prepared_estimator
-from skin_driver.core.estimation.shift import DEFAULT_METHOD
+from skin_driver.core.estimation.calibration.prepared import prepared_estimator
+from skin_driver.core.estimation.shift.methods import DEFAULT_METHOD
 from skin_driver.core.sim.experiments import calibrated_scene
 from skin_driver.core.sim.oracle import ORACLE, oracle_run
 from skin_driver.core.sim.skins import family_skin, skin_names

@@ -26,7 +26,7 @@ import time
 import cv2
 import numpy as np
 
-from skin_driver.core.estimation.shift import DEFAULT_METHOD
+from skin_driver.core.estimation.shift.methods import DEFAULT_METHOD
 from skin_driver.tools.bench import estimators as bench_core, plots, tables
 from skin_driver.tools.bench.calibration import calibration_accuracy
 from skin_driver.tools.bench.scoring import label, targets, tradeoffs, why_e2e

@@ -25,7 +25,7 @@ from geometry_msgs.msg import WrenchStamped
 import numpy as np
 from rclpy.node import Node
 from rclpy.qos import qos_profile_sensor_data
-from skin_driver.core.estimation.shift import DEFAULT_METHOD
+from skin_driver.core.estimation.shift.methods import DEFAULT_METHOD
 from skin_driver.core.protocol.wire import encode_frame, FrameDecoder
 from skin_driver.core.sim.physics import Press, render, SkinModel
 from skin_driver.ros import conversions

@@ -12,10 +12,10 @@ import warnings
 
 import numpy as np
 
-from skin_driver.core.estimation import kernel as compiled_kernel
-from skin_driver.core.estimation.pipeline import ContactEstimator, EstimatorConfig
-from skin_driver.core.estimation.prepared import prepared_estimator
-from skin_driver.core.estimation.shift import (
+from skin_driver.core.estimation.calibration.prepared import prepared_estimator
+from skin_driver.core.estimation.scan import kernel as compiled_kernel
+from skin_driver.core.estimation.scan.pipeline import ContactEstimator, EstimatorConfig
+from skin_driver.core.estimation.shift.methods import (
     centroid, DEFAULT_METHOD, get_method, Method, method_names, NO_SHIFT, REFERENCES, resolve,
     ShiftEstimate)
 from skin_driver.core.sim.experiments import (

@@ -21,7 +21,7 @@ from builtin_interfaces.msg import Time
 import numpy as np
 import rclpy
 import serial
-from skin_driver.core.estimation.pipeline import ContactEstimator, EstimatorConfig
+from skin_driver.core.estimation.scan.pipeline import ContactEstimator, EstimatorConfig
 from skin_driver.core.protocol.wire import CRC_SIZE, frame_size, HEADER_SIZE, SYNC
 from skin_driver.ros import conversions, qos
 from skin_driver.ros.spin import freeze_heap

@@ -6,7 +6,7 @@ Each target with the figure measured for it, and where the end-to-end time goes.
 
 from __future__ import annotations
 
-from skin_driver.core.estimation.shift import DEFAULT_METHOD
+from skin_driver.core.estimation.shift.methods import DEFAULT_METHOD
 
 # Issue #16 item 5: the default's cost per 16 x 16 frame pair, one core, back to back.
 ALONE_US = 30.0

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from skin_driver.core.estimation.shift import DEFAULT_METHOD
+from skin_driver.core.estimation.shift.methods import DEFAULT_METHOD
 from skin_driver.core.sim.experiments import DIRECTION_KINDS
 from skin_driver.core.sim.oracle import ORACLE
 from skin_driver.tools.bench.scoring import ALONE_US, label

@@ -30,11 +30,11 @@ import sys
 
 import numpy as np
 
-from skin_driver.core.estimation.atomic import check_writable
-from skin_driver.core.estimation.dataset import load_dataset, save_dataset
-from skin_driver.core.estimation.kernel import KernelMissing
-from skin_driver.core.estimation.pipeline import EstimatorConfig
-from skin_driver.core.estimation.shift import DEFAULT_METHOD, method_names, REFERENCES
+from skin_driver.core.common.atomic import check_writable
+from skin_driver.core.estimation.data.dataset import load_dataset, save_dataset
+from skin_driver.core.estimation.scan.kernel import KernelMissing
+from skin_driver.core.estimation.scan.pipeline import EstimatorConfig
+from skin_driver.core.estimation.shift.methods import DEFAULT_METHOD, method_names, REFERENCES
 from skin_driver.core.sim.experiments import calibrated_scene, make_scene, SCENE_KINDS
 from skin_driver.core.sim.skins import family_skin, GRID, HELD_OUT, skin_names
 from skin_driver.ros.estimator_params import estimator_config, load_direction_parameters

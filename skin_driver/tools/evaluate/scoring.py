@@ -4,8 +4,9 @@ Scoring of direction estimators on a dataset: Table 1 of the seed paper and the 
 The single normal presses calibrate (x_p, y_p); every single tilted press's strongest contact is
 compared with the ground-truth azimuth; frames with several presses are matched press by press
 (docs/dataset.md). With a ``split`` array (dataset format 2) only the calibration frames
-(split = 1) calibrate, and more fully (:mod:`skin_driver.core.estimation.prepared`); only
-split = 0 frames are scored. ROS-free.
+(split = 1) calibrate, and more fully
+(:mod:`skin_driver.core.estimation.calibration.prepared`); only split = 0 frames are scored.
+ROS-free.
 """
 
 from __future__ import annotations
@@ -16,11 +17,11 @@ import time
 
 import numpy as np
 
-from skin_driver.core.estimation.calibration import Calibration
-from skin_driver.core.estimation.dataset import Dataset
-from skin_driver.core.estimation.pipeline import EstimatorConfig
-from skin_driver.core.estimation.prepared import prepared_estimator
-from skin_driver.core.estimation.shift import DEFAULT_METHOD
+from skin_driver.core.estimation.calibration.calibration import Calibration
+from skin_driver.core.estimation.calibration.prepared import prepared_estimator
+from skin_driver.core.estimation.data.dataset import Dataset
+from skin_driver.core.estimation.scan.pipeline import EstimatorConfig
+from skin_driver.core.estimation.shift.methods import DEFAULT_METHOD
 from skin_driver.core.sim.oracle import ORACLE, oracle_run
 
 __all__ = ['PAPER_TABLE', 'MethodRun', 'summarise', 'angle_error_deg', 'run_method',

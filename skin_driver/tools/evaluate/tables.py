@@ -5,7 +5,7 @@ from __future__ import annotations
 import csv
 import math
 
-from skin_driver.core.estimation.atomic import write_atomically
+from skin_driver.core.common.atomic import write_atomically
 from skin_driver.tools.evaluate.scoring import MethodRun, PAPER_TABLE, SEPARATE_TAXELS
 
 __all__ = ['CONTACT_COLUMNS', 'write_contacts', 'format_table', 'json_safe']

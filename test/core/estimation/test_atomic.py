@@ -3,7 +3,7 @@
 import os
 
 import pytest
-from skin_driver.core.estimation.atomic import write_atomically
+from skin_driver.core.common.atomic import write_atomically
 
 
 def test_write_replaces_the_file_and_creates_missing_directories_when_asked(tmp_path):

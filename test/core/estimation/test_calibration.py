@@ -4,11 +4,12 @@ import os
 
 import numpy as np
 import pytest
-from skin_driver.core.estimation.calibration import calibrate_from_shifts, Calibration
-from skin_driver.core.estimation.calibration import CalibrationMismatch, compliance_from_presses
-from skin_driver.core.estimation.calibration import SkinIdentity
-from skin_driver.core.estimation.forcecurve import ForceCurve
-from skin_driver.core.estimation.taxelmodel import TaxelModel
+from skin_driver.core.estimation.calibration.calibration import calibrate_from_shifts, Calibration
+from skin_driver.core.estimation.calibration.calibration import (CalibrationMismatch,
+                                                                 compliance_from_presses)
+from skin_driver.core.estimation.calibration.calibration import SkinIdentity
+from skin_driver.core.estimation.model.forcecurve import ForceCurve
+from skin_driver.core.estimation.model.taxelmodel import TaxelModel
 
 MODEL = TaxelModel(pitch_m=0.005, fill_factor=0.88, cover_spread_m=0.001, layer_spread_m=0.002,
                    film_scale=0.67, film_exponent=0.53, film_ceiling=3.3, film_activation_n=0.01,

@@ -2,10 +2,10 @@
 
 import numpy as np
 import pytest
-from skin_driver.core.estimation.censoring import (censored_taxels, force_window, marked_counts,
-                                                   with_censored_sums)
-from skin_driver.core.estimation.contacts import LayerPair
-from skin_driver.core.estimation.forcecurve import ForceCurve
+from skin_driver.core.estimation.model.forcecurve import ForceCurve
+from skin_driver.core.estimation.scan.censoring import (censored_taxels, force_window,
+                                                        marked_counts, with_censored_sums)
+from skin_driver.core.estimation.scan.contacts import LayerPair
 
 CEILING = 3000.0
 # Linear to the ceiling, then flat: a film at its resistance floor.

@@ -2,9 +2,9 @@
 
 import numpy as np
 import pytest
-from skin_driver.core.estimation.conditioning import Conditioner, ConditioningConfig
-from skin_driver.core.estimation.crosstalk import without_leak
-from skin_driver.core.estimation.fsr import FsrModel
+from skin_driver.core.estimation.model.fsr import FsrModel
+from skin_driver.core.estimation.scan.conditioning import Conditioner, ConditioningConfig
+from skin_driver.core.estimation.scan.crosstalk import without_leak
 from skin_driver.core.sim.physics import Press, render, render_plate, SkinModel
 from skin_driver.core.sim.skins import family_skin
 

@@ -3,8 +3,8 @@
 import numpy as np
 import pytest
 
-from skin_driver.core.estimation.contacts import LayerPair, pair_layers
-from skin_driver.core.estimation.shift import centroid
+from skin_driver.core.estimation.scan.contacts import LayerPair, pair_layers
+from skin_driver.core.estimation.shift.methods import centroid
 
 
 def _blob(shape, r, c, value=1.0):

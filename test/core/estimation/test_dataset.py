@@ -5,7 +5,7 @@ import math
 import numpy as np
 import pytest
 
-from skin_driver.core.estimation.dataset import Dataset, load_dataset, save_dataset
+from skin_driver.core.estimation.data.dataset import Dataset, load_dataset, save_dataset
 from skin_driver.core.sim.experiments import make_random_experiment, make_seed_experiment
 from skin_driver.core.sim.physics import SkinModel
 

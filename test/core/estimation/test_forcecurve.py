@@ -2,7 +2,7 @@
 
 import numpy as np
 import pytest
-from skin_driver.core.estimation.forcecurve import ForceCurve
+from skin_driver.core.estimation.model.forcecurve import ForceCurve
 
 
 def test_a_curve_must_rise_from_zero():

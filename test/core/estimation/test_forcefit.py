@@ -2,8 +2,8 @@
 
 import numpy as np
 import pytest
-from skin_driver.core.estimation.forcefit import fit_force_curve
-from skin_driver.core.estimation.fsr import FsrModel
+from skin_driver.core.estimation.calibration.forcefit import fit_force_curve
+from skin_driver.core.estimation.model.fsr import FsrModel
 
 SKIN = FsrModel(r_min_ohm=150.0, r_max_ohm=6000.0, force_at_r_min_n=40.0)
 SHARES = np.array([0.02, 0.05, 0.08, 0.12, 0.16, 0.14, 0.12, 0.1, 0.08, 0.06, 0.04, 0.03])

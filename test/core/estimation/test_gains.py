@@ -2,10 +2,10 @@
 
 import numpy as np
 import pytest
-from skin_driver.core.estimation.fsr import FsrModel
-from skin_driver.core.estimation.gains import gains_from_force_sums, limits_note
-from skin_driver.core.estimation.pipeline import ContactEstimator, EstimatorConfig
-from skin_driver.core.estimation.session import CalibrationRefused, CalibrationSession
+from skin_driver.core.estimation.calibration.gains import gains_from_force_sums, limits_note
+from skin_driver.core.estimation.calibration.session import CalibrationRefused, CalibrationSession
+from skin_driver.core.estimation.model.fsr import FsrModel
+from skin_driver.core.estimation.scan.pipeline import ContactEstimator, EstimatorConfig
 from skin_driver.core.sim.physics import Press, render, SkinModel
 
 FSR = FsrModel()

@@ -19,15 +19,15 @@ import sys
 import numpy as np
 import pytest
 
-from skin_driver.core.estimation.calibration import Calibration
-from skin_driver.core.estimation.kernel import fit_contact as compiled_fit_contact
-from skin_driver.core.estimation.pipeline import ContactEstimator, EstimatorConfig
-from skin_driver.core.estimation.prepared import prepared_estimator
-from skin_driver.core.estimation.shift import REFERENCES
-from skin_driver.core.estimation.taxelmodel import (
+from skin_driver.core.estimation.calibration.calibration import Calibration
+from skin_driver.core.estimation.calibration.prepared import prepared_estimator
+from skin_driver.core.estimation.model.taxelmodel import (
     DX as model_dx, DY as model_dy, fit_contact, LOG_ASPECT as model_aspect,
     LOG_FORCE as model_force, LOG_RADIUS as model_radius, ORIENTATION as model_orientation,
     render_counts, start_of, TaxelModel, X as model_x, Y as model_y)
+from skin_driver.core.estimation.scan.kernel import fit_contact as compiled_fit_contact
+from skin_driver.core.estimation.scan.pipeline import ContactEstimator, EstimatorConfig
+from skin_driver.core.estimation.shift.methods import REFERENCES
 from skin_driver.core.sim.experiments import calibrated_scene, make_scene
 from skin_driver.core.sim.physics import Press, render, SkinModel
 from skin_driver.core.sim.skins import family_skin, skin_names
@@ -394,7 +394,7 @@ def test_a_reference_shift_keeps_the_python_path():
 
 def test_a_missing_kernel_stops_the_estimators_maker_naming_the_fix():
     # The Python description needs no kernel; the runtime path does, and says how to build it.
-    code = ('from skin_driver.core.estimation.pipeline import ContactEstimator\n'
+    code = ('from skin_driver.core.estimation.scan.pipeline import ContactEstimator\n'
             'ContactEstimator(compiled=False)\n'
             "print('description made', flush=True)\n"
             'ContactEstimator()\n')

@@ -5,12 +5,12 @@ import math
 import numpy as np
 import pytest
 
-from skin_driver.core.estimation.calibration import calibrate_from_shifts, Calibration
-from skin_driver.core.estimation.fsr import FsrModel
-from skin_driver.core.estimation.pipeline import Contact, ContactEstimator, EstimatorConfig
-from skin_driver.core.estimation.shift import resolve
-from skin_driver.core.estimation.taxellearn import film_start
-from skin_driver.core.estimation.taxelmodel import TaxelModel
+from skin_driver.core.estimation.calibration.calibration import calibrate_from_shifts, Calibration
+from skin_driver.core.estimation.calibration.taxellearn import film_start
+from skin_driver.core.estimation.model.fsr import FsrModel
+from skin_driver.core.estimation.model.taxelmodel import TaxelModel
+from skin_driver.core.estimation.scan.pipeline import Contact, ContactEstimator, EstimatorConfig
+from skin_driver.core.estimation.shift.methods import resolve
 from skin_driver.core.sim.physics import layer_shift_m, Press, render, SkinModel, taxel_spread
 
 

@@ -5,8 +5,8 @@ import math
 import numpy as np
 import pytest
 
-from skin_driver.core.estimation.calibration import calibrate_from_shifts
-from skin_driver.core.estimation.pipeline import ContactEstimator, EstimatorConfig
+from skin_driver.core.estimation.calibration.calibration import calibrate_from_shifts
+from skin_driver.core.estimation.scan.pipeline import ContactEstimator, EstimatorConfig
 from skin_driver.core.sim.physics import Press, render, SkinModel
 
 

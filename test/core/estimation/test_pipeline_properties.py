@@ -5,8 +5,8 @@ import math
 from hypothesis import given, settings, strategies as st
 import numpy as np
 
-from skin_driver.core.estimation import shift as direction
-from skin_driver.core.estimation.pipeline import ContactEstimator
+from skin_driver.core.estimation.scan.pipeline import ContactEstimator
+from skin_driver.core.estimation.shift import methods as direction
 from skin_driver.core.sim.physics import Press, render, SkinModel
 
 FAST = settings(max_examples=25, deadline=None)

@@ -4,10 +4,10 @@ import math
 
 import numpy as np
 import pytest
-from skin_driver.core.estimation.calibration import Calibration, SkinIdentity
-from skin_driver.core.estimation.fsr import FsrModel
-from skin_driver.core.estimation.pipeline import ContactEstimator, EstimatorConfig
-from skin_driver.core.estimation.session import CalibrationRefused, CalibrationSession
+from skin_driver.core.estimation.calibration.calibration import Calibration, SkinIdentity
+from skin_driver.core.estimation.calibration.session import CalibrationRefused, CalibrationSession
+from skin_driver.core.estimation.model.fsr import FsrModel
+from skin_driver.core.estimation.scan.pipeline import ContactEstimator, EstimatorConfig
 from skin_driver.core.sim.physics import Press, render, SkinModel
 
 # Another FSR curve and three times the default compliance: the assumed model is wrong here.

@@ -5,7 +5,7 @@ import math
 import numpy as np
 import pytest
 
-from skin_driver.core.estimation import shift as direction
+from skin_driver.core.estimation.shift import methods as direction
 from skin_driver.core.sim.physics import Press, render_force, SkinModel
 
 REQUIRED = ('centroid', 'poc', 'taxel_fit')

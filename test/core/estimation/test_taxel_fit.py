@@ -5,9 +5,9 @@ import math
 import numpy as np
 import pytest
 
-from skin_driver.core.estimation.pipeline import ContactEstimator, EstimatorConfig
-from skin_driver.core.estimation.shift import estimate_shift, get_method
-from skin_driver.core.estimation.taxelfit import cell_fit_shift, fit_cell_profiles
+from skin_driver.core.estimation.scan.pipeline import ContactEstimator, EstimatorConfig
+from skin_driver.core.estimation.shift.methods import estimate_shift, get_method
+from skin_driver.core.estimation.shift.taxelfit import cell_fit_shift, fit_cell_profiles
 from skin_driver.core.sim.physics import Press, render, SkinModel
 
 

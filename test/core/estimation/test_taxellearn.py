@@ -4,9 +4,10 @@ import math
 
 import numpy as np
 import pytest
-from skin_driver.core.estimation.fsr import FsrModel
-from skin_driver.core.estimation.taxellearn import film_start, learn_taxel_model, LearningPress
-from skin_driver.core.estimation.taxelmodel import (
+from skin_driver.core.estimation.calibration.taxellearn import (film_start, learn_taxel_model,
+                                                                LearningPress)
+from skin_driver.core.estimation.model.fsr import FsrModel
+from skin_driver.core.estimation.model.taxelmodel import (
     DX, DY, LOG_FORCE, LOG_RADIUS, render_counts, X, Y)
 from skin_driver.core.sim.physics import layer_shift_m, Press, render_expected, SkinModel
 

@@ -4,7 +4,7 @@ import math
 
 import numpy as np
 import pytest
-from skin_driver.core.estimation.taxelmodel import (
+from skin_driver.core.estimation.model.taxelmodel import (
     DX, DY, fit_contact, LOG_FORCE, LOG_RADIUS, render_counts, start_of, TaxelModel, X, Y)
 
 MODEL = TaxelModel(pitch_m=0.005, fill_factor=0.9, cover_spread_m=0.001, layer_spread_m=0.002,

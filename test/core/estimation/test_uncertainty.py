@@ -3,8 +3,8 @@
 import numpy as np
 import pytest
 
-from skin_driver.core.estimation.contacts import LayerPair
-from skin_driver.core.estimation.uncertainty import shift_sigma
+from skin_driver.core.estimation.scan.contacts import LayerPair
+from skin_driver.core.estimation.scan.uncertainty import shift_sigma
 
 
 def _pair(top, share):

@@ -5,7 +5,7 @@ import math
 import numpy as np
 import pytest
 
-from skin_driver.core.estimation.calibration import calibrate_zero, Calibration
+from skin_driver.core.estimation.calibration.calibration import calibrate_zero, Calibration
 
 
 def test_zero_follows_the_normal_force_only_when_it_measurably_does():

@@ -5,8 +5,8 @@ import re
 
 import numpy as np
 import pytest
-from skin_driver.core.estimation.pipeline import ContactEstimator, EstimatorConfig
-from skin_driver.core.estimation.session import CalibrationSession
+from skin_driver.core.estimation.calibration.session import CalibrationSession
+from skin_driver.core.estimation.scan.pipeline import ContactEstimator, EstimatorConfig
 from skin_driver.core.sim.physics import Press, render
 from skin_driver.core.sim.scene import find_scene, load_scene
 

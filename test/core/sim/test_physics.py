@@ -5,7 +5,7 @@ import math
 import numpy as np
 import pytest
 
-from skin_driver.core.estimation.fsr import FsrModel
+from skin_driver.core.estimation.model.fsr import FsrModel
 from skin_driver.core.sim.physics import layer_shift_m, Press, render, render_force, \
     render_plate, SkinModel, taxel_spread
 

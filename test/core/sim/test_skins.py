@@ -5,9 +5,9 @@ import math
 import numpy as np
 import pytest
 
-from skin_driver.core.estimation.dataset import Dataset, load_dataset, save_dataset
-from skin_driver.core.estimation.prepared import prepared_estimator
-from skin_driver.core.estimation.session import CalibrationSession
+from skin_driver.core.estimation.calibration.prepared import prepared_estimator
+from skin_driver.core.estimation.calibration.session import CalibrationSession
+from skin_driver.core.estimation.data.dataset import Dataset, load_dataset, save_dataset
 from skin_driver.core.sim.experiments import (
     calibrated_scene, CALIBRATION_RADIUS_M, make_scene, PAPER_BETAS_DEG, press_for_shift,
     SCENE_KINDS)

@@ -42,8 +42,8 @@ import cv2
 import numpy as np
 
 from .taxelfit import cell_fit_shift
-from .taxelmodel import DX, DY, fit_contact, start_of, TaxelModel
-from .validate import check_pair
+from ..model.taxelmodel import DX, DY, fit_contact, start_of, TaxelModel
+from ...common.validate import check_pair
 
 __all__ = ['ShiftEstimate', 'Method', 'METHODS', 'DEFAULT_METHOD', 'REFERENCES', 'get_method',
            'method_names', 'resolve', 'estimate_shift']

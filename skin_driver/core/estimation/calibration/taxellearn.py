@@ -22,9 +22,9 @@ from typing import Sequence
 
 import numpy as np
 
-from .fsr import FsrModel
-from .taxelmodel import (best_radius, levenberg_marquardt, LOG_FORCE, MAX_MOVES, residuals,
-                         start_of, STEPS, sub_for, TaxelModel)
+from ..model.fsr import FsrModel
+from ..model.taxelmodel import (best_radius, levenberg_marquardt, LOG_FORCE, MAX_MOVES, residuals,
+                                start_of, STEPS, sub_for, TaxelModel)
 
 __all__ = ['LearningPress', 'learn_taxel_model', 'film_start']
 

@@ -28,13 +28,13 @@ from typing import Optional, Sequence
 import numpy as np
 
 from .calibration import calibrate_zero, Calibration, compliance_from_presses, SkinIdentity
-from .conditioning import mark_clipped
-from .crosstalk import without_leak
 from .forcefit import check_known_forces, fit_force_curve
 from .gains import gains_from_force_sums, limits_note
 from .presses import PressSegmenter
-from .shift import get_method
 from .taxellearn import film_start, learn_taxel_model, LearningPress
+from ..scan.conditioning import mark_clipped
+from ..scan.crosstalk import without_leak
+from ..shift.methods import get_method
 
 __all__ = ['KINDS', 'PressRecord', 'Outcome', 'CalibrationRefused', 'CalibrationSession']
 

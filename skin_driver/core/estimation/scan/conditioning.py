@@ -24,8 +24,8 @@ import cv2
 import numpy as np
 
 from .crosstalk import leak_gate, leak_share, remove_line_leak
-from .fsr import FsrModel
-from .validate import check_map, check_number, check_pair, check_stack
+from ..model.fsr import FsrModel
+from ...common.validate import check_map, check_number, check_pair, check_stack
 
 __all__ = ['ConditioningConfig', 'Conditioner', 'ConditionerState', 'mark_clipped']
 

@@ -39,10 +39,10 @@ import os
 import numpy as np
 import yaml
 
-from .atomic import write_atomically
-from .forcecurve import ForceCurve
-from .taxelmodel import TaxelModel
-from .validate import check_map, check_number
+from ..model.forcecurve import ForceCurve
+from ..model.taxelmodel import TaxelModel
+from ...common.atomic import write_atomically
+from ...common.validate import check_map, check_number
 
 __all__ = ['Calibration', 'CalibrationMismatch', 'SkinIdentity', 'PARTS', 'calibrate_from_shifts',
            'calibrate_zero', 'compliance_from_presses', 'utc_now']

@@ -19,10 +19,10 @@ import math
 
 import numpy as np
 
-from .dataset import Dataset
-from .pipeline import ContactEstimator, EstimatorConfig
 from .session import CalibrationRefused, CalibrationSession
-from .shift import resolve
+from ..data.dataset import Dataset
+from ..scan.pipeline import ContactEstimator, EstimatorConfig
+from ..shift.methods import resolve
 
 __all__ = ['calibrate_from_frames', 'prepared_estimator']
 

@@ -36,7 +36,7 @@ import math
 import numpy as np
 
 from .cellops import axis_operator, blur_block, gather
-from .validate import check_number
+from ...common.validate import check_number
 
 __all__ = ['TaxelModel', 'PressFit', 'hertz_profile', 'render_counts', 'residuals',
            'levenberg_marquardt', 'best_radius', 'fit_contact', 'start_of', 'sub_for']

@@ -25,7 +25,7 @@ import weakref
 
 import numpy as np
 
-from .validate import check_pair
+from ...common.validate import check_pair
 
 __all__ = ['METHODS', 'KernelSettings', 'Kernel', 'KernelMissing', 'load_library',
            'CONTACT_FIELDS', 'KEPT', 'DX', 'DY', 'fit_contact', 'model_numbers']
@@ -207,7 +207,7 @@ def fit_contact(model, counts: np.ndarray, censored: np.ndarray, u0: np.ndarray,
 
     ``model`` is a :class:`taxelmodel.TaxelModel`; raises KernelMissing without the kernel.
     """
-    from .taxelmodel import PressFit
+    from ..model.taxelmodel import PressFit
     lib = load_library()
     counts = np.ascontiguousarray(counts, dtype=np.float64)
     rows, cols = counts.shape[1:]

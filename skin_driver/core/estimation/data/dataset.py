@@ -21,8 +21,8 @@ import zipfile
 
 import numpy as np
 
-from .atomic import write_atomically
-from .validate import check_number, check_stack
+from ...common.atomic import write_atomically
+from ...common.validate import check_number, check_stack
 
 __all__ = ['Dataset', 'save_dataset', 'load_dataset', 'FORMAT_VERSION', 'PRESS_FIELDS']
 

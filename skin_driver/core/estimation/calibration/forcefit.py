@@ -24,9 +24,9 @@ from typing import Sequence
 
 import numpy as np
 
-from .forcecurve import ForceCurve
-from .fsr import FsrModel
-from .imprint import bump, MIN_FITTED_SPREAD
+from ..model.forcecurve import ForceCurve
+from ..model.fsr import FsrModel
+from ..model.imprint import bump, MIN_FITTED_SPREAD
 
 __all__ = ['CurveFit', 'check_known_forces', 'fit_force_curve', 'MIN_PRESSES', 'MIN_FORCE_SPAN']
 

@@ -45,14 +45,14 @@ import threading
 import numpy as np
 
 from . import kernel as compiled_kernel
-from .calibration import Calibration
 from .censoring import censored_taxels, force_window, marked_counts, with_censored_sums
 from .conditioning import Conditioner, ConditioningConfig
 from .contacts import LayerPair, pair_layers
-from .fsr import FsrModel
-from .shift import DEFAULT_METHOD, get_method, Method, NO_SHIFT
 from .uncertainty import shift_sigma
-from .validate import check_int, check_number, check_pair
+from ..calibration.calibration import Calibration
+from ..model.fsr import FsrModel
+from ..shift.methods import DEFAULT_METHOD, get_method, Method, NO_SHIFT
+from ...common.validate import check_int, check_number, check_pair
 
 __all__ = ['EstimatorConfig', 'Contact', 'ContactEstimator', 'MIN_SNR']
 

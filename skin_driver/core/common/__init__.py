@@ -1,0 +1,1 @@
+"""Helpers the whole core shares: input checks and atomic file writes."""

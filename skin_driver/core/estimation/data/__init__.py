@@ -1,0 +1,1 @@
+"""Datasets and recordings of raw frames with their truth."""
