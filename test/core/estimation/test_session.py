@@ -62,6 +62,23 @@ def test_force_session_makes_newtons_right_on_another_fsr_curve():
         assert force_of(est, rng, f) == pytest.approx(f, rel=0.1)
 
 
+def test_one_press_of_a_wrong_known_force_is_left_out_and_named():
+    """Issue #37: one press that disagrees no longer refuses the whole force calibration."""
+    est, rng = tared()
+    known = FORCES.copy()
+    known[3] *= 1.6  # press 4: the robot's load was not what the goal says
+    session = CalibrationSession(est, 'force', forces_n=known)
+    places = rng.uniform(0.02, 0.055, (FORCES.size, 2))
+    feed(session, est, rng, [Press(x, y, f, radius_m=0.004)
+                             for (x, y), f in zip(places, FORCES)])
+    outcome = session.finish()
+    assert outcome.presses_used == FORCES.size - 1
+    assert f'left out press 4 ({known[3]:.2f} N' in outcome.message
+    est = est.with_calibration(outcome.calibration)
+    for f in (8.0, 20.0, 35.0):
+        assert force_of(est, rng, f) == pytest.approx(f, rel=0.1)
+
+
 def test_offset_session_ignores_tilted_presses_and_finds_the_misalignment():
     est, rng = tared(1)
     session = CalibrationSession(est, 'offset', presses=2)
@@ -121,7 +138,7 @@ def test_a_refused_force_session_leaves_the_calibration_in_force():
     session = CalibrationSession(est, 'force', forces_n=known)
     # The presses made in the reverse order of the forces given: no curve fits them.
     feed(session, est, rng, [Press(0.04, 0.04, f, radius_m=0.004) for f in known[::-1]])
-    with pytest.raises(CalibrationRefused, match='disagree with one curve'):
+    with pytest.raises(CalibrationRefused, match='too few presses agree with one curve'):
         session.finish()
     assert est.calibration is previous
     np.testing.assert_array_equal(est.conditioner.condition(*probe), maps)

@@ -53,13 +53,16 @@ class CurveFit:
     """
     A fitted curve and, per press, the force it gives back and its residual (N).
 
-    ``censored`` presses had saturated taxels, filled in from their rims.
+    ``censored`` presses had saturated taxels, filled in from their rims. ``left_out`` are the
+    indices of presses that disagreed with the curve the others make and were not fitted; their
+    ``fitted_n`` is what the last fit that still held them gave.
     """
 
     curve: ForceCurve
     fitted_n: tuple
     residuals_n: tuple
     censored: int
+    left_out: tuple = ()
 
 
 def _solve(gram: list, c: list, cols: tuple):
@@ -351,15 +354,29 @@ def fit_force_curve(press_counts: Sequence[np.ndarray], press_gains: Sequence[np
     empty = [k for k, p in enumerate(presses) if p.counts.size == 0]
     if empty:
         raise ValueError(f'press {empty[0] + 1} ({known[empty[0]]:.2f} N) loaded no taxel')
-    censor, bump_shape, exponent, (scale, activation, rim_load, fitted_sensed) = _best_choice(
-        presses, target, full_scale)
-    fitted = fitted_sensed * known / target
+    # One press that disagrees (a wrong known force, two things touching) would bend the curve
+    # for all: the worst is left out and the rest refitted, while most presses still agree.
+    kept = list(range(len(presses)))
+    fitted = np.zeros_like(known)
+    fewest = max(MIN_PRESSES, (len(presses) + 1) // 2)
+    while True:
+        censor, bump_shape, exponent, (scale, activation, rim_load, fitted_sensed) = _best_choice(
+            [presses[k] for k in kept], target[kept], full_scale)
+        fitted[kept] = fitted_sensed * known[kept] / target[kept]
+        relative = np.abs(fitted[kept] - known[kept]) / known[kept]
+        worst = kept[int(np.argmax(relative))]
+        if relative.max() <= MAX_RELATIVE_RESIDUAL:
+            break
+        rest = [k for k in kept if k != worst]
+        if len(rest) < fewest or known[rest].max() < MIN_FORCE_SPAN * known[rest].min():
+            left = len(presses) - len(kept)
+            raise ValueError(f'press {worst + 1} of {known[worst]:.2f} N is fitted as '
+                             f'{fitted[worst]:.2f} N{_left_out_note(left)}; too few presses '
+                             'agree with one curve (a wrong known force, or two things '
+                             'touching?)')
+        kept = rest
     residuals = fitted - known
-    worst = int(np.argmax(np.abs(residuals) / known))
-    if abs(residuals[worst]) > MAX_RELATIVE_RESIDUAL * known[worst]:
-        raise ValueError(f'press {worst + 1} of {known[worst]:.2f} N is fitted as '
-                         f'{fitted[worst]:.2f} N; the presses disagree with one curve '
-                         '(a wrong known force, or two things touching?)')
+    presses = [presses[k] for k in kept]
     # Stored in counts, sampled over the counts pressed; past them the last slope goes on (flat
     # past the highest count read under a cut: _presses).
     top = max(float(p.counts.max()) for p in presses)
@@ -370,5 +387,10 @@ def fit_force_curve(press_counts: Sequence[np.ndarray], press_gains: Sequence[np
                        rim_load_n=rim_load, activation_n=_bump_activation(censor, bump_shape,
                                                                           activation))
     censored = sum(bool((p.counts >= censor).any()) for p in presses) if censor else 0
+    left_out = tuple(k for k in range(len(known)) if k not in kept)
     return CurveFit(curve, tuple(float(v) for v in fitted),
-                    tuple(float(v) for v in residuals), censored)
+                    tuple(float(v) for v in residuals), censored, left_out)
+
+
+def _left_out_note(count: int) -> str:
+    return f' with {count} other{"s" if count != 1 else ""} left out' if count else ''

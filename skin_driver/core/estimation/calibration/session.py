@@ -288,7 +288,7 @@ class CalibrationSession:
                     raise CalibrationRefused(f'{name} layer: {err}{self._clipping()}') from None
                 fits[name] = fits['bottom']
                 notes += f'; the top layer takes the bottom curve ({err})'
-        model, model_note = self._learn_taxel_model(known)
+        model, model_note = self._learn_taxel_model(known, fits['bottom'].left_out)
         # The matrix's leak: what the presses' lines showed (0 where none leaked).
         leak = _median_of_finite([r.leak_share for r in self.accepted])
         new = self._updated(
@@ -296,18 +296,25 @@ class CalibrationSession:
             taxel_model=model, leak_share=leak if math.isfinite(leak) else 0.0)
         # The pipeline's normal force is the bottom layer's sum: report that layer's fit.
         bottom = fits['bottom']
-        rms = math.sqrt(float(np.mean(np.square(bottom.residuals_n))))
+        agreed = [r for k, r in enumerate(bottom.residuals_n) if k not in bottom.left_out]
+        rms = math.sqrt(float(np.mean(np.square(agreed))))
         saturated = ''.join(f'; the {name} layer saturated in {fit.censored} presses '
                             f'(from {fit.curve.censor_counts:.0f} counts on), filled in from '
                             'their rims' for name, fit in fits.items() if fit.censored)
-        return Outcome(new, n, bottom.fitted_n, bottom.residuals_n,
-                       f'force curves from {n} presses over {known.min():.2f} to '
+        kept = n - len(bottom.left_out)
+        left = ''.join(f'; left out press {k + 1} ({known[k]:.2f} N, fitted as '
+                       f'{bottom.fitted_n[k]:.2f} N): it disagrees with the curve of the other '
+                       f'{kept}' for k in bottom.left_out)
+        return Outcome(new, kept, bottom.fitted_n, bottom.residuals_n,
+                       f'force curves from {kept} presses over {known.min():.2f} to '
                        f'{known.max():.2f} N; residual rms {rms:.3f} N{saturated}{notes}'
-                       f'{model_note}')
+                       f'{left}{model_note}')
 
-    def _learn_taxel_model(self, known: np.ndarray) -> tuple:
+    def _learn_taxel_model(self, known: np.ndarray, left_out=()) -> tuple:
         """
         Return (the skin's taxel model or None, a note): learned when the method in use fits one.
+
+        Presses the force curve left out (``left_out``, indices) are left out here too.
 
         A model learned for another method would be stale the day the method changes, so a
         force calibration for a method without one clears it.
@@ -322,7 +329,7 @@ class CalibrationSession:
                                  (r.shift_m[0] / pitch, r.shift_m[1] / pitch)
                                  if all(math.isfinite(v) for v in r.shift_m) else (0.0, 0.0),
                                  sensitivity)
-                   for r, f in zip(self.accepted, known)]
+                   for k, (r, f) in enumerate(zip(self.accepted, known)) if k not in left_out]
         try:
             model = learn_taxel_model(presses, pitch, film_start(fsr), fsr.full_scale)
         except ValueError as err:
