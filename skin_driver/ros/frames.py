@@ -58,7 +58,19 @@ class MountTransform(Node):
         self.get_logger().info(f'{self.transform.child_frame_id} mounted on {parent}')
 
 
+MISSING_TF2_MSGS = ('tf2_msgs is not installed, so the mount cannot go on /tf_static: install '
+                    'ros-jazzy-tf2-msgs (every ROS 2 desktop install has it) or publish the mount '
+                    'with tf2_ros static_transform_publisher')
+
+
 def main(args=None):
     """Publish the mount transform and keep it latched until shut down."""
     rclpy.init(args=args)
+    try:
+        import tf2_msgs.msg  # noqa: F401 - only whether it is there
+    except ImportError:
+        # One line that says what to install, not an ImportError's traceback.
+        rclpy.logging.get_logger('skin_mount_tf').fatal(MISSING_TF2_MSGS)
+        rclpy.try_shutdown()
+        raise SystemExit(1) from None
     spin_nodes([create_or_exit(MountTransform, 'skin_mount_tf')])

@@ -3,6 +3,8 @@
 import importlib.util
 import math
 import pathlib
+import subprocess
+import sys
 import xml.etree.ElementTree as ElementTree
 
 from builtin_interfaces.msg import Time
@@ -114,6 +116,19 @@ def test_the_skin_patch_macro_gives_a_link_with_its_visual_fixed_to_the_parent(t
     assert joint.find('parent').get('link') == 'forearm_link'
     assert joint.find('child').get('link') == 'left_skin_link'
     assert joint.find('origin').get('rpy') == '0 1.5708 0'
+
+
+def test_mount_tf_without_tf2_msgs_stops_with_one_line_naming_it():
+    """Issue #37: it died with an ImportError's traceback."""
+    code = ('import sys; sys.modules["tf2_msgs"] = None\n'
+            'from skin_driver.ros.frames import main\nmain()')
+    run = subprocess.run([sys.executable, '-c', code], capture_output=True, text=True,
+                         timeout=60)
+    out = run.stdout + run.stderr
+    assert run.returncode == 1
+    assert 'Traceback' not in out
+    assert [line for line in out.splitlines() if line.strip()] == [
+        line for line in out.splitlines() if 'tf2_msgs is not installed' in line]
 
 
 @pytest.mark.ros
