@@ -223,9 +223,18 @@ class SkinDriverNode(Node):
         return TransitionCallbackReturn.SUCCESS
 
     def on_shutdown(self, state: State) -> TransitionCallbackReturn:
-        """Stop reading and release everything."""
+        """Stop reading, release everything, and end the process once the transition is done."""
         self.close()
+        # A finalized driver can do nothing more: its process ends, so that a launch file (or a
+        # supervisor) sees it go, as after Ctrl-C. The context shuts down only after this
+        # callback's answer to the change_state request has gone out.
+        self.get_logger().info('shut down on request: the process ends')
+        self._end = self.create_timer(SHUTDOWN_GRACE_S, self._end_process)
         return TransitionCallbackReturn.SUCCESS
+
+    def _end_process(self) -> None:
+        self.destroy_timer(self._end)
+        rclpy.try_shutdown(context=self.context)
 
     def close(self) -> None:
         """Stop reading and release the port and diagnostics; safe to call in any state."""

@@ -3,6 +3,8 @@
 import time
 
 from diagnostic_msgs.msg import DiagnosticStatus
+from lifecycle_msgs.msg import Transition
+from lifecycle_msgs.srv import ChangeState
 from pipeline import pipeline, scene
 import pytest
 import rclpy
@@ -11,6 +13,8 @@ from rclpy.parameter import Parameter
 from rosutil import spin_until
 from skin_driver.core.protocol.link import DISCONNECTED
 from skin_driver.ros import direction_node
+from skin_driver.tools.harness import (call_service, ros_args, ros_session, spawn, stop,
+                                       write_params)
 from skin_msgs.msg import TactileContactArray
 
 pytestmark = pytest.mark.ros
@@ -112,3 +116,22 @@ def test_direction_node_still_fails_on_a_callback_error_while_running(tmp_path, 
     with pytest.raises(RuntimeError, match='a callback failed'):
         direction_node.main(args=['--ros-args', '-p',
                                   f'calibration_file:={tmp_path / "cal.yaml"}'])
+
+
+def test_the_shutdown_transition_ends_the_driver_process(tmp_path):
+    """Issue #37: after the lifecycle shutdown the process stayed alive, unseen by launch."""
+    params = write_params(str(tmp_path))
+    log = open(tmp_path / 'driver.log', 'w')
+    driver = spawn(['-m', 'skin_driver.ros.driver_node'] + ros_args('/life', params), log)
+    try:
+        with ros_session(rclpy.Context()) as executor:
+            node = rclpy.create_node('lifecycle_client', context=executor.context)
+            executor.add_node(node)
+            client = node.create_client(ChangeState, '/life/skin_driver/change_state')
+            answer = call_service(executor, client, ChangeState.Request(transition=Transition(
+                id=Transition.TRANSITION_ACTIVE_SHUTDOWN)), timeout_s=20.0)
+            assert answer.success
+        assert driver.wait(timeout=20.0) == 0
+    finally:
+        stop([driver])
+        log.close()
