@@ -75,7 +75,7 @@ class MountFit:
 
 
 def rpy_of(rotation: np.ndarray) -> Tuple[float, float, float]:
-    """Return fixed-axis (roll, pitch, yaw) of a rotation matrix: R = Rz(yaw) Ry(pitch) Rx(roll)."""
+    """Return fixed-axis (roll, pitch, yaw) of a rotation: R = Rz(yaw) Ry(pitch) Rx(roll)."""
     r = np.asarray(rotation, dtype=float)
     pitch = math.asin(max(-1.0, min(1.0, -r[2, 0])))
     if abs(r[2, 0]) < 1.0 - 1e-12:
