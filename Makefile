@@ -2,7 +2,7 @@
 SHELL := /bin/bash
 RUN := tools/with-env.sh
 
-.PHONY: setup test demo bench soak lint clean
+.PHONY: setup test demo bench soak lint clean firmware flash
 
 setup:
 	@bash tools/setup.sh
@@ -12,6 +12,15 @@ test: setup
 
 demo: setup
 	@$(RUN) python -m skin_driver.tools.demo $(ARGS)
+
+# Both board images (build/fw-arm/boards/*/*.elf, .bin); installs the toolchain as root.
+firmware:
+	@bash tools/setup-firmware.sh && bash tools/build-firmware.sh
+
+# The Nucleo-F446RE image through its ST-LINK with st-flash (stlink-tools); OpenOCD instead:
+# cmake --build build/fw-arm --target flash-openocd. docs/firmware.md.
+flash: firmware
+	@cmake --build build/fw-arm --target flash
 
 bench: setup
 	@$(RUN) python -m skin_driver.tools.bench.cli $(ARGS)

@@ -24,6 +24,18 @@ print(" ".join(f for f in umath.__cpu_dispatch__ if "AVX512" in f or f == "X86_V
     export NPY_DISABLE_CPU_FEATURES
   fi
 fi
+# The firmware first: its set-up (as root it installs the ARM toolchain, cmocka and QEMU), the
+# core's host tests and every board's image. Without them and not root, setup-firmware.sh says
+# in one line what is missing and the firmware steps are skipped (test/firmware skips too).
+set +e
+bash tools/setup-firmware.sh
+fw=$?
+set -e
+case $fw in
+  0) bash tools/build-firmware.sh --test ;;
+  1) ;;
+  *) exit "$fw" ;;
+esac
 set +e
 tools/with-env.sh python -m pytest -n "${SKIN_TEST_WORKERS:-2}" "$@"
 rc=$?

@@ -15,6 +15,7 @@ import argparse
 import math
 import os
 import shutil
+import subprocess
 import sys
 import tempfile
 import time
@@ -32,8 +33,8 @@ from skin_driver.ros import conversions
 from skin_driver.tools.evaluate.scoring import summarise
 from skin_driver.tools.evaluate.tables import format_table
 from skin_driver.tools.harness import (
-    call_service, ros_args, ros_session, send_goal, start_nodes, start_sim, stop, wait_for,
-    write_params, write_scene)
+    BoardProcess, call_service, ros_args, ros_session, send_goal, spawn, spin_until, start_nodes,
+    start_sim, stop, wait_for, write_params, write_scene)
 from skin_driver.tools.probe import Probe
 from skin_msgs.action import Calibrate, CalibrateCompliance, CalibrateForce
 from skin_msgs.msg import SkinFrame, TactileContactArray
@@ -241,6 +242,29 @@ def calibrate(executor, monitor, path: str) -> None:
     monitor.status = 'calibrated; alpha = 45 deg presses at 8 azimuths'
 
 
+def start_firmware_board(executor, scene_path: str, duration_s: float, port: str,
+                         rate_hz: float, log) -> BoardProcess:
+    """
+    Start the firmware on the emulated board (QEMU) playing the scene, linked at port.
+
+    It builds the image on first use and renders the scene, with a few seconds of the unloaded
+    skin after it, into the scans the board reads; spin executor until it plays.
+    """
+    scans = round((duration_s + 5.0) * rate_hz)
+    board = BoardProcess(spawn(['-m', 'skin_driver.tools.firmware_board', '--scene', scene_path,
+                                '--link', port, '--rate', str(rate_hz), '--scans', str(scans)],
+                               log, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
+                               text=True))
+
+    def started() -> bool:
+        return board.epoch is not None or board.process.poll() is not None
+
+    if not spin_until(executor, started, 180.0, period_s=0.05) or board.epoch is None:
+        board.stop()
+        raise RuntimeError(f'the emulated board did not start: {"".join(board.lines)}')
+    return board
+
+
 def run(args, workdir: str) -> int:
     """Run the demo in workdir; return the exit status."""
     scene_dict = demo_scene(args.repeats, args.pace)
@@ -260,7 +284,12 @@ def run(args, workdir: str) -> int:
             try:
                 wait_for(executor, monitor.tare.service_is_ready, 20.0, 'the direction node',
                          procs)
-                procs.append(start_sim(executor, scene_path, port, args.rate, log).process)
+                if args.board == 'qemu':
+                    board = start_firmware_board(executor, scene_path, scene.duration_s, port,
+                                                 args.rate, log)
+                else:
+                    board = start_sim(executor, scene_path, port, args.rate, log)
+                procs.append(board.process)
                 # Tare needs its scans in the direction node, which sees them after the driver.
                 wait_for(executor, lambda: monitor.estimates >= 30, 20.0,
                          'contacts from the direction node', procs)
@@ -303,6 +332,10 @@ def main(argv=None) -> int:
                         help='time scale of the presses (0.5: twice as fast), 0.3 to 3')
     parser.add_argument('--fused', action='store_true',
                         help='estimate in the driver process (fused) instead of a direction node')
+    parser.add_argument('--board', choices=('sim', 'qemu'), default='sim',
+                        help='the skin: the simulator (sim) or the firmware on an emulated STM32 '
+                             'fed with the same scene (qemu; needs the ARM toolchain and QEMU, '
+                             'see tools/setup-firmware.sh)')
     parser.add_argument('--plain', dest='live', action='store_false',
                         help='print status lines instead of redrawing the terminal')
     parser.set_defaults(live=sys.stdout.isatty())

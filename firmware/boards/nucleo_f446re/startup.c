@@ -1,0 +1,50 @@
+/*
+ * Reset and vectors of the STM32F446RE: enable the FPU (the image uses the hard-float ABI), copy
+ * .data, clear .bss, call main. No interrupt is enabled (the firmware polls), but every vector
+ * leads somewhere defined: a fault stops the board with NUCLEO_FAULT_EXCEPTION.
+ */
+#include <stdint.h>
+#include <string.h>
+
+#include "nucleo.h"
+
+extern uint32_t _sidata, _sdata, _edata, _sbss, _ebss, _estack;
+int main(void);
+void Reset_Handler(void);
+void Default_Handler(void);
+
+typedef void (*handler_t)(void);
+
+#define IRQS 97 /* WWDG_IRQn (0) .. FMPI2C1_ER_IRQn (96) */
+
+/* Vector 1 (reset) onwards; vector 0 is the initial stack pointer. */
+struct vector_table {
+  void *initial_sp;
+  handler_t vectors[15 + IRQS];
+};
+
+#define D Default_Handler
+#define D8 D, D, D, D, D, D, D, D
+__attribute__((section(".isr_vector"), used)) const struct vector_table vector_table = {
+    .initial_sp = &_estack,
+    .vectors =
+        {
+            Reset_Handler, D, D, D, D, D, /* NMI, HardFault, MemManage, BusFault, UsageFault */
+            0, 0, 0, 0,                    /* reserved */
+            D, D, 0, D, D,                 /* SVCall, DebugMonitor, reserved, PendSV, SysTick */
+            D8, D8, D8, D8, D8, D8, D8, D8, D8, D8, D8, D8, D, /* 97 interrupts */
+        },
+};
+
+void Default_Handler(void) { nucleo_fault(NUCLEO_FAULT_EXCEPTION); }
+
+void Reset_Handler(void) {
+  SCB->CPACR |= (3u << 20) | (3u << 22); /* CP10 and CP11: full access */
+  __DSB();
+  __ISB();
+  memcpy(&_sdata, &_sidata, (size_t)((uint8_t *)&_edata - (uint8_t *)&_sdata));
+  memset(&_sbss, 0, (size_t)((uint8_t *)&_ebss - (uint8_t *)&_sbss));
+  (void)main();
+  for (;;) {
+  }
+}

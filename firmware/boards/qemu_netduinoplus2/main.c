@@ -1,0 +1,3 @@
+#include "skin_fw/fw.h"
+
+int main(void) { skin_fw_run(); }

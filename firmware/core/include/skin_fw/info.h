@@ -1,0 +1,28 @@
+/* The board-information frame of firmware/INFO_FRAME.md. */
+#ifndef SKIN_FW_INFO_H
+#define SKIN_FW_INFO_H
+
+#include <stdint.h>
+
+#include "skin_fw/board.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+#define SKIN_INFO_VERSION 1u
+#define SKIN_INFO_MAX_TEXT 200u
+#define SKIN_INFO_MAX_SIZE (SKIN_INFO_MAX_TEXT + 6u)
+
+/*
+ * Build the frame into out; return its size, or 0 when the text would exceed 200 bytes.
+ * Characters of the board name outside 0x20..0x7E, and ';' and '=', become '_'.
+ */
+uint32_t skin_info_build(uint8_t out[SKIN_INFO_MAX_SIZE], const skin_board_info_t *board,
+                         const char *fw_version, uint8_t rows, uint8_t cols, uint32_t pitch_um);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif

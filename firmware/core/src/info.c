@@ -1,0 +1,78 @@
+#include "skin_fw/info.h"
+
+#include "skin_fw/crc.h"
+
+typedef struct {
+  uint8_t *text;
+  uint32_t len;
+  int overflow;
+} text_t;
+
+static void put_char(text_t *t, char c) {
+  if (t->len >= SKIN_INFO_MAX_TEXT) {
+    t->overflow = 1;
+    return;
+  }
+  t->text[t->len++] = (uint8_t)c;
+}
+
+static void put_str(text_t *t, const char *s) {
+  for (; *s; s++) {
+    put_char(t, *s);
+  }
+}
+
+/* The text must stay parseable as key=value;...: anything that would break it becomes '_'. */
+static void put_field_value(text_t *t, const char *s) {
+  for (; *s; s++) {
+    const char c = *s;
+    put_char(t, (c < 0x20 || c > 0x7E || c == ';' || c == '=') ? '_' : c);
+  }
+}
+
+static void put_uint(text_t *t, uint32_t v) {
+  char digits[10];
+  int n = 0;
+  do {
+    digits[n++] = (char)('0' + v % 10u);
+    v /= 10u;
+  } while (v);
+  while (n) {
+    put_char(t, digits[--n]);
+  }
+}
+
+uint32_t skin_info_build(uint8_t out[SKIN_INFO_MAX_SIZE], const skin_board_info_t *board,
+                         const char *fw_version, uint8_t rows, uint8_t cols, uint32_t pitch_um) {
+  static const char hex[] = "0123456789abcdef";
+  text_t t = {out + 4, 0u, 0};
+  put_str(&t, "board=");
+  put_field_value(&t, board->name ? board->name : "");
+  put_str(&t, ";uid=");
+  for (int i = 0; i < 12; i++) {
+    put_char(&t, hex[board->uid[i] >> 4]);
+    put_char(&t, hex[board->uid[i] & 0x0Fu]);
+  }
+  put_str(&t, ";fw=");
+  put_field_value(&t, fw_version);
+  put_str(&t, ";grid=");
+  put_uint(&t, rows);
+  put_char(&t, 'x');
+  put_uint(&t, cols);
+  put_str(&t, ";pitch_um=");
+  put_uint(&t, pitch_um);
+  put_str(&t, ";rate_hz=");
+  put_uint(&t, board->scan_rate_hz);
+  if (t.overflow) {
+    return 0u;
+  }
+  out[0] = 0xA5u;
+  out[1] = 0x69u;
+  out[2] = SKIN_INFO_VERSION;
+  out[3] = (uint8_t)t.len;
+  const uint32_t body = 4u + t.len;
+  const uint16_t crc = skin_crc16(out, body);
+  out[body] = (uint8_t)crc;
+  out[body + 1u] = (uint8_t)(crc >> 8);
+  return body + 2u;
+}

@@ -1,0 +1,50 @@
+#include "skin_fw/scan.h"
+
+#include "skin_fw/board.h"
+#include "skin_fw/frame.h"
+
+void skin_scan_init(skin_scan_t *s, uint32_t *buf0, uint32_t *buf1, uint8_t rows, uint8_t cols,
+                    uint32_t settle_us) {
+  s->buf[0] = (uint8_t *)buf0;
+  s->buf[1] = (uint8_t *)buf1;
+  s->rows = rows;
+  s->cols = cols;
+  s->settle_us = settle_us;
+  s->seq = 0u;
+  s->fill = 0u;
+  skin_clock_init(&s->clock, board_time_us32());
+  s->last_time_us = 0u;
+}
+
+uint32_t skin_scan_fill(skin_scan_t *s) {
+  uint8_t *frame = s->buf[s->fill];
+  uint16_t *dst = skin_frame_counts(frame);
+  /* The protocol's time is the start of the scan. */
+  const uint64_t now = skin_clock_extend(&s->clock, board_time_us32());
+  for (uint8_t layer = 0; layer < 2u; layer++) {
+    for (uint8_t row = 0; row < s->rows; row++) {
+      board_drive_row(layer, row);
+      board_delay_us(s->settle_us);
+      /* Rows in order: a row's slack lands on the next row's first counts before they are
+       * sampled, and the last row's on the frame check before it is written. */
+      board_sample_row(dst, s->cols);
+      dst += s->cols;
+    }
+  }
+  board_release_rows();
+  s->last_time_us = now;
+  const uint32_t len = skin_frame_finish(frame, s->rows, s->cols, s->seq, now);
+  s->seq++; /* wraps 2^32 - 1 -> 0 as the protocol says */
+  return len;
+}
+
+void skin_link_send_when_idle(const uint8_t *buf, uint32_t len) {
+  while (!board_link_idle()) {
+  }
+  board_link_send(buf, len);
+}
+
+void skin_scan_send(skin_scan_t *s, uint32_t len) {
+  skin_link_send_when_idle(s->buf[s->fill], len);
+  s->fill ^= 1u;
+}

@@ -1,0 +1,85 @@
+/* The board-information frame of INFO_FRAME.md. */
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <string.h>
+
+#include <cmocka.h>
+
+#include "skin_fw/crc.h"
+#include "skin_fw/info.h"
+
+static skin_board_info_t board(const char *name) {
+  skin_board_info_t b = {.name = name, .scan_rate_hz = 1000u};
+  const uint8_t uid[12] = {0x00, 0x39, 0x00, 0x1e, 0x34, 0x38, 0x51, 0x0b, 0x34, 0x31, 0x39, 0x39};
+  memcpy(b.uid, uid, sizeof uid);
+  return b;
+}
+
+static void text_and_layout(void **state) {
+  (void)state;
+  uint8_t out[SKIN_INFO_MAX_SIZE];
+  skin_board_info_t b = board("nucleo-f446re");
+  const char *text =
+      "board=nucleo-f446re;uid=0039001e3438510b34313939;fw=0.1.0;grid=16x16;pitch_um=5000;"
+      "rate_hz=1000";
+  const uint32_t len = skin_info_build(out, &b, "0.1.0", 16, 16, 5000);
+  const uint32_t tlen = (uint32_t)strlen(text);
+  assert_int_equal(len, 6 + tlen);
+  assert_int_equal(out[0], 0xA5);
+  assert_int_equal(out[1], 0x69);
+  assert_int_equal(out[2], 1);
+  assert_int_equal(out[3], tlen);
+  assert_memory_equal(out + 4, text, tlen);
+  const uint16_t crc = skin_crc16(out, 4 + tlen);
+  assert_int_equal(out[4 + tlen], crc & 0xFF);
+  assert_int_equal(out[5 + tlen], crc >> 8);
+}
+
+static void extreme_grid_and_rate(void **state) {
+  (void)state;
+  uint8_t out[SKIN_INFO_MAX_SIZE];
+  skin_board_info_t b = board("q");
+  b.scan_rate_hz = 4294967295u;
+  const uint32_t len = skin_info_build(out, &b, "10.20.30", 128, 1, 0);
+  const char *tail = ";fw=10.20.30;grid=128x1;pitch_um=0;rate_hz=4294967295";
+  assert_memory_equal(out + len - 2 - strlen(tail), tail, strlen(tail));
+}
+
+static void name_cannot_break_the_fields(void **state) {
+  (void)state;
+  uint8_t out[SKIN_INFO_MAX_SIZE];
+  skin_board_info_t b = board("a;b=c\n\x7f");
+  const uint32_t len = skin_info_build(out, &b, "0.1.0", 1, 1, 1);
+  assert_true(len > 0);
+  assert_memory_equal(out + 4, "board=a_b_c__;uid=", 18);
+  for (uint32_t i = 4; i < len - 2; i++) {
+    assert_true(out[i] >= 0x20 && out[i] <= 0x7E);
+  }
+}
+
+static void too_long_a_text_is_refused(void **state) {
+  (void)state;
+  uint8_t out[SKIN_INFO_MAX_SIZE + 16];
+  char name[201];
+  memset(name, 'x', 200);
+  name[200] = '\0';
+  skin_board_info_t b = board(name);
+  memset(out, 0x55, sizeof out);
+  assert_int_equal(skin_info_build(out, &b, "0.1.0", 1, 1, 1), 0);
+  /* Nothing written past the frame's largest size. */
+  for (size_t i = SKIN_INFO_MAX_SIZE; i < sizeof out; i++) {
+    assert_int_equal(out[i], 0x55);
+  }
+}
+
+int main(void) {
+  const struct CMUnitTest tests[] = {
+      cmocka_unit_test(text_and_layout),
+      cmocka_unit_test(extreme_grid_and_rate),
+      cmocka_unit_test(name_cannot_break_the_fields),
+      cmocka_unit_test(too_long_a_text_is_refused),
+  };
+  return cmocka_run_group_tests(tests, NULL, NULL);
+}

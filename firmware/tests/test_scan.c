@@ -1,0 +1,161 @@
+/* The scan sequencer against the fake board (a 4 x 3 grid, settle time 13 us). */
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <string.h>
+
+#include <cmocka.h>
+
+#include "fake_board.h"
+#include "skin_fw/crc.h"
+#include "skin_fw/frame.h"
+#include "skin_fw/scan.h"
+
+#define ROWS 4
+#define COLS 3
+#define SETTLE 13u
+
+static uint32_t buf0[SKIN_FRAME_BUFFER_WORDS(ROWS, COLS)];
+static uint32_t buf1[SKIN_FRAME_BUFFER_WORDS(ROWS, COLS)];
+static skin_scan_t scan;
+
+static int setup(void **state) {
+  (void)state;
+  fake_reset();
+  memset(buf0, 0xEE, sizeof buf0);
+  memset(buf1, 0xEE, sizeof buf1);
+  skin_scan_init(&scan, buf0, buf1, ROWS, COLS, SETTLE);
+  return 0;
+}
+
+static uint32_t get_le(const uint8_t *p, int bytes) {
+  uint32_t v = 0;
+  for (int i = bytes - 1; i >= 0; i--) {
+    v = (v << 8) | p[i];
+  }
+  return v;
+}
+
+/* The frame of scan number `index` is intact and carries that scan's counts and this seq. */
+static void assert_frame(const uint8_t *f, uint32_t len, uint32_t index, uint32_t seq) {
+  assert_int_equal(len, SKIN_FRAME_SIZE(ROWS, COLS));
+  assert_int_equal(f[0], 0xA5);
+  assert_int_equal(f[1], 0x5A);
+  assert_int_equal(get_le(f + 4, 4), seq);
+  assert_int_equal(f[16], ROWS);
+  assert_int_equal(f[17], COLS);
+  assert_int_equal(get_le(f + 18, 2), skin_crc16(f, 18));
+  for (uint8_t layer = 0; layer < 2; layer++) {
+    for (uint8_t r = 0; r < ROWS; r++) {
+      for (uint8_t c = 0; c < COLS; c++) {
+        const uint8_t *p = f + 20 + 2 * ((layer * ROWS + r) * COLS + c);
+        assert_int_equal(get_le(p, 2), fake_count(index, layer, r, c));
+      }
+    }
+  }
+  assert_int_equal(get_le(f + len - 4, 4), skin_crc32(f, len - 4));
+}
+
+static void rows_are_driven_in_order_settled_sampled_then_released(void **state) {
+  (void)state;
+  (void)skin_scan_fill(&scan);
+  uint32_t e = 0;
+  for (uint8_t layer = 0; layer < 2; layer++) {
+    for (uint8_t r = 0; r < ROWS; r++) {
+      assert_int_equal(fake.events[e].kind, EV_DRIVE);
+      assert_int_equal(fake.events[e].layer, layer);
+      assert_int_equal(fake.events[e].row, r);
+      assert_int_equal(fake.events[e + 1].kind, EV_DELAY);
+      assert_int_equal(fake.events[e + 1].value, SETTLE);
+      assert_int_equal(fake.events[e + 2].kind, EV_SAMPLE);
+      assert_int_equal(fake.events[e + 2].value, COLS);
+      e += 3;
+    }
+  }
+  assert_int_equal(fake.events[e].kind, EV_RELEASE);
+  assert_int_equal(fake.n_events, e + 1);
+}
+
+static void samples_land_in_their_payload_slots(void **state) {
+  (void)state;
+  (void)skin_scan_fill(&scan);
+  const uint16_t *payload = skin_frame_counts((uint8_t *)buf0);
+  for (uint32_t k = 0; k < 2 * ROWS; k++) {
+    assert_ptr_equal(fake.events[3 * k + 2].ptr, payload + k * COLS);
+  }
+}
+
+static void slack_does_not_spoil_the_frame(void **state) {
+  (void)state;
+  /* The fake writes 0xFFFF into the slack after every row, the last one's over the check. */
+  const uint32_t len = skin_scan_fill(&scan);
+  assert_frame((const uint8_t *)buf0, len, 0, 0);
+}
+
+static void time_is_the_scan_start_extended_past_32_bits(void **state) {
+  (void)state;
+  fake.time_us32 = 0xFFFFFF00u;
+  skin_scan_init(&scan, buf0, buf1, ROWS, COLS, SETTLE);
+  uint32_t len = skin_scan_fill(&scan);
+  assert_true(get_le((uint8_t *)buf0 + 8, 4) == 0xFFFFFF00u);
+  assert_int_equal(get_le((uint8_t *)buf0 + 12, 4), 0);
+  skin_scan_send(&scan, len);
+  fake.time_us32 = 0x00000100u;
+  len = skin_scan_fill(&scan);
+  assert_int_equal(get_le((uint8_t *)buf1 + 8, 4), 0x100u);
+  assert_int_equal(get_le((uint8_t *)buf1 + 12, 4), 1);
+  assert_true(scan.last_time_us == 0x100000100ull);
+}
+
+static void seq_counts_up_and_wraps(void **state) {
+  (void)state;
+  scan.seq = 0xFFFFFFFEu;
+  const uint32_t want[] = {0xFFFFFFFEu, 0xFFFFFFFFu, 0u, 1u};
+  for (uint32_t i = 0; i < 4; i++) {
+    const uint32_t len = skin_scan_fill(&scan);
+    skin_scan_send(&scan, len);
+  }
+  fake_drain();
+  assert_int_equal(fake.n_sent, 4);
+  for (uint32_t i = 0; i < 4; i++) {
+    assert_frame(fake.sent[i], fake.sent_len[i], i, want[i]);
+  }
+}
+
+static void never_fills_the_buffer_the_link_is_sending(void **state) {
+  (void)state;
+  /* A slow DMA link: each send still runs while the next scan is made. */
+  fake.busy_polls = 50;
+  for (uint32_t i = 0; i < 7; i++) {
+    const uint32_t len = skin_scan_fill(&scan);
+    skin_scan_send(&scan, len);
+  }
+  fake_drain();
+  assert_int_equal(fake.samples_into_in_flight, 0);
+  assert_int_equal(fake.sends_while_busy, 0);
+  assert_int_equal(fake.n_sent, 7);
+  uint32_t sends = 0;
+  for (uint32_t e = 0; e < fake.n_events; e++) {
+    if (fake.events[e].kind == EV_SEND) {
+      /* The buffers take turns. */
+      assert_ptr_equal(fake.events[e].ptr, (sends % 2) ? (void *)buf1 : (void *)buf0);
+      sends++;
+    }
+  }
+  for (uint32_t i = 0; i < 7; i++) {
+    assert_frame(fake.sent[i], fake.sent_len[i], i, i);
+  }
+}
+
+int main(void) {
+  const struct CMUnitTest tests[] = {
+      cmocka_unit_test_setup(rows_are_driven_in_order_settled_sampled_then_released, setup),
+      cmocka_unit_test_setup(samples_land_in_their_payload_slots, setup),
+      cmocka_unit_test_setup(slack_does_not_spoil_the_frame, setup),
+      cmocka_unit_test_setup(time_is_the_scan_start_extended_past_32_bits, setup),
+      cmocka_unit_test_setup(seq_counts_up_and_wraps, setup),
+      cmocka_unit_test_setup(never_fills_the_buffer_the_link_is_sending, setup),
+  };
+  return cmocka_run_group_tests(tests, NULL, NULL);
+}

@@ -1,0 +1,32 @@
+"""
+The firmware's tools, built on first use.
+
+A test skips, naming the missing program, where the firmware cannot be built or emulated (a
+workstation without the ARM toolchain or QEMU; tools/setup-firmware.sh installs them, CI has
+them).
+"""
+
+import pytest
+
+from skin_driver.tools import firmware_board
+
+
+def _need(qemu: bool) -> None:
+    missing = firmware_board.missing_tools(qemu=qemu)
+    if missing:
+        pytest.skip(f'firmware: {", ".join(missing)} not installed (tools/setup-firmware.sh '
+                    'installs what is missing)')
+
+
+@pytest.fixture(scope='session')
+def frame_dump():
+    """Return the path of the host program that makes frames with the firmware core."""
+    _need(qemu=False)
+    return firmware_board.build_frame_dump()
+
+
+@pytest.fixture(scope='session')
+def qemu_image():
+    """Return the path of the emulated board's firmware image."""
+    _need(qemu=True)
+    return firmware_board.build_image()
