@@ -226,14 +226,13 @@ def test_every_section_the_code_points_to_exists():
     # Comments and messages say where to read more: README, "Real-time priority".
     cited = re.compile(r'(README(?:\.md)?|docs/\w+\.md),?\s+"([^"]+)"')
     missing = []
-    for path in list(ROOT.glob('skin_driver/**/*.py')) + list(ROOT.glob('skin_driver/**/*.yaml')) \
-            + list(ROOT.glob('config/*')) + list(ROOT.glob('launch/*.py')) \
-            + list(ROOT.glob('skin_kernel/**/*')):
-        if not path.is_file():
-            continue
+    patterns = ('skin_driver/**/*', 'config/*', 'launch/*', 'skin_kernel/**/*')
+    sources = [path for pattern in patterns for path in ROOT.glob(pattern)
+               if path.suffix in ('.py', '.yaml', '.c', '.h', '.txt')]
+    for path in sources:
         text = ' '.join(line.strip().lstrip('#').strip()
                         for line in path.read_text(errors='replace').splitlines())
-        text = text.replace("' '", '').replace('\' \'', '')
+        text = text.replace("' '", '')  # a string literal continued on the next line
         for document, heading in cited.findall(text):
             document = 'README.md' if document.startswith('README') else document
             headings = [title.strip('`') for _, _, title in
@@ -244,7 +243,8 @@ def test_every_section_the_code_points_to_exists():
 
 
 def test_readme_driver_parameters_are_the_drivers():
-    _check_parameters('### Parameters of `skin_driver`', _declared('skin_driver/ros/driver_node.py'))
+    declared = _declared('skin_driver/ros/driver_node.py')
+    _check_parameters('### Parameters of `skin_driver`', declared)
 
 
 def test_readme_direction_parameters_are_the_direction_nodes():
