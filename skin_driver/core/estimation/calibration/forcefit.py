@@ -310,8 +310,8 @@ def _bump_activation(censor: float, bump_shape: tuple, activation: float) -> flo
     pipeline fills in alike: the activation plus the bump fitted to the free taxels' force above
     it. A bump wide enough for each imprint to fit its own spread at run time
     (``imprint.MIN_FITTED_SPREAD``) is no fixed bump the fit could model: there the bump is
-    fitted to the whole force, activation included, as before (tried: without it the presses the
-    ADC cut on a 64 x 64 skin with 1.1 % crosstalk read 14 % high).
+    fitted to the whole force, activation included: taking the activation out there reads
+    presses whose taxels the ADC cut high on a fine grid with crosstalk.
     """
     return activation if censor and bump_shape[0] < MIN_FITTED_SPREAD else 0.0
 
