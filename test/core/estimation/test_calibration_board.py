@@ -1,11 +1,10 @@
 """A calibration file bound to the board that said who it is (docs/protocol.md, info frame)."""
 
 import pytest
-import yaml
-
 from skin_driver.core.estimation.calibration.calibration import (Calibration,
                                                                  CalibrationMismatch,
                                                                  SkinIdentity)
+import yaml
 
 NUCLEO_UID = '0039001e3438510b34313939'
 QEMU_UID = '0' * 24
