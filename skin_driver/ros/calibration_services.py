@@ -80,7 +80,8 @@ def declare_calibration_parameters(node) -> None:
             'at run time, it must name an existing file.')
     declare(node, 'calibration.skin_id', '',
             'Name of this skin, stored with its calibration: a file made under another name is '
-            'refused (the wire protocol carries no board identity). Empty: grid and pitch only.')
+            'refused. Empty: grid and pitch only (and the board uid, when the board says who '
+            'it is: docs/protocol.md).')
     declare(node, 'calibration.presses', 8,
             'Normal presses ~/calibrate records when the goal asks for 0.',
             low=1, high=MAX_CALIBRATION_PRESSES)
