@@ -41,9 +41,10 @@ def save(path, x_p_m, skin):
     return str(path)
 
 
-def test_another_boards_calibration_is_refused_and_the_board_is_reported(tmp_path):
+@pytest.mark.parametrize('fused', [False, True], ids=['nodes', 'fused'])
+def test_another_boards_calibration_is_refused_and_the_board_is_reported(tmp_path, fused):
     save(tmp_path / 'calibration.yaml', 4e-4, ON_NUCLEO)
-    with pipeline(tmp_path, scene([])) as (sim, driver, direction, probe, executor):
+    with pipeline(tmp_path, scene([]), fused=fused) as (sim, driver, direction, probe, executor):
         # The driver says who the board is.
         assert spin_until(executor, lambda: link_values(probe).get('board') == 'sim')
         values = link_values(probe)

@@ -40,7 +40,6 @@ from dataclasses import asdict, dataclass, replace
 import datetime
 import math
 import os
-import re
 
 import numpy as np
 import yaml
@@ -48,6 +47,7 @@ import yaml
 from ..model.forcecurve import ForceCurve
 from ..model.taxelmodel import TaxelModel
 from ...common.atomic import write_atomically
+from ...common.boardinfo import UID_PATTERN
 from ...common.validate import check_map, check_number
 
 __all__ = ['Calibration', 'CalibrationMismatch', 'SkinIdentity', 'PARTS', 'calibrate_from_shifts',
@@ -64,8 +64,6 @@ PARTS = {'offset': ('x_p_m', 'y_p_m', 'std_x_m', 'std_y_m', 'presses', 'zero_slo
          'gains': ('gains',)}
 # Pitches that differ by less than this share are the same.
 _PITCH_TOLERANCE = 1e-6
-# A board's unique ID as its information frame gives it (core.protocol.wire.BoardInfo).
-_UID = re.compile(r'[0-9a-f]{24}')
 _FIELDS = ('x_p_m', 'y_p_m', 'std_x_m', 'std_y_m', 'presses', 'compliance_m_per_n')
 _COUNTS = ('presses', 'force_presses', 'compliance_presses')
 
@@ -108,7 +106,7 @@ class SkinIdentity:
         if not isinstance(self.board_id, str):
             raise ValueError(f'skin board_id must be a string, got {self.board_id!r}')
         if not isinstance(self.board_uid, str) or (
-                self.board_uid and not _UID.fullmatch(self.board_uid)):
+                self.board_uid and not UID_PATTERN.fullmatch(self.board_uid)):
             raise ValueError(f'skin board_uid must be 24 lowercase hex digits or empty, got '
                              f'{self.board_uid!r}')
         if not isinstance(self.board_name, str):

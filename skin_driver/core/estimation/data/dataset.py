@@ -24,8 +24,8 @@ import zipfile
 import numpy as np
 
 from ...common.atomic import write_atomically
+from ...common.boardinfo import BoardInfo
 from ...common.validate import check_number, check_stack
-from ...protocol.wire import BoardInfo
 
 __all__ = ['Dataset', 'save_dataset', 'load_dataset', 'FORMAT_VERSION', 'PRESS_FIELDS']
 

@@ -20,7 +20,7 @@ from typing import Optional
 import numpy as np
 
 from .dataset import Dataset
-from ...protocol.wire import BoardInfo
+from ...common.boardinfo import BoardInfo
 
 __all__ = ['Labels', 'Recording', 'layers_of']
 
