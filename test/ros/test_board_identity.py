@@ -59,7 +59,8 @@ def test_another_boards_calibration_is_refused_and_the_board_is_reported(tmp_pat
         direction.destroy_subscription(late)
         assert BoardInfo.parse(heard[0].data) == sim.identity
         # The calibration made on the nucleo board is refused on the sim board, naming both.
-        assert spin_until(executor, lambda: 'uid' in estimation(probe)[2])
+        # (Until the board says who it is, the file is in force, with a note naming its board.)
+        assert spin_until(executor, lambda: 'this skin is on board sim' in estimation(probe)[2])
         _, level, message = estimation(probe)
         assert level == DiagnosticStatus.WARN
         assert (f'made on board nucleo-f446re uid {NUCLEO_UID}; this skin is on board sim uid '
