@@ -24,11 +24,16 @@ the skin's grid and pitch. The calibration lives in the estimator alone, which t
 to put a new one in force. A new calibration is written to the file first and put in force only
 once written; a refusal, a timeout, a cancel or a failed write leaves the calibration in force.
 
-A calibration file belongs to one skin (grid, pitch, ``calibration.skin_id``): one made for
-another skin is refused when the frames show the skin, with a WARN in the log and in the
-diagnostics, and the defaults are put in force.
+A calibration file belongs to one skin (grid, pitch, ``calibration.skin_id``) and, when made
+while the board said who it is, to that board (its unique ID): one made for another skin or
+board is refused when the frames show the skin or the board says who it is (:meth:`set_board`),
+with a WARN in the log and in the diagnostics, and the defaults are put in force; a file set at
+run time for another skin or board is refused and the calibration in force stays. A file bound
+to no board loads with a note; a file bound to a board loads with a WARN on a board that does
+not say who it is (a version-1 stream).
 """
 
+from dataclasses import replace
 import math
 import os
 import threading
@@ -55,6 +60,10 @@ MAX_WRENCH_AGE_S = 0.5
 # How often a running calibration looks for a cancel or its timeout.
 POLL_S = 0.1
 KEEP = '; the previous calibration stays in force'
+# A board says who it is once a second (docs/protocol.md); a driver that opens the port while
+# the board runs hears it up to a second after the first frame. Until this long after the
+# first frame a silent board is not yet taken for a version-1 board.
+BOARD_SILENCE_S = 2.0
 
 
 def default_calibration_file(fully_qualified_name: str) -> str:
@@ -71,7 +80,8 @@ def declare_calibration_parameters(node) -> None:
             'at run time, it must name an existing file.')
     declare(node, 'calibration.skin_id', '',
             'Name of this skin, stored with its calibration: a file made under another name is '
-            'refused (the wire protocol carries no board identity). Empty: grid and pitch only.')
+            'refused. Empty: grid and pitch only (and the board uid, when the board says who '
+            'it is: docs/protocol.md).')
     declare(node, 'calibration.presses', 8,
             'Normal presses ~/calibrate records when the goal asks for 0.',
             low=1, high=MAX_CALIBRATION_PRESSES)
@@ -114,9 +124,14 @@ class CalibrationServices:
         self._wrench = None
         self._wrench_sub = None
         self._skin = None
+        self._board = None  # the BoardInfo the board last gave, None while it said nothing
         declare_calibration_parameters(node)
         self.note = ''
         self.warning = ''
+        self.binding = ''  # how the calibration in force is bound to this skin's board
+        self._binding_warning = ''
+        self._first_frame_s = 0.0  # time.monotonic() of the first frame's check
+        self._board_awaited = False  # a bound calibration waits for a silent board to speak
         self.loaded_from = ''
         self.load()
         self._follow_wrench_topic()
@@ -166,13 +181,18 @@ class CalibrationServices:
                 cal = Calibration.load_yaml(path, self._skin)
                 self.note = f'calibration from {path}: {cal.describe()}'
             except CalibrationMismatch as err:
-                self._refuse(str(err))
+                # Another skin's or board's file: the calibration in force stays.
+                self.warning = f'calibration file refused: {err}{KEEP}'
+                self.note = self.warning
+                self._node.get_logger().warning(self.warning)
+                return
             except (OSError, ValueError) as err:
                 self._node.get_logger().error(f'ignoring calibration file {path}: {err}')
                 self.warning = f'calibration file {path} unreadable: uncalibrated'
                 self.note = self.warning
         self.loaded_from = path
         self._put_calibration(cal)
+        self._bind(cal)
 
     def _refuse(self, problem: str) -> None:
         self.warning = f'calibration refused, running uncalibrated: {problem}'
@@ -183,16 +203,64 @@ class CalibrationServices:
         """Refuse the calibration in force if it belongs to another skin than the frames'."""
         # SkinFrame carries the pitch as float32: 7 digits are all it knows (0.005, not
         # 0.004999999888).
+        board = self._board
         skin = SkinIdentity(rows, cols, float(f'{pitch_m:.7g}'),
-                            self._param('calibration.skin_id'))
+                            self._param('calibration.skin_id'), board.uid if board else '',
+                            board.board if board else '')
         if skin == self._skin:
             return
+        if self._skin is None:
+            self._first_frame_s = time.monotonic()
+        self._check(skin)
+
+    def set_board(self, info) -> None:
+        """
+        Take who the board says it is (a core.protocol.wire.BoardInfo) as this skin's board.
+
+        Once the frames have shown the skin, the calibration in force is checked against the
+        board at once: one made on another board is refused and the defaults are put in force.
+        """
+        if info == self._board:
+            return
+        self._board = info
+        if self._skin is not None:
+            self._check(replace(self._skin, board_uid=info.uid, board_name=info.board))
+
+    def _check(self, skin: SkinIdentity) -> None:
         self._skin = skin
-        problem = self._get_estimator().calibration.check_skin(skin)
+        cal = self._get_estimator().calibration
+        problem = cal.check_skin(skin)
         if problem:
             self._refuse(f'{self.loaded_from}: {problem}; calibrate this skin or reset the '
                          'calibration')
-            self._put_calibration(Calibration())
+            cal = Calibration()
+            self._put_calibration(cal)
+        self._bind(cal)
+
+    def _bind(self, cal: Calibration) -> None:
+        """Say how ``cal``, now in force, is bound to the board; a warning when unchecked."""
+        if self._skin is None:
+            return
+        warning, note = cal.board_binding(self._skin)
+        if self.warning and self.warning == self._binding_warning:
+            self.warning = ''  # said of the calibration before, or of the board before
+        self._binding_warning = ''
+        self._board_awaited = False
+        if warning and time.monotonic() - self._first_frame_s < BOARD_SILENCE_S:
+            # diagnostic_values() says it once the board has had its time to speak.
+            self._board_awaited = True
+            self.binding = 'waiting for the board to say who it is'
+            return
+        if cal.skin is None and not cal.made_utc:
+            note = ''  # nothing calibrated: nothing to bind
+        self._binding_warning = f'{self.loaded_from}: {warning}' if warning else ''
+        if warning and not self.warning:
+            self.warning = self._binding_warning
+            self._node.get_logger().warning(self.warning)
+        elif note:
+            self._node.get_logger().info(note)
+        self.binding = warning or note or (f'bound to {cal.skin.board()}' if (
+            cal.skin is not None and cal.skin.board_uid) else 'bound to no board')
 
     def _check_parameters(self, params) -> SetParametersResult:
         for p in params:
@@ -216,11 +284,15 @@ class CalibrationServices:
 
     def diagnostic_values(self) -> dict:
         """Return what is calibrated, for which skin, where it came from and when made."""
+        if self._board_awaited and time.monotonic() - self._first_frame_s >= BOARD_SILENCE_S:
+            # Called once a diagnostics period: a board silent so long is a version-1 board.
+            self._bind(self._get_estimator().calibration)
         cal = self._get_estimator().calibration
         session = self._session
         return {'calibration file': self.loaded_from, 'calibration made': cal.made_utc or '-',
                 **{f'{part} made': cal.made(part) or '-' for part in PARTS},
                 'calibration skin': cal.skin.describe() if cal.skin else '-',
+                'calibration board': self.binding or '-',
                 'calibration warning': self.warning or '-',
                 'x_p [m]': cal.x_p_m, 'y_p [m]': cal.y_p_m,
                 'compliance [m/N]': cal.compliance_m_per_n or '- (parameter compliance)',
@@ -403,6 +475,7 @@ class CalibrationServices:
         self._put_calibration(outcome.calibration)
         self.loaded_from = path
         self.warning = ''
+        self._bind(outcome.calibration)
         self.note = f'calibration from {path}: {outcome.calibration.describe()}'
         answer(result, outcome.calibration, outcome)
         result.success = True
@@ -432,6 +505,7 @@ class CalibrationServices:
             return response
         self._put_calibration(defaults)
         self.loaded_from, self.warning = path, ''
+        self._bind(defaults)
         self.note = f'calibration reset to the defaults in {path}'
         response.success = True
         response.message = self.note

@@ -1,10 +1,12 @@
 """
 Direction node: turns SkinFrame scans into contacts with location, force and direction.
 
-Subscribes to frame (skin_msgs/SkinFrame). Publishes contacts (TactileContactArray, every scan,
-empty when nothing touches), contact (the strongest TactileContact, when there is one) and wrench
-(geometry_msgs/WrenchStamped: the net wrench of all contacts about the frame origin, as a
-force/torque sensor reports it; zero when nothing touches, so a controller sees the release).
+Subscribes to frame (skin_msgs/SkinFrame) and board_info (std_msgs/String, latched: who the
+board says it is, which the calibration file is bound to). Publishes contacts
+(TactileContactArray, every scan, empty when nothing touches), contact (the strongest
+TactileContact, when there is one) and wrench (geometry_msgs/WrenchStamped: the net wrench of all
+contacts about the frame origin, as a force/torque sensor reports it; zero when nothing touches,
+so a controller sees the release).
 For rviz, at most viz_rate times a second: top/heatmap and bottom/heatmap (rgb8) and markers
 (visualization_msgs/MarkerArray). Actions: ~/calibrate, ~/calibrate_force,
 ~/calibrate_compliance, ~/calibrate_gains (skin_msgs/action). Services: ~/tare and
@@ -22,11 +24,13 @@ Either way the estimation itself is skin_driver.ros.estimation_host.
 
 import rclpy
 from rclpy.node import Node
+from skin_driver.core.protocol.wire import BoardInfo
 from skin_driver.ros import conversions, qos
 from skin_driver.ros.estimation_host import EstimationHost
 from skin_driver.ros.hot_path import TakenOnThread
 from skin_driver.ros.spin import create_or_exit, spin_nodes
 from skin_msgs.msg import SkinFrame
+from std_msgs.msg import String
 
 
 class DirectionNode(Node):
@@ -37,6 +41,8 @@ class DirectionNode(Node):
         super().__init__('skin_direction', **kwargs)
         self.host = EstimationHost(self)
         self._frames = None
+        # Fused as well: the driver's reader hands over scans, not who the board is.
+        self.create_subscription(String, 'board_info', self._on_board_info, qos.latched())
         if subscribe:
             # The scan's bytes as they arrive, read straight into the layers, where rclpy's
             # own bytes read back right: no message object per scan.
@@ -53,6 +59,14 @@ class DirectionNode(Node):
             self._frames.stop()
         self.host.close()
         return super().destroy_node()
+
+    def _on_board_info(self, msg: String) -> None:
+        try:
+            info = BoardInfo.parse(msg.data)
+        except ValueError as err:
+            self.get_logger().warning(f'board_info not understood, ignored: {err}')
+            return
+        self.host.calibration.set_board(info)
 
     def _frame_failed(self, err: Exception) -> None:
         self.get_logger().error(f'frame not estimated: {err!r}', throttle_duration_sec=5.0)

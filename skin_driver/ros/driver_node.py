@@ -6,7 +6,9 @@ reading, deactivate stops reading, cleanup forgets the configuration. With autos
 walks to active on its own, as a plain node would.
 
 Publishes (sensor-data QoS): frame (skin_msgs/SkinFrame), top/image_raw and bottom/image_raw
-(sensor_msgs/Image, mono16, raw counts). Diagnostics on /diagnostics once a second.
+(sensor_msgs/Image, mono16, raw counts). Diagnostics on /diagnostics once a second. board_info
+(std_msgs/String, latched): the board's information text (docs/protocol.md) each time the
+board says who it is for the first time or differently; nothing from a version-1 board.
 
 The reader thread does only what each scan needs: read, decode, (fused) estimate and publish
 contacts, publish frame while someone subscribes to it. Raw images are built only while someone
@@ -54,6 +56,7 @@ from skin_driver.ros.hot_path import LatestOnly, Listened
 from skin_driver.ros.params import accept_whole_numbers, declare
 from skin_driver.ros.spin import create_or_exit, spin_nodes
 from skin_msgs.msg import SkinFrame
+from std_msgs.msg import String
 
 # Every other parameter is read by configure: a change while configured would be accepted and
 # change nothing, so it is refused.
@@ -87,6 +90,7 @@ class SkinDriverNode(Node):
         self._diag_timer = self.create_timer(self._p('diagnostics_period'), self._report)
         self.estimation = None  # an EstimationHost fed on the reader thread when fused
         self._listened = self._images = None
+        self._board_pub = None
         self._system_time = not self.get_clock().ros_time_is_active
         self.add_on_set_parameters_callback(self._check_new_parameters)
         self.add_post_set_parameters_callback(self._follow_sim_time)
@@ -184,14 +188,16 @@ class SkinDriverNode(Node):
                     Image, f'{layer}/image_raw', qos.stream(), **qos.overridable())
             self._images = LatestOnly(self._publish_images, 'skin-images', self._images_failed)
         self._listened = Listened(self._pubs)
+        self._board_pub = self.create_publisher(String, 'board_info', qos.latched())
         decoder = FrameDecoder(expected_shape=(self._p('rows'), self._p('cols')))
         self._link = SerialLink(
             self._port(), self._p('baud'), decoder, self._publish_frames, self._on_link_state,
             read_timeout_s=self._p('read_timeout'), stall_timeout_s=self._p('stall_timeout'),
             backoff_min_s=self._p('reconnect_min'), backoff_max_s=self._p('reconnect_max'),
-            priority=self._p('realtime_priority'), cpu=StageCpu(READER_STAGES))
+            priority=self._p('realtime_priority'), cpu=StageCpu(READER_STAGES),
+            on_board_info=self._on_board_info)
         self._rate = diagnostics.RateMeter(time.monotonic())
-        self._health = LinkHealth((self._p('rows'), self._p('cols')))
+        self._health = LinkHealth((self._p('rows'), self._p('cols')), self._pitch)
         self.destroy_timer(self._diag_timer)
         self._diag_timer = self.create_timer(self._p('diagnostics_period'), self._report)
         self._lifecycle = 'inactive'
@@ -257,6 +263,9 @@ class SkinDriverNode(Node):
         for pub in self._pubs.values():
             self.destroy_lifecycle_publisher(pub)
         self._pubs = {}
+        if self._board_pub is not None:
+            self.destroy_publisher(self._board_pub)
+            self._board_pub = None
 
     # ---- data path (runs on the link's thread) ---------------------------------------------
     def _publish_frames(self, frames, receive_monotonic: float) -> None:
@@ -303,6 +312,11 @@ class SkinDriverNode(Node):
 
     def _images_failed(self, err: Exception) -> None:
         self.get_logger().warning(f'raw image not published: {err}', throttle_duration_sec=5.0)
+
+    def _on_board_info(self, info) -> None:
+        """Pass on who the board says it is (link thread, once per new identity)."""
+        self.get_logger().info(f'the board says it is {info.describe()}')
+        self._board_pub.publish(String(data=info.text))
 
     def _on_link_state(self, state: str, detail: str) -> None:
         self._state_detail = detail

@@ -6,7 +6,9 @@ keep last 5, so a late or slow reader costs the publisher nothing and never sees
 The direction node, which must estimate every scan, reads frame best effort too but keeps the
 last EVERY_SCAN_DEPTH: five scans are 2.5 ms at 2 kHz, shorter than a thread may wait for a core
 on a busy machine (the benchmark's split layout lost scans there at depth 5).
-The rviz topics and /diagnostics are reliable, keep last 5 and 10. Every publisher and
+The rviz topics and /diagnostics are reliable, keep last 5 and 10. board_info (what the board
+says it is, sent when it changes) is latched: reliable, transient local, keep last 1, so a node
+that starts later still hears it. Every publisher and
 subscription takes ROS 2's QoS overrides, parameters read once at start-up, e.g.
 
     --ros-args -p qos_overrides./skin/wrench.publisher.reliability:=reliable
@@ -30,6 +32,13 @@ def stream(depth: int = STREAM_DEPTH) -> QoSProfile:
     return QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=depth,
                       reliability=ReliabilityPolicy.BEST_EFFORT,
                       durability=DurabilityPolicy.VOLATILE)
+
+
+def latched() -> QoSProfile:
+    """Return the profile of a topic whose last message a late subscriber still gets."""
+    return QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=1,
+                      reliability=ReliabilityPolicy.RELIABLE,
+                      durability=DurabilityPolicy.TRANSIENT_LOCAL)
 
 
 def overridable() -> dict:

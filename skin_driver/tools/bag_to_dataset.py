@@ -9,12 +9,15 @@ Usage::
 Reads sqlite3 and MCAP bags with rosbags (a pure-Python bag reader), in the order the messages
 were recorded. The bag's own message definitions are used (rosbag2 stores them since Iron); an
 older bag without them is read with skin_msgs/msg/SkinFrame.msg of this workspace or of a
-sourced install. Then evaluate it: ``python -m skin_driver.evaluate OUT.npz``.
+sourced install. The board's identity (std_msgs/String board_info beside the frame topic, when
+the bag holds it) stamps the dataset (``board_info``). Then evaluate it: ``python -m
+skin_driver.evaluate OUT.npz``.
 """
 
 import argparse
 import os
 import pathlib
+import posixpath
 import sys
 
 from skin_driver.core.common.atomic import check_writable
@@ -23,6 +26,7 @@ from skin_driver.core.estimation.data.recording import layers_of, Recording
 from skin_driver.tools.recording_args import add_recording_arguments, labels_of
 
 SKIN_FRAME = 'skin_msgs/msg/SkinFrame'
+STRING = 'std_msgs/msg/String'
 
 
 def _skin_frame_definition() -> str:
@@ -69,8 +73,15 @@ def read_bag(path, topic: str = None, tare_frames: int = 0) -> Recording:
                     f'; it holds {", ".join(found) or "none"}' +
                     ('; choose one with --topic' if len(topics) > 1 else ''))
             chosen = [c for c in frames if c.topic == topics[0]]
+            # The driver's board_info sits beside its frame topic.
+            board_topic = posixpath.join(posixpath.dirname(topics[0]) or '/', 'board_info')
+            chosen += [c for c in reader.connections
+                       if c.topic == board_topic and c.msgtype == STRING]
             for connection, _, raw in reader.messages(connections=chosen):
                 msg = reader.deserialize(raw, connection.msgtype)
+                if connection.msgtype == STRING:
+                    recording.set_board(msg.data)
+                    continue
                 recording.add(msg.pitch, *layers_of(msg.rows, msg.cols, msg.top, msg.bottom))
     except (AnyReaderError, OSError) as err:
         raise ValueError(f'{path}: cannot read as a rosbag2 bag: {err}') from None
@@ -95,7 +106,9 @@ def main(argv=None) -> int:
     except (OSError, ValueError) as err:
         print(f'error: {err}', file=sys.stderr)
         return 2
-    print(f'wrote {data.frames} frames ({args.tare_frames} tare scans) to {args.out}')
+    board = recording.board
+    print(f'wrote {data.frames} frames ({args.tare_frames} tare scans) to {args.out}; '
+          + (f'board {board.board} uid {board.uid}' if board else 'no board identity'))
     return 0
 
 

@@ -18,7 +18,8 @@ import time
 from skin_driver.core.common.atomic import check_writable
 from skin_driver.core.estimation.data.dataset import save_dataset
 from skin_driver.core.protocol.link import default_port
-from skin_driver.core.sim.board import SimulatedSkin
+from skin_driver.core.protocol.wire import BoardInfo
+from skin_driver.core.sim.board import SIM, SimulatedSkin
 from skin_driver.core.sim.experiments import render_scene
 from skin_driver.core.sim.scene import bundled_scene_names, load_scene
 
@@ -46,6 +47,11 @@ def _parser() -> argparse.ArgumentParser:
                         help='render the scene into a dataset file and exit, without a pty')
     parser.add_argument('--samples-per-press', type=int, default=1,
                         help='dataset samples per press with --export (1)')
+    parser.add_argument('--board-info', default=SIM, metavar='TEXT',
+                        help='who the board says it is (docs/protocol.md): "sim" (default, a '
+                             'fake identity), "none" (a version-1 board) or an information text '
+                             'such as "board=nucleo-f446re;uid=<24 hex>;fw=0.1.0;grid=16x16;'
+                             'pitch_um=5000;rate_hz=100"')
     return parser
 
 
@@ -66,6 +72,12 @@ def main(argv=None) -> int:
         if args.duration is not None and not (math.isfinite(args.duration)
                                               and args.duration >= 0):
             raise ValueError(f'--duration must be a non-negative number, got {args.duration}')
+        identity = {SIM: SIM, 'none': None}.get(args.board_info)
+        if args.board_info not in (SIM, 'none'):
+            try:
+                identity = BoardInfo.parse(args.board_info)
+            except ValueError as err:
+                raise ValueError(f'--board-info: {err}') from None
         if args.export:
             data = render_scene(scene, seed=args.seed, samples_per_press=args.samples_per_press)
             save_dataset(args.export, data)
@@ -78,7 +90,7 @@ def main(argv=None) -> int:
             args.link = default_port()
             os.makedirs(os.path.dirname(args.link), exist_ok=True)
         skin = SimulatedSkin(scene, rate_hz=args.rate, link_path=args.link, seed=args.seed,
-                             loop=args.loop, replay=args.replay)
+                             loop=args.loop, replay=args.replay, identity=identity)
         port = skin.start()
     except (ValueError, OSError) as err:
         print(f'sim: error: {err}', file=sys.stderr)

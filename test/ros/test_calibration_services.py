@@ -14,6 +14,7 @@ from rclpy.qos import qos_profile_sensor_data
 from rosutil import ros_context, spin_until
 from skin_driver.core.estimation.calibration.calibration import Calibration, SkinIdentity
 from skin_driver.core.estimation.model.forcecurve import ForceCurve
+from skin_driver.core.sim.board import SIM_UID
 from skin_driver.ros.calibration_services import default_calibration_file
 from skin_driver.ros.conversions import status_values
 from skin_driver.ros.direction_node import DirectionNode
@@ -72,7 +73,8 @@ def test_force_then_compliance_through_the_actions_with_feedback_per_press(tmp_p
         assert len(compliance.fitted) == len(TILTED)
         in_force = direction.host.estimator.calibration
         assert in_force.force_curves is not None and in_force.compliance_presses == 4
-        assert in_force.skin == SkinIdentity(16, 16, 0.005)
+        # Stamped for the board that said who it is (the simulated board's fake identity).
+        assert in_force.skin == SkinIdentity(16, 16, 0.005, '', SIM_UID, 'sim')
         # What the diagnostics say is what was made, and when.
         assert spin_until(executor, lambda: latest_status(probe)[0].get(
             'calibration made') == in_force.made_utc)

@@ -26,7 +26,7 @@ def pressed():
     return (data.tare_top, data.tare_bottom, data.top[at_90], data.bottom[at_90], data.pitch_m)
 
 
-def _write_bag(path, scans, pitch_m, storage, topic='/skin/frame'):
+def _write_bag(path, scans, pitch_m, storage, topic='/skin/frame', board_info=()):
     store = get_typestore(Stores.ROS2_JAZZY)
     store.register(get_types_from_msg(
         (ROOT / 'skin_msgs' / 'msg' / 'SkinFrame.msg').read_text(), SKIN_FRAME))
@@ -35,6 +35,13 @@ def _write_bag(path, scans, pitch_m, storage, topic='/skin/frame'):
     stamp = store.types['builtin_interfaces/msg/Time']
     with Writer(path, version=9, storage_plugin=storage) as writer:
         connection = writer.add_connection(topic, SKIN_FRAME, typestore=store)
+        if board_info:
+            # As the driver publishes it: a std_msgs/String beside the frame topic.
+            info = writer.add_connection(topic.rsplit('/', 1)[0] + '/board_info',
+                                         'std_msgs/msg/String', typestore=store)
+            for i, text in enumerate(board_info):
+                writer.write(info, 999_000_000 + i, store.serialize_cdr(
+                    store.types['std_msgs/msg/String'](data=text), 'std_msgs/msg/String'))
         for i, (top, bottom) in enumerate(scans):
             msg = frame(header=header(stamp=stamp(sec=1, nanosec=i * 1000), frame_id='skin_link'),
                         sequence=i, device_time_us=i * 1000, rows=top.shape[0],
@@ -98,3 +105,32 @@ def test_a_bag_holding_only_the_tare_is_refused(tmp_path, pressed, capsys):
     assert bag_to_dataset.main([str(bag), str(tmp_path / 'x.npz'),
                                 '--tare-frames', str(len(tare_top))]) == 2
     assert 'needs more than the 20 tare scans' in capsys.readouterr().err
+
+
+NUCLEO = ('board=nucleo-f446re;uid=0039001e3438510b34313939;fw=0.1.0;grid=16x16;pitch_um=5000;'
+          'rate_hz=1000')
+
+
+def test_a_bag_with_the_board_identity_stamps_the_dataset(tmp_path, pressed, capsys):
+    tare_top, tare_bottom, top, bottom, pitch = pressed
+    bag = tmp_path / 'bag'
+    _write_bag(bag, list(zip(top, bottom)), pitch, StoragePlugin.MCAP, board_info=[NUCLEO])
+    out = tmp_path / 'seen.npz'
+    assert bag_to_dataset.main([str(bag), str(out)]) == 0
+    assert 'board nucleo-f446re uid 0039001e3438510b34313939' in capsys.readouterr().out
+    data = load_dataset(out)
+    assert data.board_info == NUCLEO and data.board().uid == '0039001e3438510b34313939'
+    # A bag of a version-1 board (no board_info) gives a dataset without it.
+    _write_bag(tmp_path / 'old', list(zip(top, bottom)), pitch, StoragePlugin.MCAP)
+    assert bag_to_dataset.main([str(tmp_path / 'old'), str(tmp_path / 'old.npz')]) == 0
+    assert load_dataset(tmp_path / 'old.npz').board_info is None
+
+
+def test_a_bag_of_two_boards_is_refused(tmp_path, pressed, capsys):
+    *_, top, bottom, pitch = pressed
+    other = NUCLEO.replace('uid=0039001e3438510b34313939', 'uid=' + '0' * 24)
+    _write_bag(tmp_path / 'bag', list(zip(top, bottom)), pitch, StoragePlugin.SQLITE3,
+               board_info=[NUCLEO, other])
+    assert bag_to_dataset.main([str(tmp_path / 'bag'), str(tmp_path / 'x.npz')]) == 2
+    assert 'now sends; the recording is of board nucleo-f446re' in capsys.readouterr().err
+    assert not (tmp_path / 'x.npz').exists()

@@ -57,6 +57,7 @@ def test_the_evaluator_refuses_bad_input_in_one_line_and_creates_nothing(
     (['--seed', '-1'], '--seed must be 0 or more'),
     (['--rate', '0'], 'rate_hz must be positive'),
     (['--duration', '-1'], '--duration must be a non-negative number'),
+    (['--board-info', 'board=x;uid=0'], '--board-info: info text lacks fw, grid, pitch_um'),
 ])
 def test_the_simulator_refuses_bad_input_in_one_line_and_creates_nothing(
         tmp_path, capsys, argv, expected):

@@ -42,3 +42,5 @@ def test_record_writes_the_live_frames_and_their_tare_as_a_dataset(tmp_path):
     assert np.isnan(data.azimuth_deg).all() and (data.alpha_deg == 0).all()
     # The press is in the recording: the scans are the skin's, not empty maps.
     assert data.top.max() > 1000
+    # Stamped with the board that said who it is (the simulated board's fake identity).
+    assert data.board() == sim.identity

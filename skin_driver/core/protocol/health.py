@@ -6,6 +6,13 @@ were dropped (sequence gaps, frames lost while the device was away) or corrupt f
 rejected (line noise); ERROR while the device is missing, or when the board sends nothing but
 frames of another grid size (the received shape is in the message). ROS-free: the driver node
 turns an assessment into a diagnostic status.
+
+The board's identity (its board information frame, docs/protocol.md) is in the values: name,
+uid, firmware, grid, pitch and scan rate, or "no board identity (version-1 stream)" while it
+has sent none. A board that says it has another grid than its frames, or another pitch than
+the driver is configured with, is a WARN for as long as it says so (the frames are still
+decoded: the board's word may be the wrong one); so are malformed info frames since the last
+assessment.
 """
 
 from __future__ import annotations
@@ -14,7 +21,7 @@ from dataclasses import dataclass
 
 from skin_driver.core.protocol.link import CONNECTED, STALLED
 
-__all__ = ['OK', 'WARN', 'ERROR', 'Health', 'LinkHealth']
+__all__ = ['OK', 'WARN', 'ERROR', 'Health', 'LinkHealth', 'NO_BOARD_IDENTITY', 'board_values']
 
 # The levels of diagnostic_msgs/DiagnosticStatus, so that a node passes them on unchanged.
 OK, WARN, ERROR = 0, 1, 2
@@ -32,9 +39,15 @@ class Health:
 class LinkHealth:
     """Assess a link against its counters at the previous assessment."""
 
-    def __init__(self, expected_shape: tuple):
-        """Assess a link that must deliver frames of ``expected_shape`` (rows, cols)."""
+    def __init__(self, expected_shape: tuple, pitch_m: float = 0.0):
+        """
+        Assess a link that must deliver frames of ``expected_shape`` (rows, cols).
+
+        ``pitch_m`` (> 0) is the pitch the driver is configured with, compared with the one the
+        board states; 0 compares none.
+        """
         self._expected = expected_shape
+        self._pitch_m = pitch_m
         self._reported = {}
 
     def assess(self, link, detail: str) -> Health:
@@ -43,7 +56,7 @@ class LinkHealth:
         state = link.state
         dropped = dec.frames_missed + stats.frames_lost_reconnecting
         totals = {'frames': dec.frames, 'dropped': dropped, 'size': dec.size_errors,
-                  'corrupt': dec.crc_errors + dec.version_errors}
+                  'corrupt': dec.crc_errors + dec.version_errors, 'info': dec.info_errors}
         new = {k: v - self._reported.get(k, 0) for k, v in totals.items()}
         self._reported = totals
         level = {CONNECTED: OK, STALLED: WARN}.get(state, ERROR)
@@ -62,6 +75,13 @@ class LinkHealth:
         if new['dropped']:
             level = max(level, WARN)
             problems.append(f"{new['dropped']} frames dropped (sequence gaps)")
+        if new['info']:
+            level = max(level, WARN)
+            problems.append(f"{new['info']} malformed board information frames rejected")
+        board_problems = self._board_problems(link.decoder)
+        if board_problems:
+            level = max(level, WARN)
+            problems += board_problems
         values = {
             'link state': state, 'frames': dec.frames, 'crc errors': dec.crc_errors,
             'size errors': dec.size_errors, 'last rejected shape': shape,
@@ -72,5 +92,39 @@ class LinkHealth:
             'connects': stats.connects, 'disconnects': stats.disconnects,
             'open failures': stats.open_failures, 'publish errors': stats.callback_errors,
             'last error': stats.last_error,
+            **board_values(link.decoder.board_info),
+            'board info frames': dec.info_frames, 'board info errors': dec.info_errors,
         }
         return Health(level, '; '.join([f'{state}: {detail}'] + problems), values)
+
+    def _board_problems(self, decoder) -> list:
+        """Return where the board's word disagrees with its frames or the configuration."""
+        info = decoder.board_info
+        if info is None:
+            return []
+        problems = []
+        rows, cols = decoder.last_shape or self._expected
+        if (info.rows, info.cols) != (rows, cols):
+            problems.append(f'board {info.board} says its grid is {info.rows}x{info.cols}, its '
+                            f'frames are {rows}x{cols}' if decoder.last_shape else
+                            f'board {info.board} says its grid is {info.rows}x{info.cols}, the '
+                            f'driver expects {rows}x{cols}')
+        # The board states whole micrometres.
+        if self._pitch_m > 0 and abs(info.pitch_m - self._pitch_m) > 0.5e-6:
+            problems.append(f'board {info.board} says its pitch is {1000 * info.pitch_m:.3f} mm, '
+                            f'the driver is configured with {1000 * self._pitch_m:.3f} mm')
+        return problems
+
+
+NO_BOARD_IDENTITY = 'no board identity (version-1 stream)'
+
+
+def board_values(info) -> dict:
+    """Return the board's identity (a BoardInfo or None) as diagnostic values."""
+    if info is None:
+        return {'board': NO_BOARD_IDENTITY}
+    return {'board': info.board, 'board uid': info.uid, 'board firmware': info.fw,
+            'board grid': f'{info.rows}x{info.cols}',
+            'board pitch [mm]': round(1000 * info.pitch_m, 3),
+            'board scan rate [Hz]': info.rate_hz,
+            **{f'board {key}': value for key, value in info.extra}}

@@ -26,7 +26,7 @@ import serial
 
 from skin_driver.core.protocol.realtime import (name_this_thread, NORMAL, schedule_this_thread,
                                                 Scheduling, StageCpu)
-from skin_driver.core.protocol.wire import Frame, FrameDecoder, MAX_SEQ
+from skin_driver.core.protocol.wire import BoardInfo, Frame, FrameDecoder, MAX_SEQ
 
 CONNECTING = 'connecting'
 CONNECTED = 'connected'
@@ -76,7 +76,9 @@ class SerialLink:
     Own the serial port, feed its bytes to a FrameDecoder and hand complete frames over.
 
     on_frames(frames, monotonic_receive_time) is called from the link's thread for every read
-    that completed at least one frame; on_state(state, detail) whenever the link changes state.
+    that completed at least one frame; on_state(state, detail) whenever the link changes state;
+    on_board_info(info) when the board says who it is (a BoardInfo, docs/protocol.md) for the
+    first time or differently, before the frames of the same read.
     With a priority (1..99) the thread asks for SCHED_FIFO at it (core.protocol.realtime);
     ``scheduling`` says what it got once start() has returned. ``cpu`` (a StageCpu with at
     least the stages read, decode and deliver) measures the thread's CPU per stage; on_frames
@@ -89,7 +91,8 @@ class SerialLink:
                  read_timeout_s: float = 0.05, stall_timeout_s: float = 1.0,
                  backoff_min_s: float = 0.1, backoff_max_s: float = 2.0,
                  open_port: Optional[Callable[..., serial.SerialBase]] = None,
-                 priority: int = 0, cpu: Optional[StageCpu] = None):
+                 priority: int = 0, cpu: Optional[StageCpu] = None,
+                 on_board_info: Callable[[BoardInfo], None] = lambda info: None):
         self.port = port
         self.cpu = cpu or StageCpu(('read', 'decode', 'deliver'))
         self.priority = priority
@@ -101,6 +104,8 @@ class SerialLink:
         self.state = STOPPED
         self._on_frames = on_frames
         self._on_state = on_state
+        self._on_board_info = on_board_info
+        self._board_info: Optional[BoardInfo] = None  # the newest one handed to on_board_info
         self._read_timeout = read_timeout_s
         self._stall_timeout = stall_timeout_s
         self._backoff = (backoff_min_s, backoff_max_s)
@@ -211,6 +216,10 @@ class SerialLink:
                 self.stats.bytes_read += len(data)
                 frames = self.decoder.feed(data)
                 cpu.mark('decode')
+                if self.decoder.board_info is not self._board_info:
+                    # The decoder keeps the same object while the board repeats itself.
+                    self._board_info = self.decoder.board_info
+                    self._notify(self._on_board_info, self._board_info)
                 if frames:
                     cpu.frames(len(frames))
                     self._follow_sequence(frames, now)

@@ -20,6 +20,11 @@ Counts are 12-bit, so the high byte of every count is 0x00..0x0F.  Neither sync 
 range, hence the marker never appears inside a payload, only in a header or a CRC.  The header
 check lets the decoder reject a false marker before waiting for the payload its bogus header
 announces, so it resynchronises within the next intact frame.
+
+Between two frames the board may send a board information frame (its identity, see
+:class:`BoardInfo`): marker 0xA5 0x69, info version (1), text length L (1..200), L bytes of
+ASCII text ``key=value;...``, CRC-16/CCITT-FALSE of all bytes before it.  A host that only knows
+version 1 finds no 0xA5 0x5A in it and discards it as junk between frames.
 """
 
 from __future__ import annotations
@@ -30,6 +35,8 @@ import struct
 import zlib
 
 import numpy as np
+
+from ..common.boardinfo import BoardInfo, INFO_MAX_TEXT
 
 PROTOCOL_VERSION = 1
 SYNC = b'\xa5\x5a'
@@ -45,6 +52,12 @@ MAX_DEVICE_TIME_US = 2 ** 64 - 1
 MIN_SCAN_US = 1
 _CRC = struct.Struct('<I')
 _COUNTS = np.dtype('<u2')
+
+# Board information frame: marker, info version, text length, text, CRC-16 of all before it.
+INFO_SYNC = b'\xa5\x69'
+INFO_VERSION = 1
+INFO_HEAD_SIZE = 4
+INFO_MAX_SIZE = INFO_HEAD_SIZE + INFO_MAX_TEXT + HEADER_CHECK.size
 
 
 def header_crc(data) -> int:
@@ -143,18 +156,35 @@ def frame_with_counts(seq: int, device_time_us: int, rows: int, cols: int,
     return bytes(body)
 
 
+def encode_info(info) -> bytes:
+    """
+    Return the board information frame of ``info`` (a BoardInfo, or its text as str or bytes).
+
+    Text is sent as given (a test may send text no host accepts); ValueError when it is not 1..200
+    bytes or, as str, not ASCII.
+    """
+    text = info.text if isinstance(info, BoardInfo) else info
+    raw = text.encode('ascii') if isinstance(text, str) else bytes(text)
+    if not 1 <= len(raw) <= INFO_MAX_TEXT:
+        raise ValueError(f'info text must be 1..{INFO_MAX_TEXT} bytes, got {len(raw)}')
+    body = INFO_SYNC + bytes([INFO_VERSION, len(raw)]) + raw
+    return body + HEADER_CHECK.pack(header_crc(body))
+
+
 @dataclass
 class DecoderStats:
     """Counters of what the decoder accepted and rejected since it was created."""
 
     frames: int = 0
-    crc_errors: int = 0       # header or frame CRC mismatch, or a count above 4095
+    crc_errors: int = 0       # header, frame or info CRC mismatch, or a count above 4095
     size_errors: int = 0      # rows/cols of 0, above the maximum or unlike expected_shape
-    version_errors: int = 0   # unknown protocol version or non-zero flags
+    version_errors: int = 0   # unknown protocol or info version, or non-zero flags
     bytes_discarded: int = 0  # bytes that were not part of an accepted frame
     seq_gaps: int = 0         # times the sequence number jumped forwards by more than one
     frames_missed: int = 0    # frames skipped by those jumps
     seq_implausible: int = 0  # forward jumps the device clock cannot explain (corrupt seq)
+    info_frames: int = 0      # board information frames accepted
+    info_errors: int = 0      # info frames of a length outside 1..200 or text that does not parse
 
 
 class FrameDecoder:
@@ -164,6 +194,10 @@ class FrameDecoder:
     After garbage it resynchronises on the next sync marker; a rejected candidate resumes the
     search at the byte after its marker, so an intact frame that starts inside the candidate's
     bytes is still found.  The buffer holds less than two maximum-size frames at any time.
+
+    Board information frames between the frames are checked and parsed, never returned:
+    ``board_info`` is the newest one accepted (None while the stream has sent none, as a
+    version-1 board never does).
     """
 
     def __init__(self, max_rows: int = 128, max_cols: int = 128,
@@ -185,12 +219,18 @@ class FrameDecoder:
             self._max_frame = frame_size(rows, cols)
         else:
             self._max_frame = frame_size(self._max_rows, self._max_cols)
+        # An info frame may be longer than the smallest frames (206 bytes against 28 for 1 x 1).
+        self._max_frame = max(self._max_frame, INFO_MAX_SIZE)
         self._expected = expected_shape
         self._buf = bytearray()
         self._last: tuple[int, int] | None = None  # (seq, device time) of the newest frame
         self.stats = DecoderStats()
         # (rows, cols) of the newest frame refused for its size, for diagnostics.
         self.last_rejected_shape: tuple[int, int] | None = None
+        # (rows, cols) of the newest frame accepted, to compare with the board's own word.
+        self.last_shape: tuple[int, int] | None = None
+        self.board_info: BoardInfo | None = None
+        self._info_text = b''  # the text of board_info as sent: a repeat is not parsed again
 
     @property
     def max_buffer_bytes(self) -> int:
@@ -203,7 +243,13 @@ class FrameDecoder:
         return len(self._buf)
 
     def reset(self) -> None:
-        """Drop buffered bytes and forget the last sequence number; keep the statistics."""
+        """
+        Drop buffered bytes and forget the last sequence number; keep the statistics.
+
+        ``board_info`` stays: a board that boots announces itself before its first frame and a
+        running one within a second, so a stale identity lasts no longer than a missing one
+        would, and a reconnect to the same board does not make it anonymous meanwhile.
+        """
         self.stats.bytes_discarded += len(self._buf)
         self._buf = bytearray()
         self._last = None
@@ -246,8 +292,22 @@ class FrameDecoder:
         stats = self.stats
         pos = 0
         end = len(buf)
+        # Where the next info marker is: one search per info frame, not one per frame (-1: none
+        # up to the end, which does not move within this call).
+        info_at = buf.find(INFO_SYNC)
         while True:
             found = buf.find(SYNC, pos)
+            if info_at >= 0:
+                if info_at < pos:
+                    info_at = buf.find(INFO_SYNC, pos)
+                if 0 <= info_at and (found < 0 or info_at < found):
+                    stats.bytes_discarded += info_at - pos
+                    pos = info_at
+                    taken = self._info(buf, view, pos, end)
+                    if taken < 0:
+                        break
+                    pos += taken
+                    continue
             if found < 0:
                 # Keep a trailing first sync byte: its partner may arrive with the next chunk.
                 keep = 1 if end > pos and buf[end - 1] == SYNC[0] else 0
@@ -301,10 +361,50 @@ class FrameDecoder:
                 counts.flags.writeable = False
             layers = counts.reshape(2, rows, cols)
             self._count_seq(seq, time_us)
+            self.last_shape = (rows, cols)
             frames.append(Frame(seq, time_us, rows, cols, layers[0], layers[1]))
             stats.frames += 1
             pos += size
         return pos
+
+    def _info(self, buf, view: memoryview, pos: int, end: int) -> int:
+        """
+        Check the info frame candidate at pos; return the bytes it uses up, -1 to wait for more.
+
+        A rejected candidate uses up its marker alone, as a rejected frame does.
+        """
+        stats = self.stats
+        if end - pos < INFO_HEAD_SIZE:
+            return -1
+        version, length = buf[pos + 2], buf[pos + 3]
+        if version != INFO_VERSION:
+            stats.version_errors += 1
+        elif not 1 <= length <= INFO_MAX_TEXT:
+            stats.info_errors += 1
+        else:
+            size = INFO_HEAD_SIZE + length + HEADER_CHECK.size
+            if end - pos < size:
+                return -1
+            crc_at = pos + size - HEADER_CHECK.size
+            (check,) = HEADER_CHECK.unpack_from(buf, crc_at)
+            if header_crc(view[pos:crc_at]) != check:
+                stats.crc_errors += 1
+            else:
+                text = bytes(view[pos + INFO_HEAD_SIZE:crc_at])
+                if text != self._info_text:
+                    try:
+                        info = BoardInfo.parse(text)
+                    except ValueError:
+                        info = None
+                    if info is None:
+                        stats.info_errors += 1
+                        stats.bytes_discarded += len(INFO_SYNC)
+                        return len(INFO_SYNC)
+                    self.board_info, self._info_text = info, text
+                stats.info_frames += 1
+                return size
+        stats.bytes_discarded += len(INFO_SYNC)
+        return len(INFO_SYNC)
 
     def _shape_ok(self, rows: int, cols: int) -> bool:
         if self._expected is not None:

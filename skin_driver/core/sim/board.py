@@ -13,6 +13,11 @@ times, so that it costs next to nothing per scan (the benchmark's board shares t
 measures).  Every frame that leaves the board has exactly one fate the
 board can name: intact, damaged by the line, of the wrong size, or still unread in the pty when
 the cable was pulled (see the frames_* counters).
+
+Like the firmware, the board says who it is (docs/protocol.md, board information frame): once
+before its first frame and then once a second of device time, between two frames. By default
+it is a fixed fake board (:func:`sim_board_info`: board ``sim``, the scene's grid and pitch);
+``identity`` names another, or None for a version-1 board that sends no identity.
 """
 
 from __future__ import annotations
@@ -31,12 +36,26 @@ from .line import damage
 from .pty_line import PtyLine
 from .scene import load_scene, Scene
 from ..common.validate import check_int, check_number
-from ..protocol.wire import encode_counts, encode_frame, frame_size, frame_with_counts, MAX_SEQ
+from ..protocol.wire import (BoardInfo, encode_counts, encode_frame, encode_info, frame_size,
+                             frame_with_counts, MAX_SEQ)
 
 # Below this period frames are written in batches: one wake-up per BATCH_S instead of per frame.
 BATCH_S = 0.002
 # Further behind than this (a stalled process) the clock skips frames instead of bursting them.
 MAX_LAG_S = 0.5
+# The simulated board's unique ID: 'SIM' in ASCII, then zeros (a real STM32's is never so).
+SIM_UID = '53494d000000000000000000'
+SIM_FIRMWARE = '0.1.0'
+# Microseconds of device time between two board information frames.
+INFO_PERIOD_US = 1_000_000
+# Default of SimulatedSkin's identity: the simulated board's own.
+SIM = 'sim'
+
+
+def sim_board_info(rows: int, cols: int, pitch_m: float, rate_hz: float) -> BoardInfo:
+    """Return the identity the simulated board gives for this grid, pitch and scan rate."""
+    return BoardInfo('sim', SIM_UID, SIM_FIRMWARE, rows, cols, pitch_m,
+                     max(1, int(round(rate_hz))))
 
 
 @dataclass(frozen=True)
@@ -79,11 +98,13 @@ class SimulatedSkin:
 
     def __init__(self, scene, rate_hz: float = 100.0, link_path: str | None = None,
                  seed: int = 0, loop: bool = False, truth_capacity: int = 10_000,
-                 replay: bool = False):
+                 replay: bool = False, identity=SIM):
         """
         Prepare a board for a Scene (or a bundled scene name or YAML path); start() runs it.
 
         replay (looped boards only): render one pass of the scene at start() and replay it.
+        identity: the BoardInfo the board sends, ``SIM`` (default) the simulated board's, None
+        none (a version-1 board).
         """
         self.scene = _as_scene(scene)
         self.rate_hz = check_number(rate_hz, 'rate_hz', positive=True, high=20_000)
@@ -110,6 +131,15 @@ class SimulatedSkin:
         self._noise = 0.0
         self._noise_rng = np.random.default_rng(seed + 1)
         self._wire_shape: tuple | None = None
+        model = self.scene.model
+        if isinstance(identity, str) and identity == SIM:
+            identity = sim_board_info(model.rows, model.cols, model.pitch_m, self.rate_hz)
+        if identity is not None and not isinstance(identity, BoardInfo):
+            raise ValueError(f'identity must be a BoardInfo, {SIM!r} or None, got {identity!r}')
+        self.identity = identity
+        self._info = encode_info(identity) if identity is not None else b''
+        self._info_due_us = 0  # device time from which the next info frame is due
+        self.info_frames_sent = 0  # info frames queued on the line
         self._not_queued = 0          # frames scanned while unplugged, the queue full, or lagging
         self.seq_skipped = 0          # sequence numbers skipped by skip_sequence()
 
@@ -307,6 +337,9 @@ class SimulatedSkin:
             raw = frame_with_counts(seq, device_time_us, *scan.counts)
         truth = FrameTruth(seq, device_time_us, top, bottom, scan.presses, scan.scene_time_s,
                            scan.press_indices)
+        info = b''
+        if self._info and device_time_us >= self._info_due_us:
+            info = self._info
         junk, wire, damaged = b'', raw, False
         if self._noise and self._noise_rng.random() < self._noise:
             wire = damage(raw, self._noise_rng)
@@ -317,8 +350,13 @@ class SimulatedSkin:
                                             dtype=np.uint8).tobytes()
         with self._lock:
             self._remember(truth)
-        if not self._line.queue(wire, seq, damaged, wrong_shape, junk):
+        # The info frame goes ahead of the frame, before any junk: it is the board's, the junk
+        # the line's.
+        if not self._line.queue(wire, seq, damaged, wrong_shape, info + junk):
             self._not_queued += 1
+        elif info:
+            self.info_frames_sent += 1
+            self._info_due_us = (device_time_us // INFO_PERIOD_US + 1) * INFO_PERIOD_US
 
     def _render(self, t: float) -> _Scan:
         """Render the scan of scene time t."""

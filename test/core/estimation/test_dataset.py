@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 from skin_driver.core.estimation.data.dataset import Dataset, load_dataset, save_dataset
+from skin_driver.core.estimation.data.recording import Recording
 from skin_driver.core.sim.experiments import make_random_experiment, make_seed_experiment
 from skin_driver.core.sim.physics import SkinModel
 
@@ -106,3 +107,52 @@ def test_format_1_loads_and_format_2_keeps_the_split(tmp_path):
     np.savez(tmp_path / 'v3.npz', format_version=np.int64(3), **small())
     with pytest.raises(ValueError, match='unsupported format_version 3'):
         load_dataset(tmp_path / 'v3.npz')
+
+
+BOARD = ('board=nucleo-f446re;uid=0039001e3438510b34313939;fw=0.1.0;grid=2x2;pitch_um=5000;'
+         'rate_hz=1000;adc=3')
+
+
+def _tiny(**extra):
+    maps = np.zeros((3, 2, 2), np.uint16)
+    return Dataset(top=maps, bottom=maps, pitch_m=0.005, azimuth_deg=np.full(3, np.nan),
+                   alpha_deg=np.zeros(3), **extra)
+
+
+def test_the_board_identity_round_trips_and_old_files_have_none(tmp_path):
+    data = _tiny(board_info=BOARD)
+    save_dataset(tmp_path / 'b.npz', data)
+    back = load_dataset(tmp_path / 'b.npz')
+    assert back.board_info == BOARD
+    assert back.board().uid == '0039001e3438510b34313939' and back.board().extra == (('adc', '3'),)
+    assert back.select([0, 2]).board_info == BOARD
+    save_dataset(tmp_path / 'none.npz', _tiny())
+    assert load_dataset(tmp_path / 'none.npz').board_info is None
+    assert load_dataset(tmp_path / 'none.npz').board() is None
+    with np.load(tmp_path / 'none.npz') as npz:
+        assert 'board_info' not in npz.files
+
+
+def test_a_malformed_board_identity_is_refused(tmp_path):
+    with pytest.raises(ValueError, match='board_info is not a board information text'):
+        _tiny(board_info='board=x')
+    maps = np.zeros((1, 2, 2), np.uint16)
+    arrays = {'top': maps, 'bottom': maps, 'pitch_m': 0.005, 'azimuth_deg': [np.nan],
+              'alpha_deg': [0.0], 'board_info': np.array([1, 2])}
+    np.savez(tmp_path / 'bad.npz', **arrays)
+    with pytest.raises(ValueError, match='board_info must be one string'):
+        load_dataset(tmp_path / 'bad.npz')
+
+
+def test_a_recording_is_stamped_with_one_board():
+    recording = Recording()
+    recording.add(0.005, np.zeros((2, 2), np.uint16), np.zeros((2, 2), np.uint16))
+    assert recording.dataset().board_info is None
+    recording.set_board(BOARD)
+    recording.set_board(BOARD.replace('fw=0.1.0', 'fw=0.2.0'))  # the same board, updated
+    assert recording.dataset().board().fw == '0.2.0'
+    with pytest.raises(ValueError, match='uid 000000000000000000000000 now sends; the '
+                                         'recording is of board nucleo-f446re'):
+        recording.set_board(BOARD.replace('0039001e3438510b34313939', '0' * 24))
+    with pytest.raises(ValueError, match='lacks'):
+        recording.set_board('board=x')

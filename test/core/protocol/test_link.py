@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 import serial
 from skin_driver.core.protocol.link import reader, SerialLink, STALLED
-from skin_driver.core.protocol.wire import encode_frame, FrameDecoder
+from skin_driver.core.protocol.wire import BoardInfo, encode_frame, encode_info, FrameDecoder
 
 # Generous: only bounds a hung test on a loaded machine.
 WAIT_S = 10.0
@@ -93,3 +93,39 @@ def test_a_pyserial_url_without_a_descriptor_keeps_pyserials_read():
         assert read() + read() == b'\xa5\x5a\x01'
     finally:
         port.close()
+
+
+class AnnouncingPort(FakePort):
+    """A board that sends its identity ahead of every frame, another one from frame 6 on."""
+
+    def __init__(self, infos):
+        super().__init__((16, 16))
+        self._infos = infos
+
+    def read(self, size):
+        info = self._infos[0 if self._seq < 5 else 1]
+        return encode_info(info) + super().read(size)
+
+
+def test_the_link_hands_over_each_new_identity_once_before_its_frames():
+    first = BoardInfo('nucleo-f446re', '0039001e3438510b34313939', '0.1.0', 16, 16, 0.005, 1000)
+    second = BoardInfo('qemu', '0' * 24, '0.1.0', 16, 16, 0.005, 1000)
+    events = []
+    done = threading.Event()
+
+    def on_frames(frames, now):
+        events.append(('frames', frames[0].seq))
+        if frames[0].seq >= 12:
+            done.set()
+    link = SerialLink('fake', 921600, FrameDecoder(expected_shape=(16, 16)), on_frames,
+                      open_port=lambda: AnnouncingPort([first, second]),
+                      on_board_info=lambda info: events.append(('info', info)))
+    link.start()
+    try:
+        assert done.wait(WAIT_S), 'the link never delivered 12 frames'
+    finally:
+        link.stop()
+    infos = [(i, e[1]) for i, e in enumerate(events) if e[0] == 'info']
+    assert [info for _, info in infos] == [first, second]
+    assert infos[0][0] == 0  # before the first frame
+    assert events[infos[1][0] + 1] == ('frames', 6)  # before the first frame it came with

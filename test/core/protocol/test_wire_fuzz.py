@@ -18,10 +18,13 @@ import zlib
 from hypothesis import given, settings, strategies as st
 import numpy as np
 import pytest
-from skin_driver.core.protocol.wire import encode_frame, frame_size, FrameDecoder, SYNC
+from skin_driver.core.protocol.wire import (BoardInfo, encode_frame, encode_info, frame_size,
+                                            FrameDecoder, SYNC)
 import yaml
 
 CORPUS = pathlib.Path(__file__).resolve().parent / 'corpus'
+# The board the corpus's info frames name.
+INFO = BoardInfo('corpus', '0039001e3438510b34313939', '0.1.0', 2, 3, 0.005, 1000)
 MAX_SHAPE = 16
 # Bytes that settle a candidate still waiting for its payload at the end of a stream.
 SETTLE = b'\x00' * frame_size(MAX_SHAPE, MAX_SHAPE)
@@ -49,6 +52,11 @@ def reseal(raw):
     raw = bytearray(reseal_header(raw))
     raw[-4:] = struct.pack('<I', zlib.crc32(bytes(raw[:-4])))
     return bytes(raw)
+
+
+def reseal_info(raw):
+    """Recompute the CRC of an edited board information frame."""
+    return raw[:-2] + struct.pack('<H', binascii.crc_hqx(raw[:-2], 0xFFFF))
 
 
 def mutate(raw, kind, rng):
@@ -187,6 +195,8 @@ def _corpus_cases():
         return bytes(data)
 
     head = SYNC + bytes([1, 0]) + bytes(12)
+    info_text = INFO.text.encode('ascii')
+    info = encode_info(INFO)
     cases = {
         'intact_three_frames': (f[0] + f[1] + f[2], [0, 1, 2], {}),
         'bit_flip_in_payload': (f[0] + edit(f[1], 25, f[1][25] ^ 4) + f[2], [0, 2],
@@ -227,13 +237,37 @@ def _corpus_cases():
                                      + reference_frame(2), [0, 5, 2],
                                      {'seq_gaps': 1, 'frames_missed': 4}),
         'trailing_first_sync_byte': (f[0] + SYNC[:1], [0], {}),
+        # Board information frames (docs/protocol.md): never returned, counted, the newest kept.
+        'info_frame_intact': (info + f[0] + f[1], [0, 1], {'info_frames': 1}),
+        'info_between_frames': (info + f[0] + info + f[1] + info + f[2], [0, 1, 2],
+                                {'info_frames': 3}),
+        'info_with_bad_crc': (f[0] + edit(info, len(info) - 1, info[-1] ^ 0x10) + f[1],
+                              [0, 1], {'crc_errors': 1}),
+        # Replayed in 7-byte feeds as every stream is: 3 bytes ahead put both ends of the info
+        # frame (92 bytes) inside a feed, so each feed ends mid-frame.
+        'info_split_across_feeds': (b'\x00' * 3 + info + f[0], [0], {'info_frames': 1}),
+        'info_text_with_a_non_ascii_byte': (
+            f[0] + encode_info(info_text.replace(b'board=corpus', b'board=corp\xfcs')) + f[1],
+            [0, 1], {'info_errors': 1}),
+        'info_wrong_version_valid_crc': (f[0] + reseal_info(edit(info, 2, 2)) + f[1], [0, 1],
+                                         {'version_errors': 1}),
+        # The board's word on its grid is reported, not enforced by the decoder.
+        'info_grid_disagrees_with_frames': (encode_info(info_text.replace(b'2x3', b'16x16'))
+                                            + f[0] + f[1], [0, 1], {'info_frames': 1}),
     }
     for name, (stream, seqs, counters) in cases.items():
         if seqs == [0, 2]:
             # The damaged frame 1 shows as a sequence gap.
             counters.update(seq_gaps=1, frames_missed=1)
-    return {name: (stream, {'frames': seqs, 'counters': counters})
-            for name, (stream, seqs, counters) in cases.items()}
+    out = {}
+    for name, (stream, seqs, counters) in cases.items():
+        expected = {'frames': seqs, 'counters': counters}
+        board = FrameDecoder(max_rows=MAX_SHAPE, max_cols=MAX_SHAPE)
+        board.feed(stream)
+        if name.startswith('info_') and board.board_info is not None:
+            expected['board_info'] = board.board_info.text
+        out[name] = (stream, expected)
+    return out
 
 
 def write_corpus():
@@ -244,8 +278,9 @@ def write_corpus():
         (CORPUS / f'{name}.bin').write_bytes(stream)
         expected[name] = outcome
     header = ('# Expected outcome of replaying each <name>.bin through FrameDecoder(max_rows=16,\n'
-              '# max_cols=16): the accepted sequence numbers in order, and the decoder counters\n'
-              '# that must hold exactly (null: not checked). Written by test_wire_fuzz.py.\n')
+              '# max_cols=16): the accepted sequence numbers in order, the decoder counters\n'
+              '# that must hold exactly (null: not checked) and the text of the newest board\n'
+              '# info (absent: none). Written by test_wire_fuzz.py.\n')
     (CORPUS / 'expected.yaml').write_text(header + yaml.safe_dump(expected, sort_keys=True))
 
 
@@ -276,8 +311,11 @@ def test_corpus_replays_to_its_expected_outcome(name, expected, chunk):
     stats = decoder.stats
     counters = expected['counters']
     if counters is not None:
-        for key in ('crc_errors', 'size_errors', 'version_errors', 'seq_gaps', 'frames_missed'):
+        for key in ('crc_errors', 'size_errors', 'version_errors', 'seq_gaps', 'frames_missed',
+                    'info_frames', 'info_errors'):
             assert getattr(stats, key) == counters.get(key, 0), key
+    info = decoder.board_info
+    assert (info.text if info else None) == expected.get('board_info')
 
 
 if __name__ == '__main__':

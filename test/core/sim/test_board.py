@@ -1,6 +1,7 @@
 """Tests of the simulated skin on a real pseudo-terminal, read with pyserial and the decoder."""
 
 import os
+import select
 import struct
 import time
 
@@ -8,8 +9,9 @@ import numpy as np
 from port_reader import Reader
 import pytest
 
-from skin_driver.core.protocol.wire import encode_frame, header_crc, SYNC
-from skin_driver.core.sim.board import SimulatedSkin
+from skin_driver.core.protocol.wire import (BoardInfo, encode_frame, encode_info, FrameDecoder,
+                                            header_crc, SYNC)
+from skin_driver.core.sim.board import sim_board_info, SIM_UID, SimulatedSkin
 from skin_driver.core.sim.scene import scene_from_dict
 
 RATE_HZ = 200.0
@@ -177,3 +179,58 @@ def test_a_replaying_board_sends_its_first_pass_again_under_new_numbers():
 def test_only_a_looped_board_replays():
     with pytest.raises(ValueError, match='replay needs loop'):
         SimulatedSkin('seed', replay=True)
+
+
+def test_the_board_says_who_it_is_before_its_first_frame_then_once_a_second():
+    sim = SimulatedSkin(held_press_scene(), rate_hz=RATE_HZ, seed=3)
+    # A plain open: pyserial's would flush what the board wrote before it.
+    port = os.open(sim.start(), os.O_RDONLY | os.O_NOCTTY)
+    decoder, frames, first = FrameDecoder(expected_shape=(16, 16)), [], b''
+    try:
+        deadline = time.monotonic() + 10.0
+        while not frames or frames[-1].device_time_us < 1_200_000:
+            assert time.monotonic() < deadline, 'timed out waiting for frames'
+            if select.select([port], [], [], 0.02)[0]:
+                data = os.read(port, 4096)
+                first = first or data
+                frames += decoder.feed(data)
+    finally:
+        os.close(port)
+        sim.stop()
+    info = sim_board_info(16, 16, 0.005, RATE_HZ)
+    assert (info.board, info.uid, info.rate_hz) == ('sim', SIM_UID, RATE_HZ)
+    assert sim.identity == info
+    assert first.startswith(encode_info(info))
+    assert decoder.board_info == info
+    assert frames[0].seq == 0 and all(b.seq == a.seq + 1 for a, b in zip(frames, frames[1:]))
+    # One before the first frame, one ahead of the first frame of each later second (the next
+    # one may already be read, ahead of a frame that is not).
+    seconds = len({f.device_time_us // 1_000_000 for f in frames})
+    assert seconds == 2
+    assert decoder.stats.info_frames in (seconds, seconds + 1)
+    assert decoder.stats.bytes_discarded == decoder.stats.crc_errors == 0
+
+
+def test_a_version_1_board_sends_no_identity_and_another_its_own():
+    frames = frames_of(SimulatedSkin(held_press_scene(), rate_hz=RATE_HZ, identity=None), 5)
+    assert len(frames) >= 5
+    qemu = BoardInfo('qemu', '0' * 24, '0.1.0', 16, 16, 0.005, 1000)
+    sim = SimulatedSkin(held_press_scene(), rate_hz=RATE_HZ, identity=qemu)
+    reader = Reader(sim.start())
+    try:
+        # pyserial's open may flush the first one: the next comes a second of device time later.
+        reader.read_until(lambda: reader.decoder.board_info is not None)
+    finally:
+        reader.close()
+        sim.stop()
+    assert reader.decoder.board_info == qemu
+    v1 = SimulatedSkin(held_press_scene(), rate_hz=RATE_HZ, identity=None)
+    reader = Reader(v1.start())
+    try:
+        reader.read_frames(5)
+    finally:
+        reader.close()
+        v1.stop()
+    assert reader.decoder.board_info is None and v1.info_frames_sent == 0
+    with pytest.raises(ValueError, match='identity'):
+        SimulatedSkin('seed', identity='nucleo')

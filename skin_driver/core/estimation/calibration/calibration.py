@@ -21,12 +21,17 @@ force calibration's presses when the estimator in use fits one (``model_fit``, :
 ``leak_share`` the passive matrix's leak along a line, as a share of the line's load, that the
 same presses showed (:mod:`crosstalk`; 0 where none did), which a plate for the gains needs.
 
-A calibration knows its skin (:class:`SkinIdentity`: grid, pitch and, where there is one, the
-board's identity) and when each part was made (offset, force, compliance, gains). Loaded for
-another skin, it is refused (:class:`CalibrationMismatch`): applying a calibration to the wrong
-skin gives wrong forces and directions without a word. The file is versioned YAML: version 3
-adds the skin and the time of each part, version 2 the curves, the gains and ``made_utc``;
-versions 1 and 2 still load (they name no skin, so nothing is checked).
+A calibration knows its skin (:class:`SkinIdentity`: grid, pitch, the name the user gives it
+and, when the board said who it is, the board's unique ID and name) and when each part was made
+(offset, force, compliance, gains). Loaded for another skin, it is refused
+(:class:`CalibrationMismatch`): applying a calibration to the wrong skin gives wrong forces and
+directions without a word. A calibration made on one board is refused on a board with another
+unique ID; one bound to no board (made before boards said who they are, or on a version-1
+stream) loads anywhere its grid fits, and one bound to a board loads on a board that does not
+say who it is (:meth:`Calibration.board_binding` says which, for a note or a warning). The file
+is versioned YAML: version 3 adds the skin and the time of each part (its skin may carry
+``board_uid`` and ``board_name``, which older readers ignore), version 2 the curves, the gains
+and ``made_utc``; versions 1 and 2 still load (they name no skin, so nothing is checked).
 """
 
 from __future__ import annotations
@@ -42,6 +47,7 @@ import yaml
 from ..model.forcecurve import ForceCurve
 from ..model.taxelmodel import TaxelModel
 from ...common.atomic import write_atomically
+from ...common.boardinfo import UID_PATTERN
 from ...common.validate import check_map, check_number
 
 __all__ = ['Calibration', 'CalibrationMismatch', 'SkinIdentity', 'PARTS', 'calibrate_from_shifts',
@@ -76,14 +82,19 @@ class SkinIdentity:
     """
     The skin a calibration belongs to: grid, pitch and the board's identity.
 
-    The wire protocol (version 1) carries no board identity, so ``board_id`` is what the user
-    names the skin ('' when unnamed: then only the grid and pitch are checked).
+    ``board_id`` is what the user names the skin ('' when unnamed). ``board_uid`` (24 lowercase
+    hex digits) and ``board_name`` are what the board itself said in its board information
+    frame (docs/protocol.md; '' when it said nothing, as a version-1 board never does). Two
+    skins differ when their grid or pitch differ, or both have a name or both a uid and those
+    differ.
     """
 
     rows: int
     cols: int
     pitch_m: float
     board_id: str = ''
+    board_uid: str = ''
+    board_name: str = ''
 
     def __post_init__(self):
         """Reject a grid, pitch or board identity that cannot be a skin's."""
@@ -94,17 +105,33 @@ class SkinIdentity:
         check_number(self.pitch_m, 'skin pitch_m', positive=True)
         if not isinstance(self.board_id, str):
             raise ValueError(f'skin board_id must be a string, got {self.board_id!r}')
+        if not isinstance(self.board_uid, str) or (
+                self.board_uid and not UID_PATTERN.fullmatch(self.board_uid)):
+            raise ValueError(f'skin board_uid must be 24 lowercase hex digits or empty, got '
+                             f'{self.board_uid!r}')
+        if not isinstance(self.board_name, str):
+            raise ValueError(f'skin board_name must be a string, got {self.board_name!r}')
         object.__setattr__(self, 'rows', int(self.rows))
         object.__setattr__(self, 'cols', int(self.cols))
         object.__setattr__(self, 'pitch_m', float(self.pitch_m))
 
     def describe(self) -> str:
-        """Return e.g. '16 x 16 taxels at 5.000 mm pitch, board skin-A'."""
+        """Return e.g. '16 x 16 taxels at 5.000 mm pitch, board skin-A, on nucleo uid 00...'."""
         board = f', board {self.board_id}' if self.board_id else ''
-        return f'{self.rows} x {self.cols} taxels at {1000 * self.pitch_m:.3f} mm pitch{board}'
+        on = f', on {self.board()}' if self.board_uid else ''
+        return (f'{self.rows} x {self.cols} taxels at {1000 * self.pitch_m:.3f} mm pitch'
+                f'{board}{on}')
+
+    def board(self) -> str:
+        """Return e.g. 'board nucleo-f446re uid 0039...', or '' when the board said nothing."""
+        if not self.board_uid:
+            return ''
+        return f'board {self.board_name or "(unnamed)"} uid {self.board_uid}'
 
     def mismatch(self, other: 'SkinIdentity') -> str:
         """Return how ``other`` differs from this skin ('' when it is the same one)."""
+        if self.board_uid and other.board_uid and self.board_uid != other.board_uid:
+            return f'made on {self.board()}; this skin is on {other.board()}'
         same = ((self.rows, self.cols) == (other.rows, other.cols)
                 and abs(self.pitch_m - other.pitch_m) <= _PITCH_TOLERANCE * self.pitch_m
                 and (not self.board_id or not other.board_id or self.board_id == other.board_id))
@@ -115,7 +142,8 @@ class SkinIdentity:
         """Build the identity from its YAML mapping."""
         if not isinstance(doc, dict) or not {'rows', 'cols', 'pitch_m'} <= set(doc):
             raise ValueError('skin must be a mapping with rows, cols and pitch_m')
-        return cls(doc['rows'], doc['cols'], doc['pitch_m'], str(doc.get('board_id') or ''))
+        return cls(doc['rows'], doc['cols'], doc['pitch_m'], str(doc.get('board_id') or ''),
+                   str(doc.get('board_uid') or ''), str(doc.get('board_name') or ''))
 
 
 def _curves(value):
@@ -236,6 +264,25 @@ class Calibration:
                     f'is {skin.describe()}')
         return ''
 
+    def board_binding(self, skin: SkinIdentity) -> tuple:
+        """
+        Return (warning, note) on how this calibration is bound to the board of ``skin``.
+
+        Both are '' when it is bound to that very board or neither says who it is. A warning when
+        it was made on a board and this one does not say who it is (a version-1 stream): it
+        cannot be checked. A note when it is bound to no board and this board says who it is.
+        A calibration from another board is no binding at all: :meth:`check_skin` refuses it.
+        """
+        made_on = self.skin.board_uid if self.skin is not None else ''
+        if made_on and not skin.board_uid:
+            return (f'calibration made on {self.skin.board()}; this board does not say who it '
+                    'is (version-1 stream), so it cannot be checked', '')
+        if skin.board_uid and not made_on:
+            return ('', f'calibration bound to no board (made before boards said who they are, '
+                        f'or on a version-1 stream); this skin is on {skin.board()}, which the '
+                        'next calibration records')
+        return '', ''
+
     def describe(self) -> str:
         """Return one line saying what is calibrated, for logs and diagnostics (SI units)."""
         parts = [f'x_p = {self.x_p_m:.6f} m, y_p = {self.y_p_m:.6f} m ({self.presses} presses)']
@@ -263,7 +310,9 @@ class Calibration:
         out['compliance_presses'] = int(self.compliance_presses)
         out['made_utc'] = self.made_utc
         out['made'] = dict(zip(PARTS, self.part_utc))
-        out['skin'] = None if self.skin is None else asdict(self.skin)
+        # A board that said nothing leaves no empty keys: such a file reads as before.
+        out['skin'] = None if self.skin is None else {
+            k: v for k, v in asdict(self.skin).items() if v != '' or k == 'board_id'}
         out['zero_slope_m_per_n'] = [float(v) for v in self.zero_slope_m_per_n]
         out['zero_ref_n'] = float(self.zero_ref_n)
         out['force_curves'] = (None if self.force_curves is None else

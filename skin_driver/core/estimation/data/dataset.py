@@ -8,8 +8,10 @@ raw counts), ``pitch_m`` (scalar), ``azimuth_deg`` (N, NaN where undefined), ``a
 (N x K, NaN-padded, for frames with several presses) and ``split`` (N, uint8: 1 marks a
 calibration frame, 2 a normal press at the place of use that re-takes the offset after them, 3 a
 rigid plate loading the whole skin evenly (the per-taxel gains, taken first), 0 a scored frame;
-without it every frame is scored); ``format_version`` = 2.
-Version 1 files (no ``press_*``, no ``split``) load unchanged.
+without it every frame is scored); optional ``board_info`` (a string: the information text of
+the board the frames came from, docs/protocol.md, when it said who it is); ``format_version`` =
+2. Version 1 files (no ``press_*``, no ``split``) and files without ``board_info`` load
+unchanged; readers that do not know ``board_info`` ignore it.
 """
 
 from __future__ import annotations
@@ -22,6 +24,7 @@ import zipfile
 import numpy as np
 
 from ...common.atomic import write_atomically
+from ...common.boardinfo import BoardInfo
 from ...common.validate import check_number, check_stack
 
 __all__ = ['Dataset', 'save_dataset', 'load_dataset', 'FORMAT_VERSION', 'PRESS_FIELDS']
@@ -77,6 +80,7 @@ class Dataset:
     press_alpha_deg: np.ndarray = None
     press_shift_m: np.ndarray = None
     split: np.ndarray = None
+    board_info: str = None
 
     def __post_init__(self):
         """Validate shapes, dtypes and values, and freeze copies of the arrays."""
@@ -120,6 +124,11 @@ class Dataset:
             set_(self, 'tare_top', tt.copy())
             set_(self, 'tare_bottom', tb.copy())
         _check_presses(self, n)
+        if self.board_info is not None:
+            try:
+                set_(self, 'board_info', BoardInfo.parse(self.board_info).text)
+            except ValueError as err:
+                raise ValueError(f'board_info is not a board information text: {err}') from None
         for name in ('top', 'bottom', 'alpha_deg', 'azimuth_deg', 'tare_top', 'tare_bottom',
                      'split', *_OPTIONAL, *PRESS_FIELDS):
             arr = getattr(self, name)
@@ -149,7 +158,11 @@ class Dataset:
         fields = {k: (None if getattr(self, k) is None else getattr(self, k)[keep])
                   for k in per_frame}
         return Dataset(pitch_m=self.pitch_m, tare_top=self.tare_top,
-                       tare_bottom=self.tare_bottom, **fields)
+                       tare_bottom=self.tare_bottom, board_info=self.board_info, **fields)
+
+    def board(self):
+        """Return the board the frames came from (a BoardInfo), None when it is not known."""
+        return None if self.board_info is None else BoardInfo.parse(self.board_info)
 
     def scored_frames(self) -> np.ndarray:
         """Return the indices of the frames that are scored: all, or those with split = 0."""
@@ -229,6 +242,8 @@ def save_dataset(path, data: Dataset) -> None:
     for name in (*_OPTIONAL, 'tare_top', 'tare_bottom', 'split', *PRESS_FIELDS):
         if getattr(data, name) is not None:
             arrays[name] = getattr(data, name)
+    if data.board_info is not None:
+        arrays['board_info'] = np.array(data.board_info)  # 0-d unicode: no pickle
     write_atomically(path, lambda f: np.savez_compressed(f, **arrays), binary=True)
 
 
@@ -260,4 +275,10 @@ def load_dataset(path) -> Dataset:
         fields = {k: npz[k] for k in ('top', 'bottom', 'azimuth_deg', 'alpha_deg', *_OPTIONAL,
                                       'tare_top', 'tare_bottom', 'split', *PRESS_FIELDS)
                   if k in keys}
+        if 'board_info' in keys:
+            board = npz['board_info']
+            if board.dtype.kind != 'U' or board.size != 1:
+                raise ValueError(f'{path}: board_info must be one string, got {board.dtype} '
+                                 f'of shape {board.shape}')
+            fields['board_info'] = str(board.reshape(()))
     return Dataset(pitch_m=float(pitch.reshape(())), **fields)

@@ -6,7 +6,9 @@ and a rosbag2 bag of them (``bag_to_dataset``). A recording has no ground truth 
 frames are unlabelled (azimuth NaN, alpha 0) unless the caller knows the press it recorded (a
 robot pressing at a known direction, as in the seed paper) and labels them. The first
 ``tare_frames`` scans, taken with nothing on the skin, become the dataset's tare, as ``~/tare``
-would average them.
+would average them. When the board said who it is (the driver's board_info, docs/protocol.md),
+the dataset is stamped with it (``board_info``); a recording holds one board, as it holds one
+grid.
 """
 
 from __future__ import annotations
@@ -18,6 +20,7 @@ from typing import Optional
 import numpy as np
 
 from .dataset import Dataset
+from ...common.boardinfo import BoardInfo
 
 __all__ = ['Labels', 'Recording', 'layers_of']
 
@@ -52,6 +55,20 @@ class Recording:
         self.tare_frames = int(tare_frames)
         self._top, self._bottom = [], []
         self.pitch_m = None
+        self.board = None  # the BoardInfo of the board recorded, None while it said nothing
+
+    def set_board(self, text) -> None:
+        """
+        Stamp the recording with the board that says who it is (its information text).
+
+        Raise ValueError when the text does not parse, or names another board (uid) than the
+        one the recording is stamped with: a recording holds one board.
+        """
+        info = BoardInfo.parse(text)
+        if self.board is not None and info.uid != self.board.uid:
+            raise ValueError(f'board {info.board} uid {info.uid} now sends; the recording is of '
+                             f'board {self.board.board} uid {self.board.uid}')
+        self.board = info
 
     @property
     def scans(self) -> int:
@@ -86,4 +103,5 @@ class Recording:
         force = None if labels.force_n is None else np.full(n, float(labels.force_n))
         return Dataset(top=np.stack(self._top[k:]), bottom=np.stack(self._bottom[k:]),
                        pitch_m=self.pitch_m, azimuth_deg=np.full(n, float(labels.azimuth_deg)),
-                       alpha_deg=np.full(n, float(labels.alpha_deg)), force_n=force, **tare)
+                       alpha_deg=np.full(n, float(labels.alpha_deg)), force_n=force,
+                       board_info=self.board.text if self.board else None, **tare)
