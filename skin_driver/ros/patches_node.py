@@ -34,6 +34,7 @@ import time
 from geometry_msgs.msg import Point, Vector3, Wrench, WrenchStamped
 from rcl_interfaces.msg import ParameterDescriptor, SetParametersResult
 import rclpy
+from rclpy.exceptions import ParameterException
 from rclpy.node import Node
 from rclpy.parameter import Parameter
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
@@ -128,10 +129,13 @@ class PatchesNode(Node):
             check_frame_name(self._common, 'common_frame')
         except ValueError as err:
             raise self._refuse_start('common_frame', str(err)) from None
-        names = self.declare_parameter(
-            'patches', Parameter.Type.STRING_ARRAY, ParameterDescriptor(
-                description='Namespaces of the patches (their contacts: /<patch>/contacts).',
-                read_only=True)).value
+        try:
+            names = self.declare_parameter(
+                'patches', Parameter.Type.STRING_ARRAY, ParameterDescriptor(
+                    description='Namespaces of the patches (their contacts: /<patch>/contacts).',
+                    read_only=True)).value
+        except ParameterException as err:
+            raise self._refuse_start('patches', f'{err}; it takes a list of namespaces') from None
         if not names:
             raise self._refuse_start('patches', 'is not set; it takes the namespaces of the '
                                                 'patches, e.g. [left, right]')

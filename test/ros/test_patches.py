@@ -436,6 +436,7 @@ def test_a_mount_changed_at_run_time_moves_the_contacts_and_a_bad_one_is_refused
     ({'a.parent_frame': 'a-b'}, 'a parent frame'),
     ({'common_frame': 'base link'}, 'common_frame'),
     ({'patches': ['skin', 'a']}, 'publishes'),
+    ({'patches': 'a'}, "'patches'.*list of namespaces"),
 ])
 def test_parameters_it_cannot_work_with_stop_it_naming_them(params, message):
     with ros_context() as (context, _):
