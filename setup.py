@@ -10,7 +10,7 @@ setup(
     name=PACKAGE,
     version='0.1.0',
     packages=find_packages(exclude=['test']),
-    package_data={PACKAGE: ['scenes/*.yaml']},
+    package_data={PACKAGE: ['scenes/*.yaml', 'scenes/patches/*.yaml']},
     data_files=[
         ('share/ament_index/resource_index/packages', ['resource/' + PACKAGE]),
         ('share/' + PACKAGE, ['package.xml']),
@@ -36,6 +36,8 @@ setup(
             'record = skin_driver.tools.record:main',
             'bag_to_dataset = skin_driver.tools.bag_to_dataset:main',
             'mount_tf = skin_driver.ros.frames:main',
+            'patches = skin_driver.ros.patches_node:main',
+            'patches_sim = skin_driver.tools.patches_sim:main',
         ],
     },
 )

@@ -2,7 +2,8 @@
 The core must run where no ROS is installed, and its wings keep one import rule.
 
 No core module imports rclpy or a message package; ``estimation`` never imports ``sim``;
-``protocol`` imports neither; ``common`` (checks, atomic writes) imports none of them.
+``protocol`` imports neither; ``common`` (checks, atomic writes) and ``robot`` (frames, mounts)
+import none of them.
 """
 
 import ast
@@ -21,7 +22,8 @@ FORBIDDEN = ('rclpy', 'rosidl', 'builtin_interfaces', 'std_msgs', 'geometry_msgs
              'skin_msgs', 'visualization_msgs', 'diagnostic_msgs', 'std_srvs', 'launch')
 # What each wing may not import (besides ROS).
 WING_RULES = {'common': ('estimation', 'sim', 'protocol'), 'protocol': ('estimation', 'sim'),
-              'estimation': ('sim', 'protocol'), 'sim': ()}
+              'estimation': ('sim', 'protocol'), 'sim': (),
+              'robot': ('estimation', 'sim', 'protocol')}
 
 
 def _core_modules():
