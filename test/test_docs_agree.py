@@ -261,13 +261,18 @@ def test_readme_methods_are_the_registered_ones():
     assert DEFAULT_METHOD == 'taxel_fit' and '`taxel_fit`' in README.read_text().split('##')[0]
 
 
-def _publishers():
+# The patches node is not one skin's: its interface is in docs/robot.md.
+PATCHES_NODE = ROOT / 'skin_driver' / 'ros' / 'patches_node.py'
+
+
+def _publishers(paths):
     """Return the topic names the nodes publish on, f-strings over the two layers expanded."""
     topics = set()
-    for path in ROOT.glob('skin_driver/ros/**/*.py'):
+    for path in paths:
         for found in re.findall(r"create_(?:lifecycle_)?publisher\(\s*\w+,\s*(f?)'([^']+)'",
                                 path.read_text()):
             prefix, name = found
+            name = name.replace('{link}', '<link>')
             topics.update({name.replace('{layer}', layer) for layer in ('top', 'bottom')}
                           if prefix else {name})
     return topics - {'/tf_static'}  # the mount's, described with the robot
@@ -276,7 +281,14 @@ def _publishers():
 def test_readme_topics_are_the_published_ones():
     rows = _table(README.read_text(), '### Topics (namespace `skin` in the launch file)')
     written = {name for row in rows for name in _ticked(row[0])}
-    assert written == _publishers()
+    skin = [p for p in ROOT.glob('skin_driver/ros/**/*.py') if p != PATCHES_NODE]
+    assert written == _publishers(skin)
+
+
+def test_the_patches_topics_in_docs_robot_are_the_published_ones():
+    rows = _table((ROOT / 'docs' / 'robot.md').read_text(), '## Several patches as one skin')
+    written = {name for row in rows if len(row) == 3 for name in _ticked(row[0])}
+    assert written == _publishers([PATCHES_NODE]) | {'/diagnostics'}
 
 
 def test_readme_actions_and_services_are_the_offered_ones():
