@@ -1,4 +1,4 @@
-"""Tests of the one Levenberg-Marquardt solver the taxel model, its learning and the oracle share."""
+"""Tests of the Levenberg-Marquardt solver the taxel model, its learning and the oracle share."""
 
 import numpy as np
 import pytest
