@@ -9,9 +9,10 @@ What keeps work a lower rate would do off the per-scan path of the driver and th
 * :class:`TakenOnThread`: subscriptions whose messages a thread of its own takes as they arrive,
   every waiting one per wake-up, instead of the node's executor: the split direction node's
   frames, the benchmark's subscriber (its two subscriptions on one thread: no GIL hand-over).
-  rclpy's executor rebuilds its wait set from every entity of its nodes on each wake-up (the
-  split direction node's executor cost ~0.4 ms per scan); this thread waits on its
-  subscriptions and a stop signal alone, and the executor keeps parameters, services and timers.
+  rclpy's executor rebuilds its wait set from every entity of its nodes on each wake-up, a cost
+  paid per scan that grows with the node's services, actions and timers; this thread waits on
+  its subscriptions and a stop signal alone, and the executor keeps parameters, services and
+  timers.
 """
 
 import contextlib
