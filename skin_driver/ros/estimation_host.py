@@ -113,6 +113,7 @@ class EstimationHost:
         # The skin the scans show that the estimator was not checked for (the hot path's), and
         # the executor's work that checks it.
         self._asked_skin = None
+        self._pitch_seen = (None, None)  # (a scan's pitch, its frame_pitch), the hot path's
         self._skin_check = node.create_guard_condition(self._check_skin)
         # The skin it estimates, for /diagnostics: the frame its scans carry (until the first
         # scan, the frame its namespace gives).
@@ -329,7 +330,9 @@ class EstimationHost:
         try:
             if not (math.isfinite(pitch_m) and pitch_m > 0):
                 raise ValueError(f'pitch {pitch_m} is not a positive length')
-            skin = (top.shape[0], top.shape[1], conversions.frame_pitch(pitch_m))
+            if pitch_m != self._pitch_seen[0]:  # the rule's formatting, once per pitch seen
+                self._pitch_seen = (pitch_m, conversions.frame_pitch(pitch_m))
+            skin = (top.shape[0], top.shape[1], self._pitch_seen[1])
             if skin != live.skin:
                 self._unchecked += 1
                 self._ask_for_skin(skin)
