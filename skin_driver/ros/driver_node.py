@@ -27,7 +27,9 @@ down (Ctrl-C stops the simulated board too) is not reported as a fault.
 Fused (parameter fused, read at start-up): the process also runs the skin_direction node (same
 parameters, services, topics and diagnostics as the separate direction node) and estimates every
 scan on the serial reader thread right after decoding it, before the frame is published: no
-executor and no SkinFrame round trip between the last byte and the contacts.
+executor and no SkinFrame round trip between the last byte and the contacts. Configure checks
+the estimator (calibration, pitch) for the configured grid and pitch, so the reader's first scan
+is estimated.
 
 Each message is stamped with the host time at which its last byte was read. The board's own clock
 travels in SkinFrame.device_time_us: it is not synchronised with the host, but its differences are

@@ -11,19 +11,20 @@ the same whichever way the scans arrive.
 
 Threads: process() is the hot path and may run on any one thread; everything else runs on the
 executor (parameter changes on a thread of their own). An estimator slower than the scans
-(``model_fit`` with a learned taxel model) takes the newest scan on a thread of its own instead,
-so that the hot path is never held up. The host is the one owner of what the hot path reads:
-one immutable :class:`Live` (the estimator, the skin it was checked for, its generation), read
-once per scan. The hot path takes no lock and builds nothing: every change (tare,
-calibration, parameters, a new skin or taxel pitch) builds a new estimator from the current one
-off the hot path, serialised by a lock only changes take (:meth:`EstimationHost._swap`), and
-puts it in force by one reference assignment. A scan of a skin the estimator was not checked
-for asks the executor to check it (the calibration's skin, the pitch) and is counted, not
-estimated, until then. Each diagnostic count is written by one thread only: the hot path
-raises totals, the report takes differences. Work a lower rate does as well (heatmaps,
-markers, diagnostics) runs on timers, on the latest scan only, and heatmaps and markers only
-while someone subscribes to them. Contacts, contact and wrench leave as CDR bytes written
-directly (conversions.SerializedMessages), to topics that have subscribers.
+(``model_fit`` with a learned taxel model) takes the newest scan on a thread of its own instead, so
+that the hot path is never held up. The host is the one owner of what the hot path reads: one
+immutable :class:`Live` (the estimator, the skin it was checked for, its generation), read once per
+scan. The hot path builds no estimator and takes no lock but a running calibration's (uncontended
+but for the moment it ends, so no scan reaches a session being finished): every change (tare,
+calibration, parameters, a new skin or taxel pitch) builds a new estimator from the current one off
+the hot path, serialised by a lock only changes take (:meth:`EstimationHost._swap`), and puts it in
+force by one reference assignment. A scan of a skin the estimator was not checked for asks the
+executor to check it (the calibration's skin, the pitch) and is counted, not estimated, until then.
+Each diagnostic count is written by one thread only: the hot path raises totals, the report takes
+differences. Work a lower rate does as well (heatmaps, markers, diagnostics) runs on timers, on the
+latest scan only, and heatmaps and markers only while someone subscribes to them. Contacts, contact
+and wrench leave as CDR bytes written directly (conversions.SerializedMessages), to topics that
+have subscribers.
 """
 
 from dataclasses import replace
@@ -303,15 +304,18 @@ class EstimationHost:
         An estimator slower than the scans (``ContactEstimator.every_scan`` false) estimates on a
         thread of its own, each time the newest scan: the scans in between are left, and the
         caller (the serial reader, fused) is never held up. A switch of method lets the scan in
-        flight there finish.
+        flight there finish, and scans go there until it has: one thread estimates at a time,
+        the one owner of the estimation's counts, caches and reused messages.
         """
         scan = (header, sequence, device_time_us, pitch_m, top, bottom)
-        if self._live.estimator.every_scan:
+        newest = self._newest
+        if self._live.estimator.every_scan and (newest is None or not newest.busy):
             self._estimate(scan)
             return
-        if self._newest is None:
-            self._newest = LatestOnly(self._estimate, 'skin-estimate', self._estimate_failed)
-        self._newest.offer(scan)
+        if newest is None:
+            newest = self._newest = LatestOnly(self._estimate, 'skin-estimate',
+                                               self._estimate_failed)
+        newest.offer(scan)
 
     def close(self) -> None:
         """Stop the thread of a slow estimator, if one ran (after the scan in progress)."""

@@ -62,6 +62,9 @@ class LatestOnly:
         self._item = None
         # Items replaced before their job started (read by any thread: an int, set under _ready).
         self.dropped = 0
+        # True from an offer until the job of the last item offered has returned (set under
+        # _ready): while False, this thread runs nothing and will not until the next offer.
+        self.busy = False
         self._stopped = False
         self._ready = threading.Condition()
         self._thread = threading.Thread(target=self._run, name=name, daemon=True)
@@ -72,6 +75,7 @@ class LatestOnly:
         with self._ready:
             self.dropped += self._item is not None
             self._item = item
+            self.busy = True
             self._ready.notify()
 
     def stop(self, timeout_s: float = 2.0) -> None:
@@ -94,6 +98,8 @@ class LatestOnly:
                 self._job(item)
             except Exception as err:  # noqa: B902 - reported; the next item is still served
                 self._on_error(err)
+            with self._ready:
+                self.busy = self._item is not None
 
 
 class NoExecutor(CallbackGroup):
