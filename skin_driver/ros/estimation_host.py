@@ -291,7 +291,12 @@ class EstimationHost:
         if asked is None or asked == self._live.skin:
             return
         rows, cols, pitch_m = asked
-        self.prepare(rows, cols, pitch_m)
+        try:
+            self.prepare(rows, cols, pitch_m)
+        except ValueError as err:  # a grid no skin has: its scans stay counted, not estimated
+            self.node.get_logger().error(
+                f'frames of {rows} x {cols} taxels at pitch {pitch_m} m are not estimated: {err}')
+            return
         self.node.get_logger().info(
             f'estimating a skin of {rows} x {cols} taxels at {1000 * pitch_m:.3f} mm pitch')
 
