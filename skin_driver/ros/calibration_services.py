@@ -18,11 +18,12 @@ A calibration takes seconds to minutes of presses, so each is an action: feedbac
 press, cancel (Ctrl-C on ``ros2 action send_goal``) ends it. One runs at a time: a goal that
 arrives while one runs is rejected at once (the reason is logged). A goal is checked before any
 press is awaited: one no presses could satisfy ends at once, aborted with the reason. The node
-calls :meth:`feed` with every scan and its contacts, and :meth:`check_skin` when the frames show
-the skin's grid and pitch. The calibration lives in the estimator alone, which the node owns:
-``get_estimator()`` returns the one in force and ``put_calibration(calibration)`` asks the node
-to put a new one in force. A new calibration is written to the file first and put in force only
-once written; a refusal, a timeout, a cancel or a failed write leaves the calibration in force.
+calls :meth:`feed` with every scan and its contacts (on the scans' thread), and
+:meth:`check_skin` (off it) before it estimates the scans of a skin's grid and pitch. The
+calibration lives in the estimator alone, which the node owns: ``get_estimator()`` returns the
+one in force and ``put_calibration(calibration)`` asks the node to put a new one in force. A new
+calibration is written to the file first and put in force only once written; a refusal, a
+timeout, a cancel or a failed write leaves the calibration in force (and is logged).
 
 A calibration file belongs to one skin (grid, pitch, ``calibration.skin_id``) and, when made
 while the board said who it is, to that board (its unique ID): one made for another skin or
@@ -111,6 +112,33 @@ def request_problem(presses: int, timeout: float, forces=()) -> str:
     return ''
 
 
+class _Running:
+    """
+    The calibration running: its session and goal together, put in force by one assignment.
+
+    The scans' thread gives the session scans until the executor closes it; closing waits for
+    a scan being given, so none reaches a session that is being finished.
+    """
+
+    __slots__ = ('session', 'goal', '_feeding', '_open')
+
+    def __init__(self, session: CalibrationSession, goal_handle):
+        self.session = session
+        self.goal = goal_handle
+        self._feeding = threading.Lock()
+        self._open = True
+
+    def add_scan(self, top, bottom, contacts, wrench) -> str:
+        """Give the session one scan, unless it is closed; return its note ('' if none)."""
+        with self._feeding:
+            return self.session.add_scan(top, bottom, contacts, wrench) if self._open else ''
+
+    def close(self) -> None:
+        """Take no more scans (after the one being given, if any)."""
+        with self._feeding:
+            self._open = False
+
+
 class CalibrationServices:
     """Offer the calibration actions on a node whose estimator ``get_estimator()`` returns."""
 
@@ -119,7 +147,7 @@ class CalibrationServices:
         self._node = node
         self._get_estimator = get_estimator
         self._put_calibration = put_calibration
-        self._session = self._future = self._goal = None
+        self._running_now = None  # a _Running while a calibration runs, read once per scan
         self._running = threading.Lock()  # held from a goal's acceptance to its end
         self._wrench = None
         self._wrench_sub = None
@@ -200,11 +228,14 @@ class CalibrationServices:
         self._node.get_logger().warning(self.warning)
 
     def check_skin(self, rows: int, cols: int, pitch_m: float) -> None:
-        """Refuse the calibration in force if it belongs to another skin than the frames'."""
-        # SkinFrame carries the pitch as float32: 7 digits are all it knows (0.005, not
-        # 0.004999999888).
+        """
+        Refuse the calibration in force if it belongs to another skin than the frames'.
+
+        Called off the hot path (the executor, or the driver's configure), before the skin's
+        scans are estimated.
+        """
         board = self._board
-        skin = SkinIdentity(rows, cols, float(f'{pitch_m:.7g}'),
+        skin = SkinIdentity(rows, cols, conversions.frame_pitch(pitch_m),
                             self._param('calibration.skin_id'), board.uid if board else '',
                             board.board if board else '')
         if skin == self._skin:
@@ -267,16 +298,17 @@ class CalibrationServices:
             if p.name == 'calibration_file' and str(p.value).strip():
                 path = self._path_of(p.value)
                 if not os.path.isfile(path):
-                    return SetParametersResult(
-                        successful=False,
-                        reason=f'no calibration file at {path}; name an existing file (or '
-                               'empty for the default); the calibration in force stays')
+                    reason = (f'no calibration file at {path}; name an existing file (or '
+                              'empty for the default); the calibration in force stays')
+                    self._node.get_logger().warning(f'calibration_file refused: {reason}')
+                    return SetParametersResult(successful=False, reason=reason)
         return SetParametersResult(successful=True)
 
     def _on_parameters(self, params) -> None:
         names = {p.name for p in params}
         if 'calibration.skin_id' in names and self._skin is not None:
-            self._skin = None  # checked again with the new name on the next frame
+            # The scans' skin is known: the file is checked at once under the new name.
+            self._skin = replace(self._skin, board_id=str(self._param('calibration.skin_id')))
         if names & {'calibration_file', 'calibration.skin_id'}:
             self.load()
         if 'calibration.wrench_topic' in names:
@@ -288,7 +320,8 @@ class CalibrationServices:
             # Called once a diagnostics period: a board silent so long is a version-1 board.
             self._bind(self._get_estimator().calibration)
         cal = self._get_estimator().calibration
-        session = self._session
+        running = self._running_now
+        session = running.session if running is not None else None
         return {'calibration file': self.loaded_from, 'calibration made': cal.made_utc or '-',
                 **{f'{part} made': cal.made(part) or '-' for part in PARTS},
                 'calibration skin': cal.skin.describe() if cal.skin else '-',
@@ -318,19 +351,19 @@ class CalibrationServices:
 
     def feed(self, top, bottom, contacts) -> None:
         """Give the running session, if any, one scan and its contacts (strongest first)."""
-        session, goal, future = self._session, self._goal, self._future
-        if session is None:
+        running = self._running_now  # the one read: session and goal belong together
+        if running is None:
             return
         wrench = None
-        if self._wrench is not None and time.monotonic() - self._wrench[1] <= MAX_WRENCH_AGE_S:
-            wrench = self._wrench[0]
-        note = session.add_scan(top, bottom, contacts, wrench)
+        known = self._wrench
+        if known is not None and time.monotonic() - known[1] <= MAX_WRENCH_AGE_S:
+            wrench = known[0]
+        session, goal = running.session, running.goal
+        note = running.add_scan(top, bottom, contacts, wrench)
         if note:
             self._node.get_logger().info(f'calibration ({session.kind}): {note}')
             goal.publish_feedback(
                 conversions.calibration_feedback(type(goal.request), session, note))
-        if session.done and not future.done():
-            future.set_result('done')
 
     # ---- actions -----------------------------------------------------------------------------
     def _param(self, name: str):
@@ -339,7 +372,8 @@ class CalibrationServices:
     def _on_goal(self, kind: str):
         def accept(request):
             if not self._running.acquire(blocking=False):
-                running = self._session.kind if self._session else 'another'
+                now = self._running_now
+                running = now.session.kind if now is not None else 'another'
                 self._node.get_logger().warning(
                     f'{kind} calibration goal rejected: a {running} calibration is already '
                     'running; wait for it to end or cancel it')
@@ -347,8 +381,9 @@ class CalibrationServices:
             return GoalResponse.ACCEPT
         return accept
 
-    @staticmethod
-    def _on_cancel(goal_handle) -> CancelResponse:
+    def _on_cancel(self, goal_handle) -> CancelResponse:
+        self._node.get_logger().info('calibration: cancel requested; the calibration in force '
+                                     'stays')
         return CancelResponse.ACCEPT
 
     def _offset_args(self, goal) -> tuple:
@@ -431,36 +466,45 @@ class CalibrationServices:
                 normal_tolerance_m=self._param('calibration.normal_tolerance'), **args)
         except CalibrationRefused as err:
             result.message = f'{err}{KEEP}'
+            self._node.get_logger().warning(f'{kind} calibration goal aborted: {result.message}')
             goal_handle.abort()
             return result
         timeout = goal_handle.request.timeout or self._param('calibration.timeout')
         deadline = time.monotonic() + timeout
         future = Future()
 
+        # The future is the executor's alone: the scans' thread only feeds the session, and
+        # this watch sees it done.
         def watch():
             if future.done():
                 return
             if goal_handle.is_cancel_requested:
                 future.set_result('cancel')
+            elif session.done:
+                future.set_result('done')
             elif time.monotonic() > deadline:
                 future.set_result('timeout')
-        self._session, self._future, self._goal = session, future, goal_handle
+        running = _Running(session, goal_handle)
+        self._running_now = running
         self._node.get_logger().info(
             f'calibration ({kind}): make {session.wanted} presses within {timeout:.0f} s')
         try:
             outcome = await self._polled(future, watch)
         finally:
-            self._session = self._future = self._goal = None
+            self._running_now = None
+            running.close()
         result.presses_used = len(session.accepted)
         made = f'{len(session.accepted)} of {session.wanted} presses'
         if outcome == 'cancel':
             result.message = f'cancelled with {made}{KEEP}'
+            self._node.get_logger().info(f'calibration ({kind}): {result.message}')
             goal_handle.canceled()
             return result
         if outcome == 'timeout':
             ignored = (f'; {session.ignored} ignored, the last one because {session.last_ignored}'
                        if session.ignored else '')
             result.message = f'timed out after {timeout:.0f} s with {made}{ignored}{KEEP}'
+            self._node.get_logger().warning(f'calibration ({kind}): {result.message}')
             goal_handle.abort()
             return result
         path = self.path
@@ -470,6 +514,7 @@ class CalibrationServices:
             outcome.calibration.save_yaml(path, make_parents=True)
         except (CalibrationRefused, OSError, ValueError) as err:
             result.message = f'{err}{KEEP}'
+            self._node.get_logger().warning(f'calibration ({kind}): {result.message}')
             goal_handle.abort()
             return result
         self._put_calibration(outcome.calibration)
@@ -490,10 +535,12 @@ class CalibrationServices:
 
     # ---- reset -------------------------------------------------------------------------------
     def _on_reset(self, request, response):
-        if self._session is not None:
+        running = self._running_now
+        if running is not None:
             response.success = False
-            response.message = (f'a {self._session.kind} calibration is running; cancel it '
-                                'first' + KEEP)
+            response.message = (f'reset refused: a {running.session.kind} calibration is '
+                                'running; cancel it first' + KEEP)
+            self._node.get_logger().warning(response.message)
             return response
         path = self.path
         defaults = Calibration(skin=self._skin)
@@ -501,7 +548,8 @@ class CalibrationServices:
             defaults.save_yaml(path, make_parents=True)
         except (OSError, ValueError) as err:
             response.success = False
-            response.message = f'{err}{KEEP}'
+            response.message = f'reset refused: {err}{KEEP}'
+            self._node.get_logger().warning(response.message)
             return response
         self._put_calibration(defaults)
         self.loaded_from, self.warning = path, ''

@@ -15,7 +15,7 @@ For rviz, at most viz_rate times a second: top/heatmap and bottom/heatmap (rgb8)
 Threads: the frames are taken and estimated on a thread of their own (skin-frames), every frame
 waiting at each wake-up, not by the executor, which serves parameters, services, actions and
 timers (skin_driver.ros.hot_path.TakenOnThread; rclpy's executor rebuilds its wait set from
-every entity of the node at each wake-up, docs/benchmarks.md has what that cost).
+every entity of the node at each wake-up, a cost the scans should not pay).
 
 The same node runs inside the driver's process when the driver is fused (parameter fused): it
 then has no subscription, and the driver's serial reader thread hands it every scan directly.

@@ -29,7 +29,9 @@ down (Ctrl-C stops the simulated board too) is not reported as a fault.
 Fused (parameter fused, read at start-up): the process also runs the skin_direction node (same
 parameters, services, topics and diagnostics as the separate direction node) and estimates every
 scan on the serial reader thread right after decoding it, before the frame is published: no
-executor and no SkinFrame round trip between the last byte and the contacts.
+executor and no SkinFrame round trip between the last byte and the contacts. Configure checks
+the estimator (calibration, pitch) for the configured grid and pitch, so the reader's first scan
+is estimated.
 
 Each message is stamped with the host time at which its last byte was read. The board's own clock
 travels in SkinFrame.device_time_us: it is not synchronised with the host, but its differences are
@@ -80,7 +82,7 @@ class SkinDriverNode(Node):
         self._rate = None
         self._lifecycle = 'unconfigured'
         self._state_detail = ''
-        self._burst = 0
+        self._burst = self._cpu_reading = None  # the reader's, made at configure
         self._health = None
         self._report_lock = threading.Lock()
         self._shutting_down = threading.Event()
@@ -162,12 +164,14 @@ class SkinDriverNode(Node):
         new = {p.name: p.value for p in params}
         fixed = [name for name in new if name not in START_UP_PARAMETERS]
         if fixed and self._link is not None:
-            return SetParametersResult(successful=False, reason=(
-                f"{', '.join(map(repr, fixed))} cannot change while the driver is "
-                f'{self._lifecycle}: it is read at configure; deactivate, cleanup, set it, then '
-                'configure and activate'))
-        problem = _backoff_problem(new.get('reconnect_min', self._p('reconnect_min')),
-                                   new.get('reconnect_max', self._p('reconnect_max')))
+            problem = (f"{', '.join(map(repr, fixed))} cannot change while the driver is "
+                       f'{self._lifecycle}: it is read at configure; deactivate, cleanup, set it, '
+                       'then configure and activate')
+        else:
+            problem = _backoff_problem(new.get('reconnect_min', self._p('reconnect_min')),
+                                       new.get('reconnect_max', self._p('reconnect_max')))
+        if problem:
+            self.get_logger().warning(f'parameter refused: {problem}')
         return SetParametersResult(successful=not problem, reason=problem)
 
     # ---- lifecycle --------------------------------------------------------------------------
@@ -196,7 +200,14 @@ class SkinDriverNode(Node):
             backoff_min_s=self._p('reconnect_min'), backoff_max_s=self._p('reconnect_max'),
             priority=self._p('realtime_priority'), cpu=StageCpu(READER_STAGES),
             on_board_info=self._on_board_info)
+        # The reader raises its counts, the report reads them: neither resets the other's.
         self._rate = diagnostics.RateMeter(time.monotonic())
+        self._burst = diagnostics.PeriodMax()
+        self._cpu_reading = diagnostics.TakenByOwner(self._link.cpu.take,
+                                                     dict.fromkeys(READER_STAGES, 0.0))
+        if self.estimation is not None:
+            # Fused: the estimator is checked for this skin before the reader hands it a scan.
+            self.estimation.prepare(self._p('rows'), self._p('cols'), self._pitch)
         self._health = LinkHealth((self._p('rows'), self._p('cols')), self._pitch)
         self.destroy_timer(self._diag_timer)
         self._diag_timer = self.create_timer(self._p('diagnostics_period'), self._report)
@@ -286,7 +297,8 @@ class SkinDriverNode(Node):
             self._images.offer((header, frames[-1], listened))
             cpu.mark('images')
         self._rate.add(len(frames))
-        self._burst = max(self._burst, len(frames))
+        self._burst.see(len(frames))
+        self._cpu_reading.serve()
 
     def _frame_message(self, header, frame):
         """Return a scan's SkinFrame as CDR bytes, or as a message where those are not rmw's."""
@@ -347,10 +359,10 @@ class SkinDriverNode(Node):
 
     def _report_link(self) -> None:
         rate, _ = self._rate.take(time.monotonic())
-        burst, self._burst = self._burst, 0
+        burst = int(self._burst.take())
         health = self._health.assess(self._link, self._state_detail)
         cpu = {f'reader CPU per scan, {stage} [us]': round(us, 1)
-               for stage, us in self._link.cpu.take().items()}
+               for stage, us in self._cpu_reading.ask().items()}
         values = {'port': self._port(), 'frame rate [Hz]': rate,
                   'largest burst [frames]': burst,
                   'reader scheduling': self._link.scheduling.policy,

@@ -10,21 +10,28 @@ straight from the driver's serial reader thread: parameters, services and diagno
 the same whichever way the scans arrive.
 
 Threads: process() is the hot path and may run on any one thread; everything else runs on the
-executor. An estimator slower than the scans (``model_fit`` with a learned taxel model) takes
-the newest scan on a thread of its own instead, so that the hot path is never held up. The host
-is the one owner of the live estimator, which never changes once built: the hot path takes no
-lock and reads it once per scan, and every change (tare, calibration, parameters, a new taxel
-pitch) builds a new estimator from the current one under a lock
-(:meth:`EstimationHost._swap`) and puts it in force by one reference assignment. Work a lower
-rate does as well (heatmaps, markers, diagnostics) runs on timers, on the latest scan only, and
-heatmaps and markers only while someone subscribes to them. Contacts, contact and wrench leave
-as CDR bytes written directly (conversions.SerializedMessages), to topics that have subscribers.
+executor (parameter changes on a thread of their own). An estimator slower than the scans
+(``model_fit`` with a learned taxel model) takes the newest scan on a thread of its own instead, so
+that the hot path is never held up. The host is the one owner of what the hot path reads: one
+immutable :class:`Live` (the estimator, the skin it was checked for, its generation), read once per
+scan. The hot path builds no estimator and takes no lock but a running calibration's (uncontended
+but for the moment it ends, so no scan reaches a session being finished): every change (tare,
+calibration, parameters, a new skin or taxel pitch) builds a new estimator from the current one off
+the hot path, serialised by a lock only changes take (:meth:`EstimationHost._swap`), and puts it in
+force by one reference assignment. A scan of a skin the estimator was not checked for asks the
+executor to check it (the calibration's skin, the pitch) and is counted, not estimated, until then.
+Each diagnostic count is written by one thread only: the hot path raises totals, the report takes
+differences. Work a lower rate does as well (heatmaps, markers, diagnostics) runs on timers, on the
+latest scan only, and heatmaps and markers only while someone subscribes to them. Contacts, contact
+and wrench leave as CDR bytes written directly (conversions.SerializedMessages), to topics that
+have subscribers.
 """
 
 from dataclasses import replace
 import math
 import threading
 import time
+from typing import NamedTuple, Optional, Tuple
 
 import cv2
 from geometry_msgs.msg import WrenchStamped
@@ -47,37 +54,73 @@ from skin_msgs.msg import TactileContact, TactileContactArray
 from std_srvs.srv import Trigger
 from visualization_msgs.msg import MarkerArray
 
+STAGES = ('estimate', 'publish', 'bookkeeping')
+
+
+class Live(NamedTuple):
+    """What the hot path reads once per scan; a change puts a new one in force, whole."""
+
+    estimator: ContactEstimator
+    # (rows, cols, frame_pitch) the estimator and its calibration were checked for; None until
+    # a skin is known.
+    skin: Optional[Tuple[int, int, float]]
+    generation: int  # one more with every change: names the estimator a scan met
+
+
+class Tally(NamedTuple):
+    """What became of the scans the host was given (counts since it started)."""
+
+    estimated: int  # estimated and published
+    refused: int  # not estimable: an unreadable frame, a pitch that is no length, ...
+    left_for_newer: int  # replaced by a newer scan before a slow estimator took them up
+    before_skin_checked: int  # came before the estimator was checked for their skin
+    contacts: int  # contacts published
+
 
 class EstimationHost:
     """Estimation parameters, publishers, services and diagnostics of one node."""
 
     def __init__(self, node):
         self.node = node
-        # OpenCV's worker pool spins between calls: on 16 x 16 maps it cost a whole thread
-        # ~120 us of CPU per scan (measured) and saved nothing. One thread for the process.
+        # OpenCV's worker pool spins between calls, which on maps of a few hundred taxels costs
+        # more CPU than the pool saves: one thread for the process.
         cv2.setNumThreads(1)
         self._declare_parameters()
         accept_whole_numbers(node)
         self._lock = threading.Lock()  # serialises changes of the estimator, never the hot path
-        self._estimator = ContactEstimator(self._config(EstimatorConfig().pitch_m))
+        self._live = Live(ContactEstimator(self._config(EstimatorConfig().pitch_m)), None, 0)
         # The estimator holds the calibration; the services put every new one in force here.
-        self.calibration = CalibrationServices(node, lambda: self._estimator,
+        self.calibration = CalibrationServices(node, lambda: self._live.estimator,
                                                self.put_calibration)
+        # The scans a tare averages: filled and resized by the estimating thread alone.
         self._recent = RecentScans(self._p('tare.frames'))
-        self._frames = self._bad_frames = self._contacts = 0
+        self._recent_size = self._recent_wanted = self._p('tare.frames')
+        # Counts, each written by one thread: frames unreadable by the thread that calls
+        # process(), the rest by the thread that estimates (the same one unless the estimator
+        # is slow). The report keeps what it saw last and takes differences.
+        self._unreadable = 0
+        self._frames = self._bad_frames = self._contacts = self._unchecked = 0
+        self._cost_sum, self._cost_count = 0.0, 0
+        self._cost_seen = (0.0, 0)
+        self._cost_max = diagnostics.PeriodMax()
+        self._cpu = StageCpu(STAGES)
+        self._cpu_reading = diagnostics.TakenByOwner(self._cpu.take, dict.fromkeys(STAGES, 0.0))
+        self._rate = diagnostics.RateMeter(time.monotonic())
         # A slow estimator's thread, made on the first scan it cannot keep up with.
         self._newest = None
-        self._cost_sum = self._cost_max = 0.0
-        self._cost_count = 0
-        self._latest = None
-        self._skin_seen = None
+        # (header, pitch, top, bottom, contacts, estimator) of the latest scan, the hot path's;
+        # the one the viz timer drew last, the timer's.
+        self._latest = self._drawn = None
+        # The skin the scans show that the estimator was not checked for (the hot path's), and
+        # the executor's work that checks it.
+        self._asked_skin = None
+        self._pitch_seen = (None, None)  # (a scan's pitch, its frame_pitch), the hot path's
+        self._skin_check = node.create_guard_condition(self._check_skin)
         # The skin it estimates, for /diagnostics: the frame its scans carry (until the first
         # scan, the frame its namespace gives).
         self._skin = default_frame_id(node.get_namespace())
         self._writer = conversions.ContactArrayWriter()
         self._serialized = None
-        self._cpu = StageCpu(('estimate', 'publish', 'bookkeeping'))
-        self._rate = diagnostics.RateMeter(time.monotonic())
         self._rebuilders = []
 
         # Every QoS event handler is one more entity the Python executor walks on each wake,
@@ -166,20 +209,21 @@ class EstimationHost:
                 if param.name == 'method':
                     check('method', param.value, 'a shift estimator', choices=method_names())
             except ParameterError as err:
+                self.node.get_logger().warning(f'parameter refused: {err}')
                 return SetParametersResult(successful=False, reason=str(err))
         return SetParametersResult(successful=True)
 
     def _apply_new_parameters(self, params) -> None:
         names = {param.name for param in params}
         if names & set(ESTIMATOR_PARAMETERS):
-            # Building an estimator takes up to a millisecond: on a thread of its own it holds
-            # up neither the scans nor the executor (in the direction node they are one thread).
+            # Off the executor: a change of method may load the compiled kernel, and the
+            # executor serves the actions and services meanwhile.
             worker = threading.Thread(target=self._rebuild, args=(sorted(names),), daemon=True,
                                       name='skin-estimator-rebuild')
             self._rebuilders = [t for t in self._rebuilders if t.is_alive()] + [worker]
             worker.start()
         if 'tare.frames' in names:
-            self._recent.resize(self._p('tare.frames'))
+            self._recent_wanted = self._p('tare.frames')  # resized by the estimating thread
         if 'viz_rate' in names:
             self._start_viz_timer()
 
@@ -202,16 +246,59 @@ class EstimationHost:
     @property
     def estimator(self) -> ContactEstimator:
         """Return the estimator in force (immutable; a change swaps in another)."""
-        return self._estimator
+        return self._live.estimator
 
-    def _swap(self, change) -> None:
-        """Put ``change(current estimator)`` in force; nothing changes if it raises."""
+    @property
+    def live(self) -> Live:
+        """Return what is in force: the estimator, the skin it was checked for, its generation."""
+        return self._live
+
+    def _swap(self, change, skin=None) -> None:
+        """
+        Put ``change(current estimator)`` in force; nothing changes if it raises.
+
+        ``skin`` (rows, cols, frame_pitch): the new estimator was checked for it; without, it
+        serves the skin the current one served.
+        """
         with self._lock:
-            self._estimator = change(self._estimator)
+            live = self._live
+            self._live = Live(change(live.estimator), skin or live.skin, live.generation + 1)
 
     def put_calibration(self, calibration) -> None:
         """Put ``calibration`` in force (with its force curves and gains)."""
         self._swap(lambda estimator: estimator.with_calibration(calibration))
+
+    def prepare(self, rows: int, cols: int, pitch_m: float) -> None:
+        """
+        Check the calibration and the pitch for a skin, off the hot path, before its scans.
+
+        The fused driver calls this at configure, so its first scan is estimated; a direction
+        node's first scans ask the executor for it (and are counted until it is done).
+        """
+        skin = (int(rows), int(cols), conversions.frame_pitch(pitch_m))
+        # A calibration made for another skin is refused before it is used.
+        self.calibration.check_skin(rows, cols, pitch_m)
+
+        def for_skin(old):
+            if conversions.frame_pitch(old.config.pitch_m) == skin[2]:
+                return old
+            return old.with_config(replace(old.config, pitch_m=skin[2]))
+        self._swap(for_skin, skin)
+
+    def _check_skin(self) -> None:
+        """Check the estimator for the skin the scans show (the executor's, asked by them)."""
+        asked = self._asked_skin
+        if asked is None or asked == self._live.skin:
+            return
+        rows, cols, pitch_m = asked
+        try:
+            self.prepare(rows, cols, pitch_m)
+        except ValueError as err:  # a grid no skin has: its scans stay counted, not estimated
+            self.node.get_logger().error(
+                f'frames of {rows} x {cols} taxels at pitch {pitch_m} m are not estimated: {err}')
+            return
+        self.node.get_logger().info(
+            f'estimating a skin of {rows} x {cols} taxels at {1000 * pitch_m:.3f} mm pitch')
 
     # ---- hot path ---------------------------------------------------------------------------
     def process(self, header, sequence: int, device_time_us: int, pitch_m: float,
@@ -222,15 +309,18 @@ class EstimationHost:
         An estimator slower than the scans (``ContactEstimator.every_scan`` false) estimates on a
         thread of its own, each time the newest scan: the scans in between are left, and the
         caller (the serial reader, fused) is never held up. A switch of method lets the scan in
-        flight there finish.
+        flight there finish, and scans go there until it has: one thread estimates at a time,
+        the one owner of the estimation's counts, caches and reused messages.
         """
         scan = (header, sequence, device_time_us, pitch_m, top, bottom)
-        if self._estimator.every_scan:
+        newest = self._newest
+        if self._live.estimator.every_scan and (newest is None or not newest.busy):
             self._estimate(scan)
             return
-        if self._newest is None:
-            self._newest = LatestOnly(self._estimate, 'skin-estimate', self._estimate_failed)
-        self._newest.offer(scan)
+        if newest is None:
+            newest = self._newest = LatestOnly(self._estimate, 'skin-estimate',
+                                               self._estimate_failed)
+        newest.offer(scan)
 
     def close(self) -> None:
         """Stop the thread of a slow estimator, if one ran (after the scan in progress)."""
@@ -238,26 +328,33 @@ class EstimationHost:
             self._newest.stop()
 
     def _estimate_failed(self, err: Exception) -> None:
+        self._bad_frames += 1
         self.node.get_logger().error(f'scan not estimated: {err!r}', throttle_duration_sec=5.0)
 
     def _estimate(self, scan) -> None:
         header, sequence, device_time_us, pitch_m, top, bottom = scan
         cpu = self._cpu
         cpu.begin()
+        live = self._live  # the one read of what is in force, for the whole scan
         try:
-            if (top.shape, pitch_m) != self._skin_seen:
-                # A calibration made for another skin is refused before it is used.
-                self.calibration.check_skin(top.shape[0], top.shape[1], pitch_m)
-                self._skin_seen = (top.shape, pitch_m)
-            estimator = self._estimator_for(pitch_m)
+            if not (math.isfinite(pitch_m) and pitch_m > 0):
+                raise ValueError(f'pitch {pitch_m} is not a positive length')
+            if pitch_m != self._pitch_seen[0]:  # the rule's formatting, once per pitch seen
+                self._pitch_seen = (pitch_m, conversions.frame_pitch(pitch_m))
+            skin = (top.shape[0], top.shape[1], self._pitch_seen[1])
+            if skin != live.skin:
+                self._unchecked += 1
+                self._ask_for_skin(skin)
+                return
             start = time.perf_counter()
-            contacts = estimator.process(top, bottom)
+            contacts = live.estimator.process(top, bottom)
             cost = time.perf_counter() - start
             cpu.mark('estimate')
             # Converting here means a non-finite value never reaches a publisher.
             fields = [conversions.contact_fields(c) for c in contacts]
         except ValueError as err:
-            self.reject(sequence, err)
+            self._bad_frames += 1
+            self._refused(sequence, err)
             return
         now = time.monotonic()
         self._publish(header, sequence, device_time_us, contacts, fields, self._listened(now))
@@ -267,14 +364,23 @@ class EstimationHost:
         self._contacts += len(contacts)
         self._cost_sum += cost
         self._cost_count += 1
-        if cost > self._cost_max:
-            self._cost_max = cost
+        self._cost_max.see(cost)
         self._rate.add()
+        if self._recent_size != self._recent_wanted:
+            self._recent_size = self._recent_wanted
+            self._recent.resize(self._recent_size)
         self._recent.add(top, bottom, len(contacts), now)
-        self._latest = (header, pitch_m, top, bottom, contacts)
+        self._latest = (header, pitch_m, top, bottom, contacts, live.estimator)
         self._skin = header.frame_id
         self.calibration.feed(top, bottom, contacts)
         cpu.mark('bookkeeping')
+        self._cpu_reading.serve()
+
+    def _ask_for_skin(self, skin) -> None:
+        """Ask the executor to check the estimator for ``skin``, once per skin shown."""
+        if skin != self._asked_skin:
+            self._asked_skin = skin
+            self._skin_check.trigger()
 
     def _publish(self, header, sequence, device_time_us, contacts, fields, listened) -> None:
         """Publish contacts, contact and wrench to those of them that have subscribers."""
@@ -308,22 +414,20 @@ class EstimationHost:
         return known if known.usable else None
 
     def reject(self, sequence, err: Exception) -> None:
-        """Count a scan that cannot be estimated and say why (at most every 5 s)."""
-        self._bad_frames += 1
+        """Count a frame that cannot be read (on the thread that calls process) and say why."""
+        self._unreadable += 1
+        self._refused(sequence, err)
+
+    def _refused(self, sequence, err: Exception) -> None:
+        """Say why a scan is dropped (at most every 5 s)."""
         which = 'a frame' if sequence is None else f'frame {sequence}'
         self.node.get_logger().warning(f'dropping {which}: {err}', throttle_duration_sec=5.0)
 
-    def _estimator_for(self, pitch_m: float) -> ContactEstimator:
-        """Return the estimator, rebuilt first if the frames' taxel pitch has changed."""
-        estimator = self._estimator
-        # SkinFrame carries the pitch as float32: 0.005 arrives as 0.004999999888; only a real
-        # change rebuilds the estimator (keeping the tare and the calibration).
-        if not math.isclose(pitch_m, estimator.config.pitch_m, rel_tol=1e-5):
-            if not (math.isfinite(pitch_m) and pitch_m > 0):
-                raise ValueError(f'pitch {pitch_m} is not a positive length')
-            self._swap(lambda old: old.with_config(replace(old.config, pitch_m=pitch_m)))
-            estimator = self._estimator
-        return estimator
+    def tally(self) -> Tally:
+        """Return what became of the scans given so far, each counted once."""
+        newest = self._newest
+        return Tally(self._frames, self._bad_frames + self._unreadable,
+                     0 if newest is None else newest.dropped, self._unchecked, self._contacts)
 
     # ---- rviz -------------------------------------------------------------------------------
     def _viz_events(self, name: str) -> dict:
@@ -343,15 +447,15 @@ class EstimationHost:
             self._viz_timer = self.node.create_timer(1.0 / rate, self._visualise)
 
     def _visualise(self) -> None:
-        latest, self._latest = self._latest, None
+        latest = self._latest
         listened = self._listened(time.monotonic())
         wanted = [name for name in ('top', 'bottom', 'markers') if listened[name]]
-        if latest is None or not wanted:
+        if latest is None or latest is self._drawn or not wanted:
             return
-        header, pitch, top, bottom, contacts = latest
+        self._drawn = latest
+        header, pitch, top, bottom, contacts, estimator = latest
         full = self._p('viz_full_scale')
-        forces = dict(zip(('top', 'bottom'),
-                          self._estimator.conditioner.condition(top, bottom)))
+        forces = dict(zip(('top', 'bottom'), _force_maps(estimator, top, bottom)))
         for layer in ('top', 'bottom'):
             if layer in wanted:
                 self._pub_heat[layer].publish(
@@ -383,6 +487,7 @@ class EstimationHost:
         except ValueError as err:  # TareRefused, or frames the conditioner cannot take
             response.success = False
             response.message = f'tare refused: {err}'
+            self.node.get_logger().warning(response.message)
             return response
         response.success = True
         response.message = f'baseline recorded from {len(tops)} unloaded scans'
@@ -392,27 +497,43 @@ class EstimationHost:
     # ---- diagnostics ------------------------------------------------------------------------
     def _report(self) -> None:
         rate, _ = self._rate.take(time.monotonic())
-        count, total, worst = self._cost_count, self._cost_sum, self._cost_max
-        self._cost_count, self._cost_sum, self._cost_max = 0, 0.0, 0.0
+        tally = self.tally()
+        total, count = self._cost_sum, self._cost_count
+        seen_total, seen_count = self._cost_seen
+        self._cost_seen = (total, count)
+        total, count = total - seen_total, count - seen_count
+        worst = self._cost_max.take()
         values = {
             'method': self._p('method'), 'frame rate [Hz]': rate,
-            'frames': self._frames, 'bad frames': self._bad_frames,
+            'frames': tally.estimated, 'bad frames': tally.refused,
             'frames left for newer ones (estimator slower than the scans)':
-                0 if self._newest is None else self._newest.dropped,
-            'contacts': self._contacts,
+                tally.left_for_newer,
+            'frames before the estimator was checked for their skin': tally.before_skin_checked,
+            'contacts': tally.contacts,
+            'estimator generation': self._live.generation,
             'mean cost [us]': 1e6 * total / count if count else 0.0,
             'max cost [us]': 1e6 * worst,
             **{f'CPU per scan, {stage} [us]': round(us, 1)
-               for stage, us in self._cpu.take().items()},
+               for stage, us in self._cpu_reading.ask().items()},
             **self.calibration.diagnostic_values(),
         }
         level, message = diagnostics.OK, self.calibration.note
         if self.calibration.warning:
             level, message = diagnostics.WARN, self.calibration.warning
-        if self._frames == 0:
+        if tally.estimated == 0:
             level, message = diagnostics.WARN, 'no frame received yet'
         elif rate == 0.0:
             level, message = diagnostics.WARN, 'no frame in the last period'
         self._diag.publish([diagnostics.make_status(
             f'{self.node.get_fully_qualified_name()}: contact estimation', self._skin, level,
             message, values)])
+
+
+def _force_maps(estimator: ContactEstimator, top: np.ndarray, bottom: np.ndarray) -> tuple:
+    """
+    Return the (top, bottom) force per taxel of a scan, as ``estimator`` conditions it.
+
+    The host's one use of an estimator's conditioning (rviz's heatmaps and grid): once the
+    estimate returns its force maps, they come from there instead.
+    """
+    return estimator.conditioner.condition(top, bottom)

@@ -9,9 +9,10 @@ What keeps work a lower rate would do off the per-scan path of the driver and th
 * :class:`TakenOnThread`: subscriptions whose messages a thread of its own takes as they arrive,
   every waiting one per wake-up, instead of the node's executor: the split direction node's
   frames, the benchmark's subscriber (its two subscriptions on one thread: no GIL hand-over).
-  rclpy's executor rebuilds its wait set from every entity of its nodes on each wake-up (the
-  split direction node's executor cost ~0.4 ms per scan); this thread waits on its
-  subscriptions and a stop signal alone, and the executor keeps parameters, services and timers.
+  rclpy's executor rebuilds its wait set from every entity of its nodes on each wake-up, a cost
+  paid per scan that grows with the node's services, actions and timers; this thread waits on
+  its subscriptions and a stop signal alone, and the executor keeps parameters, services and
+  timers.
 """
 
 import contextlib
@@ -61,6 +62,9 @@ class LatestOnly:
         self._item = None
         # Items replaced before their job started (read by any thread: an int, set under _ready).
         self.dropped = 0
+        # True from an offer until the job of the last item offered has returned (set under
+        # _ready): while False, this thread runs nothing and will not until the next offer.
+        self.busy = False
         self._stopped = False
         self._ready = threading.Condition()
         self._thread = threading.Thread(target=self._run, name=name, daemon=True)
@@ -71,6 +75,7 @@ class LatestOnly:
         with self._ready:
             self.dropped += self._item is not None
             self._item = item
+            self.busy = True
             self._ready.notify()
 
     def stop(self, timeout_s: float = 2.0) -> None:
@@ -93,6 +98,8 @@ class LatestOnly:
                 self._job(item)
             except Exception as err:  # noqa: B902 - reported; the next item is still served
                 self._on_error(err)
+            with self._ready:
+                self.busy = self._item is not None
 
 
 class NoExecutor(CallbackGroup):

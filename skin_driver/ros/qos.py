@@ -5,7 +5,7 @@ Streams (frame, images, contacts, contact, wrench) keep the sensor-data profile:
 keep last 5, so a late or slow reader costs the publisher nothing and never sees stale scans.
 The direction node, which must estimate every scan, reads frame best effort too but keeps the
 last EVERY_SCAN_DEPTH: five scans are 2.5 ms at 2 kHz, shorter than a thread may wait for a core
-on a busy machine (the benchmark's split layout lost scans there at depth 5).
+on a busy machine, so a depth of five would lose scans there.
 The rviz topics and /diagnostics are reliable, keep last 5 and 10. board_info (what the board
 says it is, sent when it changes) is latched: reliable, transient local, keep last 1, so a node
 that starts later still hears it. Every publisher and

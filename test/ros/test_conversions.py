@@ -8,7 +8,8 @@ import numpy as np
 import pytest
 from rclpy.serialization import deserialize_message, serialize_message
 from skin_driver.core.estimation.scan.heatmap import grey_levels
-from skin_driver.core.estimation.scan.pipeline import Contact
+from skin_driver.core.estimation.scan.pipeline import Contact, ContactEstimator, EstimatorConfig
+from skin_driver.core.sim.physics import Press, render, SkinModel
 from skin_driver.ros import conversions
 from skin_msgs.msg import SkinFrame, TactileContact, TactileContactArray
 from std_msgs.msg import Header
@@ -37,9 +38,18 @@ def test_contact_message_carries_every_field():
     assert msg.shift.y == 0.002 and msg.header.frame_id == 'skin_link'
 
 
-def test_invalid_direction_zeroes_azimuth_and_polar():
-    msg = conversions.contact_to_msg(HEADER, _contact(direction_valid=False, azimuth_rad=1.0))
-    assert (msg.azimuth, msg.polar, msg.direction_valid) == (0.0, 0.0, False)
+def test_a_contact_without_a_direction_arrives_as_the_core_made_it():
+    # A normal press: the core finds no direction and says what that looks like (Contact).
+    model = SkinModel(noise_counts=0.0)
+    top, bottom = render(model, [Press(0.0377, 0.0391, 10.0, radius_m=0.004)],
+                         np.random.default_rng(0))
+    (contact,) = ContactEstimator(EstimatorConfig(pitch_m=model.pitch_m)).process(top, bottom)
+    assert not contact.direction_valid
+    msg = conversions.contact_to_msg(HEADER, contact)
+    assert (msg.azimuth, msg.azimuth_sigma, msg.polar, msg.direction_valid) == (
+        contact.azimuth_rad, contact.azimuth_sigma_rad, contact.alpha_rad, False)
+    assert (msg.azimuth, msg.azimuth_sigma, msg.polar) == (0.0, math.pi, 0.0)
+    assert (msg.wrench.force.x, msg.wrench.force.y) == (0.0, 0.0)
 
 
 @pytest.mark.parametrize('field,value', [('force_n', math.nan), ('x_m', math.inf),

@@ -66,6 +66,27 @@ def test_latest_only_serves_the_newest_item_and_survives_a_failing_job():
     assert worker.dropped == 2  # 'old' and 'older', replaced before they started
 
 
+def test_latest_only_is_busy_from_an_offer_until_its_job_has_returned():
+    started, release = threading.Event(), threading.Event()
+
+    def job(item):
+        started.set()
+        release.wait(5.0)
+    worker = LatestOnly(job, 'skin-test-busy')
+    try:
+        assert not worker.busy
+        worker.offer(1)
+        assert worker.busy and started.wait(5.0)
+        worker.offer(2)  # waits behind the running job
+        release.set()
+        deadline = time.monotonic() + 5.0
+        while worker.busy and time.monotonic() < deadline:
+            time.sleep(0.001)
+        assert not worker.busy  # both served: nothing runs until the next offer
+    finally:
+        worker.stop()
+
+
 @contextlib.contextmanager
 def numbers_taken_on_thread(thread_name, on_message, on_error, depth):
     """Yield (context, executor, publisher): a node's `numbers` taken by a TakenOnThread."""

@@ -25,6 +25,7 @@ from typing import Sequence
 import numpy as np
 
 from .physics import expected_counts, Press, render_force, SkinModel
+from ..common import least_squares
 from ..estimation.scan.pipeline import Contact
 
 __all__ = ['ORACLE', 'fit_presses', 'oracle_contacts', 'oracle_run']
@@ -72,26 +73,38 @@ class _Frame:
         self.presses = list(presses)
         self.counts = np.asarray(counts, dtype=np.float64)
         self.scale = 1.0 / max(model.noise_counts, 1.0)
+        self._last = None  # (parameters, force maps) of the last residual taken
 
     def forces(self, u: np.ndarray) -> list:
         return [np.stack(render_force(self.model, [_press_of(self.model, p, u[k])]))
                 for k, p in enumerate(self.presses)]
 
-    def residual(self, forces: list) -> np.ndarray:
+    def of(self, forces: list) -> np.ndarray:
         total = np.sum(forces, axis=0)
         return ((expected_counts(self.model, total[0], total[1]) - self.counts)
                 * self.scale).ravel()
 
-    def jacobian(self, u: np.ndarray, forces: list, r0: np.ndarray) -> np.ndarray:
+    def residual(self, x: np.ndarray) -> np.ndarray:
+        """Return the residuals of the flat parameters ``x`` (K x 6, row by row)."""
+        forces = self.forces(x.reshape(-1, _PER_PRESS))
+        self._last = (x.copy(), forces)
+        return self.of(forces)
+
+    def jacobian(self, x: np.ndarray, r0: np.ndarray) -> np.ndarray:
+        # The solver asks at the point it has just taken the residuals of: their maps serve.
+        last, forces = self._last if self._last is not None else (None, None)
+        u = x.reshape(-1, _PER_PRESS)
+        if last is None or not np.array_equal(last, x):
+            forces = self.forces(u)
         # Each parameter moves only its own press's maps: re-render that press alone.
-        jac = np.empty((r0.size, u.size))
+        jac = np.empty((r0.size, x.size))
         for k, p in enumerate(self.presses):
             others = forces[:k] + forces[k + 1:]
             for j in range(_PER_PRESS):
                 v = u[k].copy()
                 v[j] += _STEP[j]
                 moved = np.stack(render_force(self.model, [_press_of(self.model, p, v)]))
-                jac[:, k * _PER_PRESS + j] = (self.residual(others + [moved]) - r0) / _STEP[j]
+                jac[:, k * _PER_PRESS + j] = (self.of(others + [moved]) - r0) / _STEP[j]
         return jac
 
 
@@ -105,30 +118,13 @@ def fit_presses(model: SkinModel, presses: Sequence[Press], counts: np.ndarray) 
     """
     frame = _Frame(model, presses, counts)
     u = np.array([_parameters(model, p) for p in presses])
-    forces = frame.forces(u)
-    r = frame.residual(forces)
-    cost = r @ r
-    damping = 1e-3
-    jac = frame.jacobian(u, forces, r)
-    for _ in range(_ITERATIONS):
-        normal = jac.T @ jac
-        step = np.linalg.solve(normal + damping * np.diag(np.diag(normal) + 1e-9),
-                               -jac.T @ r).reshape(u.shape)
-        step /= max(1.0, float(np.abs(step / _MAX_STEP).max()))
-        trial = u + step
-        trial_forces = frame.forces(trial)
-        trial_r = frame.residual(trial_forces)
-        trial_cost = trial_r @ trial_r
-        if trial_cost < cost:
-            u, forces, r, cost = trial, trial_forces, trial_r, trial_cost
-            damping *= 0.3
-            if np.abs(step).max() < 1e-4:
-                break
-            jac = frame.jacobian(u, forces, r)
-        else:
-            damping *= 10.0
+    fit = least_squares.levenberg_marquardt(
+        frame.residual, u.ravel(), iterations=_ITERATIONS, jacobian=frame.jacobian,
+        limit=least_squares.scaled_into(np.tile(_MAX_STEP, len(presses))), stop_move=1e-4,
+        floor=1e-9)
+    u = fit.x.reshape(u.shape)
     try:
-        covariance = np.linalg.inv(jac.T @ jac)
+        covariance = np.linalg.inv(fit.normal)
         sigma = np.sqrt(np.clip(np.diag(covariance), 0.0, None)).reshape(u.shape)
     except np.linalg.LinAlgError:
         sigma = np.full(u.shape, math.inf)

@@ -11,14 +11,16 @@ from .cdr import (GridMarkers, read_contacts_head, read_skin_frame, SerializedMe
 from .messages import (
     calibration_feedback, contact_fields, contact_markers, contact_to_msg, ContactArrayWriter,
     contacts_to_array, counts_to_image, fill_compliance_result, fill_force_result,
-    fill_gains_result, fill_offset_result, grid_markers, heatmap_markers, make_header,
+    fill_gains_result, fill_offset_result, frame_pitch, grid_markers, heatmap_markers,
+    make_header,
     mount_transform, rgb_to_image, skin_frame_layers, skin_frame_to_msg, status_values,
     wrench_stamped)
 
 __all__ = [
     'calibration_feedback', 'contact_fields', 'contact_markers', 'contact_to_msg',
     'ContactArrayWriter', 'contacts_to_array', 'counts_to_image', 'fill_compliance_result',
-    'fill_force_result', 'fill_gains_result', 'fill_offset_result', 'grid_markers',
+    'fill_force_result', 'fill_gains_result', 'fill_offset_result', 'frame_pitch',
+    'grid_markers',
     'GridMarkers', 'heatmap_markers', 'make_header',
     'mount_transform', 'read_contacts_head', 'read_skin_frame', 'rgb_to_image',
     'SerializedMessages',

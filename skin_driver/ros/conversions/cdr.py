@@ -19,7 +19,7 @@ from skin_msgs.msg import SkinFrame, TactileContact, TactileContactArray
 from std_msgs.msg import Header
 from visualization_msgs.msg import MarkerArray
 
-from .messages import (_fill_contact, _net_wrench_fields, grid_markers, palette_rgba,
+from .messages import (fill_contact, grid_markers, net_wrench_fields, palette_rgba,
                        skin_frame_to_msg)
 
 _CDR_LE = b'\x00\x01\x00\x00'  # encapsulation header: plain CDR, little-endian
@@ -115,7 +115,7 @@ class SerializedMessages:
     def wrench(self, sec: int, nanosec: int, contacts: Sequence) -> bytes:
         """Return the WrenchStamped of core contacts, as :func:`wrench_stamped` makes it."""
         return _CDR_LE + self._wrench.pack(sec, nanosec, len(self._fid), self._fid,
-                                           *_net_wrench_fields(contacts))
+                                           *net_wrench_fields(contacts))
 
     def _same_as_rclpy(self) -> bool:
         """Return whether rclpy reads these bytes back as the messages they stand for."""
@@ -125,7 +125,7 @@ class SerializedMessages:
         # location.z and shift.z (2 and 10) are 0 in every contact message.
         fields = [tuple(0.0 if i in (2, 10) else 0.5 + i + k / 7
                         for i in range(_CONTACT_DOUBLES)) + (k == 0,) for k in range(3)]
-        msgs = [_fill_contact(header, values) for values in fields]
+        msgs = [fill_contact(header, values) for values in fields]
         array_msg = TactileContactArray(header=header, sequence=7, device_time_us=2 ** 40 + 3,
                                         contacts=msgs)
         wrench = WrenchStamped(header=header, wrench=Wrench(

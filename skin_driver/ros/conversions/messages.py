@@ -41,6 +41,16 @@ def skin_frame_to_msg(header: Header, sequence: int, device_time_us: int,
     return msg
 
 
+def frame_pitch(pitch_m: float) -> float:
+    """
+    Return a taxel pitch as a SkinFrame carries it: the 7 significant digits of its float32.
+
+    A driver's 0.005 arrives as 0.004999999888. Two pitches are one skin's when their
+    frame_pitch is equal: the one rule of the estimator's pitch and the calibration's skin.
+    """
+    return float(f'{float(pitch_m):.7g}')
+
+
 def skin_frame_layers(msg: SkinFrame) -> Tuple[np.ndarray, np.ndarray]:
     """Return the (top, bottom) count maps of a SkinFrame, checking that its sizes agree."""
     return layers_of(msg.rows, msg.cols, msg.top, msg.bottom)
@@ -84,16 +94,14 @@ def contact_fields(contact) -> tuple:
     normal_force = _finite(contact.force_n, 'normal force')
     area = _finite(contact.area_m2, 'area')
     confidence = min(1.0, max(0.0, _finite(contact.confidence, 'confidence')))
-    direction_valid = bool(contact.direction_valid)
-    if direction_valid:
-        azimuth = _finite(contact.azimuth_rad, 'azimuth')
-        sigma = _finite(contact.azimuth_sigma_rad, 'azimuth_sigma')
-        polar = _finite(contact.alpha_rad, 'polar')
-    else:
-        azimuth, sigma, polar = 0.0, math.pi, 0.0
+    # What a contact without a direction carries (azimuth 0, sigma pi, polar 0) is the core's
+    # rule (Contact): the message takes the contact's own values and its direction_valid.
+    azimuth = _finite(contact.azimuth_rad, 'azimuth')
+    sigma = _finite(contact.azimuth_sigma_rad, 'azimuth_sigma')
+    polar = _finite(contact.alpha_rad, 'polar')
     return (x, y, 0.0, math.sqrt(fx * fx + fy * fy + fz * fz), normal_force, azimuth, sigma,
             polar, sx, sy, 0.0, fx, fy, fz, *torque_about_origin(x, y, (fx, fy, fz)), area,
-            confidence, direction_valid)
+            confidence, bool(contact.direction_valid))
 
 
 def contact_to_msg(header: Header, contact, out: TactileContact = None) -> TactileContact:
@@ -103,10 +111,16 @@ def contact_to_msg(header: Header, contact, out: TactileContact = None) -> Tacti
     With ``out`` the message is filled in place and returned: publish() serialises at once, so
     one message can carry scan after scan. A refused contact leaves ``out`` as it was.
     """
-    return _fill_contact(header, contact_fields(contact), out)
+    return fill_contact(header, contact_fields(contact), out)
 
 
-def _fill_contact(header: Header, fields: tuple, out: TactileContact = None) -> TactileContact:
+def fill_contact(header: Header, fields: tuple, out: TactileContact = None) -> TactileContact:
+    """
+    Return a TactileContact of one :func:`contact_fields` tuple (``out`` filled, if given).
+
+    The one writer of the message object; :class:`cdr.SerializedMessages` writes the same
+    fields as bytes and checks itself against this.
+    """
     (x, y, _, magnitude, normal_force, azimuth, sigma, polar, sx, sy, _, fx, fy, fz, tx, ty, tz,
      area, confidence, direction_valid) = fields
     msg = TactileContact() if out is None else out
@@ -131,7 +145,8 @@ class ContactArrayWriter:
     Fill one TactileContactArray (and its contacts) scan after scan instead of building anew.
 
     For a publisher's hot path: publish() serialises the message at once, so the next scan may
-    overwrite it. Building the messages afresh costs about three times as much in rclpy.
+    overwrite it. Building the messages afresh makes Python objects per contact and scan, which
+    rclpy then converts field by field.
     """
 
     def __init__(self):
@@ -167,12 +182,13 @@ def wrench_stamped(header: Header, contacts: Sequence) -> WrenchStamped:
     frame origin; zero when nothing touches. Two fingers pinching report what the skin carries,
     not the strongest finger.
     """
-    fx, fy, fz, tx, ty, tz = _net_wrench_fields(contacts)
+    fx, fy, fz, tx, ty, tz = net_wrench_fields(contacts)
     return WrenchStamped(header=header, wrench=Wrench(force=Vector3(x=fx, y=fy, z=fz),
                                                       torque=Vector3(x=tx, y=ty, z=tz)))
 
 
-def _net_wrench_fields(contacts: Sequence) -> tuple:
+def net_wrench_fields(contacts: Sequence) -> tuple:
+    """Return the net wrench of core contacts as (fx, fy, fz, tx, ty, tz), all finite."""
     force, torque = net_wrench(contacts)
     return (*(_finite(v, 'force') for v in force), *(_finite(v, 'torque') for v in torque))
 

@@ -303,6 +303,7 @@ def stage_costs(repeats=500) -> dict:
         node = DirectionNode(subscribe=False, namespace=ns, parameter_overrides=overrides(
             {'calibration_file': os.devnull + '/none', 'viz_rate': 0.0}))
         host: EstimationHost = node.host
+        host.prepare(16, 16, 0.005)  # as the fused driver does: no executor serves the check
         est = host.estimator.with_tare(
             *[np.stack([render(model, [], rng)[k] for _ in range(10)]) for k in (0, 1)])
         contacts = est.process(top, bottom)

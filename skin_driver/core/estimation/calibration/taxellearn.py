@@ -25,6 +25,7 @@ import numpy as np
 from ..model.fsr import FsrModel
 from ..model.taxelmodel import (best_radius, levenberg_marquardt, LOG_FORCE, MAX_MOVES, residuals,
                                 start_of, STEPS, sub_for, TaxelModel)
+from ...common import least_squares
 
 __all__ = ['LearningPress', 'learn_taxel_model', 'film_start']
 
@@ -162,64 +163,73 @@ def _learn_from(windows: list, pitch: float, full_scale: float, g: np.ndarray,
 
 def _joint(pitch: float, full_scale: float, g: np.ndarray, presses_u: list, subs: list,
            windows: list, iterations: int) -> tuple:
-    """Return (g, press parameters, misfit) of the joint fit of skin and presses."""
+    """
+    Return (g, press parameters, misfit) of the joint fit of skin and presses.
+
+    One vector holds the skin's numbers, then each press's free ones. The normal equations are
+    assembled press by press (a press's parameters move only its own residuals), and a trial
+    that fails is retried with more damping at most six times before the fit ends.
+    """
     idx = np.flatnonzero(_FREE)
     steps, moves = STEPS[idx], MAX_MOVES[idx]
-    ng, npress = g.size, idx.size
-    size = ng + npress * len(windows)
+    ng, npress, count = g.size, idx.size, len(windows)
+    size = ng + npress * count
 
-    def all_residuals(g, us):
-        model = _model(pitch, full_scale, g)
-        return [residuals(model, c, m, u, s, k) for (c, m, k), u, s in zip(windows, us, subs)]
+    def presses_of(x):
+        out = []
+        for k, u in enumerate(presses_u):
+            v = u.copy()
+            v[idx] = x[ng + npress * k:ng + npress * (k + 1)]
+            out.append(v)
+        return out
 
-    r = all_residuals(g, presses_u)
-    cost = sum(float(x @ x) for x in r)
-    damping = 1e-3
-    for _ in range(iterations):
+    def each_residual(x):
+        model = _model(pitch, full_scale, x[:ng])
+        return [residuals(model, c, m, u, s, k)
+                for (c, m, k), u, s in zip(windows, presses_of(x), subs)]
+
+    def residual(x):
+        return np.concatenate(each_residual(x))
+
+    # Each press's residuals: one per taxel of its window's two layers.
+    split = np.cumsum([counts.size for counts, _, _ in windows])[:-1]
+
+    def normal_equations(x, r):
+        parts = np.split(r, split)
         normal = np.zeros((size, size))
         grad = np.zeros(size)
         skin_jac = []
         for j in range(ng):
-            shifted = g.copy()
+            shifted = x.copy()
             shifted[j] += _SKIN_STEP
-            skin_jac.append([(a - b) / _SKIN_STEP
-                             for a, b in zip(all_residuals(shifted, presses_u), r)])
-        model = _model(pitch, full_scale, g)
-        for k, ((counts, censored, sens), u, sub) in enumerate(zip(windows, presses_u, subs)):
-            jp = np.empty((r[k].size, npress))
+            skin_jac.append([(a - b) / _SKIN_STEP for a, b in zip(each_residual(shifted), parts)])
+        model = _model(pitch, full_scale, x[:ng])
+        for k, ((counts, censored, sens), u, sub) in enumerate(zip(windows, presses_of(x),
+                                                                   subs)):
+            jp = np.empty((parts[k].size, npress))
             for col, (j, h) in enumerate(zip(idx, steps)):
                 v = u.copy()
                 v[j] += h
-                jp[:, col] = (residuals(model, counts, censored, v, sub, sens) - r[k]) / h
+                jp[:, col] = (residuals(model, counts, censored, v, sub, sens) - parts[k]) / h
             jg = np.column_stack([skin_jac[j][k] for j in range(ng)])
             own = slice(ng + npress * k, ng + npress * (k + 1))
             normal[:ng, :ng] += jg.T @ jg
             normal[:ng, own] += jg.T @ jp
             normal[own, :ng] += jp.T @ jg
             normal[own, own] += jp.T @ jp
-            grad[:ng] += jg.T @ r[k]
-            grad[own] += jp.T @ r[k]
-        for _ in range(6):
-            try:
-                move = np.linalg.solve(normal + damping * np.diag(np.diag(normal) + 1e-12),
-                                       -grad)
-            except np.linalg.LinAlgError:
-                return g, presses_u, cost
-            skin_move = np.clip(move[:ng], -_SKIN_MOVE, _SKIN_MOVE)
-            press_moves = move[ng:].reshape(len(windows), npress)
-            press_moves /= np.maximum(1.0, np.abs(press_moves / moves).max(axis=1))[:, None]
-            trial_u = []
-            for u, m in zip(presses_u, press_moves):
-                v = u.copy()
-                v[idx] += m
-                trial_u.append(v)
-            r2 = all_residuals(g + skin_move, trial_u)
-            cost2 = sum(float(x @ x) for x in r2)
-            if cost2 < cost:
-                g, presses_u, r, cost = g + skin_move, trial_u, r2, cost2
-                damping *= 0.3
-                break
-            damping *= 10.0
-        else:
-            break
-    return g, presses_u, cost
+            grad[:ng] += jg.T @ parts[k]
+            grad[own] += jp.T @ parts[k]
+        return normal, grad
+
+    def limit(move):
+        skin_move = np.clip(move[:ng], -_SKIN_MOVE, _SKIN_MOVE)
+        press_moves = move[ng:].reshape(count, npress)
+        press_moves = press_moves / np.maximum(1.0, np.abs(press_moves / moves).max(axis=1))[
+            :, None]
+        return np.concatenate((skin_move, press_moves.ravel()))
+
+    x0 = np.concatenate([g] + [u[idx] for u in presses_u])
+    fit = least_squares.levenberg_marquardt(
+        residual, x0, iterations=6 * iterations, normal_equations=normal_equations,
+        limit=limit, most_steps=iterations, patience=6)
+    return fit.x[:ng], presses_of(fit.x), fit.cost

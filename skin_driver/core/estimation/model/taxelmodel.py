@@ -36,6 +36,7 @@ import math
 import numpy as np
 
 from .cellops import axis_operator, blur_block, gather
+from ...common import least_squares
 from ...common.validate import check_number
 
 __all__ = ['TaxelModel', 'PressFit', 'hertz_profile', 'render_counts', 'residuals',
@@ -256,45 +257,24 @@ def levenberg_marquardt(residual, u: np.ndarray, free: np.ndarray, iterations: i
     """
     Return (u, misfit) minimising ``residual(u) @ residual(u)`` over the ``free`` parameters.
 
-    Forward-difference Jacobian (steps :data:`STEPS`), each move scaled into :data:`MAX_MOVES`.
+    Forward-difference Jacobian (steps :data:`STEPS`), each move scaled into :data:`MAX_MOVES`
+    (:func:`skin_driver.core.common.least_squares.levenberg_marquardt`).
     """
-    u = np.array(u, dtype=np.float64)
+    base = np.array(u, dtype=np.float64)
     idx = np.flatnonzero(free)
-    steps, moves = STEPS[idx], MAX_MOVES[idx]
-    r = residual(u)
-    cost = float(r @ r)
-    damping = 1e-3
 
-    def jacobian(u, r):
-        jac = np.empty((r.size, idx.size))
-        for k, (j, h) in enumerate(zip(idx, steps)):
-            v = u.copy()
-            v[j] += h
-            jac[:, k] = (residual(v) - r) / h
-        return jac
+    def of(x):
+        full = base.copy()
+        full[idx] = x
+        return full
 
-    jac = jacobian(u, r)
-    for _ in range(iterations):
-        normal = jac.T @ jac
-        try:
-            move = np.linalg.solve(normal + damping * np.diag(np.diag(normal) + 1e-12),
-                                   -jac.T @ r)
-        except np.linalg.LinAlgError:
-            break
-        move /= max(1.0, float(np.abs(move / moves).max()))
-        trial = u.copy()
-        trial[idx] += move
-        r2 = residual(trial)
-        cost2 = float(r2 @ r2)
-        if cost2 < cost:
-            u, r, cost = trial, r2, cost2
-            damping *= 0.3
-            if np.abs(move).max() < 1e-4:
-                break
-            jac = jacobian(u, r)
-        else:
-            damping *= 10.0
-    return u, cost
+    def free_residual(x):
+        return residual(of(x))
+    fit = least_squares.levenberg_marquardt(
+        free_residual, base[idx], iterations=iterations,
+        jacobian=least_squares.forward_jacobian(free_residual, STEPS[idx]),
+        limit=least_squares.scaled_into(MAX_MOVES[idx]), stop_move=1e-4)
+    return of(fit.x), fit.cost
 
 
 def start_of(maps: np.ndarray, shift: tuple, model: TaxelModel) -> np.ndarray:

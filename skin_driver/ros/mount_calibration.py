@@ -1,0 +1,250 @@
+"""
+The mount action: the skin's pose on its parent link from touches, the ROS side of core mount.py.
+
+``MountCalibration(node, frame_id, put_mount)`` declares the ``mount.*`` parameters and offers
+``~/calibrate_mount`` (skin_msgs/action/CalibrateMount). A robot or a probe touches the skin at
+points known in ``mount.parent_frame``, given in the goal or read per touch from the tool tip
+topic ``mount.tool_topic`` (geometry_msgs/PointStamped or PoseStamped, in the parent frame:
+tf2_ros has no wheel, so no transform is looked up). The node calls :meth:`feed` with every
+scan's contacts. On success the pose is published on /tf_static, handed to ``put_mount`` (which
+stores it with the calibration) and returned with its residuals and a xacro line. A refused,
+failed or cancelled calibration changes nothing; each is logged, as is a rejected goal.
+"""
+
+import math
+import threading
+import time
+
+from geometry_msgs.msg import Point, PointStamped, Pose, PoseStamped, Quaternion
+from rclpy.action import ActionServer, CancelResponse, GoalResponse
+from rclpy.callback_groups import MutuallyExclusiveCallbackGroup
+from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
+from rclpy.task import Future
+from skin_driver.core.estimation.calibration.mount import (MAX_RESIDUAL_M, MountRefused,
+                                                           MountSession, urdf_snippet)
+from skin_driver.ros import conversions, qos
+from skin_driver.ros.params import declare
+from skin_msgs.action import CalibrateMount
+
+DEFAULT_TOUCHES = 6
+MAX_TOUCHES = 100
+POLL_S = 0.1
+NOTHING = '; nothing changed'
+# A tool tip position older than this when a scan arrives is not that scan's.
+MAX_TIP_AGE_S = 0.5
+
+
+def quaternion_of(rotation) -> Quaternion:
+    """Return the unit quaternion of a 3 x 3 rotation matrix (nested sequences)."""
+    r = rotation
+    # From the largest of w, x, y, z, whose square root is then far from zero.
+    trace = r[0][0] + r[1][1] + r[2][2]
+    if trace > 0.0:
+        s = 2.0 * math.sqrt(1.0 + trace)
+        return Quaternion(x=(r[2][1] - r[1][2]) / s, y=(r[0][2] - r[2][0]) / s,
+                          z=(r[1][0] - r[0][1]) / s, w=0.25 * s)
+    i = max(range(3), key=lambda k: r[k][k])
+    j, k = (i + 1) % 3, (i + 2) % 3
+    s = 2.0 * math.sqrt(1.0 + r[i][i] - r[j][j] - r[k][k])
+    q = [0.0, 0.0, 0.0]
+    q[i], q[j], q[k] = 0.25 * s, (r[j][i] + r[i][j]) / s, (r[k][i] + r[i][k]) / s
+    return Quaternion(x=q[0], y=q[1], z=q[2], w=(r[k][j] - r[j][k]) / s)
+
+
+class _Running:
+    """One running calibration: read whole by the scan thread, set whole by the executor."""
+
+    def __init__(self, session: MountSession, goal, tip_wanted: bool):
+        self.session = session
+        self.goal = goal
+        self.tip_wanted = tip_wanted
+
+
+class MountCalibration:
+    """Offer ~/calibrate_mount on ``node`` for the skin whose frame is ``frame_id()``."""
+
+    def __init__(self, node, frame_id, skin_shape, put_mount):
+        """Declare the parameters, create the action; skin_shape() is (rows, cols, pitch)."""
+        self._node = node
+        self._frame_id = frame_id
+        self._skin_shape = skin_shape
+        self._put_mount = put_mount
+        self._running = None
+        self._busy = threading.Lock()
+        self._tip = None
+        self._tip_sub = None
+        self._tf_pub = None
+        declare(node, 'mount.parent_frame', 'base_link',
+                'Link the skin is mounted on: ~/calibrate_mount gives its pose there.',
+                non_empty=True)
+        declare(node, 'mount.tool_topic', '',
+                'geometry_msgs/PointStamped or PoseStamped topic of the tool tip in the parent '
+                'frame, read per touch by ~/calibrate_mount when its goal gives no points.')
+        declare(node, 'mount.max_residual', MAX_RESIDUAL_M,
+                'Largest miss of a touch (metres) that ~/calibrate_mount accepts.',
+                low=1.0e-5, high=0.1)
+        ActionServer(node, CalibrateMount, '~/calibrate_mount', execute_callback=self._execute,
+                     goal_callback=self._on_goal, cancel_callback=self._on_cancel,
+                     callback_group=MutuallyExclusiveCallbackGroup())
+
+    # ---- per scan ----------------------------------------------------------------------------
+    def feed(self, contacts) -> None:
+        """Give the running calibration, if any, one scan's contacts (strongest first)."""
+        running = self._running
+        if running is None:
+            return
+        tip = None
+        if running.tip_wanted and self._tip is not None:
+            point, stamp = self._tip
+            tip = point if time.monotonic() - stamp <= MAX_TIP_AGE_S else None
+        note = running.session.add_scan(contacts, tip)
+        if note:
+            self._node.get_logger().info(f'mount calibration: {note}')
+            running.goal.publish_feedback(CalibrateMount.Feedback(
+                touches_done=len(running.session.skin_xy_m),
+                touches_wanted=running.session.wanted, note=note))
+
+    def _on_tip(self, msg) -> None:
+        position = msg.pose.position if isinstance(msg, PoseStamped) else msg.point
+        if msg.header.frame_id and msg.header.frame_id != self._param('mount.parent_frame'):
+            self._tip = None
+            return
+        self._tip = ((position.x, position.y, position.z), time.monotonic())
+
+    # ---- action ------------------------------------------------------------------------------
+    def _param(self, name: str):
+        return self._node.get_parameter(name).value
+
+    def _on_goal(self, request) -> GoalResponse:
+        if not self._busy.acquire(blocking=False):
+            self._node.get_logger().warning(
+                'mount calibration goal rejected: one is already running; wait for it to end or '
+                'cancel it')
+            return GoalResponse.REJECT
+        return GoalResponse.ACCEPT
+
+    def _on_cancel(self, goal_handle) -> CancelResponse:
+        self._node.get_logger().info('mount calibration: cancel requested')
+        return CancelResponse.ACCEPT
+
+    def _problem(self, goal) -> str:
+        """Return why the goal cannot be served, or ''."""
+        points = [(p.x, p.y, p.z) for p in goal.points]
+        if not all(math.isfinite(v) for p in points for v in p):
+            return 'a point holds a value that is not finite'
+        if len(points) > MAX_TOUCHES or goal.touches > MAX_TOUCHES:
+            return f'more than {MAX_TOUCHES} touches asked for'
+        if not (math.isfinite(goal.timeout) and goal.timeout >= 0.0):
+            return f'timeout {goal.timeout} s is not a number of seconds >= 0'
+        if not points and not self._param('mount.tool_topic'):
+            return ('no points in the goal and no mount.tool_topic to read the tool tip from; '
+                    'give the touch points, or name the tool tip topic')
+        return ''
+
+    async def _execute(self, goal_handle):
+        try:
+            return await self._run(goal_handle)
+        finally:
+            self._running = None
+            self._busy.release()
+
+    async def _run(self, goal_handle):
+        goal, result = goal_handle.request, CalibrateMount.Result()
+        result.parent_frame = self._param('mount.parent_frame')
+        result.pose = Pose(orientation=Quaternion(w=1.0))
+        logger = self._node.get_logger()
+        points = [(p.x, p.y, p.z) for p in goal.points]
+        try:
+            problem = self._problem(goal)
+            if problem:
+                raise MountRefused(problem)
+            touches = len(points) or goal.touches or DEFAULT_TOUCHES
+            session = MountSession(touches, points, self._param('mount.max_residual'))
+        except MountRefused as err:
+            return self._end(goal_handle, result, f'refused: {err}{NOTHING}', goal_handle.abort)
+        if not points:
+            self._follow_tip()
+        timeout = goal.timeout or self._param('calibration.timeout')
+        deadline = time.monotonic() + timeout
+        future = Future()
+
+        def watch():
+            if future.done():
+                return
+            if goal_handle.is_cancel_requested:
+                future.set_result('cancel')
+            elif session.done:
+                future.set_result('done')
+            elif time.monotonic() > deadline:
+                future.set_result('timeout')
+        self._running = _Running(session, goal_handle, not points)
+        logger.info(f'mount calibration: make {touches} touches within {timeout:.0f} s')
+        timer = self._node.create_timer(POLL_S, watch)
+        try:
+            outcome = await future
+        finally:
+            self._node.destroy_timer(timer)
+            self._running = None
+        made = f'{len(session.skin_xy_m)} of {touches} touches'
+        if outcome == 'cancel':
+            return self._end(goal_handle, result, f'cancelled with {made}{NOTHING}',
+                             goal_handle.canceled)
+        if outcome == 'timeout':
+            return self._end(goal_handle, result,
+                             f'timed out after {timeout:.0f} s with {made}{NOTHING}',
+                             goal_handle.abort)
+        try:
+            fit = session.finish()
+            rows, cols, pitch = self._skin_shape()
+            urdf = urdf_snippet(fit, result.parent_frame, self._frame_id(), rows, cols, pitch)
+            written = self._put_mount(result.parent_frame, fit)
+        except (MountRefused, OSError, ValueError) as err:
+            return self._end(goal_handle, result, f'refused: {err}{NOTHING}', goal_handle.abort)
+        self._publish_tf(result.parent_frame, fit)
+        x, y, z = fit.translation_m
+        result.pose = Pose(position=Point(x=x, y=y, z=z), orientation=quaternion_of(fit.rotation))
+        result.residuals = list(fit.residuals_m)
+        result.position_sigma = fit.position_sigma_m
+        result.orientation_sigma = fit.orientation_sigma_rad
+        result.touches_used = len(fit.residuals_m)
+        result.urdf = urdf
+        result.success = True
+        result.message = f'{self._frame_id()} on {result.parent_frame}: {fit.describe()}{written}'
+        return self._end(goal_handle, result, result.message, goal_handle.succeed)
+
+    def _end(self, goal_handle, result, message: str, finish):
+        result.message = message
+        log = self._node.get_logger()
+        (log.info if result.success else log.warning)(f'mount calibration: {message}')
+        finish()
+        return result
+
+    def _follow_tip(self) -> None:
+        """Subscribe to the tool tip topic with the type its publishers use."""
+        topic = self._node.resolve_topic_name(self._param('mount.tool_topic'))
+        if self._tip_sub is not None:
+            if self._tip_sub.topic_name == topic:
+                return
+            self._node.destroy_subscription(self._tip_sub)
+        types = dict(self._node.get_topic_names_and_types()).get(topic, [])
+        kind = PointStamped if 'geometry_msgs/msg/PointStamped' in types else PoseStamped
+        self._tip = None
+        self._tip_sub = self._node.create_subscription(kind, topic, self._on_tip, qos.stream(),
+                                                       **qos.overridable())
+
+    def _publish_tf(self, parent: str, fit) -> None:
+        """Put the mount on /tf_static (latched), where tf2_msgs is installed."""
+        try:
+            from tf2_msgs.msg import TFMessage
+        except ImportError:
+            self._node.get_logger().warning(
+                'mount calibration: tf2_msgs is not installed, the mount is not on /tf_static '
+                '(it is in the result and the calibration file)')
+            return
+        if self._tf_pub is None:
+            latched = QoSProfile(depth=1, durability=DurabilityPolicy.TRANSIENT_LOCAL,
+                                 reliability=ReliabilityPolicy.RELIABLE)
+            self._tf_pub = self._node.create_publisher(TFMessage, '/tf_static', latched)
+        transform = conversions.mount_transform(self._node.get_clock().now().to_msg(), parent,
+                                                self._frame_id(), fit.translation_m, fit.rpy_rad)
+        self._tf_pub.publish(TFMessage(transforms=[transform]))
