@@ -533,6 +533,20 @@ class CalibrationServices:
         goal_handle.succeed()
         return result
 
+    def write_and_put(self, calibration) -> str:
+        """
+        Write ``calibration`` to the file, then put it in force; return the file's path.
+
+        For a part another action makes (the mount): raises OSError or ValueError when the file
+        cannot be written, and then nothing changes.
+        """
+        path = self.path
+        calibration.save_yaml(path, make_parents=True)
+        self._put_calibration(calibration)
+        self.loaded_from = path
+        self.note = f'calibration from {path}: {calibration.describe()}'
+        return path
+
     # ---- reset -------------------------------------------------------------------------------
     def _on_reset(self, request, response):
         running = self._running_now

@@ -39,6 +39,7 @@ import numpy as np
 from rcl_interfaces.msg import SetParametersResult
 from rclpy.event_handler import PublisherEventCallbacks
 from sensor_msgs.msg import Image
+from skin_driver.core.estimation.calibration.calibration import SkinMount, utc_now
 from skin_driver.core.estimation.calibration.tare import RecentScans
 from skin_driver.core.estimation.scan.heatmap import colour_map, grey_levels
 from skin_driver.core.estimation.scan.pipeline import ContactEstimator, EstimatorConfig
@@ -49,6 +50,7 @@ from skin_driver.ros.calibration_services import CalibrationServices
 from skin_driver.ros.estimator_params import estimator_config, ESTIMATOR_PARAMETERS
 from skin_driver.ros.frames import default_frame_id
 from skin_driver.ros.hot_path import LatestOnly, Listened
+from skin_driver.ros.mount_calibration import MountCalibration
 from skin_driver.ros.params import accept_whole_numbers, check, declare, ParameterError
 from skin_msgs.msg import TactileContact, TactileContactArray
 from std_srvs.srv import Trigger
@@ -92,6 +94,7 @@ class EstimationHost:
         # The estimator holds the calibration; the services put every new one in force here.
         self.calibration = CalibrationServices(node, lambda: self._live.estimator,
                                                self.put_calibration)
+        self.mount = MountCalibration(node, lambda: self._skin, self._skin_grid, self._put_mount)
         # The scans a tare averages: filled and resized by the estimating thread alone.
         self._recent = RecentScans(self._p('tare.frames'))
         self._recent_size = self._recent_wanted = self._p('tare.frames')
@@ -264,6 +267,18 @@ class EstimationHost:
             live = self._live
             self._live = Live(change(live.estimator), skin or live.skin, live.generation + 1)
 
+    def _skin_grid(self) -> tuple:
+        """Return (rows, cols, pitch) of the skin the scans show (touches come with scans)."""
+        return self._live.skin or (0, 0, self._live.estimator.config.pitch_m)
+
+    def _put_mount(self, parent: str, fit) -> str:
+        """Store a mount found from touches with the calibration; return where it was written."""
+        calibration = self._live.estimator.calibration
+        mount = SkinMount(parent, fit.translation_m, fit.rpy_rad, fit.rms_residual_m,
+                          len(fit.residuals_m), utc_now())
+        path = self.calibration.write_and_put(replace(calibration, mount=mount))
+        return f'; written to {path}'
+
     def put_calibration(self, calibration) -> None:
         """Put ``calibration`` in force (with its force curves and gains)."""
         self._swap(lambda estimator: estimator.with_calibration(calibration))
@@ -373,6 +388,7 @@ class EstimationHost:
         self._latest = (header, pitch_m, top, bottom, contacts, live.estimator)
         self._skin = header.frame_id
         self.calibration.feed(top, bottom, contacts)
+        self.mount.feed(contacts)
         cpu.mark('bookkeeping')
         self._cpu_reading.serve()
 

@@ -4,6 +4,7 @@ import math
 
 import numpy as np
 import pytest
+from skin_driver.core.estimation.calibration.calibration import Calibration, SkinMount
 from skin_driver.core.estimation.calibration.mount import (fit_mount, MountRefused, MountSession,
                                                            rpy_of, urdf_snippet)
 from skin_driver.core.estimation.scan.pipeline import ContactEstimator
@@ -168,3 +169,16 @@ def test_a_session_refuses_points_that_do_not_match_the_touches():
         MountSession(6, [(0.0, 0.0, 0.0)] * 5)
     with pytest.raises(MountRefused, match='at least 3'):
         MountSession(2)
+
+
+def test_the_mount_goes_into_the_calibration_file_and_back(tmp_path):
+    mount = SkinMount('forearm_link', (0.1, 0.2, 0.3), (0.0, 0.5, 1.0), 0.0004, 6, 'now')
+    path = tmp_path / 'calibration.yaml'
+    Calibration(x_p_m=1e-4, mount=mount).save_yaml(path)
+    assert Calibration.load_yaml(path).mount == mount
+    Calibration(x_p_m=1e-4).save_yaml(path)
+    assert 'mount' not in path.read_text()  # no mount: the file an older reader knows
+    with pytest.raises(ValueError, match='parent_frame'):
+        SkinMount('', (0.0, 0.0, 0.0), (0.0, 0.0, 0.0), 0.0, 3)
+    with pytest.raises(ValueError, match='3 numbers'):
+        SkinMount('link', (0.0, 0.0), (0.0, 0.0, 0.0), 0.0, 3)

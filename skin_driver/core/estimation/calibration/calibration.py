@@ -170,6 +170,47 @@ def _gains(value):
 
 
 @dataclass(frozen=True)
+class SkinMount:
+    """
+    The skin's pose on its parent link, as a mount calibration from touches found it.
+
+    ``xyz_m`` and ``rpy_rad`` (fixed-axis roll, pitch, yaw) place the skin frame on
+    ``parent_frame``; ``residual_m`` is the touches' RMS miss, ``touches`` how many there were.
+    """
+
+    parent_frame: str
+    xyz_m: tuple
+    rpy_rad: tuple
+    residual_m: float
+    touches: int
+    made_utc: str = ''
+
+    def __post_init__(self):
+        """Reject an empty parent, non-finite numbers and wrong lengths."""
+        if not isinstance(self.parent_frame, str) or not self.parent_frame:
+            raise ValueError('mount parent_frame must be a non-empty string')
+        for name in ('xyz_m', 'rpy_rad'):
+            values = tuple(float(v) for v in getattr(self, name))
+            if len(values) != 3:
+                raise ValueError(f'mount {name} must be 3 numbers')
+            object.__setattr__(self, name, tuple(check_number(v, f'mount {name}')
+                                                 for v in values))
+        object.__setattr__(self, 'residual_m', check_number(float(self.residual_m),
+                                                            'mount residual_m',
+                                                            non_negative=True))
+        if isinstance(self.touches, bool) or int(self.touches) != self.touches:
+            raise ValueError(f'mount touches must be an integer, got {self.touches!r}')
+
+    @classmethod
+    def from_dict(cls, doc) -> 'SkinMount':
+        """Return the mount of a calibration file's ``mount`` mapping."""
+        if not isinstance(doc, dict):
+            raise ValueError('mount must be a mapping')
+        return cls(str(doc['parent_frame']), tuple(doc['xyz_m']), tuple(doc['rpy_rad']),
+                   float(doc['residual_m']), int(doc['touches']), str(doc.get('made_utc') or ''))
+
+
+@dataclass(frozen=True)
 class Calibration:
     """
     Everything a skin was calibrated with; a field left at its default was not calibrated.
@@ -198,6 +239,7 @@ class Calibration:
     zero_ref_n: float = 0.0
     taxel_model: TaxelModel = None
     leak_share: float = 0.0
+    mount: 'SkinMount' = None
 
     def __post_init__(self):
         """Reject non-finite or negative values and malformed curves or gains."""
@@ -228,6 +270,8 @@ class Calibration:
         object.__setattr__(self, 'gains', _gains(self.gains))
         if self.taxel_model is not None and not isinstance(self.taxel_model, TaxelModel):
             raise ValueError(f'taxel_model must be a TaxelModel, got {self.taxel_model!r}')
+        if self.mount is not None and not isinstance(self.mount, SkinMount):
+            raise ValueError(f'mount must be a SkinMount, got {self.mount!r}')
 
     def zero_m(self, normal_force_n: float) -> tuple:
         """Return the raw shift (x, y) of a normal press of this force: where beta is 0 from."""
@@ -298,6 +342,8 @@ class Calibration:
             parts.append('taxel gains')
         if self.taxel_model:
             parts.append(f'taxel model ({self.taxel_model.presses} presses)')
+        if self.mount:
+            parts.append(f'mounted on {self.mount.parent_frame} ({self.mount.touches} touches)')
         if self.skin:
             parts.append(f'for {self.skin.describe()}')
         return '; '.join(parts) + (f'; made {self.made_utc}' if self.made_utc else '')
@@ -323,6 +369,10 @@ class Calibration:
                          zip(('top', 'bottom'), self.gains)})
         out['taxel_model'] = None if self.taxel_model is None else self.taxel_model.to_dict()
         out['leak_share'] = float(self.leak_share)
+        if self.mount is not None:
+            # Only when there is one: older readers see the file they know.
+            out['mount'] = {k: list(v) if isinstance(v, tuple) else v
+                            for k, v in asdict(self.mount).items()}
         return out
 
     def save_yaml(self, path, make_parents: bool = False) -> None:
@@ -385,6 +435,8 @@ class Calibration:
                 values['taxel_model'] = TaxelModel.from_dict(doc['taxel_model'])
             if doc.get('leak_share') is not None:
                 values['leak_share'] = float(doc['leak_share'])
+            if doc.get('mount') is not None:
+                values['mount'] = SkinMount.from_dict(doc['mount'])
             cal = cls(**values)
         except (KeyError, TypeError, ValueError) as exc:
             raise ValueError(f'{path}: {exc}') from None
