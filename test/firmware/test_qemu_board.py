@@ -2,9 +2,9 @@
 End to end: the firmware on the emulated board (QEMU netduinoplus2) through the driver's link.
 
 It streams 10 000 scans of a simulator scene through the driver's serial link and decoder;
-every frame arrives intact and in order, the information frames between them are passed over
-as junk by this version-1 decoder, and the contacts estimated from the received scans are those
-of the rendered scans.
+every frame arrives intact and in order, the information frames between them are read as the
+board's identity (docs/protocol.md) and discard nothing, and the contacts estimated from the
+received scans are those of the rendered scans.
 """
 
 import os
@@ -103,14 +103,22 @@ def test_ten_thousand_scans_through_the_driver(qemu_image, tmp_path):
     times = [f.device_time_us for f in frames]
     assert all(b > a for a, b in zip(times, times[1:]))
 
-    # The stream after the first frame is data and information frames and nothing else, and the
-    # information frames are all the decoder discarded there.
+    # The stream after the first frame is data and information frames and nothing else; the
+    # decoder accepts every information frame (the one at boot too, when it was read) and
+    # discards only what came before the first whole frame of either kind.
     raw = bytes(decoder.raw)
     start = raw.find(struct.pack('<BBBBI', 0xA5, 0x5A, 1, 0, first))
     assert start >= 0
     count, infos = _split_stream(raw, start)
     assert count >= SCANS
-    assert stats.bytes_discarded == start + sum(len(i) for i in infos)
+    boot = raw.find(b'\xa5\x69', 0, start)
+    if boot >= 0:
+        _, infos_from_boot = _split_stream(raw, boot)
+        assert (stats.bytes_discarded, stats.info_frames) == (boot, len(infos_from_boot))
+    else:
+        assert (stats.bytes_discarded, stats.info_frames) == (start, len(infos))
+    assert stats.info_errors == 0
+    assert INFO_TEXT.fullmatch(decoder.board_info.text.encode('ascii'))
     for info in infos:
         assert info[2] == 1 and info[3] == len(info) - 6
         assert INFO_TEXT.fullmatch(info[4:-2]), info
