@@ -1,4 +1,4 @@
-/* The board-information frame of INFO_FRAME.md. */
+/* The board-information frame (docs/protocol.md, "Board information frame"). */
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>

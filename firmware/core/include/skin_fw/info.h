@@ -1,4 +1,4 @@
-/* The board-information frame of firmware/INFO_FRAME.md. */
+/* The board-information frame (docs/protocol.md, "Board information frame"). */
 #ifndef SKIN_FW_INFO_H
 #define SKIN_FW_INFO_H
 
