@@ -69,7 +69,8 @@ class SerializedMessages:
         found = self._contact_at.get(key)
         if found is None:
             layout = _Layout(key).header(len(self._fid)).add('d', 8, _CONTACT_DOUBLES)
-            layout.add('?', 1)
+            # direction_valid, then patch: one skin's contacts name no patch (an empty string).
+            layout.add('?', 1).add('I', 4).add('s', 1, 1)
             found = self._contact_at[key] = (Struct(layout.format), layout.offset - key)
         return found
 
@@ -83,14 +84,14 @@ class SerializedMessages:
         offset = self._array_size
         for values in fields:
             layout, size = self._contact(offset)
-            parts.append(layout.pack(sec, nanosec, len(fid), fid, *values))
+            parts.append(layout.pack(sec, nanosec, len(fid), fid, *values, 1, b''))
             offset += size
         return b''.join(parts)
 
     def contact(self, sec: int, nanosec: int, values: tuple) -> bytes:
         """Return a TactileContact of one :func:`contact_fields` tuple."""
         return _CDR_LE + self._contact(0)[0].pack(sec, nanosec, len(self._fid), self._fid,
-                                                  *values)
+                                                  *values, 1, b'')
 
     def frame(self, sec: int, nanosec: int, sequence: int, device_time_us: int, pitch_m: float,
               top: np.ndarray, bottom: np.ndarray) -> bytes:
