@@ -70,6 +70,6 @@ double sk_sigma(const sk_kernel *k, const sk_pair *p, const double *window, int 
   } else if (p->at_border) {
     total += flat;
   }
-  total += k->reals[SK_CALIBRATION_VAR];
+  total += k->s.calibration_var;
   return sqrt(total);
 }

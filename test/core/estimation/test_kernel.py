@@ -398,10 +398,11 @@ def test_a_missing_kernel_stops_the_estimators_maker_naming_the_fix():
             'ContactEstimator(compiled=False)\n'
             "print('description made', flush=True)\n"
             'ContactEstimator()\n')
-    env = {**os.environ, 'AMENT_PREFIX_PATH': os.devnull}
+    env = {**os.environ, 'SKIN_KERNEL_LIBRARY': '/nonexistent/libskin_kernel.so.0'}
     out = subprocess.run([sys.executable, '-c', code], capture_output=True, text=True, env=env)
     assert out.stdout == 'description made\n' and out.returncode != 0
     assert 'KernelMissing' in out.stderr and 'make setup' in out.stderr
+    assert '/nonexistent/libskin_kernel.so.0' in out.stderr
 
 
 # ---- the forward model's fit of one contact (sk_model_fit) against taxelmodel.fit_contact ----

@@ -290,8 +290,7 @@ class ContactEstimator:
         """
         p = self.config.pitch_m
         if self._use_kernel:
-            dx, dy = compiled_kernel.DX, compiled_kernel.DY
-            return [(r[dx] * p, r[dy] * p)
+            return [(r.dx * p, r.dy * p)
                     for r in self._scan(top_counts, bottom_counts, every_pair=True)]
         raw = sorted(self._raw(top_counts, bottom_counts),
                      key=lambda item: -self._normal_force(item[0]))
@@ -301,8 +300,7 @@ class ContactEstimator:
         """Return the contacts in the two raw count maps, strongest (normal force) first."""
         if not self._use_kernel:
             return self._process_described(top_counts, bottom_counts)
-        kept = compiled_kernel.KEPT
-        return [_contact(r) for r in self._scan(top_counts, bottom_counts) if r[kept]]
+        return [_contact(r) for r in self._scan(top_counts, bottom_counts) if r.kept]
 
     def _scan(self, top_counts, bottom_counts, every_pair: bool = False) -> list:
         """Return the compiled kernel's records of the contacts (kernel.Kernel.scan)."""
@@ -316,24 +314,30 @@ class ContactEstimator:
         t, _ = check_pair(top_counts, bottom_counts)
         with self._kernel_lock:
             if self._kernel is None:
-                cfg, cal = self.config, self.calibration
                 state = self.conditioner.state(t.shape)
-                curves = cal.force_curves or (None, None)
-                reals = (cfg.pitch_m, self.compliance_m_per_n, cfg.min_contact_force_n,
-                         cfg.min_confidence, cfg.min_shift_m, cfg.force_scale, cfg.fill_factor,
-                         cal.x_p_m, cal.y_p_m, *cal.zero_slope_m_per_n, cal.zero_ref_n,
-                         self._calibration_variance(),
-                         *(c.censor_counts if c is not None else 0.0 for c in curves),
-                         *(c.rim_load_n if c is not None else 0.0 for c in curves),
-                         *(c.spread_taxels if c is not None else 0.0 for c in curves),
-                         *(c.bump_power if c is not None else 2.0 for c in curves),
-                         *(c.activation_n if c is not None else 0.0 for c in curves),
-                         *compiled_kernel.model_numbers(cal.taxel_model))
-                cond = self.conditioner.config
                 self._kernel = compiled_kernel.Kernel(compiled_kernel.KernelSettings(
-                    self._method.name, cfg.max_contacts, cond.remove_crosstalk, cond.fill_dead,
-                    reals, *state))
+                    self._kernel_settings(), self._method.name, *state))
         return self._kernel
+
+    def _kernel_settings(self) -> compiled_kernel.Settings:
+        """Return the kernel's settings of this estimator (the maps' shape filled in later)."""
+        cfg, cal = self.config, self.calibration
+        curves = [compiled_kernel.Curve(bump_power=2.0) if c is None else compiled_kernel.Curve(
+            censor_counts=c.censor_counts, rim_load_n=c.rim_load_n,
+            spread_taxels=c.spread_taxels, bump_power=c.bump_power,
+            activation_n=c.activation_n) for c in (cal.force_curves or (None, None))]
+        slope_x, slope_y = cal.zero_slope_m_per_n
+        cond = self.conditioner.config
+        return compiled_kernel.Settings(
+            max_contacts=cfg.max_contacts, remove_crosstalk=cond.remove_crosstalk,
+            fill_dead=cond.fill_dead, pitch_m=cfg.pitch_m,
+            compliance_m_per_n=self.compliance_m_per_n, min_force_n=cfg.min_contact_force_n,
+            min_confidence=cfg.min_confidence, min_shift_m=cfg.min_shift_m,
+            force_scale=cfg.force_scale, fill_factor=cfg.fill_factor, x_p_m=cal.x_p_m,
+            y_p_m=cal.y_p_m, slope_x_m_per_n=slope_x, slope_y_m_per_n=slope_y,
+            zero_ref_n=cal.zero_ref_n, calibration_var=self._calibration_variance(),
+            curves=(compiled_kernel.Curve * 2)(*curves),
+            model=compiled_kernel.taxel_model_of(cal.taxel_model))
 
     def _process_described(self, top_counts, bottom_counts) -> list:
         """Return the contacts as :meth:`process`, by the Python description of the pipeline."""
@@ -377,15 +381,17 @@ class ContactEstimator:
         return contacts
 
 
-def _contact(r: list) -> Contact:
-    """Return the Contact of a compiled record (its first kernel.CONTACT_FIELDS numbers)."""
+def _contact(r: compiled_kernel.Record) -> Contact:
+    """Return the Contact of a compiled record."""
     # The frozen dataclass's __init__ sets each field through object.__setattr__; its __dict__
     # made at once is the same Contact for less than half the cost (a scan's Python share).
     contact = object.__new__(Contact)
     object.__setattr__(contact, '__dict__', {
-        'x_m': r[0], 'y_m': r[1], 'force_n': r[2], 'area_m2': r[3], 'shift_m': (r[4], r[5]),
-        'azimuth_rad': r[6], 'azimuth_sigma_rad': r[7], 'alpha_rad': r[8],
-        'force_xyz_n': (r[9], r[10], r[11]), 'confidence': r[12], 'direction_valid': r[13] > 0})
+        'x_m': r.x_m, 'y_m': r.y_m, 'force_n': r.force_n, 'area_m2': r.area_m2,
+        'shift_m': (r.shift_x_m, r.shift_y_m), 'azimuth_rad': r.azimuth_rad,
+        'azimuth_sigma_rad': r.azimuth_sigma_rad, 'alpha_rad': r.alpha_rad,
+        'force_xyz_n': (r.force_x_n, r.force_y_n, r.force_z_n), 'confidence': r.confidence,
+        'direction_valid': r.valid > 0})
     return contact
 
 
