@@ -351,7 +351,7 @@ class EstimationHost:
         header, pitch, top, bottom, contacts = latest
         full = self._p('viz_full_scale')
         forces = dict(zip(('top', 'bottom'),
-                          self._estimator.conditioner.condition(top, bottom)))
+                          self._estimator.maps_of(top, bottom)))
         for layer in ('top', 'bottom'):
             if layer in wanted:
                 self._pub_heat[layer].publish(

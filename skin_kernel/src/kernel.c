@@ -328,8 +328,8 @@ static void model_refit(sk_kernel *k, sk_pair *p, const sk_taxel_model *model, c
 }
 
 /* One scan of maps known to hold counts (sk_scan, sk_scan_counts). */
-static int scan(sk_kernel *k, const double *maps, int every_pair, sk_contact *out,
-                sk_status *status)
+static int scan(sk_kernel *k, const double *maps, int every_pair, sk_shift_fn shift,
+                void *user, sk_contact *out, sk_status *status)
 {
   k->revived = 0;
   k->npairs = 0;
@@ -370,7 +370,16 @@ static int scan(sk_kernel *k, const double *maps, int every_pair, sk_contact *ou
       continue;
     }
     double *scratch = k->fit + 4 * m;
-    if (k->method == SK_TAXEL_FIT || k->method == SK_MODEL_FIT) {
+    if (shift) {
+      double given[3] = {0.0, 0.0, 0.0};
+      if (shift(user, k->fit, p->h, p->w, given) == 0) {
+        p->dx = given[0];
+        p->dy = given[1];
+        p->confidence = given[2];
+      } else {
+        p->dx = p->dy = NAN;
+      }
+    } else if (k->method == SK_TAXEL_FIT || k->method == SK_MODEL_FIT) {
       /*
        * saturated taxels: at the curve's censoring counts, or cut by the ADC (pipeline.py);
        * a pair with none is not censored, and its marks are all 0
@@ -411,8 +420,8 @@ static int scan(sk_kernel *k, const double *maps, int every_pair, sk_contact *ou
   return finish(k, out);
 }
 
-int sk_scan(sk_kernel *k, const double *maps, int every_pair, sk_contact *out,
-            sk_status *status)
+/* SK_OK when every value of (2, rows, cols) maps is a count, else what is wrong. */
+static int check_maps(const sk_kernel *k, const double *maps)
 {
   int n2 = 2 * k->n;
   for (int i = 0; i < n2; i++) {
@@ -423,7 +432,38 @@ int sk_scan(sk_kernel *k, const double *maps, int every_pair, sk_contact *out,
       return SK_ERR_NEGATIVE;
     }
   }
-  return scan(k, maps, every_pair, out, status);
+  return SK_OK;
+}
+
+int sk_scan(sk_kernel *k, const double *maps, int every_pair, sk_contact *out,
+            sk_status *status)
+{
+  int checked = check_maps(k, maps);
+  return checked == SK_OK ? scan(k, maps, every_pair, NULL, NULL, out, status) : checked;
+}
+
+int sk_scan_shifted(sk_kernel *k, const double *maps, int every_pair, sk_shift_fn shift,
+                    void *user, sk_contact *out, sk_status *status)
+{
+  int checked = check_maps(k, maps);
+  return checked == SK_OK ? scan(k, maps, every_pair, shift, user, out, status) : checked;
+}
+
+int sk_condition(sk_kernel *k, const double *maps, double *counts, double *force)
+{
+  int checked = check_maps(k, maps);
+  if (checked != SK_OK) {
+    return checked;
+  }
+  sk_touch_counts(k, maps);
+  sk_force_of(k);
+  if (counts) {
+    memcpy(counts, k->counts, sizeof(double) * 2 * (size_t)k->n);
+  }
+  if (force) {
+    memcpy(force, k->force, sizeof(double) * 2 * (size_t)k->n);
+  }
+  return SK_OK;
 }
 
 int sk_scan_counts(sk_kernel *k, const uint16_t *maps, int every_pair, sk_contact *out,
@@ -434,7 +474,7 @@ int sk_scan_counts(sk_kernel *k, const uint16_t *maps, int every_pair, sk_contac
   for (int i = 0; i < n2; i++) {
     k->raw[i] = maps[i];
   }
-  return scan(k, k->raw, every_pair, out, status);
+  return scan(k, k->raw, every_pair, NULL, NULL, out, status);
 }
 
 void sk_dead(const sk_kernel *k, unsigned char *out)

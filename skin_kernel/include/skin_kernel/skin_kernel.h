@@ -9,7 +9,9 @@
  * package skin_driver.core.estimation, which the tests run side by side with this library.
  *
  * A kernel is built once per estimator from its state (tare, gains, force tables, settings) and
- * is not changed afterwards, except for dead-taxel marks that a touch revives (reported).
+ * is not changed afterwards, except for dead-taxel marks that a touch revives (reported): that
+ * is the per-scan state, owned by whoever runs the scans; a kernel is never used by two threads
+ * at once.
  */
 #ifndef SKIN_KERNEL_SKIN_KERNEL_H
 #define SKIN_KERNEL_SKIN_KERNEL_H
@@ -25,7 +27,7 @@ extern "C" {
  * (libskin_kernel.so.<SK_ABI_VERSION>), and sk_layout reports it with every struct's layout,
  * which the binding compares with its own mirrors before any other call.
  */
-#define SK_ABI_VERSION 9
+#define SK_ABI_VERSION 11
 
 /* Shift methods. */
 enum { SK_CENTROID = 0, SK_TAXEL_FIT = 1, SK_POC = 2, SK_MODEL_FIT = 3, SK_NMETHODS };
@@ -136,6 +138,29 @@ int sk_scan(sk_kernel *k, const double *maps, int every_pair, sk_contact *out,
  */
 int sk_scan_counts(sk_kernel *k, const uint16_t *maps, int every_pair, sk_contact *out,
                    sk_status *status);
+
+/*
+ * A shift given by the caller for one contact: window is its (2, h, w) tared counts (top,
+ * bottom); writes dx, dy (taxels, the bottom imprint's displacement from the top one) and a
+ * confidence in [0, 1] to shift. Returns 0, or anything else for no shift.
+ */
+typedef int (*sk_shift_fn)(void *user, const double *window, int h, int w, double *shift);
+
+/*
+ * sk_scan with each contact's shift from `shift` (called with `user`) instead of the kernel's
+ * method: a reference estimator run inside the kernel's pipeline (conditioning, contacts,
+ * uncertainty, figures), so that only the shift differs from the kernel's own.
+ */
+int sk_scan_shifted(sk_kernel *k, const double *maps, int every_pair, sk_shift_fn shift,
+                    void *user, sk_contact *out, sk_status *status);
+
+/*
+ * The conditioning of one scan alone, as sk_scan does it: the tared counts (line leak out, dead
+ * taxels filled) and the force of every taxel, each (2, rows, cols), to counts and force (either
+ * NULL: not wanted). Dead-taxel marks the maps revive are revived, as by a scan. Returns SK_OK or
+ * sk_scan's errors.
+ */
+int sk_condition(sk_kernel *k, const double *maps, double *counts, double *force);
 
 /* Copy the dead-taxel marks in force, (2, rows, cols), to out. */
 void sk_dead(const sk_kernel *k, unsigned char *out);

@@ -27,7 +27,7 @@ from skin_driver.core.estimation.model.taxelmodel import (
     render_counts, start_of, TaxelModel, X as model_x, Y as model_y)
 from skin_driver.core.estimation.scan.kernel import fit_contact as compiled_fit_contact
 from skin_driver.core.estimation.scan.pipeline import ContactEstimator, EstimatorConfig
-from skin_driver.core.estimation.shift.methods import REFERENCES
+from skin_driver.core.estimation.shift.methods import centroid, Method, REFERENCES
 from skin_driver.core.sim.experiments import calibrated_scene, make_scene
 from skin_driver.core.sim.physics import Press, render, SkinModel
 from skin_driver.core.sim.skins import family_skin, skin_names
@@ -369,11 +369,14 @@ def test_bad_maps_raise_what_is_wrong_and_the_next_scan_works(top, message):
     assert est.process(good, good) == []
 
 
-def test_maps_of_another_shape_than_the_first_are_refused():
+def test_an_untared_estimator_serves_each_shape_a_tared_one_only_its_own():
+    # No state follows the first scan: each new shape gets a kernel of its own.
     est = ContactEstimator()
     est.process(np.zeros((16, 16)), np.zeros((16, 16)))
-    with pytest.raises(ValueError, match='expected'):
-        est.process(np.zeros((8, 8)), np.zeros((8, 8)))
+    assert est.process(np.zeros((8, 8)), np.zeros((8, 8))) == []
+    tared = est.with_tare(np.zeros((2, 16, 16)), np.zeros((2, 16, 16)))
+    with pytest.raises(ValueError, match='expect'):
+        tared.process(np.zeros((8, 8)), np.zeros((8, 8)))
 
 
 def test_nested_lists_are_maps_too():
@@ -387,6 +390,16 @@ def test_a_reference_shift_keeps_the_python_path():
     # The paper's method (a reference, never a node's) is not compiled: both ways run Python.
     data = make_scene('random', 'default', np.random.default_rng(1), size=2)
     est = ContactEstimator(EstimatorConfig(pitch_m=data.pitch_m), shift=REFERENCES['seed'])
+    compiled, described = both_ways(est.with_tare(data.tare_top, data.tare_bottom))
+    for top, bottom in zip(data.top, data.bottom):
+        assert_same(compiled, described, top, bottom)
+
+
+def test_a_windowed_reference_shift_runs_in_the_kernels_pipeline():
+    # A reference on each contact's counts window (the bench's scikit-image one is such).
+    data = make_scene('multi', 'default', np.random.default_rng(2), size=2)
+    windowed = Method('windowed', centroid, False, 'the centroid as a reference')
+    est = ContactEstimator(EstimatorConfig(pitch_m=data.pitch_m), shift=windowed)
     compiled, described = both_ways(est.with_tare(data.tare_top, data.tare_bottom))
     for top, bottom in zip(data.top, data.bottom):
         assert_same(compiled, described, top, bottom)

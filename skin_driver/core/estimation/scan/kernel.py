@@ -11,7 +11,8 @@ A :class:`Kernel` copies an estimator's state once (tare, gains, force tables, s
 preallocated buffers, so a scan costs one copy of the maps into its buffer and one foreign call.
 Maps of uint16, as the driver and the datasets give them, are copied as they are (any value is
 a count, no check); others are checked and copied as float64.
-The kernel owns the dead-taxel marks its scans revive (:meth:`Kernel.dead_masks`).
+The kernel owns the dead-taxel marks its scans revive (:meth:`Kernel.dead_masks`): it is the
+estimation's one piece of mutable state, and whoever runs the scans owns it.
 
 The structs of skin_kernel.h are mirrored here field by field (:class:`Settings`,
 :class:`ContactRecord`, ...); before any other call the binding compares every mirror with the
@@ -41,7 +42,7 @@ __all__ = ['METHODS', 'ABI_VERSION', 'TaxelModelNumbers', 'Curve', 'Settings', '
 METHODS = {'centroid': 0, 'taxel_fit': 1, 'poc': 2, 'model_fit': 3}
 
 # skin_kernel.h's SK_ABI_VERSION, the library's SOVERSION: libskin_kernel.so.<ABI_VERSION>.
-ABI_VERSION = 9
+ABI_VERSION = 11
 LIBRARY = f'libskin_kernel.so.{ABI_VERSION}'
 # The variable that names the library file to load, before any place searched.
 LIBRARY_VARIABLE = 'SKIN_KERNEL_LIBRARY'
@@ -106,6 +107,11 @@ class Status(ctypes.Structure):
     """skin_kernel.h's sk_status: what a scan found besides its contacts."""
 
     _fields_ = [('pairs', _int), ('censored', _int), ('revived', _int)]
+
+
+# skin_kernel.h's sk_shift_fn: (user, window, h, w, shift out) -> 0, or anything else: none.
+_SHIFT_FN = ctypes.CFUNCTYPE(_int, ctypes.c_void_p, ctypes.POINTER(_double), _int, _int,
+                             ctypes.POINTER(_double))
 
 
 class _Field(ctypes.Structure):
@@ -216,7 +222,8 @@ def _sign(lib: ctypes.CDLL) -> None:
                   'sk_new': (_int, [ptr, ulong] + [ptr] * 6 + [ptr, ctypes.c_char_p, ulong]),
                   'sk_free': (None, [ptr]),
                   'sk_scan': (_int, None), 'sk_scan_counts': (_int, None),
-                  'sk_dead': (None, [ptr, ptr]),
+                  'sk_scan_shifted': (_int, [ptr, ptr, _int, _SHIFT_FN, ptr, ptr, ptr]),
+                  'sk_dead': (None, [ptr, ptr]), 'sk_condition': (_int, [ptr, ptr, ptr, ptr]),
                   'sk_model_fit': (_int, [ptr, _int, _int, ptr, ptr, ptr, ptr, _int, ptr, ptr])}
     for name, (restype, argtypes) in signatures.items():
         function = getattr(lib, name, None)
@@ -302,20 +309,25 @@ class Kernel:
                                                (lib.sk_scan_counts, self._counts)))
         self._lock = threading.Lock()
 
-    def scan(self, top, bottom, every_pair: bool = False) -> tuple:
-        """
-        Return (records, revived) of the raw maps: a :class:`Record` per contact, strongest first.
-
-        Without ``every_pair`` a contact too light to report (``kept`` 0) gets no shift.
-        ``revived`` is None, or the dead-taxel marks after this scan revived some. Bad maps
-        raise ValueError saying what is wrong.
-        """
+    def _checked(self, top, bottom) -> tuple:
+        """Return (whether both are uint16 counts, top, bottom), checked as a scan needs."""
         if not (type(top) is np.ndarray and type(bottom) is np.ndarray
                 and top.shape == self.shape and bottom.shape == self.shape):
             top, bottom = check_pair(top, bottom, self.shape)
         counts = top.dtype == _COUNTS and bottom.dtype == _COUNTS
         if not (counts or top.dtype.kind in 'uif' and bottom.dtype.kind in 'uif'):
             top, bottom = check_pair(top, bottom, self.shape)
+        return counts, top, bottom
+
+    def scan(self, top, bottom, every_pair: bool = False) -> list:
+        """
+        Return the :class:`Record` of each contact in the raw maps, strongest first.
+
+        Without ``every_pair`` a contact too light to report (``kept`` 0) gets no shift. Dead
+        taxels that read a touch are revived in the kernel. Bad maps raise ValueError saying
+        what is wrong.
+        """
+        counts, top, bottom = self._checked(top, bottom)
         scan, top_buffer, bottom_buffer, args = self._scans[counts]
         with self._lock:
             top_buffer[...] = top
@@ -324,18 +336,67 @@ class Kernel:
             if count < 0:
                 check_pair(top, bottom, self.shape)
                 raise ValueError('top or bottom holds a value that is not a count')
-            records = list(map(Record._make, self._out[:count].tolist()))
-            revived = self._dead_masks() if self._status.revived else None
-            return records, revived
+            return list(map(Record._make, self._out[:count].tolist()))
+
+    def scan_shifted(self, top, bottom, shift, every_pair: bool = False) -> list:
+        """
+        Return :meth:`scan`'s records with each contact's shift from ``shift``, not the kernel's.
+
+        ``shift(window)`` takes a contact's (2, h, w) tared counts and returns (dx, dy,
+        confidence) in taxels, or None for no shift: a reference estimator in the kernel's
+        pipeline. What it raises is raised here.
+        """
+        _, top, bottom = self._checked(top, bottom)
+        raised = []
+
+        def given(_user, window, h, w, out):
+            try:
+                found = shift(np.ctypeslib.as_array(window, (2, h, w)).copy())
+                if found is None:
+                    return 1
+                out[0], out[1], out[2] = (float(v) for v in found[:3])
+                return 0
+            except BaseException as err:  # noqa: B902 - raised again after the call
+                raised.append(err)
+                return 1
+
+        with self._lock:
+            self._maps[0] = top
+            self._maps[1] = bottom
+            count = self._lib.sk_scan_shifted(self._handle, _address(self._maps),
+                                              int(every_pair), _SHIFT_FN(given), None,
+                                              _address(self._out),
+                                              ctypes.byref(self._status))
+            if raised:
+                raise raised[0]
+            if count < 0:
+                check_pair(top, bottom, self.shape)
+                raise ValueError('top or bottom holds a value that is not a count')
+            return list(map(Record._make, self._out[:count].tolist()))
+
+    def condition(self, top, bottom) -> tuple:
+        """
+        Return (tared counts, force) of the raw maps, (2, rows, cols) each: a scan's conditioning.
+
+        Dead taxels that read a touch are revived, as by :meth:`scan`.
+        """
+        _, top, bottom = self._checked(top, bottom)
+        counts, force = np.zeros((2,) + self.shape), np.zeros((2,) + self.shape)
+        with self._lock:
+            self._maps[0] = top
+            self._maps[1] = bottom
+            status = self._lib.sk_condition(self._handle, _address(self._maps),
+                                            _address(counts), _address(force))
+        if status != _OK:
+            check_pair(top, bottom, self.shape)
+            raise ValueError('top or bottom holds a value that is not a count')
+        return counts, force
 
     def dead_masks(self) -> np.ndarray:
         """Return a snapshot of the kernel's dead-taxel marks, (2, rows, cols) bool."""
-        with self._lock:
-            return self._dead_masks()
-
-    def _dead_masks(self) -> np.ndarray:
         out = np.zeros((2,) + self.shape, dtype=np.uint8)
-        self._lib.sk_dead(self._handle, _address(out))
+        with self._lock:
+            self._lib.sk_dead(self._handle, _address(out))
         return out.astype(bool)
 
 

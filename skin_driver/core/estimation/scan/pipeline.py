@@ -136,6 +136,15 @@ class ContactEstimator:
     The registered methods (:data:`kernel.METHODS`) run in the compiled kernel, one call per
     scan; the Python code of this module and the ones it calls describes that algorithm and runs
     with ``compiled=False`` (the tests compare the two) and with a reference ``shift``.
+
+    An estimator does not change once made: its config, calibration and tare are fixed, and a
+    change (``with_*``) makes a new one, which a live host swaps in whole. The one piece of
+    mutable state is the kernel's: the dead-taxel marks that its scans revive. It belongs to the
+    thread that runs the scans (:meth:`process`, :meth:`measure_shifts`); other threads read
+    snapshots (:meth:`dead_masks`, :attr:`conditioner`) or condition maps on a kernel of their
+    own (:meth:`maps_of`). A kernel is built when the estimator is made if the maps' shape is
+    known then (a tare or gains fix it), else by the first scan of each new shape: readers find
+    it in a dict that is replaced, never changed, so a scan takes no lock to look it up.
     """
 
     def __init__(self, config: EstimatorConfig = None, calibration: Calibration = None,
@@ -144,37 +153,72 @@ class ContactEstimator:
         Create the pipeline; ``conditioner`` may carry a tare (it is copied, never shared).
 
         ``shift`` replaces the configured shift method by one that is not registered (the
-        benchmark's references). An estimator does not change once made: a tare, a calibration
-        or other settings make a new one (``with_*``), which a live host swaps in whole.
-        ``compiled=False`` runs the Python description instead of the compiled kernel.
+        benchmark's references). ``compiled=False`` runs the Python description instead of the
+        compiled kernel.
         """
         self.config = config or EstimatorConfig()
         cond_config = ConditioningConfig(fsr=self.config.fsr,
                                          threshold_counts=self.config.threshold_counts,
                                          noise_sigmas=self.config.noise_sigmas)
-        self.conditioner = (Conditioner(cond_config) if conditioner is None
-                            else conditioner.copy(None if conditioner.config == cond_config
-                                                  else cond_config))
+        conditioner = (Conditioner(cond_config) if conditioner is None
+                       else conditioner.copy(None if conditioner.config == cond_config
+                                             else cond_config))
         self._calibration = calibration or Calibration()
-        self.conditioner.set_force_curves(*(self._calibration.force_curves or (None, None)))
+        conditioner.set_force_curves(*(self._calibration.force_curves or (None, None)))
         top, bottom = self._calibration.gain_maps()
-        if top is not None or self.conditioner.shape is not None:
-            self.conditioner.set_gain(top, bottom)
+        if top is not None or conditioner.shape is not None:
+            conditioner.set_gain(top, bottom)
+        # Never changed after this: snapshots and kernels are made from it.
+        self._conditioner = conditioner
         self._shift = shift
         self._method = shift or get_method(self.config.method)
         self._compiled = compiled
-        self._use_kernel = (compiled and shift is None
-                            and self._method.name in compiled_kernel.METHODS)
+        if shift is not None and (shift.linear or shift.modelled):
+            raise ValueError(f'a reference shift takes the counts window alone: {shift.name} '
+                             'wants force maps or a taxel model')
+        self._use_kernel = compiled
+        self._kernels = {}
+        self._build_lock = threading.Lock()
+        # The Python description's per-scan state (dead marks it revives), as the kernel's.
+        self._described = conditioner.copy() if not self._use_kernel else None
         if self._use_kernel:
             # A missing kernel stops the estimator's maker (a node at start-up), not a scan.
             compiled_kernel.load_library()
-        self._kernel = None
-        self._kernel_lock = threading.Lock()
+            if conditioner.shape is not None:
+                self._kernels = {conditioner.shape: self._new_kernel(conditioner.shape)}
+        self._viewer = None
+        self._viewer_lock = threading.Lock()
 
     @property
     def calibration(self) -> Calibration:
         """Return the calibration in force."""
         return self._calibration
+
+    @property
+    def conditioner(self) -> Conditioner:
+        """
+        Return a snapshot of the conditioning: tare, gains, curves, the dead marks in force now.
+
+        A copy: changing it changes nothing here. Read it once for a consistent view.
+        """
+        snapshot = self._conditioner.copy()
+        top, bottom = self.dead_masks()
+        if top is not None:
+            snapshot.set_dead(top, bottom)
+        return snapshot
+
+    def dead_masks(self) -> tuple:
+        """Return the (top, bottom) dead-taxel marks in force now (None, None: no shape yet)."""
+        if self._described is not None:
+            return self._described.dead_masks()
+        shape = self._conditioner.shape
+        kernels = self._kernels
+        kernel = kernels.get(shape) if shape is not None else (
+            next(iter(kernels.values())) if len(kernels) == 1 else None)
+        if kernel is None:
+            return self._conditioner.dead_masks()
+        dead = kernel.dead_masks()
+        return dead[0], dead[1]
 
     def with_calibration(self, calibration: Calibration) -> 'ContactEstimator':
         """Return this estimator with ``calibration`` (force curves and gains too) in force."""
@@ -188,7 +232,7 @@ class ContactEstimator:
 
     def with_tare(self, top_frames, bottom_frames) -> 'ContactEstimator':
         """Return this estimator tared from no-touch frames (N x rows x cols each)."""
-        tared = self.conditioner.copy()
+        tared = self.conditioner
         tared.tare(top_frames, bottom_frames)
         return ContactEstimator(self.config, self._calibration, tared, self._shift,
                                 self._compiled)
@@ -197,6 +241,23 @@ class ContactEstimator:
         """Return this estimator on the compiled kernel or on its Python description."""
         return ContactEstimator(self.config, self._calibration, self.conditioner, self._shift,
                                 compiled)
+
+    def maps_of(self, top_counts, bottom_counts) -> tuple:
+        """
+        Return the (top, bottom) force maps (N per taxel) of one scan, as the scans condition it.
+
+        For the heatmaps of a thread that does not run the scans: it conditions on a kernel of
+        its own (the dead marks as they were when it was made), never on the scanning one.
+        """
+        t, b = check_pair(top_counts, bottom_counts)
+        if not self._use_kernel:
+            return self.conditioner.condition(t, b)
+        with self._viewer_lock:
+            viewer = self._viewer
+            if viewer is None or viewer.shape != t.shape:
+                viewer = self._viewer = self._new_kernel(t.shape)
+            _, force = viewer.condition(t, b)
+        return force[0], force[1]
 
     @property
     def every_scan(self) -> bool:
@@ -218,7 +279,7 @@ class ContactEstimator:
         """Return [(LayerPair, ShiftEstimate, sigma in taxels)] for the contacts."""
         t, b = check_pair(top_counts, bottom_counts)
         cfg = self.config
-        conditioner = self.conditioner
+        conditioner = self._described
         maps = conditioner.touch_counts(t, b)
         dead = conditioner.dead_masks()[0]
         clipped = conditioner.clipped(t, b)
@@ -304,20 +365,42 @@ class ContactEstimator:
 
     def _scan(self, top_counts, bottom_counts, every_pair: bool = False) -> list:
         """Return the compiled kernel's records of the contacts (kernel.Kernel.scan)."""
-        kernel = self._kernel or self._build_kernel(top_counts, bottom_counts)
-        records, revived = kernel.scan(top_counts, bottom_counts, every_pair)
-        if revived is not None:
-            self.conditioner.set_dead(revived[0], revived[1])
-        return records
+        kernel = self._kernels.get(np.shape(top_counts))
+        if kernel is None:
+            kernel = self._kernel_for(top_counts, bottom_counts)
+        if self._shift is None:
+            return kernel.scan(top_counts, bottom_counts, every_pair)
+        return kernel.scan_shifted(top_counts, bottom_counts,
+                                   self._reference(top_counts, bottom_counts), every_pair)
 
-    def _build_kernel(self, top_counts, bottom_counts) -> compiled_kernel.Kernel:
+    def _reference(self, top_counts, bottom_counts):
+        """Return the reference shift's function of a contact's counts window for one scan."""
+        method = self._shift
+        if method.whole_map:
+            whole = method.function(np.stack(check_pair(top_counts, bottom_counts))
+                                    .astype(np.float64))
+            return lambda window: whole
+        return method.function
+
+    def _kernel_for(self, top_counts, bottom_counts) -> compiled_kernel.Kernel:
+        """Return the kernel of the maps' shape, built by the first scan of that shape."""
         t, _ = check_pair(top_counts, bottom_counts)
-        with self._kernel_lock:
-            if self._kernel is None:
-                state = self.conditioner.state(t.shape)
-                self._kernel = compiled_kernel.Kernel(compiled_kernel.KernelSettings(
-                    self._kernel_settings(), self._method.name, *state))
-        return self._kernel
+        with self._build_lock:
+            kernel = self._kernels.get(t.shape)
+            if kernel is None:
+                kernel = self._new_kernel(t.shape)
+                # Replaced, never changed: a reader holds the old dict or the new one, whole.
+                self._kernels = {**self._kernels, t.shape: kernel}
+        return kernel
+
+    def _new_kernel(self, shape: tuple) -> compiled_kernel.Kernel:
+        """Return a new kernel of this estimator for ``shape`` maps (the dead marks as made)."""
+        conditioner = self._conditioner
+        if conditioner.shape is None:
+            conditioner = conditioner.copy()  # state() fixes the shape: not on the original
+        state = conditioner.state(shape)
+        return compiled_kernel.Kernel(compiled_kernel.KernelSettings(
+            self._kernel_settings(), self.config.method, *state))
 
     def _kernel_settings(self) -> compiled_kernel.Settings:
         """Return the kernel's settings of this estimator (the maps' shape filled in later)."""
@@ -327,7 +410,7 @@ class ContactEstimator:
             spread_taxels=c.spread_taxels, bump_power=c.bump_power,
             activation_n=c.activation_n) for c in (cal.force_curves or (None, None))]
         slope_x, slope_y = cal.zero_slope_m_per_n
-        cond = self.conditioner.config
+        cond = self._conditioner.config
         return compiled_kernel.Settings(
             max_contacts=cfg.max_contacts, remove_crosstalk=cond.remove_crosstalk,
             fill_dead=cond.fill_dead, pitch_m=cfg.pitch_m,
