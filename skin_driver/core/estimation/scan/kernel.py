@@ -1,11 +1,11 @@
 """
-The compiled per-scan estimation (package ``skin_kernel``, plain C) bound through ctypes.
+The per-scan estimation (package ``skin_kernel``, plain C) bound through ctypes.
 
-One call per scan does what :class:`pipeline.ContactEstimator` describes in Python:
-conditioning, contacts, a saturated imprint's force filled in from its rim (a calibrated
-censoring curve), each contact's shift (any registered method: ``taxel_fit``, ``poc``,
-``centroid``) and uncertainty, and the contact figures. The Python code stays the description
-of the algorithm; the tests run both side by side (test/core/estimation/test_kernel.py).
+One call per scan does all of it: conditioning, contacts, a saturated imprint's force filled in
+from its rim (a calibrated censoring curve), each contact's shift (any registered method:
+``taxel_fit``, ``model_fit``, ``poc``, ``centroid``; or a caller's, :meth:`Kernel.scan_shifted`)
+and uncertainty, and the contact figures. There is no second implementation to agree with: the
+tests hold the kernel to behaviour (symmetries, invariances, hard cases) and to golden outputs.
 
 A :class:`Kernel` copies an estimator's state once (tare, gains, force tables, settings) and owns
 preallocated buffers, so a scan costs one copy of the maps into its buffer and one foreign call.
