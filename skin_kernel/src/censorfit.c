@@ -1,6 +1,6 @@
 /*
  * A saturated layer's imprint fitted in 2-D, its saturated taxels lower bounds: the censored
- * fit of taxel_fit. Python description: taxelfit.py (fit_censored_layer, _censored_centres).
+ * fit of taxel_fit.
  */
 #include <math.h>
 #include <string.h>

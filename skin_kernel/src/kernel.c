@@ -1,6 +1,6 @@
 /*
  * The kernel's life cycle and the per-scan entry points: conditioning, contacts, each contact's
- * shift and uncertainty, then the contact figures. Python description: pipeline.py.
+ * shift and uncertainty, then the contact figures.
  */
 #include <math.h>
 #include <stddef.h>

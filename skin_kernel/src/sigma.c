@@ -2,8 +2,7 @@
  * The 1-sigma uncertainty of one axis of a contact's shift, from its own data: the counts'
  * noise through each centroid, a shared bottom load's assignment, the pixel-locking error of a
  * narrow imprint, the map's edge (the shift method's own uncertainty of its cut profiles, else
- * a flat fifth of a taxel) and the calibration. Python description: uncertainty.shift_sigma
- * (and its module docstring).
+ * a flat fifth of a taxel) and the calibration.
  */
 #include <math.h>
 

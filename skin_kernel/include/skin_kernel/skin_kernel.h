@@ -5,8 +5,9 @@
  * (tare, line-leak removal, threshold, dead-taxel fill, counts to force), contacts (components,
  * peak split, bottom-load mixture, windows), a saturated imprint's force filled in from its rim,
  * the layer shift of each contact (taxel_fit, poc or centroid), its uncertainty and the contact
- * figures. The algorithm's description is the Python
- * package skin_driver.core.estimation, which the tests run side by side with this library.
+ * figures. It is the one implementation of the per-scan estimate; skin_driver binds it
+ * (skin_driver/core/estimation/scan/kernel.py) and its tests hold it to behaviour and to golden
+ * outputs.
  *
  * A kernel is built once per estimator from its state (tare, gains, force tables, settings) and
  * is not changed afterwards, except for dead-taxel marks that a touch revives (reported): that
