@@ -13,7 +13,8 @@ ROSDEP_KEYS = {'cv2': 'python3-opencv', 'hypothesis': 'python3-hypothesis',
                'serial': 'python3-serial',
                'skimage': 'python3-skimage', 'yaml': 'python3-yaml'}
 # This project's own packages and the tests' helper modules.
-OWN = {'skin_driver', 'skin_msgs', 'rosutil', 'pipeline', 'port_reader', 'conftest'}
+OWN = {'skin_driver', 'skin_msgs', 'rosutil', 'pipeline', 'port_reader', 'conftest',
+       'taxel_presses'}
 
 
 def _imported_modules():

@@ -471,7 +471,7 @@ class EstimationHost:
         self._drawn = latest
         header, pitch, top, bottom, contacts, estimator = latest
         full = self._p('viz_full_scale')
-        forces = dict(zip(('top', 'bottom'), _force_maps(estimator, top, bottom)))
+        forces = dict(zip(('top', 'bottom'), estimator.maps_of(top, bottom)))
         for layer in ('top', 'bottom'):
             if layer in wanted:
                 self._pub_heat[layer].publish(
@@ -544,12 +544,3 @@ class EstimationHost:
             f'{self.node.get_fully_qualified_name()}: contact estimation', self._skin, level,
             message, values)])
 
-
-def _force_maps(estimator: ContactEstimator, top: np.ndarray, bottom: np.ndarray) -> tuple:
-    """
-    Return the (top, bottom) force per taxel of a scan, as ``estimator`` conditions it.
-
-    The host's one use of an estimator's conditioning (rviz's heatmaps and grid): once the
-    estimate returns its force maps, they come from there instead.
-    """
-    return estimator.conditioner.condition(top, bottom)

@@ -1,6 +1,6 @@
 /*
  * A saturated layer's imprint fitted in 2-D, its saturated taxels lower bounds: the censored
- * fit of taxel_fit. Python description: taxelfit.py (fit_censored_layer, _censored_centres).
+ * fit of taxel_fit.
  */
 #include <math.h>
 #include <string.h>
@@ -200,7 +200,6 @@ static void normal_equations(const double *rows, int n, double normal[5][5], dou
 static int gauss_newton(const double *force, const double *bound, int h, int w, double *params,
                         double fitted, int searched, double *scratch)
 {
-  int m = h * w;
   /* the cells of params and of the trial step: an accepted trial's become params' own */
   cells here = cells_in(scratch, h, w), there = cells_in(scratch + 3 * (h + w), h, w);
   /* the taxels that count, packed: a row of their Jacobian's entries and residual each; the

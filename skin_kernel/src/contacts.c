@@ -1,6 +1,6 @@
 /*
  * Contacts: connected top imprints (8-connected), split at clear peaks, each paired with its
- * share of the bottom load by a small Gaussian mixture. Python description: contacts.py.
+ * share of the bottom load by a small Gaussian mixture.
  */
 #include <math.h>
 #include <stdlib.h>

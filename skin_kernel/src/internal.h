@@ -17,8 +17,8 @@ typedef struct {
 } sk_pair;
 
 struct sk_kernel {
+  sk_settings s;                    /* as built; rows, cols, ... below are copies */
   int rows, cols, n, kmax, method, crosstalk, fill_dead, full_scale, has_gain, tared;
-  double reals[SK_NREALS];
   /* the estimator's state, (2, n) each */
   double *baseline, *threshold, *noise, *gain;
   double *leak_gate;                /* (2, n): a line is lifted at this count (crosstalk.py) */
@@ -47,8 +47,16 @@ struct sk_kernel {
   int revived;
 };
 
-/* numsum.c: numpy's pairwise sum, so that sums agree with the reference to the bit */
-double sk_sum(const double *a, int n);
+/* The sum of n numbers in order (the sums are of at most a window's taxels, so a plain loop
+ * loses no accuracy that matters next to the counts' own noise). */
+static inline double sk_sum(const double *a, int n)
+{
+  double res = 0.0;
+  for (int i = 0; i < n; i++) {
+    res += a[i];
+  }
+  return res;
+}
 
 /* condition.c */
 void sk_live_counts(sk_kernel *k);
@@ -129,8 +137,9 @@ void sk_profiles_of(const double *layer, int h, int w, int nn, double *along_x,
 /* model_fit (modelfit.c): the fit's start from a contact's force window, taken before
  * sk_taxel_fit changes that window; then the fit from the start and taxel_fit's shift, which
  * overwrites *dx, *dy (left as they are when the fit cannot be made). */
-void sk_model_start(const double *model, const double *force, int h, int w, double *start);
-void sk_model_refit(const double *model, const double *counts, const double *marks,
+void sk_model_start(const sk_taxel_model *model, const double *force, int h, int w,
+                    double *start);
+void sk_model_refit(const sk_taxel_model *model, const double *counts, const double *marks,
                     const double *sensitivity, int h, int w, double *start, double *dx,
                     double *dy);
 

@@ -1,8 +1,10 @@
 /*
  * The kernel's life cycle and the per-scan entry points: conditioning, contacts, each contact's
- * shift and uncertainty, then the contact figures. Python description: pipeline.py.
+ * shift and uncertainty, then the contact figures.
  */
 #include <math.h>
+#include <stddef.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -44,31 +46,112 @@ void sk_free(sk_kernel *k)
   free(k);
 }
 
-sk_kernel *sk_new(const int *ints, const double *reals, const double *baseline,
-                  const double *threshold, const double *noise, const double *gain,
-                  const unsigned char *dead, const double *tables)
+/* The layout the binding compares with its mirrors, field by field. */
+#define FIELD(type, name) {#type, #name, offsetof(type, name), sizeof(((type *)0)->name)}
+#define SIZE(type) {#type, NULL, 0, sizeof(type)}
+static const sk_field layout[] = {
+  SIZE(sk_taxel_model),
+  FIELD(sk_taxel_model, pitch_m), FIELD(sk_taxel_model, fill_factor),
+  FIELD(sk_taxel_model, cover_spread_m), FIELD(sk_taxel_model, layer_spread_m),
+  FIELD(sk_taxel_model, film_scale), FIELD(sk_taxel_model, film_exponent),
+  FIELD(sk_taxel_model, film_ceiling), FIELD(sk_taxel_model, film_activation_n),
+  FIELD(sk_taxel_model, turn_on_pa), FIELD(sk_taxel_model, film_step),
+  FIELD(sk_taxel_model, full_scale),
+  SIZE(sk_curve),
+  FIELD(sk_curve, censor_counts), FIELD(sk_curve, rim_load_n), FIELD(sk_curve, spread_taxels),
+  FIELD(sk_curve, bump_power), FIELD(sk_curve, activation_n),
+  SIZE(sk_settings),
+  FIELD(sk_settings, rows), FIELD(sk_settings, cols), FIELD(sk_settings, max_contacts),
+  FIELD(sk_settings, method), FIELD(sk_settings, remove_crosstalk),
+  FIELD(sk_settings, fill_dead), FIELD(sk_settings, full_scale), FIELD(sk_settings, tared),
+  FIELD(sk_settings, pitch_m), FIELD(sk_settings, compliance_m_per_n),
+  FIELD(sk_settings, min_force_n), FIELD(sk_settings, min_confidence),
+  FIELD(sk_settings, min_shift_m), FIELD(sk_settings, force_scale),
+  FIELD(sk_settings, fill_factor), FIELD(sk_settings, x_p_m), FIELD(sk_settings, y_p_m),
+  FIELD(sk_settings, slope_x_m_per_n), FIELD(sk_settings, slope_y_m_per_n),
+  FIELD(sk_settings, zero_ref_n), FIELD(sk_settings, calibration_var),
+  FIELD(sk_settings, curves), FIELD(sk_settings, model),
+  SIZE(sk_contact),
+  FIELD(sk_contact, x_m), FIELD(sk_contact, y_m), FIELD(sk_contact, force_n),
+  FIELD(sk_contact, area_m2), FIELD(sk_contact, shift_x_m), FIELD(sk_contact, shift_y_m),
+  FIELD(sk_contact, azimuth_rad), FIELD(sk_contact, azimuth_sigma_rad),
+  FIELD(sk_contact, alpha_rad), FIELD(sk_contact, force_x_n), FIELD(sk_contact, force_y_n),
+  FIELD(sk_contact, force_z_n), FIELD(sk_contact, confidence), FIELD(sk_contact, dx),
+  FIELD(sk_contact, dy), FIELD(sk_contact, sigma), FIELD(sk_contact, top_force_n),
+  FIELD(sk_contact, bottom_force_n), FIELD(sk_contact, shift_confidence),
+  FIELD(sk_contact, valid), FIELD(sk_contact, kept), FIELD(sk_contact, pair),
+  FIELD(sk_contact, censored),
+  SIZE(sk_status),
+  FIELD(sk_status, pairs), FIELD(sk_status, censored), FIELD(sk_status, revived),
+};
+
+int sk_layout(const sk_field **fields, int *abi_version)
 {
-  int rows = ints[SK_ROWS], cols = ints[SK_COLS], full_scale = ints[SK_FULL_SCALE];
-  if (rows < 1 || cols < 1 || full_scale < 1 || ints[SK_MAX_CONTACTS] < 0
-      || rows > 4096 || cols > 4096) {
-    return NULL;
+  *fields = layout;
+  *abi_version = SK_ABI_VERSION;
+  return (int)(sizeof(layout) / sizeof(layout[0]));
+}
+
+/* The first setting sk_new cannot use, said in message; SK_OK when there is none. */
+static int refuse(const sk_settings *s, unsigned long settings_size, char *message,
+                  unsigned long size)
+{
+  char text[160];
+  text[0] = '\0';
+  if (settings_size != sizeof(sk_settings)) {
+    snprintf(text, sizeof text, "settings of %lu bytes, this library's are %lu (ABI %d)",
+             settings_size, (unsigned long)sizeof(sk_settings), SK_ABI_VERSION);
+  } else if (s->rows < 1 || s->cols < 1 || s->rows > 4096 || s->cols > 4096) {
+    snprintf(text, sizeof text, "maps of %d x %d taxels (1 to 4096 each)", s->rows, s->cols);
+  } else if (s->full_scale < 1) {
+    snprintf(text, sizeof text, "full scale %d counts (1 or more)", s->full_scale);
+  } else if (s->max_contacts < 0) {
+    snprintf(text, sizeof text, "max_contacts %d (0 or more)", s->max_contacts);
+  } else if (s->method < 0 || s->method >= SK_NMETHODS) {
+    snprintf(text, sizeof text, "unknown shift method %d (0 to %d)", s->method,
+             SK_NMETHODS - 1);
+  } else if (!(s->pitch_m > 0) || !(s->fill_factor > 0) || !(s->compliance_m_per_n > 0)) {
+    snprintf(text, sizeof text, "pitch, fill factor and compliance must be positive");
+  } else {
+    return SK_OK;
   }
+  if (message && size) {
+    snprintf(message, size, "%s", text);
+  }
+  return SK_ERR_SETTINGS;
+}
+
+int sk_new(const sk_settings *settings, unsigned long settings_size, const double *baseline,
+           const double *threshold, const double *noise, const double *gain,
+           const unsigned char *dead, const double *tables, sk_kernel **out, char *message,
+           unsigned long message_size)
+{
+  *out = NULL;
+  if (message && message_size) {
+    message[0] = '\0';
+  }
+  int refused = refuse(settings, settings_size, message, message_size);
+  if (refused != SK_OK) {
+    return refused;
+  }
+  const sk_settings *s = settings;
+  int rows = s->rows, cols = s->cols, full_scale = s->full_scale;
   sk_kernel *k = calloc(1, sizeof(sk_kernel));
   if (!k) {
-    return NULL;
+    return SK_ERR_NO_MEMORY;
   }
+  k->s = *s;
   int n = rows * cols, line = rows > cols ? rows : cols;
   k->rows = rows;
   k->cols = cols;
   k->n = n;
-  k->kmax = ints[SK_MAX_CONTACTS] < n ? ints[SK_MAX_CONTACTS] : n;
-  k->method = ints[SK_METHOD];
-  k->crosstalk = ints[SK_REMOVE_CROSSTALK];
-  k->fill_dead = ints[SK_FILL_DEAD];
+  k->kmax = s->max_contacts < n ? s->max_contacts : n;
+  k->method = s->method;
+  k->crosstalk = s->remove_crosstalk != 0;
+  k->fill_dead = s->fill_dead != 0;
   k->full_scale = full_scale;
   k->has_gain = gain != NULL;
-  k->tared = ints[SK_TARED];
-  memcpy(k->reals, reals, sizeof(k->reals));
+  k->tared = s->tared != 0;
   size_t size = (size_t)full_scale + 1, kcap = k->kmax ? k->kmax : 1;
   k->baseline = copy_of(baseline, 2 * n);
   k->threshold = copy_of(threshold, 2 * n);
@@ -106,12 +189,16 @@ sk_kernel *sk_new(const int *ints, const double *reals, const double *baseline,
       || !k->pairs || !k->tops || !k->fractions || !k->scratch || !k->fit || !k->labels
       || !k->iscratch) {
     sk_free(k);
-    return NULL;
+    if (message && message_size) {
+      snprintf(message, message_size, "no memory for a kernel of %d x %d taxels", rows, cols);
+    }
+    return SK_ERR_NO_MEMORY;
   }
   memcpy(k->dead, dead, 2 * n);
   sk_live_counts(k);
   sk_leak_gate(k);
-  return k;
+  *out = k;
+  return SK_OK;
 }
 
 static double finite_or_zero(double v)
@@ -127,72 +214,68 @@ static double normal_force(const sk_kernel *k, const sk_pair *p)
   if (sensed <= 0) {
     sensed = p->top_force;
   }
-  double fill = k->reals[SK_FILL_FACTOR];
-  return sensed * k->reals[SK_FORCE_SCALE] / (fill * fill);
+  double fill = k->s.fill_factor;
+  return sensed * k->s.force_scale / (fill * fill);
 }
 
 /* One contact's record (ContactEstimator.process). */
-static void contact(const sk_kernel *k, int q, double *rec)
+static void contact(const sk_kernel *k, int q, sk_contact *rec)
 {
   const sk_pair *p = &k->pairs[q];
-  const double *c = k->reals;
-  double pitch = c[SK_PITCH], normal = normal_force(k, p);
-  double compliance = c[SK_COMPLIANCE];
+  const sk_settings *c = &k->s;
+  double pitch = c->pitch_m, normal = normal_force(k, p);
   double reach = 0.5 * (k->rows < k->cols ? k->rows : k->cols);
-  double load = normal - c[SK_ZERO_REF];
-  double sx = p->dx * pitch - (c[SK_X_P] + c[SK_SLOPE_X] * load);
-  double sy = p->dy * pitch - (c[SK_Y_P] + c[SK_SLOPE_Y] * load);
+  double load = normal - c->zero_ref_n;
+  double sx = p->dx * pitch - (c->x_p_m + c->slope_x_m_per_n * load);
+  double sy = p->dy * pitch - (c->y_p_m + c->slope_y_m_per_n * load);
   double magnitude = hypot(sx, sy);
   double snr = p->sigma > 0 ? magnitude / (p->sigma * pitch) : INFINITY;
   double own = finite_or_zero(p->confidence);
   own = own < 0.0 ? 0.0 : (own > 1.0 ? 1.0 : own);
   double conf = own * (isfinite(snr) ? snr * snr / (snr * snr + MIN_SNR * MIN_SNR) : 1.0);
-  int valid = snr >= MIN_SNR && conf >= c[SK_MIN_CONFIDENCE] && c[SK_MIN_SHIFT] <= magnitude
+  int valid = snr >= MIN_SNR && conf >= c->min_confidence && c->min_shift_m <= magnitude
     && hypot(p->dx, p->dy) <= reach;
-  memset(rec, 0, sizeof(double) * SK_NREC);
-  rec[SK_AZIMUTH_SIGMA] = SK_PI;
+  memset(rec, 0, sizeof(*rec));
+  rec->azimuth_sigma_rad = SK_PI;
   if (valid) {
-    double azimuth = atan2(sy, sx), tangential = magnitude / compliance;
-    rec[SK_AZIMUTH] = azimuth;
-    rec[SK_ALPHA] = atan2(tangential, normal);
-    rec[SK_FORCE_X] = tangential * cos(azimuth);
-    rec[SK_FORCE_Y] = tangential * sin(azimuth);
-    rec[SK_AZIMUTH_SIGMA] = atan2(p->sigma * pitch, magnitude);
+    double azimuth = atan2(sy, sx), tangential = magnitude / c->compliance_m_per_n;
+    rec->azimuth_rad = azimuth;
+    rec->alpha_rad = atan2(tangential, normal);
+    rec->force_x_n = tangential * cos(azimuth);
+    rec->force_y_n = tangential * sin(azimuth);
+    rec->azimuth_sigma_rad = atan2(p->sigma * pitch, magnitude);
   }
-  rec[SK_X_M] = p->col * pitch;
-  rec[SK_Y_M] = p->row * pitch;
-  rec[SK_FORCE_N] = normal;
-  rec[SK_AREA_M2] = p->taxels * pitch * pitch;
-  rec[SK_SHIFT_X_M] = finite_or_zero(sx);
-  rec[SK_SHIFT_Y_M] = finite_or_zero(sy);
-  rec[SK_FORCE_Z] = -normal;
-  rec[SK_CONFIDENCE] = conf;
-  rec[SK_VALID] = valid;
-  rec[SK_KEPT] = normal >= c[SK_MIN_FORCE];
-  rec[SK_DX] = p->dx;
-  rec[SK_DY] = p->dy;
-  rec[SK_PAIR] = q;
-  rec[SK_CENSORED] = p->censored;
-  rec[SK_SIGMA] = p->sigma;
-  rec[SK_TOP_FORCE] = p->top_force;
-  rec[SK_BOTTOM_FORCE] = p->bottom_force;
-  rec[SK_SHIFT_CONFIDENCE] = p->confidence;
+  rec->x_m = p->col * pitch;
+  rec->y_m = p->row * pitch;
+  rec->force_n = normal;
+  rec->area_m2 = p->taxels * pitch * pitch;
+  rec->shift_x_m = finite_or_zero(sx);
+  rec->shift_y_m = finite_or_zero(sy);
+  rec->force_z_n = -normal;
+  rec->confidence = conf;
+  rec->valid = valid;
+  rec->kept = normal >= c->min_force_n;
+  rec->dx = p->dx;
+  rec->dy = p->dy;
+  rec->pair = q;
+  rec->censored = p->censored;
+  rec->sigma = p->sigma;
+  rec->top_force_n = p->top_force;
+  rec->bottom_force_n = p->bottom_force;
+  rec->shift_confidence = p->confidence;
 }
 
 /* Write the records of the last scan's pairs to out, strongest first; returns their number. */
-static int finish(sk_kernel *k, double *out)
+static int finish(sk_kernel *k, sk_contact *out)
 {
   int count = k->npairs;
   for (int q = 0; q < count; q++) {
-    double *rec = out + q * SK_NREC;
-    contact(k, q, rec);
+    contact(k, q, &out[q]);
     /* strongest first, a stable insertion */
-    for (int j = q; j > 0 && out[(j - 1) * SK_NREC + SK_FORCE_N] < out[j * SK_NREC + SK_FORCE_N];
-         j--) {
-      double tmp[SK_NREC];
-      memcpy(tmp, out + j * SK_NREC, sizeof(tmp));
-      memcpy(out + j * SK_NREC, out + (j - 1) * SK_NREC, sizeof(tmp));
-      memcpy(out + (j - 1) * SK_NREC, tmp, sizeof(tmp));
+    for (int j = q; j > 0 && out[j - 1].force_n < out[j].force_n; j--) {
+      sk_contact tmp = out[j];
+      out[j] = out[j - 1];
+      out[j - 1] = tmp;
     }
   }
   return count;
@@ -208,13 +291,12 @@ static void imprint_forces(sk_kernel *k, sk_pair *p, const double *marked)
   double *sums[2] = {&p->top_force, &p->bottom_force};
   int m = p->h * p->w;
   for (int layer = 0; layer < 2; layer++) {
-    double rim = k->reals[SK_RIM_TOP + layer];
+    const sk_curve *curve = &k->s.curves[layer];
+    double rim = curve->rim_load_n;
     if (p->censored >> layer & 1) {
       *sums[layer] = sk_imprint_force(marked + layer * m, k->fit + (2 + layer) * m, p->h, p->w,
-                                      k->reals[SK_CENSOR_TOP + layer],
-                                      k->reals[SK_SPREAD_TOP + layer],
-                                      k->reals[SK_POWER_TOP + layer],
-                                      k->reals[SK_ACTIVATION_TOP + layer], rim,
+                                      curve->censor_counts, curve->spread_taxels,
+                                      curve->bump_power, curve->activation_n, rim,
                                       k->fit + 6 * m);
     } else {
       *sums[layer] += fmin(rim, *sums[layer]);
@@ -224,7 +306,7 @@ static void imprint_forces(sk_kernel *k, sk_pair *p, const double *marked)
 
 /* model_fit's fit of pair p's window (its counts in k->fit), each taxel's load times its
  * sensitivity (the inverse of its gain) where the kernel has gains. */
-static void model_refit(sk_kernel *k, sk_pair *p, const double *model, const double *marks,
+static void model_refit(sk_kernel *k, sk_pair *p, const sk_taxel_model *model, const double *marks,
                         double *start)
 {
   int m = p->h * p->w;
@@ -246,7 +328,8 @@ static void model_refit(sk_kernel *k, sk_pair *p, const double *model, const dou
 }
 
 /* One scan of maps known to hold counts (sk_scan, sk_scan_counts). */
-static int scan(sk_kernel *k, const double *maps, int every_pair, double *out, int *status)
+static int scan(sk_kernel *k, const double *maps, int every_pair, sk_shift_fn shift,
+                void *user, sk_contact *out, sk_status *status)
 {
   k->revived = 0;
   k->npairs = 0;
@@ -263,7 +346,7 @@ static int scan(sk_kernel *k, const double *maps, int every_pair, double *out, i
     /* a loaded taxel the ADC cut is censored whatever its tared counts (conditioning.py) */
     int clipped = sk_clipped_window(k, p, k->fit, 0);
     for (int layer = 0; layer < 2; layer++) {
-      double censor = k->reals[SK_CENSOR_TOP + layer], peak = 0.0;
+      double censor = k->s.curves[layer].censor_counts, peak = 0.0;
       for (int j = 0; j < m; j++) {
         peak = k->fit[layer * m + j] > peak ? k->fit[layer * m + j] : peak;
       }
@@ -282,26 +365,35 @@ static int scan(sk_kernel *k, const double *maps, int every_pair, double *out, i
     p->dx = p->dy = p->confidence = 0.0;
     p->sigma = INFINITY;
     p->cut_var = 0.0;
-    if (!every_pair && normal_force(k, p) < k->reals[SK_MIN_FORCE]) {
+    if (!every_pair && normal_force(k, p) < k->s.min_force_n) {
       /* too light to report, and its force is final: its shift is never asked for */
       continue;
     }
     double *scratch = k->fit + 4 * m;
-    if (k->method == SK_TAXEL_FIT || k->method == SK_MODEL_FIT) {
+    if (shift) {
+      double given[3] = {0.0, 0.0, 0.0};
+      if (shift(user, k->fit, p->h, p->w, given) == 0) {
+        p->dx = given[0];
+        p->dy = given[1];
+        p->confidence = given[2];
+      } else {
+        p->dx = p->dy = NAN;
+      }
+    } else if (k->method == SK_TAXEL_FIT || k->method == SK_MODEL_FIT) {
       /*
        * saturated taxels: at the curve's censoring counts, or cut by the ADC (pipeline.py);
        * a pair with none is not censored, and its marks are all 0
        */
       double *marks = marked;
       for (int layer = 0; layer < 2; layer++) {
-        double censor = k->reals[SK_CENSOR_TOP + layer];
+        double censor = k->s.curves[layer].censor_counts;
         for (int j = layer * m; j < (layer + 1) * m; j++) {
           marks[j] = p->censored && censor > 0 && marks[j] >= censor ? 1.0 : 0.0;
         }
       }
       /* model_fit: taxel_fit's shift, refitted by the calibration's taxel model if it has one */
-      const double *model = k->reals + SK_TAXEL_MODEL;
-      int modelled = k->method == SK_MODEL_FIT && model[SK_MODEL_PITCH] > 0;
+      const sk_taxel_model *model = &k->s.model;
+      int modelled = k->method == SK_MODEL_FIT && model->pitch_m > 0;
       double start[8];
       if (modelled) {
         sk_model_start(model, k->fit + 2 * m, p->h, p->w, start);
@@ -322,13 +414,14 @@ static int scan(sk_kernel *k, const double *maps, int every_pair, double *out, i
     }
     p->sigma = sk_sigma(k, p, k->fit, count == 1);
   }
-  status[SK_STATUS_PAIRS] = count;
-  status[SK_STATUS_CENSORED] = censored;
-  status[SK_STATUS_REVIVED] = k->revived;
+  status->pairs = count;
+  status->censored = censored;
+  status->revived = k->revived != 0;
   return finish(k, out);
 }
 
-int sk_scan(sk_kernel *k, const double *maps, int every_pair, double *out, int *status)
+/* SK_OK when every value of (2, rows, cols) maps is a count, else what is wrong. */
+static int check_maps(const sk_kernel *k, const double *maps)
 {
   int n2 = 2 * k->n;
   for (int i = 0; i < n2; i++) {
@@ -339,17 +432,49 @@ int sk_scan(sk_kernel *k, const double *maps, int every_pair, double *out, int *
       return SK_ERR_NEGATIVE;
     }
   }
-  return scan(k, maps, every_pair, out, status);
+  return SK_OK;
 }
 
-int sk_scan_counts(sk_kernel *k, const uint16_t *maps, int every_pair, double *out, int *status)
+int sk_scan(sk_kernel *k, const double *maps, int every_pair, sk_contact *out,
+            sk_status *status)
+{
+  int checked = check_maps(k, maps);
+  return checked == SK_OK ? scan(k, maps, every_pair, NULL, NULL, out, status) : checked;
+}
+
+int sk_scan_shifted(sk_kernel *k, const double *maps, int every_pair, sk_shift_fn shift,
+                    void *user, sk_contact *out, sk_status *status)
+{
+  int checked = check_maps(k, maps);
+  return checked == SK_OK ? scan(k, maps, every_pair, shift, user, out, status) : checked;
+}
+
+int sk_condition(sk_kernel *k, const double *maps, double *counts, double *force)
+{
+  int checked = check_maps(k, maps);
+  if (checked != SK_OK) {
+    return checked;
+  }
+  sk_touch_counts(k, maps);
+  sk_force_of(k);
+  if (counts) {
+    memcpy(counts, k->counts, sizeof(double) * 2 * (size_t)k->n);
+  }
+  if (force) {
+    memcpy(force, k->force, sizeof(double) * 2 * (size_t)k->n);
+  }
+  return SK_OK;
+}
+
+int sk_scan_counts(sk_kernel *k, const uint16_t *maps, int every_pair, sk_contact *out,
+                   sk_status *status)
 {
   /* exact as doubles: the scan is sk_scan's to the bit */
   int n2 = 2 * k->n;
   for (int i = 0; i < n2; i++) {
     k->raw[i] = maps[i];
   }
-  return scan(k, k->raw, every_pair, out, status);
+  return scan(k, k->raw, every_pair, NULL, NULL, out, status);
 }
 
 void sk_dead(const sk_kernel *k, unsigned char *out)

@@ -1,8 +1,7 @@
 /*
  * The bottom load shared among several top imprints by a small Gaussian mixture whose centres
  * start at each top centroid plus the common shift of the whole maps, so that neighbouring
- * presses keep their own bottom imprints even when those overlap. Python description:
- * contacts._share_bottom.
+ * presses keep their own bottom imprints even when those overlap.
  */
 #include <math.h>
 #include <string.h>

@@ -32,7 +32,7 @@ typedef struct {
 } axis_tab;
 
 typedef struct {
-  const double *model;
+  const sk_taxel_model *model;
   int h, w, sub;
   const double *counts, *sensitivity;
   const unsigned char *censored;
@@ -286,17 +286,17 @@ static void render_layer(fit_ctx *c, double cx, double cy, const double *u, int 
 /* The robust residuals (2 h w of them) of the layers' per-taxel loads into r; returns the
  * misfit r . r. */
 static double film_residuals(const fit_ctx *c, const double *loads, double *r) {
-  const double *m = c->model;
+  const sk_taxel_model *m = c->model;
   int n = c->h * c->w;
-  double scale = m[SK_MODEL_FULL_SCALE] * ROBUST_SHARE, cost = 0.0;
+  double scale = m->full_scale * ROBUST_SHARE, cost = 0.0;
   for (int k = 0; k < 2 * n; k++) {
     double f = loads[k] * (c->sensitivity ? c->sensitivity[k] : 1.0);
-    double load = f - m[SK_MODEL_ACTIVATION];
+    double load = f - m->film_activation_n;
     if (load < 0.0) load = 0.0;
-    double g = m[SK_MODEL_SCALE] * pow(load, m[SK_MODEL_EXPONENT]);
-    if (g > m[SK_MODEL_CEILING]) g = m[SK_MODEL_CEILING];
-    if (m[SK_MODEL_STEP] > 0.0 && f > 0.0 && g < m[SK_MODEL_STEP]) g = m[SK_MODEL_STEP];
-    double v = m[SK_MODEL_FULL_SCALE] * g / (1.0 + g) - c->counts[k];
+    double g = m->film_scale * pow(load, m->film_exponent);
+    if (g > m->film_ceiling) g = m->film_ceiling;
+    if (m->film_step > 0.0 && f > 0.0 && g < m->film_step) g = m->film_step;
+    double v = m->full_scale * g / (1.0 + g) - c->counts[k];
     if (c->censored && c->censored[k] && v > 0.0) v = 0.0;
     v /= scale;
     double s = (v > 0.0) - (v < 0.0);
@@ -445,7 +445,7 @@ static void free_ctx(fit_ctx *c) {
   free(c->axes);
 }
 
-int sk_model_fit(const double *model, int rows, int cols, const double *counts,
+int sk_model_fit(const sk_taxel_model *model, int rows, int cols, const double *counts,
                  const unsigned char *censored, const double *sensitivity, const double *u0,
                  int iterations, double *u_out, double *misfit_out) {
   fit_ctx c;
@@ -456,13 +456,13 @@ int sk_model_fit(const double *model, int rows, int cols, const double *counts,
   c.counts = counts;
   c.censored = censored;
   c.sensitivity = sensitivity;
-  c.fill = model[SK_MODEL_FILL];
-  c.turn_on = model[SK_MODEL_TURN_ON] * model[SK_MODEL_PITCH] * model[SK_MODEL_PITCH];
-  double cover = model[SK_MODEL_COVER] / model[SK_MODEL_PITCH];
+  c.fill = model->fill_factor;
+  c.turn_on = model->turn_on_pa * model->pitch_m * model->pitch_m;
+  double cover = model->cover_spread_m / model->pitch_m;
   c.blur[0] = cover;
-  c.blur[1] = hypot(cover, model[SK_MODEL_LAYER] / model[SK_MODEL_PITCH]);
+  c.blur[1] = hypot(cover, model->layer_spread_m / model->pitch_m);
   c.sub = sub_for(u0);
-  int n = 2 * rows * cols, status = -1;
+  int n = 2 * rows * cols, status = SK_ERR_NO_MEMORY;
   double *work = malloc(sizeof(double) * (size_t)n * (4 + NU));  /* r r2 probe base jac */
   c.weights = malloc(sizeof(double) * (size_t)c.sub);
   c.layer = malloc(sizeof(double) * (size_t)n);
@@ -514,7 +514,7 @@ done:
 /* The fit's start (taxelmodel.start_of): the top layer's centroid, its second moment less the
  * cover's blur and the pad's own (a Hertz disc's is a**2 / 5), the larger layer's force over the
  * pad's share; the shift is set by sk_model_refit. */
-void sk_model_start(const double *model, const double *force, int h, int w, double *start)
+void sk_model_start(const sk_taxel_model *model, const double *force, int h, int w, double *start)
 {
   int nn = h > w ? h : w;
   double *along = malloc(sizeof(double) * 2 * (size_t)nn);
@@ -533,10 +533,10 @@ void sk_model_start(const double *model, const double *force, int h, int w, doub
   for (int r = 0; r < h; r++) vy += along_y[r] * ((r - cy) * (r - cy));
   free(along);
   double var = (vx + vy) / (2.0 * mass);
-  double cover = model[SK_MODEL_COVER] / model[SK_MODEL_PITCH];
+  double cover = model->cover_spread_m / model->pitch_m;
   double radius = sqrt(5.0 * fmax(var - cover * cover - 1.0 / 12.0, 0.01));
   double top = mass, bottom = sk_sum(force + h * w, h * w);
-  double fill = model[SK_MODEL_FILL];
+  double fill = model->fill_factor;
   double load = (top > bottom ? top : bottom) / (fill * fill);
   start[X] = cx;
   start[Y] = cy;
@@ -545,7 +545,7 @@ void sk_model_start(const double *model, const double *force, int h, int w, doub
 }
 
 /* model_fit's fit of one contact (shift.model_fit) from `start` and taxel_fit's (*dx, *dy). */
-void sk_model_refit(const double *model, const double *counts, const double *marks,
+void sk_model_refit(const sk_taxel_model *model, const double *counts, const double *marks,
                     const double *sensitivity, int h, int w, double *start, double *dx,
                     double *dy)
 {

@@ -1,7 +1,6 @@
 /*
  * Shift by band-limited phase-only correlation (poc): the cross-power spectrum of the window's
- * two layers on the low-frequency bins, and a weighted fit of its phase plane. Python
- * description: shift.poc and shift._fit_plane.
+ * two layers on the low-frequency bins, and a weighted fit of its phase plane.
  */
 #include <math.h>
 

@@ -2,8 +2,7 @@
  * The 1-sigma uncertainty of one axis of a contact's shift, from its own data: the counts'
  * noise through each centroid, a shared bottom load's assignment, the pixel-locking error of a
  * narrow imprint, the map's edge (the shift method's own uncertainty of its cut profiles, else
- * a flat fifth of a taxel) and the calibration. Python description: uncertainty.shift_sigma
- * (and its module docstring).
+ * a flat fifth of a taxel) and the calibration.
  */
 #include <math.h>
 
@@ -70,6 +69,6 @@ double sk_sigma(const sk_kernel *k, const sk_pair *p, const double *window, int 
   } else if (p->at_border) {
     total += flat;
   }
-  total += k->reals[SK_CALIBRATION_VAR];
+  total += k->s.calibration_var;
   return sqrt(total);
 }

@@ -1,7 +1,6 @@
 /*
  * Shift of one contact's window: cell-integrated Gaussian profiles (taxel_fit) or the centroid
- * difference; a saturated layer is refitted in 2-D by censorfit.c. Python description:
- * taxelfit.py and shift.centroid.
+ * difference; a saturated layer is refitted in 2-D by censorfit.c.
  */
 #include <math.h>
 #include <stddef.h>
@@ -85,8 +84,8 @@ void sk_axis_cells(double mu, double s, int n, double *g, double *d_mu, double *
 /*
  * Solve the 3 x 3 system a x = b as numpy.linalg.solve does with OpenBLAS (dgesv: left-looking
  * LU with partial pivoting, multipliers by the pivot's reciprocal, column-wise substitutions),
- * so that the fit follows the reference's steps to the bit: its narrow windows are ill-conditioned
- * and any other order of operations drifts by up to 1e-4 taxels. Returns 0 for a zero pivot.
+ * a stable order for the fits' narrow windows, which are ill-conditioned. Returns 0 for a zero
+ * pivot.
  */
 static int solve3(double a[3][3], double b[3], double x[3])
 {

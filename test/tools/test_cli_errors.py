@@ -82,6 +82,6 @@ def test_the_evaluator_without_its_compiled_kernel_says_so_in_one_line(tmp_path)
     assert _run(evaluate.main, ['--generate', 'paper', data]) == 0
     out = subprocess.run([sys.executable, '-m', 'skin_driver.evaluate', data],
                          capture_output=True, text=True, timeout=60,
-                         env={**os.environ, 'AMENT_PREFIX_PATH': os.devnull})
+                         env={**os.environ, 'SKIN_KERNEL_LIBRARY': '/nonexistent/lib.so'})
     assert out.returncode == 2
     assert out.stderr.startswith('error: skin_kernel') and len(out.stderr.splitlines()) == 1

@@ -16,7 +16,7 @@ from skin_driver.core.estimation.calibration.prepared import prepared_estimator
 from skin_driver.core.estimation.scan import kernel as compiled_kernel
 from skin_driver.core.estimation.scan.pipeline import ContactEstimator, EstimatorConfig
 from skin_driver.core.estimation.shift.methods import (
-    centroid, DEFAULT_METHOD, get_method, Method, method_names, NO_SHIFT, REFERENCES, resolve,
+    DEFAULT_METHOD, get_method, Method, method_names, NO_SHIFT, REFERENCES, resolve,
     ShiftEstimate)
 from skin_driver.core.sim.experiments import (
     calibrated_scene, DIRECTION_KINDS, make_random_experiment, make_seed_experiment,
@@ -50,10 +50,16 @@ def skimage_shift(maps: np.ndarray) -> ShiftEstimate:
     return ShiftEstimate(float(dx), float(dy), 1.0)
 
 
-# Bench-only: the default estimator run by its Python description (pipeline.ContactEstimator
-# with compiled=False) instead of the compiled kernel, same state, to put the two costs side by
-# side in one run.
-PYTHON_DEFAULT = f'{DEFAULT_METHOD}_python'
+def centroid(maps: np.ndarray) -> ShiftEstimate:
+    """Return the difference of the weighted centroids of a (2, h, w) stack (bench reference)."""
+    cols = maps.sum(axis=1)
+    rows = maps.sum(axis=2)
+    mass = cols.sum(axis=1)
+    if not (mass[0] > 0 and mass[1] > 0):
+        return NO_SHIFT
+    cx = cols @ np.arange(maps.shape[2], dtype=np.float64) / mass
+    cy = rows @ np.arange(maps.shape[1], dtype=np.float64) / mass
+    return ShiftEstimate(float(cx[1] - cx[0]), float(cy[1] - cy[0]), 1.0)
 
 
 def scan_methods(modelled: bool = False) -> list:
@@ -74,8 +80,6 @@ def bench_methods(with_reference: bool = True) -> list:
 
 def make_estimator(name: str, model: SkinModel, calibration=None) -> ContactEstimator:
     """Return the pipeline with estimator ``name`` (a registered one or the skimage reference)."""
-    if name == PYTHON_DEFAULT:
-        return make_estimator(DEFAULT_METHOD, model, calibration).with_compiled(False)
     registered, reference = resolve(name if name != SKIMAGE else 'centroid')
     # The no-shear floor follows the pitch (the default's 0.25 mm is 1/20 of the seed's taxel),
     # so that small shifts on fine grids are judged by the estimator, not by a fixed threshold.
@@ -187,15 +191,11 @@ def scaling(grids, contact_counts, methods, frames, repeats, seed=0, log=print) 
     """
     Return pipeline cost (contacts included) against taxel count and against contacts.
 
-    With the default among ``methods``, its Python description runs beside it (PYTHON_DEFAULT),
-    and its row per grid also has ``alone_median_us``: the same frames back to back, as a driver
-    runs it. Interleaved with a millisecond of numpy per frame (the other estimators), the
-    compiled call finds its caches cold and costs more.
+    With the default among ``methods``, its row per grid also has ``alone_median_us``: the same
+    frames back to back, as a driver runs it. Interleaved with a millisecond of numpy per frame
+    (the other estimators), the compiled call finds its caches cold and costs more.
     """
     rng = np.random.default_rng(seed)
-    if DEFAULT_METHOD in methods and PYTHON_DEFAULT not in methods:
-        at = list(methods).index(DEFAULT_METHOD) + 1
-        methods = list(methods[:at]) + [PYTHON_DEFAULT] + list(methods[at:])
     by_grid = []
     for n in grids:
         model = skin_for_grid(n)
@@ -235,11 +235,10 @@ def family_methods(everything: bool = True) -> list:
     """
     Return the family benchmark's methods: default, seed, the plain centroid, the others.
 
-    The default's Python description (PYTHON_DEFAULT) comes second: its cost beside the
-    compiled kernel's, its scores equal to the default's. ``model_fit`` is among the others: each
+    ``model_fit`` is among the others: each
     scene's calibration learns its taxel model (up to a minute a scene, in Python).
     """
-    first = [DEFAULT_METHOD, PYTHON_DEFAULT, 'seed', PLAIN_CENTROID]
+    first = [DEFAULT_METHOD, 'seed', PLAIN_CENTROID]
     return first + ([m for m in scan_methods(True) if m not in first] if everything else [])
 
 
@@ -317,14 +316,10 @@ def family(sizes: dict, methods: list, skins: list = None, seed: int = 0, log=pr
         for kind in kinds:
             truth = []
             data = calibrated_scene(kind, skin, rng, sizes[kind], truth)
-            prepared = {m: _family_estimator(data, m) for m in methods if m != PYTHON_DEFAULT}
+            prepared = {m: _family_estimator(data, m) for m in methods}
             notes += [{'skin': skin, 'scene': kind, 'method': m, 'notes': list(n)}
                       for m, (_, n) in prepared.items()]
             ests = {m: est for m, (est, _) in prepared.items()}
-            if PYTHON_DEFAULT in methods:
-                compiled = ests.get(DEFAULT_METHOD) or _family_estimator(data,
-                                                                         DEFAULT_METHOD)[0]
-                ests[PYTHON_DEFAULT] = compiled.with_compiled(False)
             scored_frames = data.scored_frames()
             presses = [truth[i] for i in scored_frames]
             data = data.select(scored_frames)

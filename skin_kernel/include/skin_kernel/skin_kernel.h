@@ -5,11 +5,14 @@
  * (tare, line-leak removal, threshold, dead-taxel fill, counts to force), contacts (components,
  * peak split, bottom-load mixture, windows), a saturated imprint's force filled in from its rim,
  * the layer shift of each contact (taxel_fit, poc or centroid), its uncertainty and the contact
- * figures. The algorithm's description is the Python
- * package skin_driver.core.estimation, which the tests run side by side with this library.
+ * figures. It is the one implementation of the per-scan estimate; skin_driver binds it
+ * (skin_driver/core/estimation/scan/kernel.py) and its tests hold it to behaviour and to golden
+ * outputs.
  *
  * A kernel is built once per estimator from its state (tare, gains, force tables, settings) and
- * is not changed afterwards, except for dead-taxel marks that a touch revives (reported).
+ * is not changed afterwards, except for dead-taxel marks that a touch revives (reported): that
+ * is the per-scan state, owned by whoever runs the scans; a kernel is never used by two threads
+ * at once.
  */
 #ifndef SKIN_KERNEL_SKIN_KERNEL_H
 #define SKIN_KERNEL_SKIN_KERNEL_H
@@ -20,101 +23,157 @@
 extern "C" {
 #endif
 
-/* Bumped whenever a signature or a layout below changes; the binding checks it. */
-#define SK_ABI_VERSION 8
-
-/* Integer settings, in this order. */
-enum {
-  SK_ROWS, SK_COLS, SK_MAX_CONTACTS, SK_METHOD, SK_REMOVE_CROSSTALK, SK_FILL_DEAD,
-  SK_FULL_SCALE, SK_HAS_GAIN,
-  SK_TARED, /* 1 once a tare measured noise and rest: the line-leak gate (crosstalk.py) */
-  SK_NINTS
-};
+/*
+ * Bumped whenever a signature or a layout below changes. It is the library's SOVERSION too
+ * (libskin_kernel.so.<SK_ABI_VERSION>), and sk_layout reports it with every struct's layout,
+ * which the binding compares with its own mirrors before any other call.
+ */
+#define SK_ABI_VERSION 11
 
 /* Shift methods. */
-enum { SK_CENTROID = 0, SK_TAXEL_FIT = 1, SK_POC = 2, SK_MODEL_FIT = 3 };
+enum { SK_CENTROID = 0, SK_TAXEL_FIT = 1, SK_POC = 2, SK_MODEL_FIT = 3, SK_NMETHODS };
 
-/* A skin's forward model of the taxels (taxelmodel.TaxelModel), SI units, in this order. */
+/* A skin's forward model of the taxels (taxelmodel.TaxelModel), SI units; pitch_m 0: none. */
+typedef struct {
+  double pitch_m, fill_factor;
+  double cover_spread_m, layer_spread_m;          /* the blurs */
+  double film_scale, film_exponent, film_ceiling, film_activation_n; /* the film's law */
+  double turn_on_pa, film_step;                   /* a film that stays open below a pressure */
+  double full_scale;                              /* counts */
+} sk_taxel_model;
+
+/* One force curve's censoring of a layer (forcecurve.ForceCurve); all 0 (power 2): none. */
+typedef struct {
+  double censor_counts;   /* counts from which a taxel is saturated; 0: never */
+  double rim_load_n;      /* force at an imprint's rim that no taxel reads */
+  double spread_taxels;   /* a saturated imprint's bump: spread and power (imprint.py) */
+  double bump_power;
+  double activation_n;    /* force of every conducting taxel, not the bump's */
+} sk_curve;
+
+/* Everything a kernel is built with besides the per-taxel arrays (SI units). */
+typedef struct {
+  int rows, cols, max_contacts;
+  int method;             /* SK_CENTROID ... */
+  int remove_crosstalk, fill_dead;
+  int full_scale;         /* the ADC's highest count */
+  int tared;              /* 1 once a tare measured noise and rest: the line-leak gate */
+  double pitch_m, compliance_m_per_n, min_force_n, min_confidence, min_shift_m;
+  double force_scale, fill_factor;
+  /* the calibration: the zero shift at zero_ref_n and its slope with the load */
+  double x_p_m, y_p_m, slope_x_m_per_n, slope_y_m_per_n, zero_ref_n;
+  double calibration_var; /* the calibration's share of sigma**2, taxels**2 */
+  sk_curve curves[2];     /* top, bottom */
+  sk_taxel_model model;   /* model_fit's taxel model */
+} sk_settings;
+
+/* One contact of a scan, strongest (normal force) first. */
+typedef struct {
+  double x_m, y_m, force_n, area_m2, shift_x_m, shift_y_m, azimuth_rad, azimuth_sigma_rad;
+  double alpha_rad, force_x_n, force_y_n, force_z_n, confidence;
+  double dx, dy;          /* the raw shift, taxels */
+  double sigma;           /* 1-sigma of one axis of the shift, taxels */
+  double top_force_n, bottom_force_n, shift_confidence;
+  int valid;              /* 1 when the direction is meaningful */
+  int kept;               /* 1 when the normal force reaches the minimum: a contact to report */
+  int pair;               /* index of the contact among the scan's pairs */
+  int censored;           /* bit 0: the top layer reached its censor counts, bit 1: the bottom */
+} sk_contact;
+
+/* What a scan found besides its contacts. */
+typedef struct {
+  int pairs;              /* contacts found, reported or not */
+  int censored;           /* bits as sk_contact.censored, over every contact */
+  int revived;            /* 1 when the scan revived dead-taxel marks (sk_dead) */
+} sk_status;
+
+/* One field of a struct above (field NULL: the struct's own size), for sk_layout. */
+typedef struct {
+  const char *type, *field;
+  unsigned long offset, size;
+} sk_field;
+
+/* Return codes: sk_scan's (a negative count) and sk_new's. */
 enum {
-  SK_MODEL_PITCH, SK_MODEL_FILL, SK_MODEL_COVER, SK_MODEL_LAYER, /* blurs: spreads, m */
-  SK_MODEL_SCALE, SK_MODEL_EXPONENT, SK_MODEL_CEILING, SK_MODEL_ACTIVATION, /* the film's law */
-  SK_MODEL_TURN_ON, SK_MODEL_STEP, /* a film that stays open below a pressure (Pa) */
-  SK_MODEL_FULL_SCALE,
-  SK_MODEL_NREALS
+  SK_OK = 0, SK_ERR_NOT_FINITE = -1, SK_ERR_NEGATIVE = -2, SK_ERR_SETTINGS = -3,
+  SK_ERR_NO_MEMORY = -4
 };
-
-/* Real settings, in this order (SI units; the calibration's numbers included). */
-enum {
-  SK_PITCH, SK_COMPLIANCE, SK_MIN_FORCE, SK_MIN_CONFIDENCE, SK_MIN_SHIFT, SK_FORCE_SCALE,
-  SK_FILL_FACTOR, SK_X_P, SK_Y_P, SK_SLOPE_X, SK_SLOPE_Y, SK_ZERO_REF,
-  SK_CALIBRATION_VAR, /* the calibration's share of sigma**2, taxels**2 */
-  SK_CENSOR_TOP, SK_CENSOR_BOTTOM, /* counts from which a taxel is saturated; 0: never */
-  SK_RIM_TOP, SK_RIM_BOTTOM, /* force at an imprint's rim that no taxel reads (forcecurve) */
-  SK_SPREAD_TOP, SK_SPREAD_BOTTOM, /* a saturated imprint's bump: spread (taxels), power */
-  SK_POWER_TOP, SK_POWER_BOTTOM,   /* (imprint.py) */
-  SK_ACTIVATION_TOP, SK_ACTIVATION_BOTTOM, /* force of every conducting taxel, not the bump's */
-  SK_TAXEL_MODEL, /* SK_MODEL_NREALS numbers: the calibration's taxel model (pitch 0: none) */
-  SK_NREALS = SK_TAXEL_MODEL + SK_MODEL_NREALS
-};
-
-/* One output record per contact, SK_NREC doubles, strongest (normal force) first. */
-enum {
-  SK_X_M, SK_Y_M, SK_FORCE_N, SK_AREA_M2, SK_SHIFT_X_M, SK_SHIFT_Y_M, SK_AZIMUTH,
-  SK_AZIMUTH_SIGMA, SK_ALPHA, SK_FORCE_X, SK_FORCE_Y, SK_FORCE_Z, SK_CONFIDENCE, SK_VALID,
-  SK_KEPT,        /* 1 when the normal force reaches the minimum: a contact to report */
-  SK_DX, SK_DY,   /* the raw shift, taxels */
-  SK_PAIR,        /* index of the contact among the scan's pairs */
-  SK_CENSORED,    /* bit 0: the top layer reached its censor counts, bit 1: the bottom */
-  SK_SIGMA, SK_TOP_FORCE, SK_BOTTOM_FORCE, SK_SHIFT_CONFIDENCE,
-  SK_NREC
-};
-
-/* sk_scan's status words. */
-enum { SK_STATUS_PAIRS, SK_STATUS_CENSORED, SK_STATUS_REVIVED, SK_NSTATUS };
-
-/* sk_scan's errors (negative return values). */
-enum { SK_ERR_NOT_FINITE = -1, SK_ERR_NEGATIVE = -2 };
 
 typedef struct sk_kernel sk_kernel;
 
 int sk_abi_version(void);
 
 /*
- * Build a kernel; every array is copied. baseline, threshold, noise, gain (NULL: none) and dead
- * are (2, rows, cols); tables holds each layer's force at every count 0..full_scale (2 tables).
- * Returns NULL when out of memory or when the sizes are not usable.
+ * The layout of every struct above as this library was compiled: *fields points to a table of
+ * the returned count of entries. Returns the ABI version through *abi_version.
  */
-sk_kernel *sk_new(const int *ints, const double *reals, const double *baseline,
-                  const double *threshold, const double *noise, const double *gain,
-                  const unsigned char *dead, const double *tables);
+int sk_layout(const sk_field **fields, int *abi_version);
+
+/*
+ * Build a kernel into *out; every array is copied. settings_size is sizeof(sk_settings) as the
+ * caller knows it. baseline, threshold, noise, gain (NULL: none) and dead are (2, rows, cols);
+ * tables holds each layer's force at every count 0..full_scale (2 tables). Returns SK_OK, or
+ * SK_ERR_SETTINGS with a message (NUL-terminated, at most message_size bytes) saying which
+ * setting is not usable, or SK_ERR_NO_MEMORY; *out is NULL then.
+ */
+int sk_new(const sk_settings *settings, unsigned long settings_size, const double *baseline,
+           const double *threshold, const double *noise, const double *gain,
+           const unsigned char *dead, const double *tables, sk_kernel **out, char *message,
+           unsigned long message_size);
 
 void sk_free(sk_kernel *k);
 
 /*
  * Estimate the contacts of one scan: maps is the (2, rows, cols) raw counts. Writes one record
- * per contact found (at most max_contacts) to out and SK_NSTATUS words to status; returns the
- * number of records, or an SK_ERR_* when the maps hold a value that is not a count. Without
- * every_pair, a contact too light to report (SK_KEPT 0) gets no shift (0) and no sigma (inf).
+ * per contact found (at most max_contacts) to out and the scan's status; returns the number of
+ * records, or SK_ERR_NOT_FINITE / SK_ERR_NEGATIVE when the maps hold a value that is not a
+ * count. Without every_pair, a contact too light to report (kept 0) gets no shift (0) and no
+ * sigma (inf).
  */
-int sk_scan(sk_kernel *k, const double *maps, int every_pair, double *out, int *status);
+int sk_scan(sk_kernel *k, const double *maps, int every_pair, sk_contact *out,
+            sk_status *status);
 
 /*
  * sk_scan of maps as the ADC gives them, (2, rows, cols) unsigned 16-bit counts: every value is
  * a count, so there is no error to return.
  */
-int sk_scan_counts(sk_kernel *k, const uint16_t *maps, int every_pair, double *out, int *status);
+int sk_scan_counts(sk_kernel *k, const uint16_t *maps, int every_pair, sk_contact *out,
+                   sk_status *status);
+
+/*
+ * A shift given by the caller for one contact: window is its (2, h, w) tared counts (top,
+ * bottom); writes dx, dy (taxels, the bottom imprint's displacement from the top one) and a
+ * confidence in [0, 1] to shift. Returns 0, or anything else for no shift.
+ */
+typedef int (*sk_shift_fn)(void *user, const double *window, int h, int w, double *shift);
+
+/*
+ * sk_scan with each contact's shift from `shift` (called with `user`) instead of the kernel's
+ * method: a reference estimator run inside the kernel's pipeline (conditioning, contacts,
+ * uncertainty, figures), so that only the shift differs from the kernel's own.
+ */
+int sk_scan_shifted(sk_kernel *k, const double *maps, int every_pair, sk_shift_fn shift,
+                    void *user, sk_contact *out, sk_status *status);
+
+/*
+ * The conditioning of one scan alone, as sk_scan does it: the tared counts (line leak out, dead
+ * taxels filled) and the force of every taxel, each (2, rows, cols), to counts and force (either
+ * NULL: not wanted). Dead-taxel marks the maps revive are revived, as by a scan. Returns SK_OK or
+ * sk_scan's errors.
+ */
+int sk_condition(sk_kernel *k, const double *maps, double *counts, double *force);
 
 /* Copy the dead-taxel marks in force, (2, rows, cols), to out. */
 void sk_dead(const sk_kernel *k, unsigned char *out);
 
 /*
- * Fit a skin's forward model (model: SK_MODEL_NREALS numbers) to one contact's window: counts
- * (2, rows, cols) tared counts, censored (2, rows, cols) 1 where a taxel is a lower bound (NULL:
- * none), sensitivity (2, rows, cols) each taxel's load factor (NULL: 1), u0 the start (8
- * numbers: x, y, log force, dx, dy, log radius, log aspect, orientation). Writes the least-misfit
- * press to u_out and its misfit (counts**2) to misfit_out; returns 0, or -1 when out of memory.
+ * Fit a skin's forward model to one contact's window: counts (2, rows, cols) tared counts,
+ * censored (2, rows, cols) 1 where a taxel is a lower bound (NULL: none), sensitivity
+ * (2, rows, cols) each taxel's load factor (NULL: 1), u0 the start (8 numbers: x, y, log force,
+ * dx, dy, log radius, log aspect, orientation). Writes the least-misfit press to u_out and its
+ * misfit (counts**2) to misfit_out; returns SK_OK, or SK_ERR_NO_MEMORY.
  */
-int sk_model_fit(const double *model, int rows, int cols, const double *counts,
+int sk_model_fit(const sk_taxel_model *model, int rows, int cols, const double *counts,
                  const unsigned char *censored, const double *sensitivity, const double *u0,
                  int iterations, double *u_out, double *misfit_out);
 

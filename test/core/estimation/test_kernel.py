@@ -1,13 +1,10 @@
 """
-The compiled kernel (skin_kernel, through kernel.py) against the pipeline's Python description.
+The compiled kernel through the estimator, and its forward model's fit beside the Python one.
 
-Every comparison runs one estimator both ways on the same state (``with_compiled``) and asks
-for the same contacts, in the same order, with the same figures to 1e-9 (relative, or absolute
-below 1): the two follow the same operations in the same order nearly everywhere and agree to
-the bit there; where the reference sums through BLAS (centroids, mixture moments) the order
-differs and they part by a few ulp (at most 2e-13 relative over the family when measured). The
-Gauss-Newton fit of narrow windows is ill-conditioned enough to turn a changed order of
-operations into 1e-5 taxels; 1e-9 catches that and any real divergence.
+Edge cases, censoring, gains, dead taxels, line leak, map types, bad input, references.
+
+What the kernel finds on the family's scenes is held by the golden outputs (test_golden.py);
+its symmetries and invariances by test_kernel_behaviour.py.
 """
 
 from dataclasses import replace
@@ -27,16 +24,15 @@ from skin_driver.core.estimation.model.taxelmodel import (
     render_counts, start_of, TaxelModel, X as model_x, Y as model_y)
 from skin_driver.core.estimation.scan.kernel import fit_contact as compiled_fit_contact
 from skin_driver.core.estimation.scan.pipeline import ContactEstimator, EstimatorConfig
-from skin_driver.core.estimation.shift.methods import REFERENCES
+from skin_driver.core.estimation.shift.methods import Method, REFERENCES
 from skin_driver.core.sim.experiments import calibrated_scene, make_scene
 from skin_driver.core.sim.physics import Press, render, SkinModel
-from skin_driver.core.sim.skins import family_skin, skin_names
+from skin_driver.core.sim.skins import family_skin
 
-TOLERANCE = 1e-9
-# Noise specks of one to three taxels: three-parameter fits on so few cells are ill-conditioned
-# enough to grow a few ulp into 1e-8 taxels (measured); still far below any meaningful shift.
-SPECK_TOLERANCE = 1e-6
-SCENES = ('random', 'multi', 'border')
+# sk_model_fit against the learning's Python fit (taxelmodel.fit_contact): the same fit, its
+# sums in another order; a narrow window's fit grows ulp to 1e-9 taxels at most, an algorithm
+# change moves it by 1e-3 or more.
+TOLERANCE = 1e-7
 
 
 def figures(contact) -> np.ndarray:
@@ -46,87 +42,17 @@ def figures(contact) -> np.ndarray:
                      contact.direction_valid], dtype=np.float64)
 
 
-def assert_same(compiled, described, top, bottom, tolerance=TOLERANCE, speck_tolerance=None):
-    """
-    Assert both estimators find the same contacts and shifts in one frame pair.
-
-    ``speck_tolerance``: the shifts of every pair (``measure_shifts``, noise specks included)
-    to that tolerance instead.
-    """
-    got, want = compiled.process(top, bottom), described.process(top, bottom)
-    assert len(got) == len(want)
-    for g, w in zip(got, want):
-        # The same type with the same fields, however the kernel's Contact is made.
-        assert type(g) is type(w) and vars(g).keys() == vars(w).keys()
-        a, b = figures(g), figures(w)
-        assert np.isfinite(a).all()
-        np.testing.assert_allclose(a, b, rtol=tolerance, atol=tolerance)
-    shifts = speck_tolerance or tolerance
-    np.testing.assert_allclose(np.reshape(compiled.measure_shifts(top, bottom), (-1, 2)),
-                               np.reshape(described.measure_shifts(top, bottom), (-1, 2)),
-                               rtol=shifts, atol=shifts * compiled.config.pitch_m)
-    return got
-
-
-def both_ways(est: ContactEstimator) -> tuple:
-    return est.with_compiled(True), est.with_compiled(False)
-
-
-def scene_estimators(skin, kind, frames, method='taxel_fit', seed=1, tared=True):
-    data = make_scene(kind, skin, np.random.default_rng(seed), size=frames)
-    est = ContactEstimator(EstimatorConfig(method=method, pitch_m=data.pitch_m))
-    if tared and data.tare_top is not None:
-        est = est.with_tare(data.tare_top, data.tare_bottom)
-    return data, both_ways(est)
-
-
-@pytest.mark.parametrize('skin', skin_names() + ['held_out:1', 'held_out:2', 'held_out:3'])
-@pytest.mark.parametrize('kind', SCENES)
-def test_family_frames_give_the_same_contacts(skin, kind):
-    data, (compiled, described) = scene_estimators(skin, kind, 4)
-    for top, bottom in zip(data.top, data.bottom):
-        assert_same(compiled, described, top, bottom)
-
-
-@pytest.mark.parametrize('skin', ['default', 'crosstalk', 'harsh', 'held_out:2@64'])
-def test_untared_estimators_give_the_same_contacts(skin):
-    # Before a tare the line-leak gate is the touch threshold (crosstalk.leak_gate): shut on
-    # the default skin's presses, open where crosstalk lifts lines over it. Rest readings over
-    # the threshold (untared offsets) are noise specks, whose shifts agree to SPECK_TOLERANCE.
-    data, (compiled, described) = scene_estimators(skin, 'multi', 3, tared=False)
-    assert not compiled.conditioner.state(data.top.shape[1:]).tared
-    for top, bottom in zip(data.top, data.bottom):
-        assert_same(compiled, described, top, bottom, speck_tolerance=SPECK_TOLERANCE)
-
-
-@pytest.mark.parametrize('skin', ['default@32', 'soft@32', 'default@64'])
-def test_finer_grids_give_the_same_contacts(skin):
-    data, (compiled, described) = scene_estimators(skin, 'multi', 2)
-    for top, bottom in zip(data.top, data.bottom):
-        assert_same(compiled, described, top, bottom)
-
-
-@pytest.mark.parametrize('skin', ['crosstalk', 'noisy', 'soft', 'default@32'])
-@pytest.mark.parametrize('method', ['centroid', 'poc'])
-@pytest.mark.parametrize('kind', ['multi', 'border'])
-def test_the_other_methods_give_the_same_contacts(skin, method, kind):
-    data, (compiled, described) = scene_estimators(skin, kind, 3, method=method)
-    for top, bottom in zip(data.top, data.bottom):
-        assert_same(compiled, described, top, bottom)
-
-
-@pytest.mark.parametrize('skin', ['saturating', 'film', 'noisy', 'held_out:2'])
-def test_calibrated_estimators_give_the_same_contacts(skin):
-    # Calibrated as the evaluator does: offset, force curves (censoring on the saturating skin,
-    # gains where the skin has them) and compliance, all from the scene's own frames.
-    data = make_scene('paper', skin, np.random.default_rng(2), size=1)
-    compiled, described = both_ways(prepared_estimator(data, 'taxel_fit')[0])
-    for top, bottom in zip(data.top, data.bottom):
-        assert_same(compiled, described, top, bottom)
+def scan(est, top, bottom) -> list:
+    """Return the contacts of one scan, each checked finite; the shifts are measured too."""
+    contacts = est.process(top, bottom)
+    for contact in contacts:
+        assert np.isfinite(figures(contact)).all()
+    assert len(est.measure_shifts(top, bottom)) >= len(contacts)
+    return contacts
 
 
 @pytest.mark.parametrize('x_m, radius_m', [(0.0, 0.004), (0.005, 0.002)])
-def test_the_normal_force_at_the_edge_is_chosen_alike(x_m, radius_m):
+def test_the_normal_force_at_the_edge_is_chosen(x_m, radius_m):
     # Centred on the edge column, the bottom imprint is cut (the larger layer sum is taken); a
     # taxel inside, a 2 mm tip's bottom imprint reaches the edge with its rim only (the bottom
     # sum, 10 % below the top one on the default skin).
@@ -137,15 +63,14 @@ def test_the_normal_force_at_the_edge_is_chosen_alike(x_m, radius_m):
     rest = [render(model, [], rng) for _ in range(8)]
     est = ContactEstimator(EstimatorConfig(pitch_m=model.pitch_m)).with_tare(
         np.stack([t for t, _ in rest]), np.stack([b for _, b in rest]))
-    compiled, described = both_ways(est)
-    (contact,) = assert_same(compiled, described, top, bottom)
+    (contact,) = scan(est, top, bottom)
     if x_m > 0:
         # The bottom sum reads the press within 2 %; the top one would read it 9 % high.
         assert contact.force_n == pytest.approx(20.0, rel=0.02)
 
 
 @pytest.mark.parametrize('skin', ['film', 'held_out:6', 'loaded'])
-def test_rim_loads_of_a_force_calibration_are_added_alike(skin):
+def test_rim_loads_of_a_force_calibration_are_added(skin):
     # Force-calibrated from 16 normal presses of known force: these skins' curves learn a rim
     # load (forcecurve) that the kernel adds itself to every unsaturated imprint.
     member = family_skin(skin)
@@ -153,13 +78,12 @@ def test_rim_loads_of_a_force_calibration_are_added_alike(skin):
     data = calibrated_scene('random', member, rng, 4)
     est = prepared_estimator(data, 'taxel_fit')[0]
     assert any(curve.rim_load_n > 0 for curve in est.calibration.force_curves)
-    compiled, described = both_ways(est)
     scored = np.flatnonzero(data.split == 0)
     for top, bottom in zip(data.top[scored], data.bottom[scored]):
-        assert_same(compiled, described, top, bottom)
+        scan(est, top, bottom)
 
 
-def test_a_censoring_force_curve_fills_in_the_saturated_imprint_alike():
+def test_a_censoring_force_curve_fills_in_the_saturated_imprint():
     # 3 N a taxel saturates this film: presses of 15 to 50 N read the ceiling at their centre,
     # and the calibrated curve fills their force in from the rims (forcecurve, in Python).
     member = family_skin('saturating')
@@ -167,27 +91,13 @@ def test_a_censoring_force_curve_fills_in_the_saturated_imprint_alike():
     data = calibrated_scene('random', member, rng, 2)
     est, notes = prepared_estimator(data, 'taxel_fit')
     assert any('filled in from their rims' in note for note in notes)
-    compiled, described = both_ways(est)
     for force in (15.0, 30.0, 50.0):
         press = Press(0.0431, 0.0353, force, radius_m=0.004)
-        (contact,) = assert_same(compiled, described, *render(member.model, [press], rng))
+        (contact,) = scan(est, *render(member.model, [press], rng))
         assert contact.force_n == pytest.approx(force, rel=0.1)
 
 
-@pytest.mark.parametrize('kind', SCENES)
-def test_a_calibrated_censoring_skin_gives_the_same_contacts(kind):
-    # The kernel fills each saturated imprint in itself (imprint.c): the spread search picks
-    # the same spread, and the sums agree, on every scored frame of the family's scenes.
-    member = family_skin('saturating')
-    data = calibrated_scene(kind, member, np.random.default_rng(5), 6)
-    est, notes = prepared_estimator(data, 'taxel_fit')
-    assert any('filled in from their rims' in note for note in notes)
-    compiled, described = both_ways(est)
-    for i in np.flatnonzero(data.split == 0):
-        assert_same(compiled, described, data.top[i], data.bottom[i])
-
-
-def test_taxels_the_adc_cut_are_censored_alike():
+def test_taxels_the_adc_cut_are_censored():
     # 1.1 % crosstalk on a 64 x 64 grid drives the centre of heavier presses to the ADC's full
     # scale, calibration presses and scored ones alike: those taxels keep a level shape, read
     # the force at full scale and are filled in by the censoring curves, both ways.
@@ -196,25 +106,23 @@ def test_taxels_the_adc_cut_are_censored_alike():
     data = calibrated_scene('random', member, rng, 4)
     est, notes = prepared_estimator(data, 'taxel_fit')
     assert all(curve.censor_counts > 0 for curve in est.calibration.force_curves)
-    compiled, described = both_ways(est)
     scored = np.flatnonzero(data.split == 0)
     cut = [i for i in scored if (data.bottom[i] >= 4095).any()]
     assert cut
     for i in scored:
-        (contact,) = assert_same(compiled, described, data.top[i], data.bottom[i])
+        (contact,) = scan(est, data.top[i], data.bottom[i])
         if i in cut:
             force = math.sqrt(sum(v * v for v in contact.force_xyz_n))
             assert force == pytest.approx(data.force_n[i], rel=0.05)
 
 
-def test_gains_scale_the_force_alike():
+def test_gains_scale_the_force():
     model = SkinModel(noise_counts=0)
     top, bottom = render(model, [Press(0.04, 0.04, 12.0, math.radians(30), 1.0)],
                          np.random.default_rng(3))
     gain = np.full((16, 16), 1.25)
-    compiled, described = both_ways(ContactEstimator(calibration=Calibration(
-        gains=(gain, 0.5 * gain))))
-    (contact,) = assert_same(compiled, described, top, bottom)
+    est = ContactEstimator(calibration=Calibration(gains=(gain, 0.5 * gain)))
+    (contact,) = scan(est, top, bottom)
     assert contact.force_n == pytest.approx(
         0.5 * 1.25 * ContactEstimator().process(top, bottom)[0].force_n)
 
@@ -226,49 +134,47 @@ def tared_with_dead_taxel(model, rng, spot):
     return ContactEstimator().with_tare(tops, np.stack([b for _, b in frames]))
 
 
-def test_dead_taxels_are_filled_and_revived_alike():
+def test_dead_taxels_are_filled_and_revived():
     model = SkinModel()
     rng = np.random.default_rng(4)
     est = tared_with_dead_taxel(model, rng, (8, 8))
     assert est.conditioner.dead_masks()[0][8, 8]
-    compiled, described = both_ways(est)
     # A press beside the dead taxel: it is filled in from its neighbours.
     top, bottom = render(model, [Press(0.0425, 0.0325, 10.0, 0.5, 2.0)], rng)
     top[8, 8] = 0
-    assert_same(compiled, described, top, bottom)
+    scan(est, top, bottom)
     # A press on it that reads: the taxel was only resting below zero and is alive again.
     top, bottom = render(model, [Press(0.0425, 0.0425, 10.0, 0.5, 2.0)], rng)
-    assert_same(compiled, described, top, bottom)
-    assert not compiled.conditioner.dead_masks()[0][8, 8]
-    assert not described.conditioner.dead_masks()[0][8, 8]
+    scan(est, top, bottom)
+    assert not est.conditioner.dead_masks()[0][8, 8]
 
 
 @pytest.mark.parametrize('row', [0, 1, 8])
-def test_a_dead_taxel_between_two_peaks_is_no_dip_alike(row):
+def test_a_dead_taxel_between_two_peaks_is_no_dip(row):
     # Two 4 mm tips two taxels apart make one imprint with peaks in columns 7 and 9; the dead
     # taxel between them, filled in low, is taken on the path between the peaks as its higher
     # neighbour: one contact. Near the map's edge too, where the loaded taxels' box is cut.
     model = SkinModel(noise_counts=0)
     rng = np.random.default_rng(row)
     est = tared_with_dead_taxel(model, rng, (row, 8))
-    compiled, described = both_ways(est)
     for centre_m, gap_m in ((0.04, 0.01), (0.04125, 0.0105)):
         y = (row + 0.2) * 0.005
         presses = [Press(centre_m - gap_m / 2, y, 12.0, 0.0, 0.0, 0.004),
                    Press(centre_m + gap_m / 2, y, 11.0, 0.0, 0.0, 0.004)]
         top, bottom = render(model, presses, rng)
         top[row, 8] = 0
-        assert len(assert_same(compiled, described, top, bottom)) == 1
+        assert len(scan(est, top, bottom)) == 1
 
 
 @pytest.mark.parametrize('rows, cols', [(16, 16), (7, 12), (20, 17), (3, 40)])
-def test_line_leak_is_taken_alike_on_short_and_long_lines(rows, cols):
-    # Leak lifts every line through a press over the touch threshold (crosstalk.py): the
-    # kernel sorts lines of up to 16 taxels with a network and selects the median of longer
-    # ones, and settles lines away from the press without either; integer counts tie often.
+def test_line_leak_is_taken_on_short_and_long_lines(rows, cols):
+    # Leak lifts every line through a press over the touch threshold: the kernel sorts lines
+    # of up to 16 taxels with a network and selects the median of longer ones, and settles
+    # lines away from the press without either; integer counts tie often. The press is found
+    # where it is, whatever its lines carried.
     rng = np.random.default_rng(rows * cols)
     r, c = np.mgrid[:rows, :cols]
-    compiled, described = both_ways(ContactEstimator())
+    est = ContactEstimator()
     for _ in range(4):
         y, x = rng.uniform(0, rows - 1), rng.uniform(0, cols - 1)
         maps = []
@@ -279,7 +185,9 @@ def test_line_leak_is_taken_alike_on_short_and_long_lines(rows, cols):
             maps.append(np.round(press + leak + rng.integers(0, 25, (rows, cols))))
         top, bottom = maps
         assert ((top >= 40).sum(axis=1) >= 0.5 * min(rows, cols)).any()
-        assert_same(compiled, described, top, bottom, speck_tolerance=SPECK_TOLERANCE)
+        strongest = scan(est, top, bottom)[0]
+        assert strongest.x_m / 0.005 == pytest.approx(x, abs=0.5)
+        assert strongest.y_m / 0.005 == pytest.approx(y, abs=0.5)
 
 
 @pytest.mark.parametrize('top_dtype, bottom_dtype', [
@@ -308,16 +216,16 @@ def test_counts_of_other_dtypes_give_the_contacts_of_uint16_counts(top_dtype, bo
 
 
 def test_empty_maps_give_no_contact():
-    compiled = ContactEstimator()
+    est = ContactEstimator()
     zeros = np.zeros((16, 16), dtype=np.uint16)
-    assert compiled.process(zeros, zeros) == []
-    assert compiled.measure_shifts(zeros, zeros) == []
+    assert est.process(zeros, zeros) == []
+    assert est.measure_shifts(zeros, zeros) == []
 
 
 def test_all_taxels_loaded_give_one_contact_at_the_centre_without_direction():
     full = np.full((16, 16), 3000, dtype=np.uint16)
-    compiled, described = both_ways(ContactEstimator())
-    (contact,) = assert_same(compiled, described, full, full)
+    est = ContactEstimator()
+    (contact,) = scan(est, full, full)
     assert (contact.x_m, contact.y_m) == pytest.approx((7.5 * 0.005, 7.5 * 0.005))
     assert contact.area_m2 == pytest.approx(256 * 0.005 ** 2)
     assert not contact.direction_valid
@@ -329,8 +237,7 @@ def test_max_contacts_caps_the_contacts(max_contacts, expected):
     top, bottom = render(model, [Press(0.02, 0.02, 10.0), Press(0.06, 0.06, 8.0)],
                          np.random.default_rng(5))
     est = ContactEstimator(EstimatorConfig(max_contacts=max_contacts))
-    compiled, described = both_ways(est)
-    assert len(assert_same(compiled, described, top, bottom)) == expected
+    assert len(scan(est, top, bottom)) == expected
 
 
 def test_a_single_row_map_gives_the_same_contact():
@@ -338,8 +245,8 @@ def test_a_single_row_map_gives_the_same_contact():
     line[0, 3:6] = (200.0, 900.0, 300.0)
     below = np.zeros((1, 12))
     below[0, 4:8] = (150.0, 500.0, 600.0, 100.0)
-    compiled, described = both_ways(ContactEstimator())
-    (contact,) = assert_same(compiled, described, line, below)
+    est = ContactEstimator()
+    (contact,) = scan(est, line, below)
     assert contact.y_m == 0.0 and contact.x_m == pytest.approx(
         0.005 * (3 * 200 + 4 * 900 + 5 * 300) / 1400)
 
@@ -347,11 +254,9 @@ def test_a_single_row_map_gives_the_same_contact():
 def test_noise_only_frames_are_nan_free():
     model = SkinModel(noise_counts=30.0)
     rng = np.random.default_rng(6)
-    compiled, described = both_ways(ContactEstimator(EstimatorConfig(threshold_counts=20.0)))
+    est = ContactEstimator(EstimatorConfig(threshold_counts=20.0))
     for _ in range(5):
-        for contact in assert_same(compiled, described, *render(model, [], rng),
-                                   tolerance=SPECK_TOLERANCE):
-            assert np.isfinite(figures(contact)).all()
+        scan(est, *render(model, [], rng))
 
 
 @pytest.mark.parametrize('top, message', [
@@ -369,39 +274,80 @@ def test_bad_maps_raise_what_is_wrong_and_the_next_scan_works(top, message):
     assert est.process(good, good) == []
 
 
-def test_maps_of_another_shape_than_the_first_are_refused():
+def test_an_untared_estimator_serves_each_shape_a_tared_one_only_its_own():
+    # No state follows the first scan: each new shape gets a kernel of its own.
     est = ContactEstimator()
     est.process(np.zeros((16, 16)), np.zeros((16, 16)))
-    with pytest.raises(ValueError, match='expected'):
-        est.process(np.zeros((8, 8)), np.zeros((8, 8)))
+    assert est.process(np.zeros((8, 8)), np.zeros((8, 8))) == []
+    tared = est.with_tare(np.zeros((2, 16, 16)), np.zeros((2, 16, 16)))
+    with pytest.raises(ValueError, match='expect'):
+        tared.process(np.zeros((8, 8)), np.zeros((8, 8)))
 
 
 def test_nested_lists_are_maps_too():
     model = SkinModel(noise_counts=0)
     top, bottom = render(model, [Press(0.04, 0.04, 10.0, 0.6, 0.3)], np.random.default_rng(7))
-    compiled, described = both_ways(ContactEstimator())
-    assert assert_same(compiled, described, top.tolist(), bottom.tolist())
+    est = ContactEstimator()
+    assert scan(est, top.tolist(), bottom.tolist())
 
 
-def test_a_reference_shift_keeps_the_python_path():
-    # The paper's method (a reference, never a node's) is not compiled: both ways run Python.
-    data = make_scene('random', 'default', np.random.default_rng(1), size=2)
-    est = ContactEstimator(EstimatorConfig(pitch_m=data.pitch_m), shift=REFERENCES['seed'])
-    compiled, described = both_ways(est.with_tare(data.tare_top, data.tare_bottom))
+def test_a_whole_map_reference_gives_every_contact_its_shift():
+    # The paper's method (a reference, never a node's) runs on the whole raw maps in Python;
+    # the kernel's pipeline around it takes its one shift for every contact.
+    data = make_scene('multi', 'default', np.random.default_rng(1), size=2)
+    seed = REFERENCES['seed']
+    est = ContactEstimator(EstimatorConfig(pitch_m=data.pitch_m), shift=seed)
+    est = est.with_tare(data.tare_top, data.tare_bottom)
     for top, bottom in zip(data.top, data.bottom):
-        assert_same(compiled, described, top, bottom)
+        whole = seed.function(np.stack((top, bottom)).astype(np.float64))
+        shifts = est.measure_shifts(top, bottom)
+        assert shifts and scan(est, top, bottom)
+        for shift in shifts:
+            assert shift == pytest.approx((whole.dx * data.pitch_m, whole.dy * data.pitch_m))
+
+
+def test_a_windowed_reference_shift_runs_in_the_kernels_pipeline():
+    # A reference on each contact's counts window (the bench's scikit-image one is such).
+    data = make_scene('multi', 'default', np.random.default_rng(2), size=2)
+    windows = []
+
+    def half_a_taxel(window):
+        windows.append(window)
+        return 0.5, -0.25, 1.0
+
+    windowed = Method('windowed', half_a_taxel, False, 'half a taxel, whatever the window')
+    est = ContactEstimator(EstimatorConfig(pitch_m=data.pitch_m), shift=windowed)
+    est = est.with_tare(data.tare_top, data.tare_bottom)
+    for top, bottom in zip(data.top, data.bottom):
+        windows.clear()
+        shifts = est.measure_shifts(top, bottom)
+        assert len(shifts) == len(windows) > 0
+        assert all(w.ndim == 3 and w.shape[0] == 2 and w.any() for w in windows)
+        assert shifts == [pytest.approx((0.5 * data.pitch_m, -0.25 * data.pitch_m))] * len(shifts)
+
+
+def test_what_a_reference_raises_is_raised():
+    def broken(window):
+        raise ZeroDivisionError('a broken reference')
+
+    est = ContactEstimator(shift=Method('broken', broken, False, 'raises'))
+    top, bottom = render(SkinModel(noise_counts=0), [Press(0.04, 0.04, 10.0)],
+                         np.random.default_rng(1))
+    with pytest.raises(ZeroDivisionError, match='broken'):
+        est.process(top, bottom)
+    assert est.process(np.zeros((16, 16)), np.zeros((16, 16))) == []
 
 
 def test_a_missing_kernel_stops_the_estimators_maker_naming_the_fix():
-    # The Python description needs no kernel; the runtime path does, and says how to build it.
+    # The import needs no kernel; making an estimator does, and says how to build it.
     code = ('from skin_driver.core.estimation.scan.pipeline import ContactEstimator\n'
-            'ContactEstimator(compiled=False)\n'
-            "print('description made', flush=True)\n"
+            "print('imported', flush=True)\n"
             'ContactEstimator()\n')
-    env = {**os.environ, 'AMENT_PREFIX_PATH': os.devnull}
+    env = {**os.environ, 'SKIN_KERNEL_LIBRARY': '/nonexistent/libskin_kernel.so.0'}
     out = subprocess.run([sys.executable, '-c', code], capture_output=True, text=True, env=env)
-    assert out.stdout == 'description made\n' and out.returncode != 0
+    assert out.stdout == 'imported\n' and out.returncode != 0
     assert 'KernelMissing' in out.stderr and 'make setup' in out.stderr
+    assert '/nonexistent/libskin_kernel.so.0' in out.stderr
 
 
 # ---- the forward model's fit of one contact (sk_model_fit) against taxelmodel.fit_contact ----
@@ -424,7 +370,7 @@ def _noisy(counts):
     return counts + np.random.default_rng(0).normal(0.0, 5.0, counts.shape)
 
 
-def _assert_fits_alike(model, counts, censored, start, sensitivity=None):
+def _assert_fits(model, counts, censored, start, sensitivity=None):
     python = fit_contact(model, counts, censored, start, sensitivity=sensitivity)
     compiled = compiled_fit_contact(model, counts, censored, start, sensitivity=sensitivity)
     np.testing.assert_allclose(compiled.u[:model_orientation], python.u[:model_orientation],
@@ -444,40 +390,22 @@ def _assert_fits_alike(model, counts, censored, start, sensitivity=None):
     (replace(FILM, cover_spread_m=0.0015, turn_on_pa=20000.0, film_step=0.25),  # a film's cliffs
      _press(0.4, -0.3, force=12.0, radius=1.2)),
 ])
-def test_the_forward_model_fits_a_contact_alike(model, truth):
+def test_the_forward_model_fits_a_contact(model, truth):
     counts = _noisy(render_counts(model, WINDOW, truth, 24))
     start = start_of(counts / 100.0, (truth[model_dx] + 0.3, truth[model_dy] - 0.3), model)
-    fit = _assert_fits_alike(model, counts, None, start)
+    fit = _assert_fits(model, counts, None, start)
     # The model's own press under the ADC's noise: the fit finds its shift.
     assert fit.u[model_dx] == pytest.approx(truth[model_dx], abs=0.01)
     assert fit.u[model_dy] == pytest.approx(truth[model_dy], abs=0.01)
 
 
-def test_censored_taxels_and_taxel_sensitivities_are_fitted_alike():
+def test_censored_taxels_and_taxel_sensitivities_are_fitted():
     # Hard case: the peak saturated (lower bounds cut low) on taxels 10 % apart in sensitivity.
     pattern = np.random.default_rng(2).uniform(0.9, 1.1, (2,) + WINDOW)
     counts = _noisy(render_counts(FILM, WINDOW, _press(0.7, 0.5, force=200.0), 24, pattern))
     censored = counts >= 0.9 * counts.max()
     cut = np.where(censored, 0.9 * counts.max() - 50.0, counts)
     start = start_of(counts / 100.0, (1.0, 0.2), FILM)
-    fit = _assert_fits_alike(FILM, cut, censored, start, pattern)
+    fit = _assert_fits(FILM, cut, censored, start, pattern)
     assert fit.u[model_dx] == pytest.approx(0.7, abs=0.01)
     assert fit.u[model_dy] == pytest.approx(0.5, abs=0.01)
-
-
-@pytest.mark.parametrize('gains', [False, True])
-def test_model_fit_fits_each_contact_compiled_as_its_description_does(gains):
-    # The whole pipeline with a calibration that carries a taxel model (and taxels 10 % apart
-    # in sensitivity, their gains calibrated): both paths alike.
-    truth = _press(0.6, -0.4)
-    truth[model_x], truth[model_y] = 7.2, 8.4
-    pattern = np.random.default_rng(3).uniform(0.9, 1.1, (2, 16, 16)) if gains else None
-    top, bottom = _noisy(render_counts(FILM, (16, 16), truth, 24, pattern)).clip(0.0, None)
-    calibration = Calibration(taxel_model=FILM,
-                              gains=None if pattern is None else tuple(1.0 / pattern))
-    est = ContactEstimator(EstimatorConfig(method='model_fit'), calibration)
-    compiled, python = (est.process(top, bottom),
-                        est.with_compiled(False).process(top, bottom))
-    assert len(compiled) == len(python) == 1
-    np.testing.assert_allclose(figures(compiled[0]), figures(python[0]), rtol=TOLERANCE,
-                               atol=TOLERANCE)

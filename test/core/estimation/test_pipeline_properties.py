@@ -6,7 +6,6 @@ from hypothesis import given, settings, strategies as st
 import numpy as np
 
 from skin_driver.core.estimation.scan.pipeline import ContactEstimator
-from skin_driver.core.estimation.shift import methods as direction
 from skin_driver.core.sim.physics import Press, render, SkinModel
 
 FAST = settings(max_examples=25, deadline=None)
@@ -29,31 +28,3 @@ def test_pipeline_output_is_always_finite_and_sane(
         assert 0.0 <= c.confidence <= 1.0 and c.force_n > 0 and c.area_m2 > 0
         assert 0.0 <= c.alpha_rad < math.pi / 2
         assert c.force_xyz_n[2] == -c.force_n
-
-
-@FAST
-@given(dx=st.integers(-3, 3), dy=st.integers(-3, 3), size=st.integers(3, 6),
-       seed=st.integers(0, 2 ** 16), name=st.sampled_from(['poc', 'centroid']))
-def test_whole_taxel_shift_of_a_random_blob_is_recovered(dx, dy, size, seed, name):
-    rng = np.random.default_rng(seed)
-    top = np.zeros((24, 24))
-    top[9:9 + size, 9:9 + size] = rng.uniform(0.2, 1.0, (size, size))
-    bottom = np.roll(top, (dy, dx), axis=(0, 1))
-    est = direction.estimate_shift(top, bottom, name)
-    assert abs(est.dx - dx) < 0.05 and abs(est.dy - dy) < 0.05
-
-
-@FAST
-# The maps the estimators see hold newtons per taxel of contacts above min_contact_force_n;
-# below about 0.1 of that scale OpenCV's normalisation epsilon (seed) starts to show, so the
-# property is asked where the data live.
-@given(seed=st.integers(0, 2 ** 16), scale=st.floats(1e-1, 1e3),
-       name=st.sampled_from(direction.method_names()))
-def test_estimates_are_finite_and_scale_free(seed, scale, name):
-    rng = np.random.default_rng(seed)
-    top = rng.uniform(0, 1, (8, 8)) ** 4
-    bottom = rng.uniform(0, 1, (8, 8)) ** 4
-    a = direction.estimate_shift(top, bottom, name)
-    b = direction.estimate_shift(top * scale, bottom * scale, name)
-    assert all(math.isfinite(v) for v in a) and 0 <= a.confidence <= 1
-    assert abs(a.dx - b.dx) < 1e-4 and abs(a.dy - b.dy) < 1e-4

@@ -34,9 +34,9 @@ def test_scaling_has_a_point_per_grid_contact_count_and_method(results):
     assert all(r['median_us'] > 0 for r in scale['by_grid'] + scale['by_contacts'])
 
 
-def test_scaling_times_the_default_beside_its_python_description():
+def test_scaling_times_the_default_back_to_back_too():
     scale = bench_core.scaling([16], [1], ['taxel_fit'], 1, 1, log=lambda s: None)
-    assert [r['method'] for r in scale['by_grid']] == ['taxel_fit', 'taxel_fit_python']
+    assert [r['method'] for r in scale['by_grid']] == ['taxel_fit']
     # The default is also timed back to back, as a driver runs it.
     assert scale['by_grid'][0]['alone_median_us'] > 0
 
@@ -44,7 +44,7 @@ def test_scaling_times_the_default_beside_its_python_description():
 def test_family_scores_every_skin_scene_and_method_and_names_the_worst(results):
     fam = results['family']
     # The floor (the simulator's model fitted from the truth) is scored beside the methods.
-    methods = ['taxel_fit', 'taxel_fit_python', 'seed', 'plain_centroid', 'oracle']
+    methods = ['taxel_fit', 'seed', 'plain_centroid', 'oracle']
     assert fam['methods'] == methods
     assert {(r['skin'], r['scene'], r['method']) for r in fam['rows']} == {
         (s, k, m) for s in ('default', 'soft') for k in ('paper', 'random', 'border', 'multi')
@@ -59,13 +59,6 @@ def test_family_scores_every_skin_scene_and_method_and_names_the_worst(results):
                   and r['mean_error_deg'] is not None}
         assert worst['mean_error_deg'] == max(errors.values())
         assert errors[worst['error_skin']] == worst['mean_error_deg']
-    # The default's Python description runs beside the compiled kernel: the same scores.
-    for r in fam['rows']:
-        if r['method'] == 'taxel_fit_python':
-            twin = next(x for x in fam['rows'] if (x['skin'], x['scene'], x['method'])
-                        == (r['skin'], r['scene'], 'taxel_fit'))
-            assert r['mean_error_deg'] == pytest.approx(twin['mean_error_deg'], rel=1e-9)
-            assert r['valid_share'] == twin['valid_share']
     for kind in ('paper', 'random'):
         # Nothing estimates the azimuth better than the floor on its own frames.
         assert fam['worst']['taxel_fit'][kind]['ratio_to_oracle'] > 1.0

@@ -323,8 +323,9 @@ class CalibrationSession:
         if not get_method(estimator.config.method).modelled:
             return None, ''
         pitch = estimator.config.pitch_m
-        fsr = estimator.conditioner.config.fsr
-        sensitivity = estimator.conditioner.sensitivity_maps()
+        conditioner = estimator.conditioner  # one snapshot
+        fsr = conditioner.config.fsr
+        sensitivity = conditioner.sensitivity_maps()
         presses = [LearningPress(r.counts, r.clipped, float(f),
                                  (r.shift_m[0] / pitch, r.shift_m[1] / pitch)
                                  if all(math.isfinite(v) for v in r.shift_m) else (0.0, 0.0),

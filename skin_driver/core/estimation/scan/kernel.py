@@ -1,24 +1,31 @@
 """
-The compiled per-scan estimation (package ``skin_kernel``, plain C) bound through ctypes.
+The per-scan estimation (package ``skin_kernel``, plain C) bound through ctypes.
 
-One call per scan does what :class:`pipeline.ContactEstimator` describes in Python:
-conditioning, contacts, a saturated imprint's force filled in from its rim (a calibrated
-censoring curve), each contact's shift (any registered method: ``taxel_fit``, ``poc``,
-``centroid``) and uncertainty, and the contact figures. The Python code stays the description
-of the algorithm; the tests run both side by side (test/core/estimation/test_kernel.py).
+One call per scan does all of it: conditioning, contacts, a saturated imprint's force filled in
+from its rim (a calibrated censoring curve), each contact's shift (any registered method:
+``taxel_fit``, ``model_fit``, ``poc``, ``centroid``; or a caller's, :meth:`Kernel.scan_shifted`)
+and uncertainty, and the contact figures. There is no second implementation to agree with: the
+tests hold the kernel to behaviour (symmetries, invariances, hard cases) and to golden outputs.
 
 A :class:`Kernel` copies an estimator's state once (tare, gains, force tables, settings) and owns
 preallocated buffers, so a scan costs one copy of the maps into its buffer and one foreign call.
 Maps of uint16, as the driver and the datasets give them, are copied as they are (any value is
 a count, no check); others are checked and copied as float64.
-The dead-taxel marks a touch revives are handed back to the conditioner, which owns them.
+The kernel owns the dead-taxel marks its scans revive (:meth:`Kernel.dead_masks`): it is the
+estimation's one piece of mutable state, and whoever runs the scans owns it.
+
+The structs of skin_kernel.h are mirrored here field by field (:class:`Settings`,
+:class:`ContactRecord`, ...); before any other call the binding compares every mirror with the
+layout the library reports (``sk_layout``) and refuses a library that differs.
 """
 
 from __future__ import annotations
 
+from collections import namedtuple
 import ctypes
 from functools import lru_cache
 import os
+from pathlib import Path
 import threading
 from typing import NamedTuple
 import weakref
@@ -27,80 +34,211 @@ import numpy as np
 
 from ...common.validate import check_pair
 
-__all__ = ['METHODS', 'KernelSettings', 'Kernel', 'KernelMissing', 'load_library',
-           'CONTACT_FIELDS', 'KEPT', 'DX', 'DY', 'fit_contact', 'model_numbers']
+__all__ = ['METHODS', 'ABI_VERSION', 'TaxelModelNumbers', 'Curve', 'Settings', 'ContactRecord',
+           'Status', 'Record', 'KernelSettings', 'Kernel', 'KernelMissing', 'KernelMismatch',
+           'load_library', 'library_candidates', 'fit_contact', 'taxel_model_of']
 
 # Shift methods the kernel runs, by their registered names (skin_kernel.h: SK_CENTROID, ...).
 METHODS = {'centroid': 0, 'taxel_fit': 1, 'poc': 2, 'model_fit': 3}
 
-# skin_kernel.h's layout: bump both together.
-_ABI_VERSION = 8
-_INTS = 9
-_REALS = 34
-_NREC = 23
-_NSTATUS = 3
-# A record's first CONTACT_FIELDS numbers are pipeline.Contact's fields in order, the shift and
-# the force vector flattened (x_m, y_m, force_n, area_m2, shift x, y, azimuth_rad, ...).
-CONTACT_FIELDS = 14
-KEPT, DX, DY = range(CONTACT_FIELDS, CONTACT_FIELDS + 3)
-_REVIVED = 2  # sk_scan's status word SK_STATUS_REVIVED
+# skin_kernel.h's SK_ABI_VERSION, the library's SOVERSION: libskin_kernel.so.<ABI_VERSION>.
+ABI_VERSION = 11
+LIBRARY = f'libskin_kernel.so.{ABI_VERSION}'
+# The variable that names the library file to load, before any place searched.
+LIBRARY_VARIABLE = 'SKIN_KERNEL_LIBRARY'
+
+_OK, _NOT_FINITE, _NEGATIVE, _BAD_SETTINGS, _NO_MEMORY = 0, -1, -2, -3, -4
 _COUNTS = np.dtype(np.uint16)  # sk_scan_counts's maps, native byte order
 
-_FIX = ('build it with `make setup` (or `colcon build` in the workspace) and source the '
-        'workspace, e.g. `tools/with-env.sh`')
+_FIX = ('build it with `make setup` (or `colcon build` in the workspace), or name the library '
+        f'file in {LIBRARY_VARIABLE}')
+
+_double, _int = ctypes.c_double, ctypes.c_int
 
 
 class KernelMissing(RuntimeError):
     """The compiled kernel (package skin_kernel) is not installed or does not load."""
 
 
-@lru_cache(maxsize=1)
-def load_library() -> ctypes.CDLL:
-    """Return the loaded ``libskin_kernel.so`` found through the ament index, signatures set."""
+class KernelMismatch(KernelMissing):
+    """The library found is not the one this binding was written for (layout or ABI)."""
+
+
+class TaxelModelNumbers(ctypes.Structure):
+    """skin_kernel.h's sk_taxel_model: a :class:`taxelmodel.TaxelModel` (pitch_m 0: none)."""
+
+    _fields_ = [(name, _double) for name in (
+        'pitch_m', 'fill_factor', 'cover_spread_m', 'layer_spread_m', 'film_scale',
+        'film_exponent', 'film_ceiling', 'film_activation_n', 'turn_on_pa', 'film_step',
+        'full_scale')]
+
+
+class Curve(ctypes.Structure):
+    """skin_kernel.h's sk_curve: one layer's force-curve censoring (all 0, power 2: none)."""
+
+    _fields_ = [(name, _double) for name in (
+        'censor_counts', 'rim_load_n', 'spread_taxels', 'bump_power', 'activation_n')]
+
+
+class Settings(ctypes.Structure):
+    """skin_kernel.h's sk_settings: everything a kernel is built with but the taxel arrays."""
+
+    _fields_ = ([(name, _int) for name in (
+        'rows', 'cols', 'max_contacts', 'method', 'remove_crosstalk', 'fill_dead', 'full_scale',
+        'tared')]
+        + [(name, _double) for name in (
+            'pitch_m', 'compliance_m_per_n', 'min_force_n', 'min_confidence', 'min_shift_m',
+            'force_scale', 'fill_factor', 'x_p_m', 'y_p_m', 'slope_x_m_per_n', 'slope_y_m_per_n',
+            'zero_ref_n', 'calibration_var')]
+        + [('curves', Curve * 2), ('model', TaxelModelNumbers)])
+
+
+class ContactRecord(ctypes.Structure):
+    """skin_kernel.h's sk_contact: one contact of a scan."""
+
+    _fields_ = ([(name, _double) for name in (
+        'x_m', 'y_m', 'force_n', 'area_m2', 'shift_x_m', 'shift_y_m', 'azimuth_rad',
+        'azimuth_sigma_rad', 'alpha_rad', 'force_x_n', 'force_y_n', 'force_z_n', 'confidence',
+        'dx', 'dy', 'sigma', 'top_force_n', 'bottom_force_n', 'shift_confidence')]
+        + [(name, _int) for name in ('valid', 'kept', 'pair', 'censored')])
+
+
+class Status(ctypes.Structure):
+    """skin_kernel.h's sk_status: what a scan found besides its contacts."""
+
+    _fields_ = [('pairs', _int), ('censored', _int), ('revived', _int)]
+
+
+# skin_kernel.h's sk_shift_fn: (user, window, h, w, shift out) -> 0, or anything else: none.
+_SHIFT_FN = ctypes.CFUNCTYPE(_int, ctypes.c_void_p, ctypes.POINTER(_double), _int, _int,
+                             ctypes.POINTER(_double))
+
+
+class _Field(ctypes.Structure):
+    _fields_ = [('type', ctypes.c_char_p), ('field', ctypes.c_char_p),
+                ('offset', ctypes.c_ulong), ('size', ctypes.c_ulong)]
+
+
+_MIRRORS = {'sk_taxel_model': TaxelModelNumbers, 'sk_curve': Curve, 'sk_settings': Settings,
+            'sk_contact': ContactRecord, 'sk_status': Status}
+
+# One contact as Python reads it: a record's fields by name (numpy's view of the C struct).
+_RECORD_DTYPE = np.dtype(ContactRecord)
+Record = namedtuple('Record', _RECORD_DTYPE.names)
+
+
+def _check_layout(lib: ctypes.CDLL, path: str) -> None:
+    """Raise KernelMismatch unless the library's ABI and struct layouts are the mirrors'."""
+    table = ctypes.POINTER(_Field)()
+    abi = _int()
+    count = lib.sk_layout(ctypes.byref(table), ctypes.byref(abi))
+    if abi.value != ABI_VERSION:
+        raise KernelMismatch(f'skin_kernel: {path} has ABI {abi.value}, this skin_driver needs '
+                             f'{ABI_VERSION}; {_FIX}')
+    theirs = {}
+    for i in range(count):
+        entry = table[i]
+        field = None if entry.field is None else entry.field.decode()
+        theirs[(entry.type.decode(), field)] = (entry.offset, entry.size)
+    ours = {}
+    for type_name, mirror in _MIRRORS.items():
+        ours[(type_name, None)] = (0, ctypes.sizeof(mirror))
+        for name, _ in mirror._fields_:
+            described = getattr(mirror, name)
+            ours[(type_name, name)] = (described.offset, described.size)
+    differ = sorted(f'{t}.{f or "sizeof"}: library {theirs.get(key)}, binding {ours.get(key)}'
+                    for key in set(ours) | set(theirs) if ours.get(key) != theirs.get(key)
+                    for t, f in [key])
+    if differ:
+        raise KernelMismatch(f'skin_kernel: {path} lays its structs out otherwise than this '
+                             f'binding (offset, size): {"; ".join(differ)}; {_FIX}')
+
+
+def library_candidates() -> list:
+    """
+    Return the places the kernel is looked for, in order, as (where, path or None).
+
+    The file ``SKIN_KERNEL_LIBRARY`` names, alone when it is set; else the install prefix this
+    package is installed under (``<prefix>/lib/python3.X/site-packages``: ``<prefix>/lib``, and
+    a colcon workspace's
+    ``install/skin_kernel/lib`` beside ``install/skin_driver``); the workspace next to a source
+    checkout (``<checkout>/install/skin_kernel/lib``); then the ament index, when importable.
+    """
+    named = os.environ.get(LIBRARY_VARIABLE)
+    if named:
+        # Named explicitly: that file or nothing, never another one found by chance.
+        return [(LIBRARY_VARIABLE, Path(named))]
+    out = []
+    package = Path(__file__).resolve().parents[3]  # .../skin_driver
+    above = package.parent
+    if above.name in ('site-packages', 'dist-packages') and above.parent.parent.name == 'lib':
+        prefix = above.parent.parent.parent
+        out.append(('install prefix', prefix / 'lib' / LIBRARY))
+        out.append(('colcon workspace', prefix.parent / 'skin_kernel' / 'lib' / LIBRARY))
+    else:
+        out.append(('source checkout', above / 'install' / 'skin_kernel' / 'lib' / LIBRARY))
     try:
         from ament_index_python.packages import get_package_prefix, PackageNotFoundError
-    except ImportError as exc:
-        raise KernelMissing(f'skin_kernel: ament_index_python is missing ({exc}); '
-                            f'{_FIX}') from None
-    try:
-        prefix = get_package_prefix('skin_kernel')
-    except PackageNotFoundError:
-        raise KernelMissing('skin_kernel: the package is not in the ament index (AMENT_PREFIX_PATH'
-                            f'={os.environ.get("AMENT_PREFIX_PATH", "")!r}); {_FIX}') from None
-    path = os.path.join(prefix, 'lib', 'libskin_kernel.so')
-    try:
-        lib = ctypes.CDLL(path)
-    except OSError as exc:
-        raise KernelMissing(f'skin_kernel: cannot load {path} ({exc}); {_FIX}') from None
-    ptr = ctypes.c_void_p
-    lib.sk_abi_version.restype = ctypes.c_int
-    lib.sk_abi_version.argtypes = []
-    if lib.sk_abi_version() != _ABI_VERSION:
-        raise KernelMissing(f'skin_kernel: {path} is another version than this skin_driver; '
-                            f'{_FIX}')
-    # sk_scan and sk_scan_counts (kernel, maps, every_pair, out, status) have no argtypes: their
-    # checks cost 0.7 us a call, and Kernel passes the same c_void_p objects and a Python int
-    # every time.
-    signatures = {'sk_new': (ptr, [ptr] * 8), 'sk_free': (None, [ptr]),
-                  'sk_scan': (ctypes.c_int, None), 'sk_scan_counts': (ctypes.c_int, None),
-                  'sk_dead': (None, [ptr, ptr]),
-                  'sk_model_fit': (ctypes.c_int, [ptr, ctypes.c_int, ctypes.c_int, ptr, ptr,
-                                                  ptr, ptr, ctypes.c_int, ptr, ptr])}
+    except ImportError:
+        out.append(('ament index', None))
+    else:
+        try:
+            out.append(('ament index', Path(get_package_prefix('skin_kernel')) / 'lib' / LIBRARY))
+        except PackageNotFoundError:
+            out.append(('ament index', None))
+    return out
+
+
+@lru_cache(maxsize=1)
+def load_library() -> ctypes.CDLL:
+    """Return the loaded ``libskin_kernel.so.<ABI>``, its layout checked and signatures set."""
+    looked = []
+    for where, path in library_candidates():
+        if path is None:
+            looked.append(f'{where}: not available')
+            continue
+        if not path.is_file():
+            looked.append(f'{where}: no {path}')
+            continue
+        try:
+            lib = ctypes.CDLL(str(path))
+        except OSError as exc:
+            looked.append(f'{where}: {path} does not load ({exc})')
+            continue
+        _sign(lib)
+        _check_layout(lib, str(path))
+        return lib
+    raise KernelMissing(f'skin_kernel: no {LIBRARY} found; looked at ' + '; '.join(looked)
+                        + f'. {_FIX}')
+
+
+def _sign(lib: ctypes.CDLL) -> None:
+    """Set the argument and result types of the library's functions."""
+    ptr, ulong = ctypes.c_void_p, ctypes.c_ulong
+    # sk_scan and sk_scan_counts (kernel, maps, every_pair, out, status) have no argtypes: a
+    # Kernel passes the same c_void_p objects and a Python int every time, and a scan is where
+    # their checks would cost.
+    signatures = {'sk_layout': (_int, [ptr, ptr]), 'sk_abi_version': (_int, []),
+                  'sk_new': (_int, [ptr, ulong] + [ptr] * 6 + [ptr, ctypes.c_char_p, ulong]),
+                  'sk_free': (None, [ptr]),
+                  'sk_scan': (_int, None), 'sk_scan_counts': (_int, None),
+                  'sk_scan_shifted': (_int, [ptr, ptr, _int, _SHIFT_FN, ptr, ptr, ptr]),
+                  'sk_dead': (None, [ptr, ptr]), 'sk_condition': (_int, [ptr, ptr, ptr, ptr]),
+                  'sk_model_fit': (_int, [ptr, _int, _int, ptr, ptr, ptr, ptr, _int, ptr, ptr])}
     for name, (restype, argtypes) in signatures.items():
-        function = getattr(lib, name)
+        function = getattr(lib, name, None)
+        if function is None:
+            raise KernelMismatch(f'skin_kernel: the library has no {name}; {_FIX}')
         function.restype = restype
-        function.argtypes = argtypes
-    return lib
+        if argtypes is not None:
+            function.argtypes = argtypes
 
 
 class KernelSettings(NamedTuple):
-    """Everything a kernel copies from an estimator, as plain numbers and arrays."""
+    """Everything a kernel copies from an estimator, as a :class:`Settings` and arrays."""
 
+    settings: Settings    # rows, cols, full_scale, tared and the method are filled in by Kernel
     method: str
-    max_contacts: int
-    remove_crosstalk: bool
-    fill_dead: bool
-    reals: tuple         # skin_kernel.h's SK_PITCH ... SK_TAXEL_MODEL's numbers, in order
     baseline: np.ndarray  # (2, rows, cols) each, like threshold, noise, gain (or None), dead
     threshold: np.ndarray
     noise: np.ndarray
@@ -115,39 +253,51 @@ def _address(array: np.ndarray) -> ctypes.c_void_p:
 
 
 class Kernel:
-    """One estimator's compiled state and buffers; scans run one at a time."""
+    """
+    One estimator's compiled state and buffers; scans run one at a time.
 
-    def __init__(self, settings: KernelSettings):
-        """Copy ``settings`` into a new compiled kernel (raises KernelMissing without one)."""
+    The kernel is the estimation's one piece of mutable state: the dead-taxel marks its scans
+    revive. Whoever runs the scans owns it; :meth:`dead_masks` gives a consistent snapshot.
+    """
+
+    def __init__(self, spec: KernelSettings):
+        """Copy ``spec`` into a new compiled kernel (raises KernelMissing without one)."""
         lib = load_library()
-        rows, cols = settings.baseline.shape[1:]
-        full_scale = settings.tables.shape[1] - 1
-        ints = np.array([rows, cols, settings.max_contacts, METHODS[settings.method],
-                         settings.remove_crosstalk, settings.fill_dead, full_scale,
-                         settings.gain is not None, settings.tared], dtype=np.intc)
-        assert ints.size == _INTS and len(settings.reals) == _REALS
-        reals = np.array(settings.reals, dtype=np.float64)
+        rows, cols = spec.baseline.shape[1:]
+        settings = Settings.from_buffer_copy(spec.settings)
+        if spec.method not in METHODS:
+            raise ValueError(f'skin_kernel: no compiled shift method {spec.method!r} '
+                             f'(compiled: {", ".join(METHODS)})')
+        settings.rows, settings.cols = rows, cols
+        settings.full_scale = spec.tables.shape[1] - 1
+        settings.method = METHODS[spec.method]
+        settings.tared = bool(spec.tared)
         arrays = [np.ascontiguousarray(a, dtype=np.float64) for a in (
-            settings.baseline, settings.threshold, settings.noise)]
-        gain = (None if settings.gain is None
-                else np.ascontiguousarray(settings.gain, dtype=np.float64))
-        dead = np.ascontiguousarray(settings.dead, dtype=np.uint8)
-        tables = np.ascontiguousarray(settings.tables, dtype=np.float64)
-        handle = lib.sk_new(*(_address(a) for a in [ints, reals] + arrays),
+            spec.baseline, spec.threshold, spec.noise)]
+        gain = (None if spec.gain is None
+                else np.ascontiguousarray(spec.gain, dtype=np.float64))
+        dead = np.ascontiguousarray(spec.dead, dtype=np.uint8)
+        tables = np.ascontiguousarray(spec.tables, dtype=np.float64)
+        handle = ctypes.c_void_p()
+        message = ctypes.create_string_buffer(256)
+        status = lib.sk_new(ctypes.byref(settings), ctypes.sizeof(Settings),
+                            *(_address(a) for a in arrays),
                             None if gain is None else _address(gain), _address(dead),
-                            _address(tables))
-        if not handle:
-            raise MemoryError(f'skin_kernel: no kernel for {rows} x {cols} maps')
+                            _address(tables), ctypes.byref(handle), message, len(message))
+        if status == _NO_MEMORY:
+            raise MemoryError(f'skin_kernel: {message.value.decode()}')
+        if status != _OK or not handle:
+            raise ValueError(f'skin_kernel refused the settings: {message.value.decode()}')
         self._lib = lib
-        self._handle = ctypes.c_void_p(handle)
+        self._handle = handle
         weakref.finalize(self, lib.sk_free, self._handle)
         self.shape = (rows, cols)
         # A scan's maps: float64 (sk_scan), or uint16 counts as they come (sk_scan_counts).
         self._maps = np.zeros((2, rows, cols))
         self._counts = np.zeros((2, rows, cols), dtype=np.uint16)
-        self._out = np.zeros((max(min(settings.max_contacts, rows * cols), 1), _NREC))
-        # A ctypes array: reading a word of it costs a tenth of reading a numpy scalar.
-        self._status = (ctypes.c_int * _NSTATUS)()
+        self._out = np.zeros(max(min(settings.max_contacts, rows * cols), 1),
+                             dtype=_RECORD_DTYPE)
+        self._status = Status()
         outputs = (_address(self._out), ctypes.c_void_p(ctypes.addressof(self._status)))
         # By whether the maps are uint16 counts: the function, its top and bottom buffers, and
         # its arguments for reported contacts only and for every contact (measure_shifts wants
@@ -159,20 +309,25 @@ class Kernel:
                                                (lib.sk_scan_counts, self._counts)))
         self._lock = threading.Lock()
 
-    def scan(self, top, bottom, every_pair: bool = False) -> tuple:
-        """
-        Return (records, revived) of the raw maps: a list per contact, strongest first.
-
-        Without ``every_pair`` a contact too light to report (record[KEPT] 0) gets no shift.
-        ``revived`` is None, or the dead-taxel marks after this scan revived some. Bad maps
-        raise ValueError saying what is wrong.
-        """
+    def _checked(self, top, bottom) -> tuple:
+        """Return (whether both are uint16 counts, top, bottom), checked as a scan needs."""
         if not (type(top) is np.ndarray and type(bottom) is np.ndarray
                 and top.shape == self.shape and bottom.shape == self.shape):
             top, bottom = check_pair(top, bottom, self.shape)
         counts = top.dtype == _COUNTS and bottom.dtype == _COUNTS
         if not (counts or top.dtype.kind in 'uif' and bottom.dtype.kind in 'uif'):
             top, bottom = check_pair(top, bottom, self.shape)
+        return counts, top, bottom
+
+    def scan(self, top, bottom, every_pair: bool = False) -> list:
+        """
+        Return the :class:`Record` of each contact in the raw maps, strongest first.
+
+        Without ``every_pair`` a contact too light to report (``kept`` 0) gets no shift. Dead
+        taxels that read a touch are revived in the kernel. Bad maps raise ValueError saying
+        what is wrong.
+        """
+        counts, top, bottom = self._checked(top, bottom)
         scan, top_buffer, bottom_buffer, args = self._scans[counts]
         with self._lock:
             top_buffer[...] = top
@@ -181,23 +336,80 @@ class Kernel:
             if count < 0:
                 check_pair(top, bottom, self.shape)
                 raise ValueError('top or bottom holds a value that is not a count')
-            revived = self.dead_masks() if self._status[_REVIVED] else None
-            return self._out[:count].tolist(), revived
+            return list(map(Record._make, self._out[:count].tolist()))
+
+    def scan_shifted(self, top, bottom, shift, every_pair: bool = False) -> list:
+        """
+        Return :meth:`scan`'s records with each contact's shift from ``shift``, not the kernel's.
+
+        ``shift(window)`` takes a contact's (2, h, w) tared counts and returns (dx, dy,
+        confidence) in taxels, or None for no shift: a reference estimator in the kernel's
+        pipeline. What it raises is raised here.
+        """
+        _, top, bottom = self._checked(top, bottom)
+        raised = []
+
+        def given(_user, window, h, w, out):
+            try:
+                found = shift(np.ctypeslib.as_array(window, (2, h, w)).copy())
+                if found is None:
+                    return 1
+                out[0], out[1], out[2] = (float(v) for v in found[:3])
+                return 0
+            except BaseException as err:  # noqa: B902 - raised again after the call
+                raised.append(err)
+                return 1
+
+        with self._lock:
+            self._maps[0] = top
+            self._maps[1] = bottom
+            count = self._lib.sk_scan_shifted(self._handle, _address(self._maps),
+                                              int(every_pair), _SHIFT_FN(given), None,
+                                              _address(self._out),
+                                              ctypes.byref(self._status))
+            if raised:
+                raise raised[0]
+            if count < 0:
+                check_pair(top, bottom, self.shape)
+                raise ValueError('top or bottom holds a value that is not a count')
+            return list(map(Record._make, self._out[:count].tolist()))
+
+    def condition(self, top, bottom) -> tuple:
+        """
+        Return (tared counts, force) of the raw maps, (2, rows, cols) each: a scan's conditioning.
+
+        Dead taxels that read a touch are revived, as by :meth:`scan`.
+        """
+        _, top, bottom = self._checked(top, bottom)
+        counts, force = np.zeros((2,) + self.shape), np.zeros((2,) + self.shape)
+        with self._lock:
+            self._maps[0] = top
+            self._maps[1] = bottom
+            status = self._lib.sk_condition(self._handle, _address(self._maps),
+                                            _address(counts), _address(force))
+        if status != _OK:
+            check_pair(top, bottom, self.shape)
+            raise ValueError('top or bottom holds a value that is not a count')
+        return counts, force
 
     def dead_masks(self) -> np.ndarray:
-        """Return the kernel's dead-taxel marks, (2, rows, cols) bool."""
+        """Return a snapshot of the kernel's dead-taxel marks, (2, rows, cols) bool."""
         out = np.zeros((2,) + self.shape, dtype=np.uint8)
-        self._lib.sk_dead(self._handle, _address(out))
+        with self._lock:
+            self._lib.sk_dead(self._handle, _address(out))
         return out.astype(bool)
 
 
-def model_numbers(model) -> tuple:
-    """Return a :class:`taxelmodel.TaxelModel` as skin_kernel.h's SK_MODEL_* numbers (0s: none)."""
+def taxel_model_of(model) -> TaxelModelNumbers:
+    """Return a :class:`taxelmodel.TaxelModel` as skin_kernel.h's sk_taxel_model (0s: none)."""
     if model is None:
-        return (0.0,) * 11
-    return (model.pitch_m, model.fill_factor, model.cover_spread_m, model.layer_spread_m,
-            model.film_scale, model.film_exponent, model.film_ceiling, model.film_activation_n,
-            model.turn_on_pa, model.film_step, model.full_scale)
+        return TaxelModelNumbers()
+    return TaxelModelNumbers(
+        pitch_m=model.pitch_m, fill_factor=model.fill_factor,
+        cover_spread_m=model.cover_spread_m, layer_spread_m=model.layer_spread_m,
+        film_scale=model.film_scale, film_exponent=model.film_exponent,
+        film_ceiling=model.film_ceiling, film_activation_n=model.film_activation_n,
+        turn_on_pa=model.turn_on_pa, film_step=model.film_step, full_scale=model.full_scale)
 
 
 def fit_contact(model, counts: np.ndarray, censored: np.ndarray, u0: np.ndarray,
@@ -211,7 +423,7 @@ def fit_contact(model, counts: np.ndarray, censored: np.ndarray, u0: np.ndarray,
     lib = load_library()
     counts = np.ascontiguousarray(counts, dtype=np.float64)
     rows, cols = counts.shape[1:]
-    numbers = np.array(model_numbers(model), dtype=np.float64)
+    numbers = taxel_model_of(model)
     marks = (None if censored is None
              else np.ascontiguousarray(np.broadcast_to(censored, counts.shape), dtype=np.uint8))
     factors = (None if sensitivity is None
@@ -220,10 +432,10 @@ def fit_contact(model, counts: np.ndarray, censored: np.ndarray, u0: np.ndarray,
     start = np.ascontiguousarray(u0, dtype=np.float64)
     u = np.zeros(8)
     misfit = np.zeros(1)
-    status = lib.sk_model_fit(_address(numbers), rows, cols, _address(counts),
+    status = lib.sk_model_fit(ctypes.byref(numbers), rows, cols, _address(counts),
                               None if marks is None else _address(marks),
                               None if factors is None else _address(factors), _address(start),
                               int(iterations), _address(u), _address(misfit))
-    if status != 0:
+    if status != _OK:
         raise MemoryError(f'skin_kernel: no memory to fit a {rows} x {cols} window')
     return PressFit(u, float(misfit[0]))

@@ -2,23 +2,21 @@
 The contact estimation pipeline used by the ROS nodes, the evaluator and the benchmark.
 
 raw counts (top, bottom) -> conditioning (tare, threshold, FSR model -> force per taxel)
--> contacts (each top imprint paired with its share of the bottom load, :mod:`contacts`)
--> shift between the layers in each contact's window (named estimator from :mod:`shift`)
+-> contacts (each top imprint paired with its share of the bottom load)
+-> shift between the layers in each contact's window (a method named in :mod:`..shift.methods`)
 -> calibrated shift ``s = raw - (x_p, y_p)`` -> azimuth ``atan2(s_y, s_x)``
 -> tangential force ``|s| / compliance`` -> polar angle and 3-D force.
 
 Geometry and force: contacts, their windows and the shift are measured on the tared counts (the
 sensor's own readings, whatever its FSR curve); the force maps only give the contacts' forces.
 
-Uncertainty, from the contact's own data (:mod:`uncertainty`): ``sigma`` (taxels, one axis of
+Uncertainty, from the contact's own data (the kernel's sigma.c): ``sigma`` (taxels, one axis of
 the shift) gives ``azimuth_sigma = atan2(sigma, |s|)``; a shift shorter than ``MIN_SNR`` sigmas
 is within the noise and carries no direction.
 
-Compiled: for the registered methods all of the above runs in the compiled kernel (package
-``skin_kernel``, :mod:`kernel`), one call per scan; this module and the ones it calls are the
-algorithm's description, run with ``compiled=False``, and the tests hold the kernel to it.
-``model_fit`` too: the kernel refits ``taxel_fit``'s shift of each contact with the
-calibration's taxel model (``sk_model_fit``).
+All of the above runs in the compiled kernel (package ``skin_kernel``, :mod:`kernel`), one call
+per scan, for every registered method; a reference shift (``shift=``, the benchmark's) replaces
+only the shift of each contact inside the kernel's pipeline.
 
 Normal force: the taxels sense only ``fill_factor**2`` of the skin area, so the summed taxel
 forces of a contact are divided by it. The bottom layer's sum is used because the elastic layer
@@ -39,25 +37,18 @@ tangential components point along the azimuth, the direction in which the top la
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-import math
 import threading
 
 import numpy as np
 
 from . import kernel as compiled_kernel
-from .censoring import censored_taxels, force_window, marked_counts, with_censored_sums
 from .conditioning import Conditioner, ConditioningConfig
-from .contacts import LayerPair, pair_layers
-from .uncertainty import shift_sigma
 from ..calibration.calibration import Calibration
 from ..model.fsr import FsrModel
-from ..shift.methods import DEFAULT_METHOD, get_method, Method, NO_SHIFT
+from ..shift.methods import DEFAULT_METHOD, get_method, Method
 from ...common.validate import check_int, check_number, check_pair
 
-__all__ = ['EstimatorConfig', 'Contact', 'ContactEstimator', 'MIN_SNR']
-
-# A shift shorter than this many standard deviations of its own noise has no direction.
-MIN_SNR = 3.0
+__all__ = ['EstimatorConfig', 'Contact', 'ContactEstimator']
 
 
 @dataclass(frozen=True)
@@ -125,78 +116,117 @@ class Contact:
     direction_valid: bool
 
 
-def _or_zero(v: float) -> float:
-    return float(v) if math.isfinite(v) else 0.0
-
-
 class ContactEstimator:
     """
     Estimate contacts (location, force, direction) from raw top and bottom count maps.
 
-    The registered methods (:data:`kernel.METHODS`) run in the compiled kernel, one call per
-    scan; the Python code of this module and the ones it calls describes that algorithm and runs
-    with ``compiled=False`` (the tests compare the two) and with a reference ``shift``.
+    Every scan is one call of the compiled kernel (:mod:`kernel`).
+
+    An estimator does not change once made: its config, calibration and tare are fixed, and a
+    change (``with_*``) makes a new one, which a live host swaps in whole. The one piece of
+    mutable state is the kernel's: the dead-taxel marks that its scans revive. It belongs to the
+    thread that runs the scans (:meth:`process`, :meth:`measure_shifts`); other threads read
+    snapshots (:meth:`dead_masks`, :attr:`conditioner`) or condition maps on a kernel of their
+    own (:meth:`maps_of`). A kernel is built when the estimator is made if the maps' shape is
+    known then (a tare or gains fix it), else by the first scan of each new shape: readers find
+    it in a dict that is replaced, never changed, so a scan takes no lock to look it up.
     """
 
     def __init__(self, config: EstimatorConfig = None, calibration: Calibration = None,
-                 conditioner: Conditioner = None, shift: Method = None, compiled: bool = True):
+                 conditioner: Conditioner = None, shift: Method = None):
         """
         Create the pipeline; ``conditioner`` may carry a tare (it is copied, never shared).
 
         ``shift`` replaces the configured shift method by one that is not registered (the
-        benchmark's references). An estimator does not change once made: a tare, a calibration
-        or other settings make a new one (``with_*``), which a live host swaps in whole.
-        ``compiled=False`` runs the Python description instead of the compiled kernel.
+        benchmark's references): it runs on each contact's counts window, or once on the whole
+        maps (``whole_map``), inside the kernel's pipeline. A missing kernel raises
+        :class:`kernel.KernelMissing`.
         """
         self.config = config or EstimatorConfig()
         cond_config = ConditioningConfig(fsr=self.config.fsr,
                                          threshold_counts=self.config.threshold_counts,
                                          noise_sigmas=self.config.noise_sigmas)
-        self.conditioner = (Conditioner(cond_config) if conditioner is None
-                            else conditioner.copy(None if conditioner.config == cond_config
-                                                  else cond_config))
+        conditioner = (Conditioner(cond_config) if conditioner is None
+                       else conditioner.copy(None if conditioner.config == cond_config
+                                             else cond_config))
         self._calibration = calibration or Calibration()
-        self.conditioner.set_force_curves(*(self._calibration.force_curves or (None, None)))
+        conditioner.set_force_curves(*(self._calibration.force_curves or (None, None)))
         top, bottom = self._calibration.gain_maps()
-        if top is not None or self.conditioner.shape is not None:
-            self.conditioner.set_gain(top, bottom)
+        if top is not None or conditioner.shape is not None:
+            conditioner.set_gain(top, bottom)
+        # Never changed after this: snapshots and kernels are made from it.
+        self._conditioner = conditioner
         self._shift = shift
         self._method = shift or get_method(self.config.method)
-        self._compiled = compiled
-        self._use_kernel = (compiled and shift is None
-                            and self._method.name in compiled_kernel.METHODS)
-        if self._use_kernel:
-            # A missing kernel stops the estimator's maker (a node at start-up), not a scan.
-            compiled_kernel.load_library()
-        self._kernel = None
-        self._kernel_lock = threading.Lock()
+        if shift is not None and (shift.linear or shift.modelled or shift.function is None):
+            raise ValueError(f'a reference shift takes the counts window alone: {shift.name} '
+                             'wants force maps or a taxel model')
+        self._kernels = {}
+        self._build_lock = threading.Lock()
+        # A missing kernel stops the estimator's maker (a node at start-up), not a scan.
+        compiled_kernel.load_library()
+        if conditioner.shape is not None:
+            self._kernels = {conditioner.shape: self._new_kernel(conditioner.shape)}
+        self._viewer = None
+        self._viewer_lock = threading.Lock()
 
     @property
     def calibration(self) -> Calibration:
         """Return the calibration in force."""
         return self._calibration
 
+    @property
+    def conditioner(self) -> Conditioner:
+        """
+        Return a snapshot of the conditioning: tare, gains, curves, the dead marks in force now.
+
+        A copy: changing it changes nothing here. Read it once for a consistent view.
+        """
+        snapshot = self._conditioner.copy()
+        top, bottom = self.dead_masks()
+        if top is not None:
+            snapshot.set_dead(top, bottom)
+        return snapshot
+
+    def dead_masks(self) -> tuple:
+        """Return the (top, bottom) dead-taxel marks in force now (None, None: no shape yet)."""
+        shape = self._conditioner.shape
+        kernels = self._kernels
+        kernel = kernels.get(shape) if shape is not None else (
+            next(iter(kernels.values())) if len(kernels) == 1 else None)
+        if kernel is None:
+            return self._conditioner.dead_masks()
+        dead = kernel.dead_masks()
+        return dead[0], dead[1]
+
     def with_calibration(self, calibration: Calibration) -> 'ContactEstimator':
         """Return this estimator with ``calibration`` (force curves and gains too) in force."""
-        return ContactEstimator(self.config, calibration, self.conditioner, self._shift,
-                                self._compiled)
+        return ContactEstimator(self.config, calibration, self.conditioner, self._shift)
 
     def with_config(self, config: EstimatorConfig) -> 'ContactEstimator':
         """Return an estimator with other settings, keeping the tare and the calibration."""
-        return ContactEstimator(config, self._calibration, self.conditioner, self._shift,
-                                self._compiled)
+        return ContactEstimator(config, self._calibration, self.conditioner, self._shift)
 
     def with_tare(self, top_frames, bottom_frames) -> 'ContactEstimator':
         """Return this estimator tared from no-touch frames (N x rows x cols each)."""
-        tared = self.conditioner.copy()
+        tared = self.conditioner
         tared.tare(top_frames, bottom_frames)
-        return ContactEstimator(self.config, self._calibration, tared, self._shift,
-                                self._compiled)
+        return ContactEstimator(self.config, self._calibration, tared, self._shift)
 
-    def with_compiled(self, compiled: bool) -> 'ContactEstimator':
-        """Return this estimator on the compiled kernel or on its Python description."""
-        return ContactEstimator(self.config, self._calibration, self.conditioner, self._shift,
-                                compiled)
+    def maps_of(self, top_counts, bottom_counts) -> tuple:
+        """
+        Return the (top, bottom) force maps (N per taxel) of one scan, as the scans condition it.
+
+        For the heatmaps of a thread that does not run the scans: it conditions on a kernel of
+        its own (the dead marks as they were when it was made), never on the scanning one.
+        """
+        t, b = check_pair(top_counts, bottom_counts)
+        with self._viewer_lock:
+            viewer = self._viewer
+            if viewer is None or viewer.shape != t.shape:
+                viewer = self._viewer = self._new_kernel(t.shape)
+            _, force = viewer.condition(t, b)
+        return force[0], force[1]
 
     @property
     def every_scan(self) -> bool:
@@ -214,50 +244,6 @@ class ContactEstimator:
         """Return the compliance in use: the calibrated one, else the configured one."""
         return self.calibration.compliance_m_per_n or self.config.compliance_m_per_n
 
-    def _raw(self, top_counts, bottom_counts) -> list:
-        """Return [(LayerPair, ShiftEstimate, sigma in taxels)] for the contacts."""
-        t, b = check_pair(top_counts, bottom_counts)
-        cfg = self.config
-        conditioner = self.conditioner
-        maps = conditioner.touch_counts(t, b)
-        dead = conditioner.dead_masks()[0]
-        clipped = conditioner.clipped(t, b)
-        force = conditioner.force_of(maps, clipped)
-        pairs = pair_layers(maps, cfg.max_contacts,
-                            dead if dead is not None and dead.any() else None, force)
-        if not pairs:
-            return []
-        curves = self.calibration.force_curves
-        censoring = bool(curves) and any(c.censor_counts or c.rim_load_n for c in curves)
-        method = self._method
-        noise = conditioner.count_noise()
-        sensitivity = conditioner.sensitivity_maps() if method.modelled else None
-        whole = None
-        if method.whole_map:
-            whole = method.function(np.stack((t, b)).astype(np.float64))
-        out = []
-        for pair in pairs:
-            window = marked = None
-            if censoring or method.linear:
-                window = force_window(pair, maps, force)
-                marked = marked_counts(pair, clipped, conditioner.config.fsr.full_scale)
-            if censoring:
-                pair = with_censored_sums(pair, marked, window, curves)
-            if whole is not None:
-                est = whole
-            elif method.linear:
-                stack = np.concatenate((window, pair.maps, censored_taxels(marked, curves)))
-                est = (method.function(stack, self._calibration.taxel_model,
-                                       _window_of(sensitivity, pair))
-                       if method.modelled else method.function(stack))
-            else:
-                est = method.function(pair.maps)
-            if not (math.isfinite(est.dx) and math.isfinite(est.dy)):
-                est = NO_SHIFT
-            out.append((pair, est, shift_sigma(pair, maps, noise, len(pairs) == 1,
-                                               self._calibration_variance(), est.cut_variance)))
-        return out
-
     def _calibration_variance(self) -> float:
         """
         Return the calibration's share of sigma**2 (taxels**2): the zero a new press meets.
@@ -273,15 +259,6 @@ class ContactEstimator:
         return ((cal.std_x_m ** 2 + cal.std_y_m ** 2) * (1.0 + 1.0 / cal.presses)
                 / (2.0 * pitch * pitch))
 
-    def _normal_force(self, pair: LayerPair) -> float:
-        """Return the contact's normal force: sensed sum / fill_factor**2 (module docstring)."""
-        cfg = self.config
-        sensed = (max(pair.top_force_n, pair.bottom_force_n) if pair.bottom_cut
-                  else pair.bottom_force_n)
-        if sensed <= 0:
-            sensed = pair.top_force_n
-        return sensed * cfg.force_scale / (cfg.fill_factor * cfg.fill_factor)
-
     def measure_shifts(self, top_counts, bottom_counts) -> list:
         """
         Return the uncalibrated layer shifts (x, y) in metres of the contacts, strongest first.
@@ -289,110 +266,82 @@ class ContactEstimator:
         Use it on normal presses to feed :func:`calibration.calibrate_from_shifts`.
         """
         p = self.config.pitch_m
-        if self._use_kernel:
-            dx, dy = compiled_kernel.DX, compiled_kernel.DY
-            return [(r[dx] * p, r[dy] * p)
-                    for r in self._scan(top_counts, bottom_counts, every_pair=True)]
-        raw = sorted(self._raw(top_counts, bottom_counts),
-                     key=lambda item: -self._normal_force(item[0]))
-        return [(est.dx * p, est.dy * p) for _, est, _ in raw]
+        return [(r.dx * p, r.dy * p)
+                for r in self._scan(top_counts, bottom_counts, every_pair=True)]
 
     def process(self, top_counts, bottom_counts) -> list:
         """Return the contacts in the two raw count maps, strongest (normal force) first."""
-        if not self._use_kernel:
-            return self._process_described(top_counts, bottom_counts)
-        kept = compiled_kernel.KEPT
-        return [_contact(r) for r in self._scan(top_counts, bottom_counts) if r[kept]]
+        return [_contact(r) for r in self._scan(top_counts, bottom_counts) if r.kept]
 
     def _scan(self, top_counts, bottom_counts, every_pair: bool = False) -> list:
         """Return the compiled kernel's records of the contacts (kernel.Kernel.scan)."""
-        kernel = self._kernel or self._build_kernel(top_counts, bottom_counts)
-        records, revived = kernel.scan(top_counts, bottom_counts, every_pair)
-        if revived is not None:
-            self.conditioner.set_dead(revived[0], revived[1])
-        return records
+        kernel = self._kernels.get(np.shape(top_counts))
+        if kernel is None:
+            kernel = self._kernel_for(top_counts, bottom_counts)
+        if self._shift is None:
+            return kernel.scan(top_counts, bottom_counts, every_pair)
+        return kernel.scan_shifted(top_counts, bottom_counts,
+                                   self._reference(top_counts, bottom_counts), every_pair)
 
-    def _build_kernel(self, top_counts, bottom_counts) -> compiled_kernel.Kernel:
+    def _reference(self, top_counts, bottom_counts):
+        """Return the reference shift's function of a contact's counts window for one scan."""
+        method = self._shift
+        if method.whole_map:
+            whole = method.function(np.stack(check_pair(top_counts, bottom_counts))
+                                    .astype(np.float64))
+            return lambda window: whole
+        return method.function
+
+    def _kernel_for(self, top_counts, bottom_counts) -> compiled_kernel.Kernel:
+        """Return the kernel of the maps' shape, built by the first scan of that shape."""
         t, _ = check_pair(top_counts, bottom_counts)
-        with self._kernel_lock:
-            if self._kernel is None:
-                cfg, cal = self.config, self.calibration
-                state = self.conditioner.state(t.shape)
-                curves = cal.force_curves or (None, None)
-                reals = (cfg.pitch_m, self.compliance_m_per_n, cfg.min_contact_force_n,
-                         cfg.min_confidence, cfg.min_shift_m, cfg.force_scale, cfg.fill_factor,
-                         cal.x_p_m, cal.y_p_m, *cal.zero_slope_m_per_n, cal.zero_ref_n,
-                         self._calibration_variance(),
-                         *(c.censor_counts if c is not None else 0.0 for c in curves),
-                         *(c.rim_load_n if c is not None else 0.0 for c in curves),
-                         *(c.spread_taxels if c is not None else 0.0 for c in curves),
-                         *(c.bump_power if c is not None else 2.0 for c in curves),
-                         *(c.activation_n if c is not None else 0.0 for c in curves),
-                         *compiled_kernel.model_numbers(cal.taxel_model))
-                cond = self.conditioner.config
-                self._kernel = compiled_kernel.Kernel(compiled_kernel.KernelSettings(
-                    self._method.name, cfg.max_contacts, cond.remove_crosstalk, cond.fill_dead,
-                    reals, *state))
-        return self._kernel
+        with self._build_lock:
+            kernel = self._kernels.get(t.shape)
+            if kernel is None:
+                kernel = self._new_kernel(t.shape)
+                # Replaced, never changed: a reader holds the old dict or the new one, whole.
+                self._kernels = {**self._kernels, t.shape: kernel}
+        return kernel
 
-    def _process_described(self, top_counts, bottom_counts) -> list:
-        """Return the contacts as :meth:`process`, by the Python description of the pipeline."""
-        cfg = self.config
-        cal = self.calibration
-        compliance = self.compliance_m_per_n
-        pitch = cfg.pitch_m
-        # A bottom imprint more than half the grid away cannot be told from another contact's.
-        reach = 0.5 * min(np.shape(top_counts))
-        contacts = []
-        for pair, est, sigma in self._raw(top_counts, bottom_counts):
-            normal = self._normal_force(pair)
-            if normal < cfg.min_contact_force_n:
-                continue
-            raw_x, raw_y = est.dx * pitch, est.dy * pitch
-            zero_x, zero_y = cal.zero_m(normal)
-            sx, sy = raw_x - zero_x, raw_y - zero_y
-            magnitude = math.hypot(sx, sy)
-            snr = magnitude / (sigma * pitch) if sigma > 0 else math.inf
-            method_conf = min(max(_or_zero(est.confidence), 0.0), 1.0)
-            conf = method_conf * (snr * snr / (snr * snr + MIN_SNR * MIN_SNR)
-                                  if math.isfinite(snr) else 1.0)
-            valid = (snr >= MIN_SNR and conf >= cfg.min_confidence
-                     and cfg.min_shift_m <= magnitude and math.hypot(est.dx, est.dy) <= reach)
-            if valid:
-                azimuth = math.atan2(sy, sx)
-                tangential = magnitude / compliance
-                alpha = math.atan2(tangential, normal)
-                fx, fy = tangential * math.cos(azimuth), tangential * math.sin(azimuth)
-                azimuth_sigma = math.atan2(sigma * pitch, magnitude)
-            else:
-                azimuth = alpha = fx = fy = 0.0
-                azimuth_sigma = math.pi
-            contacts.append(Contact(
-                x_m=pair.col * pitch, y_m=pair.row * pitch, force_n=normal,
-                area_m2=pair.taxels * pitch * pitch,
-                shift_m=(_or_zero(sx), _or_zero(sy)), azimuth_rad=azimuth,
-                azimuth_sigma_rad=azimuth_sigma, alpha_rad=alpha,
-                force_xyz_n=(fx, fy, -normal), confidence=conf, direction_valid=bool(valid)))
-        contacts.sort(key=lambda c: -c.force_n)
-        return contacts
+    def _new_kernel(self, shape: tuple) -> compiled_kernel.Kernel:
+        """Return a new kernel of this estimator for ``shape`` maps (the dead marks as made)."""
+        conditioner = self._conditioner
+        if conditioner.shape is None:
+            conditioner = conditioner.copy()  # state() fixes the shape: not on the original
+        state = conditioner.state(shape)
+        return compiled_kernel.Kernel(compiled_kernel.KernelSettings(
+            self._kernel_settings(), self.config.method, *state))
+
+    def _kernel_settings(self) -> compiled_kernel.Settings:
+        """Return the kernel's settings of this estimator (the maps' shape filled in later)."""
+        cfg, cal = self.config, self.calibration
+        curves = [compiled_kernel.Curve(bump_power=2.0) if c is None else compiled_kernel.Curve(
+            censor_counts=c.censor_counts, rim_load_n=c.rim_load_n,
+            spread_taxels=c.spread_taxels, bump_power=c.bump_power,
+            activation_n=c.activation_n) for c in (cal.force_curves or (None, None))]
+        slope_x, slope_y = cal.zero_slope_m_per_n
+        cond = self._conditioner.config
+        return compiled_kernel.Settings(
+            max_contacts=cfg.max_contacts, remove_crosstalk=cond.remove_crosstalk,
+            fill_dead=cond.fill_dead, pitch_m=cfg.pitch_m,
+            compliance_m_per_n=self.compliance_m_per_n, min_force_n=cfg.min_contact_force_n,
+            min_confidence=cfg.min_confidence, min_shift_m=cfg.min_shift_m,
+            force_scale=cfg.force_scale, fill_factor=cfg.fill_factor, x_p_m=cal.x_p_m,
+            y_p_m=cal.y_p_m, slope_x_m_per_n=slope_x, slope_y_m_per_n=slope_y,
+            zero_ref_n=cal.zero_ref_n, calibration_var=self._calibration_variance(),
+            curves=(compiled_kernel.Curve * 2)(*curves),
+            model=compiled_kernel.taxel_model_of(cal.taxel_model))
 
 
-def _contact(r: list) -> Contact:
-    """Return the Contact of a compiled record (its first kernel.CONTACT_FIELDS numbers)."""
+def _contact(r: compiled_kernel.Record) -> Contact:
+    """Return the Contact of a compiled record."""
     # The frozen dataclass's __init__ sets each field through object.__setattr__; its __dict__
     # made at once is the same Contact for less than half the cost (a scan's Python share).
     contact = object.__new__(Contact)
     object.__setattr__(contact, '__dict__', {
-        'x_m': r[0], 'y_m': r[1], 'force_n': r[2], 'area_m2': r[3], 'shift_m': (r[4], r[5]),
-        'azimuth_rad': r[6], 'azimuth_sigma_rad': r[7], 'alpha_rad': r[8],
-        'force_xyz_n': (r[9], r[10], r[11]), 'confidence': r[12], 'direction_valid': r[13] > 0})
+        'x_m': r.x_m, 'y_m': r.y_m, 'force_n': r.force_n, 'area_m2': r.area_m2,
+        'shift_m': (r.shift_x_m, r.shift_y_m), 'azimuth_rad': r.azimuth_rad,
+        'azimuth_sigma_rad': r.azimuth_sigma_rad, 'alpha_rad': r.alpha_rad,
+        'force_xyz_n': (r.force_x_n, r.force_y_n, r.force_z_n), 'confidence': r.confidence,
+        'direction_valid': r.valid > 0})
     return contact
-
-
-def _window_of(maps: np.ndarray, pair) -> np.ndarray:
-    """Return the (2, h, w) part of full ``maps`` under ``pair``'s window (None for None)."""
-    if maps is None:
-        return None
-    r, c = pair.origin
-    h, w = pair.maps.shape[1:]
-    return maps[:, r:r + h, c:c + w]
