@@ -295,6 +295,8 @@ class EstimationHost:
         self.calibration.check_skin(rows, cols, pitch_m)
 
         def for_skin(old):
+            # A tare or gains of another grid would refuse every scan of this one.
+            old = old.for_grid(skin[0], skin[1])
             if conversions.frame_pitch(old.config.pitch_m) == skin[2]:
                 return old
             return old.with_config(replace(old.config, pitch_m=skin[2]))
@@ -543,4 +545,3 @@ class EstimationHost:
         self._diag.publish([diagnostics.make_status(
             f'{self.node.get_fully_qualified_name()}: contact estimation', self._skin, level,
             message, values)])
-

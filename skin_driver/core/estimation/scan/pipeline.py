@@ -36,7 +36,7 @@ tangential components point along the azimuth, the direction in which the top la
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 import threading
 
 import numpy as np
@@ -202,6 +202,23 @@ class ContactEstimator:
     def with_calibration(self, calibration: Calibration) -> 'ContactEstimator':
         """Return this estimator with ``calibration`` (force curves and gains too) in force."""
         return ContactEstimator(self.config, calibration, self.conditioner, self._shift)
+
+    def for_grid(self, rows: int, cols: int) -> 'ContactEstimator':
+        """
+        Return this estimator for scans of ``rows`` x ``cols`` taxels.
+
+        Itself when its tare and gains are of that grid or of none; else one without them (a
+        tare or gains of another grid say nothing of this one), its settings and the rest of
+        its calibration kept, so the skin it has is estimated rather than every scan refused.
+        """
+        shape = self._conditioner.shape
+        if shape is None or shape == (rows, cols):
+            return self
+        calibration = self._calibration
+        gains = calibration.gain_maps()[0]
+        if gains is not None and gains.shape != (rows, cols):
+            calibration = replace(calibration, gains=None)
+        return ContactEstimator(self.config, calibration, None, self._shift)
 
     def with_config(self, config: EstimatorConfig) -> 'ContactEstimator':
         """Return an estimator with other settings, keeping the tare and the calibration."""
