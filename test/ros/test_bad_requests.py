@@ -135,7 +135,7 @@ def test_direction_refuses_an_unknown_method_at_run_time_and_applies_a_known_one
 
 
 @pytest.mark.ros
-def test_calibrate_refuses_a_huge_timeout_and_tare_refuses_without_frames(tmp_path):
+def test_calibrate_refuses_a_huge_timeout_and_tare_refuses_without_frames(tmp_path, capfd):
     with ros_context() as (context, executor):
         node = DirectionNode(context=context, parameter_overrides=overrides(
             {'calibration_file': str(tmp_path / 'cal.yaml')}))
@@ -146,6 +146,8 @@ def test_calibrate_refuses_a_huge_timeout_and_tare_refuses_without_frames(tmp_pa
             assert not result.success and 'is not in (0, 3600]' in result.message
         result = call(executor, node, Trigger, '/skin_direction/tare', Trigger.Request())
         assert not result.success and 'no scan is arriving' in result.message
+        # The refusal is in the node's log too (issue #37: it was not).
+        assert 'tare refused: no scan is arriving' in capfd.readouterr().err
         node.destroy_node()
     assert not (tmp_path / 'cal.yaml').exists()
 

@@ -131,7 +131,8 @@ def test_bad_goals_end_before_any_press_and_change_nothing(node_with_calibration
     assert path.read_text() == text
 
 
-def test_a_second_goal_is_rejected_and_a_cancel_changes_nothing(node_with_calibration):
+def test_a_second_goal_is_rejected_and_a_cancel_changes_nothing(node_with_calibration, capfd):
+    """The rejection and the cancel are logged too (issue #37: neither was)."""
     node, executor, path, previous = node_with_calibration
     text = path.read_text()
     first = ActionClient(node, CalibrateForce, FORCE)
@@ -149,6 +150,10 @@ def test_a_second_goal_is_rejected_and_a_cancel_changes_nothing(node_with_calibr
     assert done.result().result.message.startswith('cancelled with 0 of 8 presses')
     assert node.host.estimator.calibration == previous
     assert path.read_text() == text
+    logged = capfd.readouterr().err
+    assert 'compliance calibration goal rejected: a force calibration is already running' \
+        in logged
+    assert 'calibration (force): cancelled with 0 of 8 presses' in logged
     first.destroy()
     # The session is over: the next goal is taken.
     status, _ = send_goal(executor, node, CalibrateForce, FORCE,
