@@ -244,6 +244,11 @@ class CalibrationServices:
             self._first_frame_s = time.monotonic()
         self._check(skin)
 
+    @property
+    def board(self):
+        """Return the BoardInfo the board last gave (None while it said nothing)."""
+        return self._board
+
     def set_board(self, info) -> None:
         """
         Take who the board says it is (a core.protocol.wire.BoardInfo) as this skin's board.

@@ -39,7 +39,7 @@ import numpy as np
 from rcl_interfaces.msg import SetParametersResult
 from rclpy.event_handler import PublisherEventCallbacks
 from sensor_msgs.msg import Image
-from skin_driver.core.estimation.calibration.calibration import SkinMount, utc_now
+from skin_driver.core.estimation.calibration.calibration import PARTS, SkinMount, utc_now
 from skin_driver.core.estimation.calibration.tare import RecentScans
 from skin_driver.core.estimation.scan.heatmap import colour_map, grey_levels
 from skin_driver.core.estimation.scan.pipeline import ContactEstimator, EstimatorConfig
@@ -52,7 +52,8 @@ from skin_driver.ros.frames import default_frame_id
 from skin_driver.ros.hot_path import LatestOnly, Listened
 from skin_driver.ros.mount_calibration import MountCalibration
 from skin_driver.ros.params import accept_whole_numbers, check, declare, ParameterError
-from skin_msgs.msg import TactileContact, TactileContactArray
+from skin_msgs.msg import SkinInfo, TactileContact, TactileContactArray
+from std_msgs.msg import Header
 from std_srvs.srv import Trigger
 from visualization_msgs.msg import MarkerArray
 
@@ -134,6 +135,9 @@ class EstimationHost:
                                                    **quiet)
         self._pub_contact = node.create_publisher(TactileContact, 'contact', qos.stream(), **quiet)
         self._pub_wrench = node.create_publisher(WrenchStamped, 'wrench', qos.stream(), **quiet)
+        # What the skin is, latched: a tool that finds the topic later still learns it.
+        self._pub_info = node.create_publisher(SkinInfo, 'skin_info', qos.latched())
+        self._described = None
         # The viz timer runs only while rviz's topics have subscribers: told by their matched
         # events (three entities) rather than woken at viz_rate to ask.
         self._viz_watchers = {}
@@ -201,6 +205,9 @@ class EstimationHost:
                 low=0.001, high=1000.0)
         declare(node, 'diagnostics_period', 1.0, 'Seconds between two /diagnostics reports.',
                 low=0.1, high=60.0)
+        declare(node, 'layer_gap', 0.0,
+                'Thickness of the elastic layer between the two FSR layers (metres), for '
+                'skin_info; 0: not given.', low=0.0, high=0.1)
 
     def _p(self, name):
         return self.node.get_parameter(name).value
@@ -513,6 +520,17 @@ class EstimationHost:
         return response
 
     # ---- diagnostics ------------------------------------------------------------------------
+    def _describe_skin(self) -> None:
+        """Publish what the skin is on skin_info (latched) when any of it changed."""
+        live = self._live
+        if live.skin is None:
+            return
+        info = skin_info(self._skin, live.skin, live.estimator, self.calibration.board,
+                         self._p('layer_gap'))
+        if info != self._described:
+            self._described = info
+            self._pub_info.publish(info)
+
     def _report(self) -> None:
         rate, _ = self._rate.take(time.monotonic())
         tally = self.tally()
@@ -542,6 +560,25 @@ class EstimationHost:
             level, message = diagnostics.WARN, 'no frame received yet'
         elif rate == 0.0:
             level, message = diagnostics.WARN, 'no frame in the last period'
+        self._describe_skin()
         self._diag.publish([diagnostics.make_status(
             f'{self.node.get_fully_qualified_name()}: contact estimation', self._skin, level,
             message, values)])
+
+
+def skin_info(frame_id: str, skin: tuple, estimator: ContactEstimator, board,
+              layer_gap_m: float) -> SkinInfo:
+    """Return what a tool needs to know of the skin ``estimator`` serves, as a SkinInfo."""
+    rows, cols, pitch_m = skin
+    cal = estimator.calibration
+    parts = [part for part in PARTS if cal.made(part)] + (['mount'] if cal.mount else [])
+    return SkinInfo(
+        header=Header(frame_id=frame_id), rows=int(rows), cols=int(cols), pitch=float(pitch_m),
+        layer_gap=float(layer_gap_m),
+        min_contact_force=float(estimator.config.min_contact_force_n),
+        scan_rate=float(board.rate_hz) if board is not None and board.rate_hz else 0.0,
+        board_name=board.board if board is not None else '',
+        board_uid=board.uid if board is not None else '',
+        firmware_version=board.fw if board is not None else '',
+        calibration_made=cal.made_utc, calibration_parts=parts,
+        parent_frame=cal.mount.parent_frame if cal.mount else '')
