@@ -139,6 +139,32 @@ class _Running:
             self._open = False
 
 
+async def goal_outcome(node, goal_handle, done, timeout_s: float) -> str:
+    """
+    Return what ended a goal that waits for ``done()``: 'done', 'cancel' or 'timeout'.
+
+    Polled every POLL_S by a timer on the executor, whose future it is alone: the scans' thread
+    only makes ``done()`` true.
+    """
+    deadline = time.monotonic() + timeout_s
+    future = Future()
+
+    def watch():
+        if future.done():
+            return
+        if goal_handle.is_cancel_requested:
+            future.set_result('cancel')
+        elif done():
+            future.set_result('done')
+        elif time.monotonic() > deadline:
+            future.set_result('timeout')
+    timer = node.create_timer(POLL_S, watch)
+    try:
+        return await future
+    finally:
+        node.destroy_timer(timer)
+
+
 class CalibrationServices:
     """Offer the calibration actions on a node whose estimator ``get_estimator()`` returns."""
 
@@ -475,26 +501,12 @@ class CalibrationServices:
             goal_handle.abort()
             return result
         timeout = goal_handle.request.timeout or self._param('calibration.timeout')
-        deadline = time.monotonic() + timeout
-        future = Future()
-
-        # The future is the executor's alone: the scans' thread only feeds the session, and
-        # this watch sees it done.
-        def watch():
-            if future.done():
-                return
-            if goal_handle.is_cancel_requested:
-                future.set_result('cancel')
-            elif session.done:
-                future.set_result('done')
-            elif time.monotonic() > deadline:
-                future.set_result('timeout')
         running = _Running(session, goal_handle)
         self._running_now = running
         self._node.get_logger().info(
             f'calibration ({kind}): make {session.wanted} presses within {timeout:.0f} s')
         try:
-            outcome = await self._polled(future, watch)
+            outcome = await goal_outcome(self._node, goal_handle, lambda: session.done, timeout)
         finally:
             self._running_now = None
             running.close()

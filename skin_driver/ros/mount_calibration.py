@@ -19,16 +19,15 @@ from geometry_msgs.msg import Point, PointStamped, Pose, PoseStamped, Quaternion
 from rclpy.action import ActionServer, CancelResponse, GoalResponse
 from rclpy.callback_groups import MutuallyExclusiveCallbackGroup
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
-from rclpy.task import Future
 from skin_driver.core.estimation.calibration.mount import (MAX_RESIDUAL_M, MountRefused,
                                                            MountSession, urdf_snippet)
 from skin_driver.ros import conversions, qos
+from skin_driver.ros.calibration_services import goal_outcome
 from skin_driver.ros.params import declare
 from skin_msgs.action import CalibrateMount
 
 DEFAULT_TOUCHES = 6
 MAX_TOUCHES = 100
-POLL_S = 0.1
 NOTHING = '; nothing changed'
 # A tool tip position older than this when a scan arrives is not that scan's.
 MAX_TIP_AGE_S = 0.5
@@ -165,25 +164,11 @@ class MountCalibration:
         if not points:
             self._follow_tip()
         timeout = goal.timeout or self._param('calibration.timeout')
-        deadline = time.monotonic() + timeout
-        future = Future()
-
-        def watch():
-            if future.done():
-                return
-            if goal_handle.is_cancel_requested:
-                future.set_result('cancel')
-            elif session.done:
-                future.set_result('done')
-            elif time.monotonic() > deadline:
-                future.set_result('timeout')
         self._running = _Running(session, goal_handle, not points)
         logger.info(f'mount calibration: make {touches} touches within {timeout:.0f} s')
-        timer = self._node.create_timer(POLL_S, watch)
         try:
-            outcome = await future
+            outcome = await goal_outcome(self._node, goal_handle, lambda: session.done, timeout)
         finally:
-            self._node.destroy_timer(timer)
             self._running = None
         made = f'{len(session.skin_xy_m)} of {touches} touches'
         if outcome == 'cancel':

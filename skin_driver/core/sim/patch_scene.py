@@ -29,17 +29,18 @@ the common frame (the truth a test holds the patches node's contacts to).
 from __future__ import annotations
 
 from dataclasses import dataclass
-import importlib.resources
 import math
 import os
 from pathlib import Path
 from typing import Any, Mapping, Optional, Tuple
 
-import yaml
-
 from .physics import Press
-from .scene import Scene, scene_from_dict
+from .scene import (bundled_scene_names, find_scene, read_scene_file, Scene,
+                    scene_from_dict)
 from ..robot.patches import Layout, layout_from_dict, Pose
+
+# The package's folder of patch scenes, under scenes/.
+PATCH_SCENES = 'patches'
 
 __all__ = ['PatchScene', 'PatchView', 'PLANE_TOLERANCE_M', 'patch_scene_from_dict',
            'load_patch_scene', 'bundled_patch_scene_names']
@@ -208,31 +209,15 @@ def patch_scene_from_dict(data: Any, name: str = 'scene') -> PatchScene:
 
 def bundled_patch_scene_names() -> list:
     """Return the names of the patch scenes shipped with the package."""
-    folder = importlib.resources.files('skin_driver') / 'scenes' / 'patches'
-    return sorted(p.name[:-5] for p in folder.iterdir() if p.name.endswith('.yaml'))
+    return bundled_scene_names(PATCH_SCENES)
 
 
 def find_patch_scene(name_or_path: str | os.PathLike) -> Path:
     """Return the file of a bundled patch scene name or of an existing path."""
-    path = Path(name_or_path)
-    if path.is_file():
-        return path
-    stem = path.name[:-5] if path.name.endswith('.yaml') else path.name
-    if str(name_or_path) in (stem, stem + '.yaml'):
-        candidate = importlib.resources.files('skin_driver') / 'scenes' / 'patches' / (
-            stem + '.yaml')
-        if candidate.is_file():
-            return Path(str(candidate))
-    raise ValueError(f'no patch scene file or bundled patch scene named {str(name_or_path)!r}; '
-                     f'bundled patch scenes are {", ".join(bundled_patch_scene_names())}')
+    return find_scene(name_or_path, PATCH_SCENES, 'patch scene')
 
 
 def load_patch_scene(name_or_path: str | os.PathLike) -> PatchScene:
     """Load and validate a patch scene from a bundled name or a YAML file path."""
-    path = find_patch_scene(name_or_path)
-    try:
-        data = yaml.safe_load(path.read_text())
-    except yaml.YAMLError as err:
-        raise ValueError(f'patch scene {str(path)!r} is not valid YAML: {err}') from None
-    return patch_scene_from_dict(data, name=path.name[:-5] if path.name.endswith('.yaml')
-                                 else path.name)
+    data, name = read_scene_file(find_patch_scene(name_or_path), 'patch scene')
+    return patch_scene_from_dict(data, name=name)

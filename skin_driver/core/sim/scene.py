@@ -355,32 +355,44 @@ def scene_from_dict(data: Any, name: str = 'scene') -> Scene:
                  repeat=repeat, period_s=period, description=str(description))
 
 
-def bundled_scene_names() -> list:
-    """Return the names of the scenes shipped with the package."""
-    folder = importlib.resources.files('skin_driver') / 'scenes'
-    return sorted(p.name[:-5] for p in folder.iterdir() if p.name.endswith('.yaml'))
+def bundled_scene_names(folder: str = '') -> list:
+    """Return the names of the scenes shipped with the package (in its ``folder`` of scenes)."""
+    where = importlib.resources.files('skin_driver') / 'scenes'
+    if folder:
+        where = where / folder
+    return sorted(p.name[:-5] for p in where.iterdir() if p.name.endswith('.yaml'))
 
 
-def find_scene(name_or_path: str | os.PathLike) -> Path:
-    """Return the file of a bundled scene name (with or without .yaml) or of an existing path."""
+def find_scene(name_or_path: str | os.PathLike, folder: str = '', kind: str = 'scene') -> Path:
+    """
+    Return the file of a bundled scene name (with or without .yaml) or of an existing path.
+
+    ``folder`` is the package's folder of such scenes under scenes/ ('' for plain scenes),
+    ``kind`` what the messages call them.
+    """
     path = Path(name_or_path)
     if path.is_file():
         return path
     stem = path.name[:-5] if path.name.endswith('.yaml') else path.name
     if str(name_or_path) in (stem, stem + '.yaml'):
-        candidate = importlib.resources.files('skin_driver') / 'scenes' / (stem + '.yaml')
+        where = importlib.resources.files('skin_driver') / 'scenes'
+        candidate = (where / folder if folder else where) / (stem + '.yaml')
         if candidate.is_file():
             return Path(str(candidate))
-    raise ValueError(f'no scene file or bundled scene named {str(name_or_path)!r}; bundled '
-                     f'scenes are {", ".join(bundled_scene_names())}')
+    raise ValueError(f'no {kind} file or bundled {kind} named {str(name_or_path)!r}; bundled '
+                     f'{kind}s are {", ".join(bundled_scene_names(folder))}')
+
+
+def read_scene_file(path: Path, kind: str = 'scene') -> tuple:
+    """Return (the YAML data, the scene's name) of a scene file; bad YAML raises ValueError."""
+    try:
+        data = yaml.safe_load(path.read_text())
+    except yaml.YAMLError as err:
+        raise ValueError(f'{kind} {str(path)!r} is not valid YAML: {err}') from None
+    return data, path.name[:-5] if path.name.endswith('.yaml') else path.name
 
 
 def load_scene(name_or_path: str | os.PathLike) -> Scene:
     """Load and validate a scene from a bundled name or a YAML file path."""
-    path = find_scene(name_or_path)
-    try:
-        data = yaml.safe_load(path.read_text())
-    except yaml.YAMLError as err:
-        raise ValueError(f'scene {str(path)!r} is not valid YAML: {err}') from None
-    name = path.name[:-5] if path.name.endswith('.yaml') else path.name
+    data, name = read_scene_file(find_scene(name_or_path))
     return scene_from_dict(data, name=name)
