@@ -3,12 +3,13 @@
 import math
 
 from action_msgs.msg import GoalStatus
-from geometry_msgs.msg import Point
+from geometry_msgs.msg import Point, PointStamped
 import numpy as np
 from pipeline import pipeline, scene, send_goal
 import pytest
 from skin_driver.core.estimation.calibration.calibration import Calibration
 from skin_msgs.action import CalibrateMount
+from std_msgs.msg import Header
 
 pytestmark = pytest.mark.ros
 
@@ -85,3 +86,28 @@ def test_a_goal_without_points_or_tool_topic_is_refused_at_once(tmp_path):
                                    CalibrateMount.Goal(touches=6), timeout_s=10.0)
     assert status == GoalStatus.STATUS_ABORTED
     assert 'mount.tool_topic' in result.message
+
+
+def test_the_tool_tip_topic_gives_each_touch_its_point(tmp_path):
+    """A robot that publishes where its tool tip is, instead of points in the goal."""
+    parent = points(TOUCHES_M)
+    with pipeline(tmp_path, touches_scene(TOUCHES_M), rate_hz=100.0,
+                  direction={'mount.tool_topic': '/tool_tip'}) as (
+            _, _, direction, probe, executor):
+        tip = probe.node.create_publisher(PointStamped, '/tool_tip', 10)
+
+        def publish_tip():
+            # The robot knows which point it is touching: the touch under the newest contact.
+            if not probe.contacts or not probe.contacts[-1].contacts:
+                return
+            where = probe.contacts[-1].contacts[0].location
+            k = min(range(len(TOUCHES_M)), key=lambda i: math.hypot(
+                TOUCHES_M[i][0] - where.x, TOUCHES_M[i][1] - where.y))
+            tip.publish(PointStamped(header=Header(frame_id='base_link'), point=parent[k]))
+        probe.node.create_timer(0.01, publish_tip)
+        status, result = send_goal(
+            executor, direction, CalibrateMount, ACTION,
+            CalibrateMount.Goal(touches=6, timeout=30.0), timeout_s=40.0)
+    assert status == GoalStatus.STATUS_SUCCEEDED and result.success, result.message
+    p = result.pose.position
+    assert np.linalg.norm(np.subtract((p.x, p.y, p.z), XYZ)) < 0.001
