@@ -218,18 +218,19 @@ class MountCalibration:
                                                        **qos.overridable())
 
     def _publish_tf(self, parent: str, fit) -> None:
-        """Put the mount on /tf_static (latched), where tf2_msgs is installed."""
+        """Put the mount on /tf_static (latched), where tf2_msgs is installed and loads."""
         try:
             from tf2_msgs.msg import TFMessage
-        except ImportError:
+            if self._tf_pub is None:
+                latched = QoSProfile(depth=1, durability=DurabilityPolicy.TRANSIENT_LOCAL,
+                                     reliability=ReliabilityPolicy.RELIABLE)
+                self._tf_pub = self._node.create_publisher(TFMessage, '/tf_static', latched)
+        except Exception as err:  # noqa: B902 - ImportError, or its type support not loading
+            # The mount is found and stored all the same: the result and the file carry it.
             self._node.get_logger().warning(
-                'mount calibration: tf2_msgs is not installed, the mount is not on /tf_static '
-                '(it is in the result and the calibration file)')
+                f'mount calibration: the mount is not on /tf_static (tf2_msgs: {err}); it is in '
+                'the result and the calibration file')
             return
-        if self._tf_pub is None:
-            latched = QoSProfile(depth=1, durability=DurabilityPolicy.TRANSIENT_LOCAL,
-                                 reliability=ReliabilityPolicy.RELIABLE)
-            self._tf_pub = self._node.create_publisher(TFMessage, '/tf_static', latched)
         transform = conversions.mount_transform(self._node.get_clock().now().to_msg(), parent,
                                                 self._frame_id(), fit.translation_m, fit.rpy_rad)
         self._tf_pub.publish(TFMessage(transforms=[transform]))
