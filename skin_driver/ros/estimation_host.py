@@ -272,7 +272,12 @@ class EstimationHost:
         """
         with self._lock:
             live = self._live
-            self._live = Live(change(live.estimator), skin or live.skin, live.generation + 1)
+            skin = skin or live.skin
+            estimator = change(live.estimator)
+            if skin is not None:
+                # Its kernel now, not by the first scan on the thread that reads them.
+                estimator.ready_for(skin[0], skin[1])
+            self._live = Live(estimator, skin, live.generation + 1)
 
     def _skin_grid(self) -> tuple:
         """Return (rows, cols, pitch) of the skin the scans show (touches come with scans)."""

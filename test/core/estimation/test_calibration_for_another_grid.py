@@ -2,6 +2,7 @@
 
 import numpy as np
 from skin_driver.core.estimation.calibration.calibration import Calibration
+from skin_driver.core.estimation.scan import kernel
 from skin_driver.core.estimation.scan.pipeline import ContactEstimator
 from skin_driver.core.sim.physics import Press, render, SkinModel
 
@@ -28,3 +29,21 @@ def test_a_tare_of_another_grid_is_dropped_for_this_grid():
     est = est.for_grid(12, 12)
     top, bottom = render(model, [Press(0.03, 0.025, 10.0)], rng)
     assert len(est.process(top, bottom)) == 1
+
+
+def test_an_estimator_made_ready_for_a_grid_builds_nothing_on_its_first_scan(monkeypatch):
+    est = ContactEstimator().ready_for(12, 12)
+    built = []
+    real = kernel.Kernel.__init__
+
+    def counting(self, *args, **kwargs):
+        built.append(args)
+        real(self, *args, **kwargs)
+    monkeypatch.setattr(kernel.Kernel, '__init__', counting)
+    top, bottom = render(SkinModel(rows=12, cols=12), [Press(0.03, 0.025, 10.0)],
+                         np.random.default_rng(2))
+    assert len(est.process(top, bottom)) == 1 and built == []
+    # A grid it was not made ready for is built by its first scan, as before.
+    top, bottom = render(SkinModel(rows=10, cols=10), [Press(0.02, 0.02, 10.0)],
+                         np.random.default_rng(3))
+    assert len(est.process(top, bottom)) == 1 and len(built) == 1

@@ -309,6 +309,20 @@ class ContactEstimator:
             return lambda window: whole
         return method.function
 
+    def ready_for(self, rows: int, cols: int) -> 'ContactEstimator':
+        """
+        Return this estimator with its kernel for ``rows`` x ``cols`` maps built now.
+
+        A live host calls it where it makes the estimator, off the hot path, so that the first
+        scan after a change builds nothing on the thread that reads the scans.
+        """
+        shape = (int(rows), int(cols))
+        if shape not in self._kernels:
+            with self._build_lock:
+                if shape not in self._kernels:
+                    self._kernels = {**self._kernels, shape: self._new_kernel(shape)}
+        return self
+
     def _kernel_for(self, top_counts, bottom_counts) -> compiled_kernel.Kernel:
         """Return the kernel of the maps' shape, built by the first scan of that shape."""
         t, _ = check_pair(top_counts, bottom_counts)
