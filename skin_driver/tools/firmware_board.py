@@ -41,6 +41,7 @@ import numpy as np
 
 from skin_driver.core.sim import physics
 from skin_driver.core.sim.scene import load_scene, Scene
+from skin_driver.tools.sim import stop_on_signal
 
 ROOT = Path(__file__).resolve().parents[2]
 FIRMWARE_DIR = Path(os.environ.get('SKIN_FW_DIR') or ROOT / 'firmware')
@@ -241,9 +242,7 @@ def main(argv=None) -> int:
               'them)', file=sys.stderr)
         return 2
     # From here a stop request ends the run quietly, also while the image builds.
-    done = threading.Event()
-    for sig in (signal.SIGINT, signal.SIGTERM):
-        signal.signal(sig, lambda *_: done.set())
+    done = stop_on_signal()
     try:
         scene = load_scene(args.scene)
         if not 1.0 <= args.rate <= 100_000.0:

@@ -12,15 +12,13 @@ per patch; human messages go to stderr.
 import argparse
 import math
 import os
-import signal
 import sys
-import threading
-import time
 
 from skin_driver.core.common.atomic import check_writable
 from skin_driver.core.protocol.link import default_port
 from skin_driver.core.sim.board import SimulatedSkin
 from skin_driver.core.sim.patch_scene import bundled_patch_scene_names, load_patch_scene
+from skin_driver.tools.sim import announce_epoch, stop_on_signal
 
 
 def _parser() -> argparse.ArgumentParser:
@@ -77,15 +75,8 @@ def main(argv=None) -> int:
             board.stop()
         print(f'patches_sim: error: {err}', file=sys.stderr)
         return 2
-    done = threading.Event()
-
-    def _on_signal(signum, frame):
-        done.set()
-
-    for sig in (signal.SIGINT, signal.SIGTERM):
-        signal.signal(sig, _on_signal)
-    epoch = time.time() - (time.monotonic() - boards[0][1].epoch_monotonic)
-    print(f'SKIN_EPOCH {epoch:.6f}', file=sys.stderr, flush=True)
+    done = stop_on_signal()
+    announce_epoch(boards[0][1].epoch_monotonic)
     print(f'patches_sim: scene {scene.name!r} ({scene.duration_s:.1f} s'
           f'{", looped" if args.loop else ""}), patches {", ".join(scene.patch_names)} at '
           f'{args.rate:g} Hz; Ctrl-C stops', file=sys.stderr)

@@ -55,6 +55,25 @@ def _parser() -> argparse.ArgumentParser:
     return parser
 
 
+def stop_on_signal() -> threading.Event:
+    """Return an event that SIGINT or SIGTERM sets: how a board tool is asked to stop."""
+    done = threading.Event()
+
+    def _on_signal(signum, frame):
+        done.set()
+
+    for sig in (signal.SIGINT, signal.SIGTERM):
+        signal.signal(sig, _on_signal)
+    return done
+
+
+def announce_epoch(epoch_monotonic: float) -> None:
+    """Print the wall-clock instant of device time 0 (SKIN_EPOCH) on stderr."""
+    # So that a host can turn device stamps into latency.
+    epoch = time.time() - (time.monotonic() - epoch_monotonic)
+    print(f'SKIN_EPOCH {epoch:.6f}', file=sys.stderr, flush=True)
+
+
 def main(argv=None) -> int:
     """Run the simulator from the command line; return the process exit status."""
     argv = sys.argv[1:] if argv is None else list(argv)
@@ -95,17 +114,9 @@ def main(argv=None) -> int:
     except (ValueError, OSError) as err:
         print(f'sim: error: {err}', file=sys.stderr)
         return 2
-    done = threading.Event()
-
-    def _on_signal(signum, frame):
-        done.set()
-
-    for sig in (signal.SIGINT, signal.SIGTERM):
-        signal.signal(sig, _on_signal)
+    done = stop_on_signal()
     print(f'SKIN_PORT {port}', flush=True)
-    # Wall-clock instant of device time 0, so that a host can turn device stamps into latency.
-    epoch = time.time() - (time.monotonic() - skin.epoch_monotonic)
-    print(f'SKIN_EPOCH {epoch:.6f}', file=sys.stderr, flush=True)
+    announce_epoch(skin.epoch_monotonic)
     model = scene.model
     print(f'sim: scene {scene.name!r} ({scene.duration_s:.1f} s{", looped" if args.loop else ""}'
           f'), {model.rows}x{model.cols} taxels at {args.rate:g} Hz on {skin.port}'
