@@ -33,23 +33,6 @@ NOTHING = '; nothing changed'
 MAX_TIP_AGE_S = 0.5
 
 
-def quaternion_of(rotation) -> Quaternion:
-    """Return the unit quaternion of a 3 x 3 rotation matrix (nested sequences)."""
-    r = rotation
-    # From the largest of w, x, y, z, whose square root is then far from zero.
-    trace = r[0][0] + r[1][1] + r[2][2]
-    if trace > 0.0:
-        s = 2.0 * math.sqrt(1.0 + trace)
-        return Quaternion(x=(r[2][1] - r[1][2]) / s, y=(r[0][2] - r[2][0]) / s,
-                          z=(r[1][0] - r[0][1]) / s, w=0.25 * s)
-    i = max(range(3), key=lambda k: r[k][k])
-    j, k = (i + 1) % 3, (i + 2) % 3
-    s = 2.0 * math.sqrt(1.0 + r[i][i] - r[j][j] - r[k][k])
-    q = [0.0, 0.0, 0.0]
-    q[i], q[j], q[k] = 0.25 * s, (r[j][i] + r[i][j]) / s, (r[k][i] + r[i][k]) / s
-    return Quaternion(x=q[0], y=q[1], z=q[2], w=(r[k][j] - r[j][k]) / s)
-
-
 class _Running:
     """One running calibration: read whole by the scan thread, set whole by the executor."""
 
@@ -187,7 +170,9 @@ class MountCalibration:
             return self._end(goal_handle, result, f'refused: {err}{NOTHING}', goal_handle.abort)
         self._publish_tf(result.parent_frame, fit)
         x, y, z = fit.translation_m
-        result.pose = Pose(position=Point(x=x, y=y, z=z), orientation=quaternion_of(fit.rotation))
+        qx, qy, qz, qw = fit.quaternion_xyzw
+        result.pose = Pose(position=Point(x=x, y=y, z=z),
+                           orientation=Quaternion(x=qx, y=qy, z=qz, w=qw))
         result.residuals = list(fit.residuals_m)
         result.position_sigma = fit.position_sigma_m
         result.orientation_sigma = fit.orientation_sigma_rad

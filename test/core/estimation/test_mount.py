@@ -5,8 +5,8 @@ import math
 import numpy as np
 import pytest
 from skin_driver.core.estimation.calibration.calibration import Calibration, SkinMount
-from skin_driver.core.estimation.calibration.mount import (fit_mount, MountRefused, MountSession,
-                                                           rpy_of, urdf_snippet)
+from skin_driver.core.estimation.calibration.mount import (fit_mount, MountFit, MountRefused,
+                                                           MountSession, urdf_snippet)
 from skin_driver.core.estimation.scan.pipeline import ContactEstimator
 from skin_driver.core.sim.physics import Press, render, SkinModel
 
@@ -57,7 +57,8 @@ def test_exact_touches_give_the_mount_exactly(mount):
 
 def test_rpy_round_trip_and_the_urdf_snippet():
     for rpy in [(0.1, -0.4, 2.5), (-2.0, 1.2, 0.3), (0.0, 0.0, 0.0)]:
-        assert np.allclose(rotation(*rpy_of(rotation(*rpy))), rotation(*rpy), atol=1e-12)
+        mount = MountFit((0.0, 0.0, 0.0), tuple(map(tuple, rotation(*rpy))), (0.0,), 0.0, 0.0)
+        assert np.allclose(rotation(*mount.rpy_rad), rotation(*rpy), atol=1e-12)
     fit = fit_mount(TOUCHES_M, parent_points((0.0, 0.0, math.pi / 2), (0.1, 0.2, 0.3),
                                              TOUCHES_M))
     snippet = urdf_snippet(fit, 'forearm_link', 'left_skin_link', 16, 16, 0.005)

@@ -22,8 +22,9 @@ from typing import Optional, Sequence, Tuple
 import numpy as np
 
 from .presses import PressSegmenter
+from ...robot.patches import Pose
 
-__all__ = ['MountFit', 'MountRefused', 'fit_mount', 'MountSession', 'rpy_of', 'urdf_snippet',
+__all__ = ['MountFit', 'MountRefused', 'fit_mount', 'MountSession', 'urdf_snippet',
            'MIN_TOUCHES']
 
 MIN_TOUCHES = 3
@@ -54,7 +55,12 @@ class MountFit:
     @property
     def rpy_rad(self) -> Tuple[float, float, float]:
         """Return the fixed-axis roll, pitch, yaw (REP-103, as URDF's origin takes them)."""
-        return rpy_of(np.array(self.rotation))
+        return Pose(self.rotation).rpy()
+
+    @property
+    def quaternion_xyzw(self) -> Tuple[float, float, float, float]:
+        """Return the rotation as a unit quaternion x, y, z, w (w >= 0)."""
+        return Pose(self.rotation).quaternion()
 
     @property
     def rms_residual_m(self) -> float:
@@ -72,19 +78,6 @@ class MountFit:
                 f'{1000.0 * max(self.residuals_m):.2f} mm; 1-sigma '
                 f'{1000.0 * self.position_sigma_m:.2f} mm, '
                 f'{math.degrees(self.orientation_sigma_rad):.2f} deg')
-
-
-def rpy_of(rotation: np.ndarray) -> Tuple[float, float, float]:
-    """Return fixed-axis (roll, pitch, yaw) of a rotation: R = Rz(yaw) Ry(pitch) Rx(roll)."""
-    r = np.asarray(rotation, dtype=float)
-    pitch = math.asin(max(-1.0, min(1.0, -r[2, 0])))
-    if abs(r[2, 0]) < 1.0 - 1e-12:
-        roll = math.atan2(r[2, 1], r[2, 2])
-        yaw = math.atan2(r[1, 0], r[0, 0])
-    else:  # gimbal lock: only roll - yaw (or roll + yaw) is defined; put it all in yaw
-        roll = 0.0
-        yaw = math.atan2(-r[0, 1], r[1, 1])
-    return roll, pitch, yaw
 
 
 def _skew(v: np.ndarray) -> np.ndarray:
