@@ -4,11 +4,12 @@
 Usage::
 
     python -m skin_driver.tools.bench.cli [--quick] [--out DIR] [--skip-ros] [--no-profile]
-        [--e2e-only] [--e2e-seconds S] [--method M]
+        [--e2e-only] [--e2e-seconds S] [--method M] [--only PARTS]
 
 Writes DIR/benchmarks.md, DIR/benchmarks.json and DIR/img/*.png (DIR defaults to docs/) from
-runs made on the spot, with the machine and versions they ran on. ``--quick`` takes about a
-minute; the full run about ten.
+runs made on the spot, with the machine and versions they ran on. ``--quick`` takes a few
+minutes; the full run most of an hour on two cores. ``--only PARTS`` re-measures those parts
+into the report already in DIR and says so in it.
 """
 
 from __future__ import annotations
@@ -118,11 +119,11 @@ def run(args) -> dict:
     cpu = _pin()
     try:
         if not args.e2e_only:
-            _in_process(cfg, args, res, log)
+            _in_process(cfg, args, res, log, args.only or PARTS)
     finally:
         # The ROS processes must not inherit the pin: they share the machine as deployed.
         os.sched_setaffinity(0, everything)
-    if not args.skip_ros:
+    if not args.skip_ros and 'e2e' in (args.only or PARTS):
         log('3. end to end through ROS')
         res['e2e'] = _e2e(cfg, args, log)
     res['how'] = {
@@ -130,7 +131,8 @@ def run(args) -> dict:
         + (' --skip-ros' if args.skip_ros else '') + ('' if args.profile else ' --no-profile')
         + (' --e2e-only' if args.e2e_only else '')
         + (f' --e2e-seconds {args.e2e_seconds:g}' if args.e2e_seconds else '')
-        + (f' --method {args.method}' if args.method else ''),
+        + (f' --method {args.method}' if args.method else '')
+        + (f' --only {",".join(args.only)}' if args.only else ''),
         'pinned_cpu': cpu,
         'repetitions': (f'{cfg["frames"]} frames per accuracy cell; scale: '
                         f'{cfg["scale_frames"]} frames x {cfg["scale_repeats"]} repeats per '
@@ -146,33 +148,47 @@ def run(args) -> dict:
     return res
 
 
-def _in_process(cfg, args, res, log) -> None:
-    """Run the parts measured in this process (accuracy, seed, family, scale) into res."""
+def _accuracy(cfg, args, log) -> dict:
     methods = bench_core.bench_methods()
-    log('1. accuracy against speed')
     rows = bench_core.accuracy_speed(cfg['grids'], cfg['shifts'], cfg['noises'],
                                      cfg['frames'], methods, seed=args.seed, log=log)
-    res['accuracy'] = {'grids': cfg['grids'], 'shifts_taxels': cfg['shifts'],
-                       'noise_counts': cfg['noises'], 'frames': cfg['frames'],
-                       'methods': methods, 'skimage_upsample': bench_core.SKIMAGE_UPSAMPLE,
-                       'rows': rows,
-                       'summary': bench_core.pareto_summary(rows, methods, cfg['grids'])}
-    log("2. the seed's experiment")
-    res['seed'] = bench_core.seed_experiment(cfg['seed_repeats'], cfg['random_frames'],
-                                             seed=args.seed)
-    log('5. the skin family')
-    res['family'] = bench_core.family(cfg['family_sizes'],
-                                      bench_core.family_methods(cfg['family_all_methods']),
-                                      seed=args.seed, log=log)
-    log('7. the forward model beside the oracle')
-    res['forward'] = bench_core.forward_family(cfg['forward_frames'], cfg['forward_skins'],
-                                               seed=args.seed, log=log)
-    log('6. force calibration on the family')
-    res['calibration'] = calibration_accuracy(cfg['calibration_frames'], seed=args.seed, log=log)
-    log('4. scale')
-    res['scaling'] = bench_core.scaling(cfg['scale_grids'], cfg['contacts'],
-                                        [DEFAULT_METHOD, 'seed'], cfg['scale_frames'],
-                                        cfg['scale_repeats'], seed=args.seed, log=log)
+    return {'grids': cfg['grids'], 'shifts_taxels': cfg['shifts'],
+            'noise_counts': cfg['noises'], 'frames': cfg['frames'],
+            'methods': methods, 'skimage_upsample': bench_core.SKIMAGE_UPSAMPLE,
+            'rows': rows, 'summary': bench_core.pareto_summary(rows, methods, cfg['grids'])}
+
+
+# The parts measured in this process, in the order they run: (name, heading, runner).
+IN_PROCESS = (
+    ('accuracy', '1. accuracy against speed', _accuracy),
+    ('seed', "2. the seed's experiment",
+     lambda cfg, args, log: bench_core.seed_experiment(cfg['seed_repeats'],
+                                                       cfg['random_frames'], seed=args.seed)),
+    ('family', '5. the skin family',
+     lambda cfg, args, log: bench_core.family(
+         cfg['family_sizes'], bench_core.family_methods(cfg['family_all_methods']),
+         seed=args.seed, log=log)),
+    ('forward', '7. the forward model beside the oracle',
+     lambda cfg, args, log: bench_core.forward_family(cfg['forward_frames'],
+                                                      cfg['forward_skins'], seed=args.seed,
+                                                      log=log)),
+    ('calibration', '6. force calibration on the family',
+     lambda cfg, args, log: calibration_accuracy(cfg['calibration_frames'], seed=args.seed,
+                                                 log=log)),
+    ('scaling', '4. scale',
+     lambda cfg, args, log: bench_core.scaling(cfg['scale_grids'], cfg['contacts'],
+                                               [DEFAULT_METHOD, 'seed'], cfg['scale_frames'],
+                                               cfg['scale_repeats'], seed=args.seed, log=log)),
+)
+PARTS = tuple(name for name, _, _ in IN_PROCESS) + ('e2e',)
+
+
+def _in_process(cfg, args, res, log, wanted=PARTS) -> None:
+    """Run the parts measured in this process (accuracy, seed, family, scale, ...) into res."""
+    for name, heading, runner in IN_PROCESS:
+        if name in wanted:
+            log(heading)
+            res[name] = runner(cfg, args, log)
 
 
 def _e2e(cfg, args, log) -> dict:
@@ -205,6 +221,40 @@ def _e2e(cfg, args, log) -> dict:
         return out
     finally:
         shutil.rmtree(workdir, ignore_errors=True)
+
+
+def merge(report: dict, res: dict, parts) -> dict:
+    """
+    Return the earlier report with ``parts`` as measured in ``res`` (a run with ``--only``).
+
+    The other parts stay as measured before; the report lists each later run and its parts, so
+    that no figure is passed off as measured in a run it was not. A quick run never goes into a
+    full report, nor the other way round: their sample sizes differ.
+    """
+    if bool(report.get('quick')) != bool(res['quick']):
+        raise ValueError('--only adds to a report of the same size: the report in --out was '
+                         f'{"" if report.get("quick") else "not "}made with --quick')
+    merged = dict(report)
+    merged.update({p: res[p] for p in parts if p in res})
+    earlier = [dict(u, parts=[p for p in u['parts'] if p not in parts])
+               for u in report.get('updates', ())]
+    merged['updates'] = [u for u in earlier if u['parts']] + [{
+        'parts': list(parts), 'command': res['how']['command'],
+        'generated_utc': res['generated_utc'], 'elapsed_s': res['elapsed_s'],
+        'load_before': res['machine']['load_before'],
+        'load_after': res['machine']['load_after']}]
+    merged['targets'] = targets(merged)
+    return merged
+
+
+def _earlier_report(out_dir) -> dict:
+    path = os.path.join(out_dir, 'benchmarks.json')
+    try:
+        with open(path) as f:
+            return json.load(f)
+    except (OSError, ValueError) as err:
+        raise ValueError(f'--only adds to the report in {out_dir}, which has none to read '
+                         f'({err})') from None
 
 
 def write(res, out_dir) -> None:
@@ -271,6 +321,15 @@ def _family_only(args) -> int:
     return 0
 
 
+def _parts(text: str) -> list:
+    parts = [p.strip() for p in text.split(',') if p.strip()]
+    unknown = [p for p in parts if p not in PARTS]
+    if unknown or not parts:
+        raise argparse.ArgumentTypeError(f'unknown part {", ".join(unknown) or text!r}: the '
+                                         f'parts are {", ".join(PARTS)}')
+    return parts
+
+
 def main(argv=None) -> int:
     """Run the benchmark from the command line."""
     parser = argparse.ArgumentParser(prog='python -m skin_driver.tools.bench.cli',
@@ -290,6 +349,10 @@ def main(argv=None) -> int:
     parser.add_argument('--method', default=None,
                         help='estimator of the end-to-end nodes and floor (default: the '
                              "shipped config's)")
+    parser.add_argument('--only', metavar='PARTS', type=_parts,
+                        help='measure only these comma-separated parts (' + ', '.join(PARTS)
+                        + ') and put them into the report in --out, the others as measured '
+                        'before')
     parser.add_argument('--family-only', metavar='SKINS',
                         help='run only the skin family on these comma-separated skins (names or '
                              'held_out:N), every method and the oracle, and print its rows')
@@ -305,9 +368,13 @@ def main(argv=None) -> int:
         quick_out = os.path.join(os.path.dirname(DOCS), 'log', 'bench-quick')
         args.out = quick_out if args.quick else DOCS
     try:
+        earlier = _earlier_report(args.out) if args.only else None
         res = run(args)
-    except RuntimeError as err:
-        # A layout or the simulated board that did not come up: nothing measured to report.
+        if earlier is not None:
+            res = merge(earlier, res, args.only)
+    except (RuntimeError, ValueError) as err:
+        # A layout or the simulated board that did not come up, or no report to add to:
+        # nothing measured to report.
         print(f'bench: {err}', file=sys.stderr)
         return 1
     write(res, args.out)

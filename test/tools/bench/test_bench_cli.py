@@ -110,3 +110,41 @@ def test_the_forward_model_section_puts_model_fit_beside_the_default_and_the_ora
     # Every cell measured: the three errors, both ratios and the cost.
     assert all(cell.strip() not in ('', '-') for cell in row.split('|')[2:8])
     assert 'Worst `model_fit` / oracle: ' in section and '(`default`;' in section
+
+
+def test_only_re_measures_the_named_part_into_the_earlier_report_and_says_so(
+        results, monkeypatch, tmp_path):
+    earlier = dict(results, machine=dict(results['machine'], load_after=[0.0, 0.0, 0.0]))
+    earlier['targets'] = scoring.targets(earlier)
+    bench.write(earlier, str(tmp_path))
+    seed_before = json.loads((tmp_path / 'benchmarks.json').read_text())['seed']
+    later = {'machine': dict(results['machine'], load_after=[0.5, 0.5, 0.5]), 'quick': True,
+             'scaling': dict(results['scaling'], marker='re-measured'),
+             'how': {'command': 'python -m skin_driver.tools.bench.cli --quick --only scaling'},
+             'generated_utc': 'later', 'elapsed_s': 7.0}
+
+    def run(args):
+        assert args.only == ['scaling']
+        return later
+
+    monkeypatch.setattr(bench, 'run', run)
+    assert bench.main(['--quick', '--only', 'scaling', '--out', str(tmp_path)]) == 0
+    data = json.loads((tmp_path / 'benchmarks.json').read_text())
+    assert data['scaling']['marker'] == 're-measured'
+    assert data['seed'] == seed_before  # the others as measured before
+    assert [u['parts'] for u in data['updates']] == [['scaling']]
+    text = (tmp_path / 'benchmarks.md').read_text()
+    assert 'except scaling, measured by `python -m skin_driver.tools.bench.cli --quick ' in text
+
+
+def test_only_refuses_an_unknown_part_a_missing_report_and_a_report_of_another_size(
+        results, tmp_path, capsys):
+    with pytest.raises(SystemExit):
+        bench.main(['--quick', '--only', 'everything', '--out', str(tmp_path)])
+    assert 'unknown part' in capsys.readouterr().err
+    assert bench.main(['--quick', '--only', 'seed', '--out', str(tmp_path)]) == 1
+    assert 'has none to read' in capsys.readouterr().err
+    full = dict(results, quick=False)
+    with pytest.raises(ValueError, match='same size'):
+        bench.merge(full, dict(results, how={'command': 'x'}, generated_utc='now',
+                               elapsed_s=1.0), ['seed'])
