@@ -21,7 +21,7 @@ struct sk_kernel {
   int rows, cols, n, kmax, method, crosstalk, fill_dead, full_scale, has_gain, tared;
   /* the estimator's state, (2, n) each */
   double *baseline, *threshold, *noise, *gain;
-  double *leak_gate;                /* (2, n): a line is lifted at this count (crosstalk.py) */
+  double *leak_gate;                /* (2, n): a line is lifted at this count (crosstalk.c) */
   unsigned char *dead;
   int any_dead[2];
   unsigned char *clipped;           /* (2, n): the last scan's raw count at the ADC's full scale */
@@ -31,6 +31,10 @@ struct sk_kernel {
   /* the last scan */
   double *raw;                      /* (2, n): sk_scan_counts's maps as doubles */
   double *counts, *force;           /* (2, n): tared counts, force */
+  /* each layer's rows' then columns' leak as a share of the line's load (2 (rows + cols)),
+   * valid when leak_removed */
+  double *line_share;
+  int leak_removed;
   /*
    * rows box[0]..box[1] and columns box[2]..box[3] (half-open) hold every taxel of either
    * layer whose tared count is not 0: the loops of the contact stage skip the rest
@@ -66,6 +70,11 @@ void sk_live_counts(sk_kernel *k);
 void sk_leak_gate(sk_kernel *k);
 void sk_remove_line_leak(sk_kernel *k);
 void sk_touch_counts(sk_kernel *k, const double *maps);
+/* the force of tared counts (2, n) through k's tables and gains, taxels in box (rows box[0] to
+ * box[1], columns box[2] to box[3], half-open) read, the rest 0; clipped (NULL: none) taxels
+ * with a count read the force at full scale. sk_force_of: k's own counts to k->force */
+void sk_force_in(const sk_kernel *k, const double *counts, const unsigned char *clipped,
+                 const int *box, double *force);
 void sk_force_of(sk_kernel *k);
 /* pair p's layers (bits 0, 1) holding a loaded taxel the ADC cut; with mark, such taxels of its
  * window (sk_pair_window) are put at full scale, where a force curve censors them */
