@@ -57,6 +57,19 @@ def test_heatmaps_are_the_scans_conditioning():
     assert maps[1].sum() / fill ** 2 == pytest.approx(contact.force_n, rel=1e-9)
 
 
+def test_a_calibrations_kernel_revives_its_own_marks_only():
+    model = SkinModel()
+    rng = np.random.default_rng(5)
+    est = tared_with_dead_taxel(model, rng, (8, 8))
+    kernel = est.conditioning_kernel(16, 16)
+    scan = kernel.condition(*render(model, [Press(0.0425, 0.0425, 10.0, 0.5, 2.0)], rng))
+    assert scan.counts[0, 8, 8] > 0
+    assert not kernel.dead_masks()[0][8, 8]
+    assert est.dead_masks()[0][8, 8]
+    # Made later, another one starts from the marks in force then.
+    assert est.conditioning_kernel(16, 16).dead_masks()[0][8, 8]
+
+
 def test_readers_and_changes_beside_a_scanning_thread_see_whole_states():
     model = SkinModel()
     rng = np.random.default_rng(3)
