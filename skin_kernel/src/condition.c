@@ -8,9 +8,8 @@
 #include "internal.h"
 
 /*
- * Unnormalised 3 x 3 box sum with a zero border, in OpenCV's order (boxFilter: three-term row
- * sums, then running column sums that add the entering row and subtract the leaving one), so
- * that a filled-in taxel equals the reference's to the bit, residues of the running sum included.
+ * Unnormalised 3 x 3 box sum with a zero border: three-term row sums, then running column sums
+ * that add the entering row and subtract the leaving one (a few additions a taxel).
  */
 static void box3(const double *src, int rows, int cols, double *rowsum, double *dst)
 {

@@ -10,7 +10,7 @@
 
 #include "internal.h"
 
-/* pipeline.py's constant: a shift shorter than this many of its sigmas has no direction */
+/* a shift shorter than this many of its sigmas has no direction */
 #define MIN_SNR 3.0
 
 int sk_abi_version(void)
@@ -175,7 +175,7 @@ int sk_new(const sk_settings *settings, unsigned long settings_size, const doubl
   if (k->method == SK_POC) {
     shift_scratch += (size_t)sk_poc_scratch(rows, cols);
   } else if (k->method == SK_TAXEL_FIT) {
-    /* the window's censored taxels and a 2-D fit's work (taxelfit.c: fit_censored) */
+    /* the window's censored taxels and a 2-D fit's work (censored_fit.c: fit_censored) */
     shift_scratch += 10 * (size_t)n + 4 * ((size_t)line + 1);
   }
   /* a saturated imprint's fill-in: its marked counts (2 windows), then sk_imprint_force's 3 */
@@ -382,7 +382,7 @@ static int scan(sk_kernel *k, const double *maps, int every_pair, sk_shift_fn sh
       }
     } else if (k->method == SK_TAXEL_FIT || k->method == SK_MODEL_FIT) {
       /*
-       * saturated taxels: at the curve's censoring counts, or cut by the ADC (pipeline.py);
+       * saturated taxels: at the curve's censoring counts, or cut by the ADC (condition.c);
        * a pair with none is not censored, and its marks are all 0
        */
       double *marks = marked;

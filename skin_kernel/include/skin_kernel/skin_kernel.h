@@ -7,7 +7,8 @@
  * the layer shift of each contact (taxel_fit, poc or centroid), its uncertainty and the contact
  * figures. It is the one implementation of the per-scan estimate; skin_driver binds it
  * (skin_driver/core/estimation/scan/kernel.py) and its tests hold it to behaviour and to golden
- * outputs.
+ * outputs. The conditioning alone (sk_condition, sk_force) is what a calibration reads its
+ * presses from, so that it never conditions a scan a second way.
  *
  * A kernel is built once per estimator from its state (tare, gains, force tables, settings) and
  * is not changed afterwards, except for dead-taxel marks that a touch revives (reported): that
@@ -46,7 +47,7 @@ typedef struct {
 typedef struct {
   double censor_counts;   /* counts from which a taxel is saturated; 0: never */
   double rim_load_n;      /* force at an imprint's rim that no taxel reads */
-  double spread_taxels;   /* a saturated imprint's bump: spread and power (imprint.py) */
+  double spread_taxels;   /* a saturated imprint's bump: spread and power (forcecurve.py) */
   double bump_power;
   double activation_n;    /* force of every conducting taxel, not the bump's */
 } sk_curve;

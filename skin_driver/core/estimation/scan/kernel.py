@@ -13,6 +13,8 @@ Maps of uint16, as the driver and the datasets give them, are copied as they are
 a count, no check); others are checked and copied as float64.
 The kernel owns the dead-taxel marks its scans revive (:meth:`Kernel.dead_masks`): it is the
 estimation's one piece of mutable state, and whoever runs the scans owns it.
+:meth:`Kernel.condition` and :meth:`Kernel.force` give a scan's conditioning alone (tared
+counts, cut taxels, the line leak taken off, forces): what a calibration reads its presses from.
 
 The structs of skin_kernel.h are mirrored here field by field (:class:`Settings`,
 :class:`ContactRecord`, ...); before any other call the binding compares every mirror with the
