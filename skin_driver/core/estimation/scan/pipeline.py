@@ -10,9 +10,9 @@ raw counts (top, bottom) -> conditioning (tare, threshold, FSR model -> force pe
 Geometry and force: contacts, their windows and the shift are measured on the tared counts (the
 sensor's own readings, whatever its FSR curve); the force maps only give the contacts' forces.
 
-Uncertainty, from the contact's own data (the kernel's sigma.c): ``sigma`` (taxels, one axis of
-the shift) gives ``azimuth_sigma = atan2(sigma, |s|)``; a shift shorter than ``MIN_SNR`` sigmas
-is within the noise and carries no direction.
+Uncertainty, from the contact's own data (the kernel's uncertainty.c): ``sigma`` (taxels, one
+axis of the shift) gives ``azimuth_sigma = atan2(sigma, |s|)``; a shift shorter than
+``MIN_SNR`` sigmas is within the noise and carries no direction.
 
 All of the above runs in the compiled kernel (package ``skin_kernel``, :mod:`kernel`), one call
 per scan, for every registered method; a reference shift (``shift=``, the benchmark's) replaces
