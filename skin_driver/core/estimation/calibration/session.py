@@ -424,7 +424,8 @@ def leak_share_of(line_leak: np.ndarray) -> float:
     its lines tell the matrix's leak apart from the load: what a plate over the whole skin
     cannot (:func:`gains.without_leak`).
     """
-    leaked = np.asarray(line_leak)[np.asarray(line_leak) > 0]
+    shares = np.asarray(line_leak)
+    leaked = shares[shares > 0]
     return float(np.median(leaked)) if leaked.size else math.nan
 
 
