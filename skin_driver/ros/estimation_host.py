@@ -514,7 +514,7 @@ class EstimationHost:
         try:
             tops, bottoms = self._recent.unloaded(self._p('tare.frames'), time.monotonic())
             self._swap(lambda estimator: estimator.with_tare(tops, bottoms))
-        except ValueError as err:  # TareRefused, or frames the conditioner cannot take
+        except ValueError as err:  # TareRefused, or frames the conditioning cannot take
             response.success = False
             response.message = f'tare refused: {err}'
             self.node.get_logger().warning(response.message)

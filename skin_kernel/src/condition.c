@@ -1,16 +1,15 @@
 /*
  * Conditioning: raw counts to tared touch counts (baseline, line leak: crosstalk.c, threshold,
- * dead taxels), the taxels the ADC cut, and touch counts to force. Python description:
- * conditioning.py.
+ * the taxels the ADC cut levelled, dead taxels filled), and touch counts to force through each
+ * layer's force table and the gains.
  */
 #include <string.h>
 
 #include "internal.h"
 
 /*
- * Unnormalised 3 x 3 box sum with a zero border, in OpenCV's order (boxFilter: three-term row
- * sums, then running column sums that add the entering row and subtract the leaving one), so
- * that a filled-in taxel equals the reference's to the bit, residues of the running sum included.
+ * Unnormalised 3 x 3 box sum with a zero border: three-term row sums, then running column sums
+ * that add the entering row and subtract the leaving one (a few additions a taxel).
  */
 static void box3(const double *src, int rows, int cols, double *rowsum, double *dst)
 {
@@ -100,7 +99,11 @@ static void dead_taxels(sk_kernel *k)
   }
 }
 
-/* Put the taxels the ADC cut at their layer's highest tared count (conditioning.py). */
+/*
+ * Put the taxels the ADC cut at their layer's highest tared count: a cut reading is a lower
+ * bound whatever leak was taken off it, and the lines with most load lose most leak, so a cut
+ * plateau would otherwise come out as a crater.
+ */
 static void level_clipped(sk_kernel *k)
 {
   int n = k->n;
@@ -205,13 +208,13 @@ int sk_clipped_window(const sk_kernel *k, const sk_pair *p, double *window, int 
 }
 
 /*
- * One taxel's force by linear interpolation in its layer's table at every integer count
- * (_ForceTable): the slope is the next entry less this one (numpy.diff), and 0 past the last
- * count; a reading the ADC cut reads the force at full scale (conditioning.py).
+ * One taxel's force by linear interpolation in its layer's table at every integer count: the
+ * slope is the next entry less this one, and 0 past the last count; a count at or below 0 has
+ * no force, and a reading the ADC cut reads the force at full scale.
  */
 static double force_at(const double *table, int size, double count, int clipped)
 {
-  if (count == 0.0) {
+  if (!(count > 0.0)) {
     return 0.0;
   }
   double last = (double)(size - 1);
@@ -221,15 +224,15 @@ static double force_at(const double *table, int size, double count, int clipped)
   return slope * (x - j) + table[j];
 }
 
-void sk_force_of(sk_kernel *k)
+void sk_force_in(const sk_kernel *k, const double *counts, const unsigned char *clipped,
+                 const int *box, double *force)
 {
   int n = k->n, cols = k->cols, size = k->full_scale + 1;
-  const int *box = k->box;
   for (int layer = 0; layer < 2; layer++) {
     const double *table = k->table_force + layer * size;
-    const double *c = k->counts + layer * n;
-    const unsigned char *clipped = k->clipped + layer * n;
-    double *f = k->force + layer * n;
+    const double *c = counts + layer * n;
+    const unsigned char *cut = clipped ? clipped + layer * n : NULL;
+    double *f = force + layer * n;
     const double *gain = k->has_gain ? k->gain + layer * n : NULL;
     /* a count of 0 (every taxel past the box) has the force 0 */
     for (int i = 0; i < n; i++) {
@@ -237,9 +240,14 @@ void sk_force_of(sk_kernel *k)
     }
     for (int r = box[0]; r < box[1]; r++) {
       for (int i = r * cols + box[2]; i < r * cols + box[3]; i++) {
-        double v = force_at(table, size, c[i], clipped[i]);
+        double v = force_at(table, size, c[i], cut ? cut[i] : 0);
         f[i] = gain ? v * gain[i] : v;
       }
     }
   }
+}
+
+void sk_force_of(sk_kernel *k)
+{
+  sk_force_in(k, k->counts, k->clipped, k->box, k->force);
 }

@@ -8,7 +8,7 @@
 
 #include "internal.h"
 
-/* contacts.py's constants: the saddle test (WINDOW_SHARE: internal.h) */
+/* the saddle test's constants (WINDOW_SHARE: internal.h) */
 #define SADDLE_RATIO 0.85
 #define MIN_PEAK_DISTANCE 2
 

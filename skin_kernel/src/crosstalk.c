@@ -1,14 +1,24 @@
 /*
- * Line leak (crosstalk): each row's and column's leak, the median of its taxels when that is a
- * small share of its load, taken out of both layers of the tared counts, the share of a
- * taxel's own count given back. Python description: crosstalk.py.
+ * Line leak (crosstalk): a passive FSR matrix reads each taxel through its row and column
+ * lines, so part of the load on a line shows up on every taxel of that line, the same on each;
+ * presses cover only a few taxels of a line, so a line's median is its leak. Each row's and
+ * column's leak, the median of its taxels when that is a small share of its load, is taken out
+ * of both layers of the tared counts (one sweep of median polish, rows then columns), the
+ * share of a taxel's own count given back. A median that is not a small share of the line's
+ * load is a load spread along the line (a plate, a palm) and is left alone.
+ *
+ * The step runs only on scans where a line is lifted, mostly at its gate or over: after a tare
+ * the gate is LEAK_SIGMAS times each taxel's noise, so a leak under the touch threshold still
+ * comes off; before a tare neither the noise nor the rest reading is known, and the touch
+ * threshold gates. Each line's share of its load that was taken off is kept (k->line_share)
+ * for sk_condition: a force calibration measures the matrix's leak from it.
  */
 #include <math.h>
 #include <string.h>
 
 #include "internal.h"
 
-/* Largest median, as a share of the line's load above it, taken for leak (crosstalk.py). */
+/* Largest median, as a share of the line's load above it, taken for leak. */
 #define MAX_LEAK 0.05
 /* After a tare, a line is lifted by leak when most of its taxels read this many noise sigmas. */
 #define LEAK_SIGMAS 3.0
@@ -58,7 +68,7 @@ static void network_sort(double *buf, int len)
 
 void sk_leak_gate(sk_kernel *k)
 {
-  /* LEAK_SIGMAS noise sigmas after a tare, the touch threshold before (crosstalk.leak_gate) */
+  /* LEAK_SIGMAS noise sigmas after a tare, the touch threshold before (the file's comment) */
   const double *gate = k->tared ? k->noise : k->threshold;
   double scale = k->tared ? LEAK_SIGMAS : 1.0;
   for (int i = 0; i < 2 * k->n; i++) {
@@ -160,8 +170,8 @@ static double leak_share(double leak, double load)
 
 /*
  * A taxel leaks onto the others of its lines, not onto itself: the lines' leak took a share of
- * its own count too much, which is given back (crosstalk.py). The shares are turned into the
- * leak arrays in place.
+ * its own count too much, which is given back. The leak arrays are turned into the lines' shares
+ * in place.
  */
 static void give_back_own_leak(double *c, int rows, int cols, double *row_leak,
                                double *col_leak)
@@ -193,8 +203,8 @@ static void give_back_own_leak(double *c, int rows, int cols, double *row_leak,
 }
 
 /*
- * Whether a line of either layer is mostly at its gate or over (crosstalk.remove_line_leak):
- * rows and columns counted in one sweep of each layer.
+ * Whether a line of either layer is mostly at its gate or over: rows and columns counted in one
+ * sweep of each layer.
  */
 static int lifted(const sk_kernel *k)
 {
@@ -224,19 +234,22 @@ static int lifted(const sk_kernel *k)
   return 0;
 }
 
-/* Take each line's leak (its median when a small share of its load) out of both layers. */
+/*
+ * Take each line's leak (its median when a small share of its load) out of both layers; each
+ * line's share is left in k->line_share and k->leak_removed says whether the scan had any.
+ */
 void sk_remove_line_leak(sk_kernel *k)
 {
   int rows = k->rows, cols = k->cols, n = k->n;
-  if (!lifted(k)) {
+  k->leak_removed = lifted(k);
+  if (!k->leak_removed) {
     return;
   }
-  int line = rows > cols ? rows : cols;
-  int room = line > NETWORK_INPUTS ? line : NETWORK_INPUTS; /* median_of's */
-  double *buf = k->scratch, *row_leak = k->scratch + room, *col_leak = row_leak + line;
+  double *buf = k->scratch; /* median_of's: max(line, NETWORK_INPUTS) doubles */
   /* Rows first, then columns: the leak is a row term plus a column term (layers apart). */
   for (int layer = 0; layer < 2; layer++) {
     double *c = k->counts + layer * n;
+    double *row_leak = k->line_share + layer * (rows + cols), *col_leak = row_leak + rows;
     for (int r = 0; r < rows; r++) {
       row_leak[r] = line_leak(c + r * cols, cols, 1, buf);
       /* less 0 is the same number: such lines are left as they are */

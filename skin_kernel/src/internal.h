@@ -21,7 +21,7 @@ struct sk_kernel {
   int rows, cols, n, kmax, method, crosstalk, fill_dead, full_scale, has_gain, tared;
   /* the estimator's state, (2, n) each */
   double *baseline, *threshold, *noise, *gain;
-  double *leak_gate;                /* (2, n): a line is lifted at this count (crosstalk.py) */
+  double *leak_gate;                /* (2, n): a line is lifted at this count (crosstalk.c) */
   unsigned char *dead;
   int any_dead[2];
   unsigned char *clipped;           /* (2, n): the last scan's raw count at the ADC's full scale */
@@ -31,6 +31,10 @@ struct sk_kernel {
   /* the last scan */
   double *raw;                      /* (2, n): sk_scan_counts's maps as doubles */
   double *counts, *force;           /* (2, n): tared counts, force */
+  /* each layer's rows' then columns' leak as a share of the line's load (2 (rows + cols)),
+   * valid when leak_removed */
+  double *line_share;
+  int leak_removed;
   /*
    * rows box[0]..box[1] and columns box[2]..box[3] (half-open) hold every taxel of either
    * layer whose tared count is not 0: the loops of the contact stage skip the rest
@@ -58,7 +62,7 @@ static inline double sk_sum(const double *a, int n)
   return res;
 }
 
-/* condition.c */
+/* condition.c: each layer's live taxels and their count per 3 x 3, from k->dead */
 void sk_live_counts(sk_kernel *k);
 
 /* crosstalk.c: the count at which a line is lifted (k->leak_gate), once per kernel; each
@@ -66,6 +70,11 @@ void sk_live_counts(sk_kernel *k);
 void sk_leak_gate(sk_kernel *k);
 void sk_remove_line_leak(sk_kernel *k);
 void sk_touch_counts(sk_kernel *k, const double *maps);
+/* the force of tared counts (2, n) through k's tables and gains, taxels in box (rows box[0] to
+ * box[1], columns box[2] to box[3], half-open) read, the rest 0; clipped (NULL: none) taxels
+ * with a count read the force at full scale. sk_force_of: k's own counts to k->force */
+void sk_force_in(const sk_kernel *k, const double *counts, const unsigned char *clipped,
+                 const int *box, double *force);
 void sk_force_of(sk_kernel *k);
 /* pair p's layers (bits 0, 1) holding a loaded taxel the ADC cut; with mark, such taxels of its
  * window (sk_pair_window) are put at full scale, where a force curve censors them */
@@ -83,60 +92,75 @@ void sk_pair_window(const sk_kernel *k, int q, double *out);
 /* Bottom load below this share of a contact's peak share is not part of its window. */
 #define WINDOW_SHARE 0.02
 
-/* taxelfit.py's constants shared by taxelfit.c and censorfit.c */
+/* the profile fits' constants, shared by taxel_fit.c and censored_fit.c: the narrowest width
+ * (taxels) and how far past the window's edge a cut profile's centre may lie */
 #define MIN_WIDTH 0.25
 #define PAST_EDGE 2.0 /* widths */
 #define INV_SQRT2PI 0.3989422804014327
 
-/* taxelfit.c: numpy.clip of one number, and the normal CDF to 1.5e-7 (Abramowitz and Stegun) */
-double sk_clip(double x, double lo, double hi);
+/* x within [lo, hi]; comparisons keep a NaN */
+static inline double sk_clip(double x, double lo, double hi)
+{
+  return x < lo ? lo : (x > hi ? hi : x);
+}
+
+/* solve.c: the n x n system a x = b (a row-major, both overwritten; x left in b), n at most
+ * SK_SOLVE_MAX, by LU factorisation with partial pivoting; returns 0 for a zero pivot (or an n
+ * out of range), else 1 */
+#define SK_SOLVE_MAX 8
+int sk_solve(double *a, double *b, int n);
+
+/* gaussian_cells.c: the normal CDF to 1.5e-7 (Abramowitz and Stegun) */
 double sk_normal_cdf(double u);
 /* the same, given gauss = exp(-u^2 / 2) (a density's, at hand) */
 double sk_normal_cdf_of(double u, double gauss);
-/* a unit Gaussian's share of each of n cells and its derivatives by mu and s (taxelfit._axis_cells) */
+/* a Gaussian's (centre mu, width s, taxels) share of each of n unit cells and its derivatives
+ * by mu and s */
 void sk_axis_cells(double mu, double s, int n, double *g, double *d_mu, double *d_s);
 
+/* centroid.c: a layer's column profiles (summed over rows, in row order) and row profiles (each
+ * row summed in order), each buffer nn = max(h, w) long */
+void sk_profiles_of(const double *layer, int h, int w, int nn, double *along_x,
+                    double *along_y);
+/* centroid.c: the shift of a (2, h, w) window of counts as the difference of the centroids */
+void sk_centroid(const double *counts, int h, int w, double *scratch, double *dx, double *dy,
+                 double *confidence);
+
 /*
- * censorfit.c: the saturated layers of a (2, h, w) window refitted in 2-D, in place on the
+ * censored_fit.c: the saturated layers of a (2, h, w) window refitted in 2-D, in place on the
  * marginal fits' centres (x top, x bottom, y top, y bottom); width likewise
  */
 void sk_censored_centres(const double *force, const double *censored, int h, int w,
                          double *scratch, double *centre, const double *width);
 
 /*
- * taxelfit.c: the shift of a (2, h, w) window; censored: 1 where a taxel is saturated; force's
+ * taxel_fit.c: the shift of a (2, h, w) window; censored: 1 where a taxel is saturated; force's
  * taxels on a film's turn-on step are halved in place; cut_var: the variance (taxels**2) of the
  * profiles cut by the map's edge (0 when none is)
  */
 void sk_taxel_fit(double *force, const double *counts, const double *censored, int h, int w,
                   double *scratch, double *dx, double *dy, double *confidence,
                   double *cut_var);
-void sk_centroid(const double *counts, int h, int w, double *scratch, double *dx, double *dy,
-                 double *confidence);
 
-/* poc.c: the shift by band-limited phase correlation, and the scratch it needs (doubles) */
+/* phase_correlation.c: the shift by band-limited phase correlation (poc), and the scratch it
+ * needs (doubles) */
 void sk_poc(const double *maps, int h, int w, double *scratch, double *dx, double *dy,
             double *confidence);
 int sk_poc_scratch(int h, int w);
 
-/* imprint.c: one imprint's force sum (h x w counts and force), each taxel at censor counts or
- * more filled in by the activation plus a bump of spread (taxels) and power fitted to its rim's
- * force above the activation, the rim load added; scratch holds 3 h w doubles */
+/* saturated_force.c: one imprint's force sum (h x w counts and force), each taxel at censor
+ * counts or more filled in by the activation plus a bump of spread (taxels) and power fitted to
+ * its rim's force above the activation, the rim load added; scratch holds 3 h w doubles */
 double sk_imprint_force(const double *counts, const double *force, int h, int w,
                         double censor, double spread, double power, double activation,
                         double rim, double *scratch);
 
-/* sigma.c: 1-sigma uncertainty of one axis of pair p's shift (taxels) */
+/* uncertainty.c: 1-sigma uncertainty of one axis of pair p's shift (taxels) */
 double sk_sigma(const sk_kernel *k, const sk_pair *p, const double *window, int alone);
 
-/* taxelfit.c: a layer's column profiles (summed over rows, in row order) and row profiles
- * (numpy's pairwise sums), each buffer nn = max(h, w) long */
-void sk_profiles_of(const double *layer, int h, int w, int nn, double *along_x,
-                    double *along_y);
-
-/* model_fit (modelfit.c): the fit's start from a contact's force window, taken before
- * sk_taxel_fit changes that window; then the fit from the start and taxel_fit's shift, which
- * overwrites *dx, *dy (left as they are when the fit cannot be made). */
+/* model_fit.c: the fit's start from a contact's force window, taken before sk_taxel_fit changes
+ * that window; then the fit from the start and taxel_fit's shift, which overwrites *dx, *dy
+ * (left as they are when the fit cannot be made). */
 void sk_model_start(const sk_taxel_model *model, const double *force, int h, int w,
                     double *start);
 void sk_model_refit(const sk_taxel_model *model, const double *counts, const double *marks,

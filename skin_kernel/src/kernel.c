@@ -10,7 +10,7 @@
 
 #include "internal.h"
 
-/* pipeline.py's constant: a shift shorter than this many of its sigmas has no direction */
+/* a shift shorter than this many of its sigmas has no direction */
 #define MIN_SNR 3.0
 
 int sk_abi_version(void)
@@ -33,7 +33,7 @@ void sk_free(sk_kernel *k)
     return;
   }
   double *arrays[] = {k->baseline, k->threshold, k->noise, k->gain, k->leak_gate, k->live,
-                      k->live_count, k->table_force, k->raw, k->counts, k->force, k->tops,
+                      k->live_count, k->table_force, k->raw, k->counts, k->force, k->line_share, k->tops,
                       k->fractions, k->scratch, k->fit};
   for (size_t i = 0; i < sizeof(arrays) / sizeof(arrays[0]); i++) {
     free(arrays[i]);
@@ -166,6 +166,7 @@ int sk_new(const sk_settings *settings, unsigned long settings_size, const doubl
   k->raw = copy_of(NULL, 2 * n);
   k->counts = copy_of(NULL, 2 * n);
   k->force = copy_of(NULL, 2 * n);
+  k->line_share = copy_of(NULL, 2 * ((size_t)rows + cols));
   k->pairs = calloc(kcap, sizeof(sk_pair));
   k->tops = copy_of(NULL, kcap * n);
   k->fractions = copy_of(NULL, kcap * n);
@@ -174,7 +175,7 @@ int sk_new(const sk_settings *settings, unsigned long settings_size, const doubl
   if (k->method == SK_POC) {
     shift_scratch += (size_t)sk_poc_scratch(rows, cols);
   } else if (k->method == SK_TAXEL_FIT) {
-    /* the window's censored taxels and a 2-D fit's work (taxelfit.c: fit_censored) */
+    /* the window's censored taxels and a 2-D fit's work (censored_fit.c: fit_censored) */
     shift_scratch += 10 * (size_t)n + 4 * ((size_t)line + 1);
   }
   /* a saturated imprint's fill-in: its marked counts (2 windows), then sk_imprint_force's 3 */
@@ -186,7 +187,7 @@ int sk_new(const sk_settings *settings, unsigned long settings_size, const doubl
   if (!k->baseline || !k->threshold || !k->noise || (gain && !k->gain) || !k->leak_gate
       || !k->dead || !k->clipped || !k->live
       || !k->live_count || !k->table_force || !k->raw || !k->counts || !k->force
-      || !k->pairs || !k->tops || !k->fractions || !k->scratch || !k->fit || !k->labels
+      || !k->line_share || !k->pairs || !k->tops || !k->fractions || !k->scratch || !k->fit || !k->labels
       || !k->iscratch) {
     sk_free(k);
     if (message && message_size) {
@@ -343,7 +344,7 @@ static int scan(sk_kernel *k, const double *maps, int every_pair, sk_shift_fn sh
     int m = p->h * p->w;
     sk_pair_window(k, q, k->fit);
     p->censored = 0;
-    /* a loaded taxel the ADC cut is censored whatever its tared counts (conditioning.py) */
+    /* a loaded taxel the ADC cut is censored whatever its tared counts (condition.c) */
     int clipped = sk_clipped_window(k, p, k->fit, 0);
     for (int layer = 0; layer < 2; layer++) {
       double censor = k->s.curves[layer].censor_counts, peak = 0.0;
@@ -381,7 +382,7 @@ static int scan(sk_kernel *k, const double *maps, int every_pair, sk_shift_fn sh
       }
     } else if (k->method == SK_TAXEL_FIT || k->method == SK_MODEL_FIT) {
       /*
-       * saturated taxels: at the curve's censoring counts, or cut by the ADC (pipeline.py);
+       * saturated taxels: at the curve's censoring counts, or cut by the ADC (condition.c);
        * a pair with none is not censored, and its marks are all 0
        */
       double *marks = marked;
@@ -449,20 +450,45 @@ int sk_scan_shifted(sk_kernel *k, const double *maps, int every_pair, sk_shift_f
   return checked == SK_OK ? scan(k, maps, every_pair, shift, user, out, status) : checked;
 }
 
-int sk_condition(sk_kernel *k, const double *maps, double *counts, double *force)
+int sk_condition(sk_kernel *k, const double *maps, double *counts, double *force,
+                 unsigned char *clipped, double *line_leak)
 {
   int checked = check_maps(k, maps);
   if (checked != SK_OK) {
     return checked;
   }
+  k->leak_removed = 0;
   sk_touch_counts(k, maps);
   sk_force_of(k);
+  size_t n2 = 2 * (size_t)k->n, lines = 2 * ((size_t)k->rows + k->cols);
   if (counts) {
-    memcpy(counts, k->counts, sizeof(double) * 2 * (size_t)k->n);
+    memcpy(counts, k->counts, sizeof(double) * n2);
   }
   if (force) {
-    memcpy(force, k->force, sizeof(double) * 2 * (size_t)k->n);
+    memcpy(force, k->force, sizeof(double) * n2);
   }
+  if (clipped) {
+    memcpy(clipped, k->clipped, n2);
+  }
+  if (line_leak) {
+    for (size_t i = 0; i < lines; i++) {
+      line_leak[i] = k->leak_removed ? k->line_share[i] : 0.0;
+    }
+  }
+  return SK_OK;
+}
+
+int sk_force(const sk_kernel *k, const double *counts, const unsigned char *clipped,
+             double *force)
+{
+  size_t n2 = 2 * (size_t)k->n;
+  for (size_t i = 0; i < n2; i++) {
+    if (!isfinite(counts[i])) {
+      return SK_ERR_NOT_FINITE;
+    }
+  }
+  int whole[4] = {0, k->rows, 0, k->cols};
+  sk_force_in(k, counts, clipped, whole, force);
   return SK_OK;
 }
 

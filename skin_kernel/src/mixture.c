@@ -8,7 +8,7 @@
 
 #include "internal.h"
 
-/* contacts.py's constant */
+/* EM steps of the mixture */
 #define MIXTURE_ITERATIONS 3
 
 /* Each kept top imprint's share (0..1) of every loaded bottom taxel (contacts._share_bottom). */

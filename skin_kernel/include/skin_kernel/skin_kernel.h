@@ -7,7 +7,8 @@
  * the layer shift of each contact (taxel_fit, poc or centroid), its uncertainty and the contact
  * figures. It is the one implementation of the per-scan estimate; skin_driver binds it
  * (skin_driver/core/estimation/scan/kernel.py) and its tests hold it to behaviour and to golden
- * outputs.
+ * outputs. The conditioning alone (sk_condition, sk_force) is what a calibration reads its
+ * presses from, so that it never conditions a scan a second way.
  *
  * A kernel is built once per estimator from its state (tare, gains, force tables, settings) and
  * is not changed afterwards, except for dead-taxel marks that a touch revives (reported): that
@@ -28,7 +29,7 @@ extern "C" {
  * (libskin_kernel.so.<SK_ABI_VERSION>), and sk_layout reports it with every struct's layout,
  * which the binding compares with its own mirrors before any other call.
  */
-#define SK_ABI_VERSION 11
+#define SK_ABI_VERSION 12
 
 /* Shift methods. */
 enum { SK_CENTROID = 0, SK_TAXEL_FIT = 1, SK_POC = 2, SK_MODEL_FIT = 3, SK_NMETHODS };
@@ -46,7 +47,7 @@ typedef struct {
 typedef struct {
   double censor_counts;   /* counts from which a taxel is saturated; 0: never */
   double rim_load_n;      /* force at an imprint's rim that no taxel reads */
-  double spread_taxels;   /* a saturated imprint's bump: spread and power (imprint.py) */
+  double spread_taxels;   /* a saturated imprint's bump: spread and power (forcecurve.py) */
   double bump_power;
   double activation_n;    /* force of every conducting taxel, not the bump's */
 } sk_curve;
@@ -156,12 +157,25 @@ int sk_scan_shifted(sk_kernel *k, const double *maps, int every_pair, sk_shift_f
                     void *user, sk_contact *out, sk_status *status);
 
 /*
- * The conditioning of one scan alone, as sk_scan does it: the tared counts (line leak out, dead
- * taxels filled) and the force of every taxel, each (2, rows, cols), to counts and force (either
- * NULL: not wanted). Dead-taxel marks the maps revive are revived, as by a scan. Returns SK_OK or
- * sk_scan's errors.
+ * The conditioning of one scan alone, as sk_scan does it. Writes, each output NULL when not
+ * wanted: counts, the tared counts (line leak out, cut taxels levelled, dead taxels filled), and
+ * force, each taxel's force, (2, rows, cols) each; clipped, 1 where a raw count is at the ADC's
+ * full scale, (2, rows, cols); line_leak, the leak taken off each line as a share of its load,
+ * each layer's rows then its columns, (2, rows + cols), 0 on a line that gave none and
+ * everywhere on a scan whose lines were left as they were. Dead-taxel marks the maps revive
+ * are revived, as by a scan. Returns SK_OK or sk_scan's errors.
  */
-int sk_condition(sk_kernel *k, const double *maps, double *counts, double *force);
+int sk_condition(sk_kernel *k, const double *maps, double *counts, double *force,
+                 unsigned char *clipped, double *line_leak);
+
+/*
+ * The force of given tared counts, (2, rows, cols), through the kernel's force tables and gains,
+ * as a scan reads its taxels: a count at or below 0 has none; a taxel that clipped marks (NULL:
+ * none) reads the force at full scale. Writes force, (2, rows, cols); returns SK_OK, or
+ * SK_ERR_NOT_FINITE when a count is not a number.
+ */
+int sk_force(const sk_kernel *k, const double *counts, const unsigned char *clipped,
+             double *force);
 
 /* Copy the dead-taxel marks in force, (2, rows, cols), to out. */
 void sk_dead(const sk_kernel *k, unsigned char *out);

@@ -38,7 +38,7 @@ def test_a_uniform_load_recovers_the_gain_pattern_and_evens_the_skin_out():
     assert np.std(PATTERN) > 0.12
     assert np.std(corrected / corrected.mean()) < 0.045
     est = est.with_calibration(outcome.calibration)
-    even = np.stack(est.conditioner.condition(top, bottom)) / plate
+    even = np.stack(est.maps_of(top, bottom)) / plate
     assert np.std(even / even.mean()) < 0.045
 
 

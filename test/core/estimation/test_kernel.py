@@ -138,7 +138,7 @@ def test_dead_taxels_are_filled_and_revived():
     model = SkinModel()
     rng = np.random.default_rng(4)
     est = tared_with_dead_taxel(model, rng, (8, 8))
-    assert est.conditioner.dead_masks()[0][8, 8]
+    assert est.conditioning.dead_masks()[0][8, 8]
     # A press beside the dead taxel: it is filled in from its neighbours.
     top, bottom = render(model, [Press(0.0425, 0.0325, 10.0, 0.5, 2.0)], rng)
     top[8, 8] = 0
@@ -146,7 +146,7 @@ def test_dead_taxels_are_filled_and_revived():
     # A press on it that reads: the taxel was only resting below zero and is alive again.
     top, bottom = render(model, [Press(0.0425, 0.0425, 10.0, 0.5, 2.0)], rng)
     scan(est, top, bottom)
-    assert not est.conditioner.dead_masks()[0][8, 8]
+    assert not est.conditioning.dead_masks()[0][8, 8]
 
 
 @pytest.mark.parametrize('row', [0, 1, 8])

@@ -108,7 +108,7 @@ def test_settings_of_another_size_are_refused():
 
 def test_an_unknown_method_name_is_refused_before_the_library():
     est = ContactEstimator(EstimatorConfig())
-    spec = kernel.KernelSettings(est._kernel_settings(), 'seed', *est.conditioner.state((4, 4)))
+    spec = kernel.KernelSettings(est._kernel_settings(), 'seed', *est.conditioning.state((4, 4)))
     with pytest.raises(ValueError, match='no compiled shift method'):
         kernel.Kernel(spec)
 

@@ -20,7 +20,7 @@ def estimator(model, method='poc', spot=None, seed=0):
     if spot is not None:
         shifts = [est.measure_shifts(*render(model, [Press(*spot, 10.0)], rng))[0]
                   for _ in range(5)]
-        est = ContactEstimator(config, calibrate_from_shifts(shifts), est.conditioner)
+        est = ContactEstimator(config, calibrate_from_shifts(shifts), est.conditioning)
     return est, rng
 
 

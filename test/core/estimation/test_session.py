@@ -133,7 +133,7 @@ def test_a_refused_force_session_leaves_the_calibration_in_force():
     previous = Calibration(x_p_m=1e-4, compliance_m_per_n=1e-3, presses=3)
     est = est.with_calibration(previous)
     probe = render(SKIN, [Press(0.04, 0.04, 20.0, radius_m=0.004)], rng)
-    maps = est.conditioner.condition(*probe)
+    maps = est.maps_of(*probe)
     known = [5.0, 10.0, 20.0, 30.0, 45.0, 60.0]
     session = CalibrationSession(est, 'force', forces_n=known)
     # The presses made in the reverse order of the forces given: no curve fits them.
@@ -141,7 +141,7 @@ def test_a_refused_force_session_leaves_the_calibration_in_force():
     with pytest.raises(CalibrationRefused, match='too few presses agree with one curve'):
         session.finish()
     assert est.calibration is previous
-    np.testing.assert_array_equal(est.conditioner.condition(*probe), maps)
+    np.testing.assert_array_equal(est.maps_of(*probe), maps)
 
 
 def test_a_refusal_names_the_presses_that_drove_taxels_to_the_adc_full_scale():

@@ -157,7 +157,7 @@ def test_the_plate_frames_give_the_taxel_gains_before_the_presses_calibrate():
     est, notes = prepared_estimator(data, 'taxel_fit')
     assert notes[0].startswith('gains: taxel gains from 16 presses covering 100 %')
     sensitivity, _ = taxel_spread(family_skin('noisy').model)
-    evened = est.conditioner.gain_maps() * sensitivity
+    evened = est.conditioning.gain_maps() * sensitivity
     assert np.std(sensitivity) > 0.05
     assert np.std(evened / np.median(evened)) < 0.4 * np.std(sensitivity)
 
@@ -181,7 +181,7 @@ def test_the_plate_gains_take_off_the_leak_the_force_presses_showed():
 
     def follows(e):
         # How much of the true pattern the gains undo (1: all of it).
-        return np.polyfit(sensitivity, -np.log(e.conditioner.gain_maps()).ravel(), 1)[0]
+        return np.polyfit(sensitivity, -np.log(e.conditioning.gain_maps()).ravel(), 1)[0]
     assert abs(follows(est) - 1.0) < 0.05 < 0.08 < abs(follows(blind) - 1.0)
 
 

@@ -19,7 +19,8 @@ a tangential force and hence the polar angle. Calibrate it by pressing with know
 their neighbours (:mod:`gains`). ``taxel_model`` is the skin's forward model learned from the
 force calibration's presses when the estimator in use fits one (``model_fit``, :mod:`taxelmodel`);
 ``leak_share`` the passive matrix's leak along a line, as a share of the line's load, that the
-same presses showed (:mod:`crosstalk`; 0 where none did), which a plate for the gains needs.
+same presses showed (:func:`session.leak_share_of`; 0 where none did), which a plate for the
+gains needs.
 
 A calibration knows its skin (:class:`SkinIdentity`: grid, pitch, the name the user gives it
 and, when the board said who it is, the board's unique ID and name) and when each part was made

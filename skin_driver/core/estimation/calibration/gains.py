@@ -30,7 +30,8 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ['gains_from_force_sums', 'limits_note', 'MIN_COVERED_SHARE', 'GAIN_RANGE']
+__all__ = ['gains_from_force_sums', 'limits_note', 'without_leak', 'MIN_COVERED_SHARE',
+           'GAIN_RANGE']
 
 MIN_COVERED_SHARE = 0.5
 GAIN_RANGE = (0.2, 5.0)
@@ -102,3 +103,24 @@ def limits_note(gains: np.ndarray, covered: np.ndarray) -> str:
     return ('gains at their limits, ' + '; '.join(parts) + ': the load did not cover those '
             'taxels evenly (a plate smaller than the skin, or too few presses there); cover '
             'the whole skin and repeat')
+
+
+def without_leak(counts: np.ndarray, share: float) -> np.ndarray:
+    """
+    Return a (layers, rows, cols) stack of tared counts with a known line ``share`` taken out.
+
+    A load that covers whole lines (a plate for the gains) is left alone by the per-scan
+    clean-up, whose medians would take it for leak; with the skin's leak known (the share a
+    force calibration's presses showed along their lines), each taxel's own reading ``c``
+    follows from ``counts = c + share * (row sum + column sum - 2 c)`` (sums of ``c``). Summed
+    over a line, and over the map, that gives the lines' own sums first.
+    """
+    m = np.asarray(counts, dtype=np.float64)
+    if share <= 0:
+        return m.copy()
+    rows, cols = m.shape[1:]
+    keep = 1.0 - 2.0 * share
+    total = m.sum(axis=(1, 2), keepdims=True) / (keep + share * (rows + cols))
+    row = (m.sum(axis=2, keepdims=True) - share * total) / (keep + share * cols)
+    col = (m.sum(axis=1, keepdims=True) - share * total) / (keep + share * rows)
+    return (m - share * (row + col)) / keep

@@ -29,14 +29,13 @@ import numpy as np
 
 from .calibration import calibrate_zero, Calibration, compliance_from_presses, SkinIdentity
 from .forcefit import check_known_forces, fit_force_curve
-from .gains import gains_from_force_sums, limits_note
+from .gains import gains_from_force_sums, limits_note, without_leak
 from .presses import PressSegmenter
 from .taxellearn import film_start, learn_taxel_model, LearningPress
-from ..scan.conditioning import mark_clipped
-from ..scan.crosstalk import without_leak
 from ..shift.methods import get_method
 
-__all__ = ['KINDS', 'PressRecord', 'Outcome', 'CalibrationRefused', 'CalibrationSession']
+__all__ = ['KINDS', 'PressRecord', 'Outcome', 'CalibrationRefused', 'CalibrationSession',
+           'leak_share_of']
 
 KINDS = ('offset', 'force', 'compliance', 'gains')
 MIN_COMPLIANCE_PRESSES = 3
@@ -56,7 +55,7 @@ class PressRecord:
     sensor's mean force (x, y, z) in the skin frame when one was fed, ``clipped`` where the
     raw counts read the ADC's full scale (2 x rows x cols, None where no taxel did): those
     readings are cut, and a force fit censors them. ``leak_share`` is the line leak the press
-    showed as a share of a line's load (:func:`crosstalk.leak_share`; NaN where none did).
+    showed as a share of a line's load (:func:`leak_share_of`; NaN where none did).
     """
 
     peak_force_n: float
@@ -174,13 +173,12 @@ class CalibrationSession:
             press = self._segmenter.add(0.0, None)
         if press is None:
             return ''
-        conditioner = self.estimator.conditioner
-        counts = np.mean([conditioner.touch_counts(t, b) for t, b, _ in press.plateau], axis=0)
-        clipped = [m for m in (conditioner.clipped(t, b) for t, b, _ in press.plateau)
-                   if m is not None]
+        scans = self._conditioned([(t, b) for t, b, _ in press.plateau])
+        counts = np.mean([c.counts for c in scans], axis=0)
+        clipped = [c.clipped for c in scans if c.clipped.any()]
         wrenches = [w for _, _, w in press.plateau if w is not None]
         wrench = tuple(np.mean(wrenches, axis=0)) if wrenches else None
-        leaks = [conditioner.leak_share(t, b) for t, b, _ in press.plateau]
+        leaks = [leak_share_of(c.line_leak) for c in scans]
         return self.add_press(PressRecord(
             peak_force_n=press.peak_force_n, shift_m=press.plateau_shift_m, counts=counts,
             looks_normal=press.looks_normal, shift_growth_m=press.shift_growth_m,
@@ -190,10 +188,10 @@ class CalibrationSession:
     def record(self, top_counts, bottom_counts, contacts, wrench_n=None) -> PressRecord:
         """Return the record of a press seen in one scan at full load (no stream needed)."""
         cal = self.estimator.calibration
-        conditioner = self.estimator.conditioner
-        counts = conditioner.touch_counts(top_counts, bottom_counts)
-        clipped = conditioner.clipped(top_counts, bottom_counts)
-        leak = conditioner.leak_share(top_counts, bottom_counts)
+        scan, = self._conditioned([(top_counts, bottom_counts)])
+        counts = scan.counts
+        clipped = scan.clipped if scan.clipped.any() else None
+        leak = leak_share_of(scan.line_leak)
         if not contacts:
             return PressRecord(0.0, (math.nan, math.nan), counts, wrench_n=wrench_n,
                                clipped=clipped, leak_share=leak)
@@ -201,6 +199,17 @@ class CalibrationSession:
         zero = cal.zero_m(c.force_n)
         return PressRecord(c.force_n, (c.shift_m[0] + zero[0], c.shift_m[1] + zero[1]),
                            counts, wrench_n=wrench_n, clipped=clipped, leak_share=leak)
+
+    def _conditioned(self, scans: list) -> list:
+        """
+        Return the kernel's conditioning (kernel.Conditioned) of raw (top, bottom) ``scans``.
+
+        On a kernel of the estimator's own, made for them from its state now (one snapshot):
+        the press is read as the scans read it, and the dead marks its taxels revive are
+        revived there alone.
+        """
+        kernel = self.estimator.conditioning_kernel(*np.shape(scans[0][0]))
+        return [kernel.condition(t, b) for t, b in scans]
 
     def add_press(self, record: PressRecord) -> str:
         """Add one press; return a note saying whether it counts (for a person)."""
@@ -269,11 +278,14 @@ class CalibrationSession:
                                      'were made')
         known = self.forces_n[:n]
         fill = self.estimator.config.fill_factor
-        conditioner = self.estimator.conditioner
-        gains = conditioner.gain_maps()
-        full_scale = conditioner.config.fsr.full_scale
-        # A reading the ADC cut is censored whatever its tared counts (conditioning module).
-        marked = [mark_clipped(r.counts, r.clipped, full_scale) for r in self.accepted]
+        conditioning = self.estimator.conditioning
+        gains = conditioning.gain_maps()
+        full_scale = conditioning.config.fsr.full_scale
+        # A reading the ADC cut is a lower bound whatever its tared counts: the fit is told so
+        # by its count at full scale, at or past the ceiling of every curve (forcefit).
+        marked = [r.counts if r.clipped is None
+                  else np.where(r.clipped & (r.counts > 0), float(full_scale), r.counts)
+                  for r in self.accepted]
         fits = {}
         notes = ''
         # The normal force is the bottom layer's sum: its curve must fit. The top layer (the
@@ -282,7 +294,7 @@ class CalibrationSession:
             counts = [m[layer] for m in marked]
             try:
                 fits[name] = fit_force_curve(counts, [gains[layer]] * n, known * fill * fill,
-                                             known, conditioner.config.fsr)
+                                             known, conditioning.config.fsr)
             except ValueError as err:
                 if name == 'bottom':
                     raise CalibrationRefused(f'{name} layer: {err}{self._clipping()}') from None
@@ -323,9 +335,9 @@ class CalibrationSession:
         if not get_method(estimator.config.method).modelled:
             return None, ''
         pitch = estimator.config.pitch_m
-        conditioner = estimator.conditioner  # one snapshot
-        fsr = conditioner.config.fsr
-        sensitivity = conditioner.sensitivity_maps()
+        conditioning = estimator.conditioning  # one snapshot
+        fsr = conditioning.config.fsr
+        sensitivity = conditioning.sensitivity_maps()
         presses = [LearningPress(r.counts, r.clipped, float(f),
                                  (r.shift_m[0] / pitch, r.shift_m[1] / pitch)
                                  if all(math.isfinite(v) for v in r.shift_m) else (0.0, 0.0),
@@ -382,15 +394,16 @@ class CalibrationSession:
 
     def _fit_gains(self) -> Outcome:
         n = len(self.accepted)
-        conditioner = self.estimator.conditioner
+        estimator = self.estimator
         # What each taxel sensed, without the gains in force: those are being replaced. A plate
         # loads whole lines, which the per-scan clean-up leaves alone (its record shows no
         # leak): the leak the force calibration's presses showed comes off here. A spread
-        # press's lines were cleaned with its scan.
-        leak = self.estimator.calibration.leak_share
-        sums = sum(conditioner.force_of(without_leak(r.counts, leak)
-                                        if math.isnan(r.leak_share) else r.counts)
-                   for r in self.accepted) / conditioner.gain_maps()
+        # press's lines were cleaned with its scan. Counts to force as a scan reads them.
+        leak = estimator.calibration.leak_share
+        kernel = estimator.conditioning_kernel(*self.accepted[0].counts.shape[1:])
+        sums = sum(kernel.force(without_leak(r.counts, leak)
+                                if math.isnan(r.leak_share) else r.counts)
+                   for r in self.accepted) / estimator.conditioning.gain_maps()
         gains, covered = gains_from_force_sums(sums, n)
         new = self._updated(gains=(gains[0], gains[1]))
         share = float(covered.mean())
@@ -400,6 +413,20 @@ class CalibrationSession:
                        f'{100 * share:.0f} % of the taxels: {gains.min():.2f} to '
                        f'{gains.max():.2f}' + (f'; {warning}' if warning else ''),
                        covered=share, warnings=(warning,) if warning else ())
+
+
+def leak_share_of(line_leak: np.ndarray) -> float:
+    """
+    Return the line leak one scan of a press showed, as a share of a line's load (NaN: none).
+
+    The median over the lines the kernel took leak off (kernel.Conditioned.line_leak). A press
+    leaks along its own rows and columns only, onto taxels that carry no load of their own, so
+    its lines tell the matrix's leak apart from the load: what a plate over the whole skin
+    cannot (:func:`gains.without_leak`).
+    """
+    shares = np.asarray(line_leak)
+    leaked = shares[shares > 0]
+    return float(np.median(leaked)) if leaked.size else math.nan
 
 
 def _median_of_finite(values) -> float:

@@ -21,8 +21,8 @@ without falling below a censored taxel's reading. A narrower bump is sampled by 
 taxels at most, too few for a width: there the calibration's spread is kept.
 
 The compiled kernel fills in each scan's saturated imprints the same way
-(``skin_kernel/src/imprint.c``, held to this module by the tests); the force calibration fits
-its curves with this module.
+(``skin_kernel/src/saturated_force.c``); the force calibration fits its curves with this
+module's bump.
 """
 
 from __future__ import annotations

@@ -1,8 +1,9 @@
 """
 A forward model of the taxels with the skin's own parameters, and its fit to one contact.
 
-Where :mod:`taxelfit` describes each imprint by Gaussians, this model renders the counts a
-press gives and fits them (issue #16, docs/estimation.md "The forward model"):
+Where ``taxel_fit`` (the kernel's taxel_fit.c) describes each imprint by Gaussians, this model
+renders the counts a press gives and fits them (issue #16, docs/estimation.md "The forward
+model"):
 
 * the tip loads the top layer with a Hertz profile ``sqrt(1 - r**2)`` over an ellipse (semi-axes
   ``a`` and ``a * aspect``, turned by ``orientation``) whose integral is the normal force;

@@ -13,6 +13,8 @@ Maps of uint16, as the driver and the datasets give them, are copied as they are
 a count, no check); others are checked and copied as float64.
 The kernel owns the dead-taxel marks its scans revive (:meth:`Kernel.dead_masks`): it is the
 estimation's one piece of mutable state, and whoever runs the scans owns it.
+:meth:`Kernel.condition` and :meth:`Kernel.force` give a scan's conditioning alone (tared
+counts, cut taxels, the line leak taken off, forces): what a calibration reads its presses from.
 
 The structs of skin_kernel.h are mirrored here field by field (:class:`Settings`,
 :class:`ContactRecord`, ...); before any other call the binding compares every mirror with the
@@ -35,14 +37,15 @@ import numpy as np
 from ...common.validate import check_pair
 
 __all__ = ['METHODS', 'ABI_VERSION', 'TaxelModelNumbers', 'Curve', 'Settings', 'ContactRecord',
-           'Status', 'Record', 'KernelSettings', 'Kernel', 'KernelMissing', 'KernelMismatch',
+           'Status', 'Record', 'KernelSettings', 'Conditioned', 'Kernel', 'KernelMissing',
+           'KernelMismatch',
            'load_library', 'library_candidates', 'fit_contact', 'taxel_model_of']
 
 # Shift methods the kernel runs, by their registered names (skin_kernel.h: SK_CENTROID, ...).
 METHODS = {'centroid': 0, 'taxel_fit': 1, 'poc': 2, 'model_fit': 3}
 
 # skin_kernel.h's SK_ABI_VERSION, the library's SOVERSION: libskin_kernel.so.<ABI_VERSION>.
-ABI_VERSION = 11
+ABI_VERSION = 12
 LIBRARY = f'libskin_kernel.so.{ABI_VERSION}'
 # The variable that names the library file to load, before any place searched.
 LIBRARY_VARIABLE = 'SKIN_KERNEL_LIBRARY'
@@ -223,7 +226,9 @@ def _sign(lib: ctypes.CDLL) -> None:
                   'sk_free': (None, [ptr]),
                   'sk_scan': (_int, None), 'sk_scan_counts': (_int, None),
                   'sk_scan_shifted': (_int, [ptr, ptr, _int, _SHIFT_FN, ptr, ptr, ptr]),
-                  'sk_dead': (None, [ptr, ptr]), 'sk_condition': (_int, [ptr, ptr, ptr, ptr]),
+                  'sk_dead': (None, [ptr, ptr]),
+                  'sk_condition': (_int, [ptr, ptr, ptr, ptr, ptr, ptr]),
+                  'sk_force': (_int, [ptr, ptr, ptr, ptr]),
                   'sk_model_fit': (_int, [ptr, _int, _int, ptr, ptr, ptr, ptr, _int, ptr, ptr])}
     for name, (restype, argtypes) in signatures.items():
         function = getattr(lib, name, None)
@@ -245,7 +250,16 @@ class KernelSettings(NamedTuple):
     gain: np.ndarray
     dead: np.ndarray
     tables: np.ndarray    # (2, full_scale + 1): each layer's force at every count
-    tared: bool           # conditioning.ConditionerState.tared
+    tared: bool           # conditioning.ConditioningState.tared
+
+
+class Conditioned(NamedTuple):
+    """One scan's conditioning as the kernel does it (:meth:`Kernel.condition`)."""
+
+    counts: np.ndarray     # (2, rows, cols) tared counts: leak out, cut levelled, dead filled
+    force: np.ndarray      # (2, rows, cols) each taxel's force, N
+    clipped: np.ndarray    # (2, rows, cols) bool: the raw count at the ADC's full scale
+    line_leak: np.ndarray  # (2, rows + cols): each line's leak taken off, share of its load
 
 
 def _address(array: np.ndarray) -> ctypes.c_void_p:
@@ -374,23 +388,49 @@ class Kernel:
                 raise ValueError('top or bottom holds a value that is not a count')
             return list(map(Record._make, self._out[:count].tolist()))
 
-    def condition(self, top, bottom) -> tuple:
+    def condition(self, top, bottom) -> Conditioned:
         """
-        Return (tared counts, force) of the raw maps, (2, rows, cols) each: a scan's conditioning.
+        Return the conditioning of the raw maps as a scan does it (:class:`Conditioned`).
 
-        Dead taxels that read a touch are revived, as by :meth:`scan`.
+        ``line_leak`` holds each layer's rows, then its columns: 0 on a line that gave none, and
+        everywhere on a scan whose lines were left as they were. Dead taxels that read a touch
+        are revived, as by :meth:`scan`.
         """
         _, top, bottom = self._checked(top, bottom)
-        counts, force = np.zeros((2,) + self.shape), np.zeros((2,) + self.shape)
+        layers = (2,) + self.shape
+        out = Conditioned(np.zeros(layers), np.zeros(layers), np.zeros(layers, dtype=np.uint8),
+                          np.zeros((2, sum(self.shape))))
         with self._lock:
             self._maps[0] = top
             self._maps[1] = bottom
             status = self._lib.sk_condition(self._handle, _address(self._maps),
-                                            _address(counts), _address(force))
+                                            *(_address(a) for a in out))
         if status != _OK:
             check_pair(top, bottom, self.shape)
             raise ValueError('top or bottom holds a value that is not a count')
-        return counts, force
+        return out._replace(clipped=out.clipped.astype(bool))
+
+    def force(self, counts, clipped=None) -> np.ndarray:
+        """
+        Return each taxel's force of tared ``counts``, (2, rows, cols), as a scan reads it.
+
+        In newtons, the gains applied. A count at or below 0 has none; a taxel ``clipped`` marks
+        (bool, same shape; None: none) reads the force at the ADC's full scale. Counts that are
+        not numbers raise ValueError.
+        """
+        counts = np.ascontiguousarray(counts, dtype=np.float64)
+        if counts.shape != (2,) + self.shape:
+            raise ValueError(f'counts have shape {counts.shape}, the kernel takes '
+                             f'{(2,) + self.shape}')
+        marks = None
+        if clipped is not None:
+            marks = np.ascontiguousarray(np.broadcast_to(clipped, counts.shape), dtype=np.uint8)
+        force = np.zeros(counts.shape)
+        status = self._lib.sk_force(self._handle, _address(counts),
+                                    None if marks is None else _address(marks), _address(force))
+        if status != _OK:
+            raise ValueError('counts hold a value that is not a number')
+        return force
 
     def dead_masks(self) -> np.ndarray:
         """Return a snapshot of the kernel's dead-taxel marks, (2, rows, cols) bool."""

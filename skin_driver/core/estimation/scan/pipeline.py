@@ -10,9 +10,9 @@ raw counts (top, bottom) -> conditioning (tare, threshold, FSR model -> force pe
 Geometry and force: contacts, their windows and the shift are measured on the tared counts (the
 sensor's own readings, whatever its FSR curve); the force maps only give the contacts' forces.
 
-Uncertainty, from the contact's own data (the kernel's sigma.c): ``sigma`` (taxels, one axis of
-the shift) gives ``azimuth_sigma = atan2(sigma, |s|)``; a shift shorter than ``MIN_SNR`` sigmas
-is within the noise and carries no direction.
+Uncertainty, from the contact's own data (the kernel's uncertainty.c): ``sigma`` (taxels, one
+axis of the shift) gives ``azimuth_sigma = atan2(sigma, |s|)``; a shift shorter than
+``MIN_SNR`` sigmas is within the noise and carries no direction.
 
 All of the above runs in the compiled kernel (package ``skin_kernel``, :mod:`kernel`), one call
 per scan, for every registered method; a reference shift (``shift=``, the benchmark's) replaces
@@ -42,7 +42,7 @@ import threading
 import numpy as np
 
 from . import kernel as compiled_kernel
-from .conditioning import Conditioner, ConditioningConfig
+from .conditioning import Conditioning, ConditioningConfig
 from ..calibration.calibration import Calibration
 from ..model.fsr import FsrModel
 from ..shift.methods import DEFAULT_METHOD, get_method, Method
@@ -126,16 +126,17 @@ class ContactEstimator:
     change (``with_*``) makes a new one, which a live host swaps in whole. The one piece of
     mutable state is the kernel's: the dead-taxel marks that its scans revive. It belongs to the
     thread that runs the scans (:meth:`process`, :meth:`measure_shifts`); other threads read
-    snapshots (:meth:`dead_masks`, :attr:`conditioner`) or condition maps on a kernel of their
-    own (:meth:`maps_of`). A kernel is built when the estimator is made if the maps' shape is
-    known then (a tare or gains fix it), else by the first scan of each new shape: readers find
-    it in a dict that is replaced, never changed, so a scan takes no lock to look it up.
+    snapshots (:meth:`dead_masks`, :attr:`conditioning`) or condition maps on a kernel of their
+    own (:meth:`maps_of`, :meth:`conditioning_kernel`). A kernel is built when the estimator is
+    made if the maps' shape is known then (a tare or gains fix it), else by the first scan of
+    each new shape: readers find it in a dict that is replaced, never changed, so a scan takes
+    no lock to look it up.
     """
 
     def __init__(self, config: EstimatorConfig = None, calibration: Calibration = None,
-                 conditioner: Conditioner = None, shift: Method = None):
+                 conditioning: Conditioning = None, shift: Method = None):
         """
-        Create the pipeline; ``conditioner`` may carry a tare (it is copied, never shared).
+        Create the pipeline; ``conditioning`` may carry a tare (it is copied, never shared).
 
         ``shift`` replaces the configured shift method by one that is not registered (the
         benchmark's references): it runs on each contact's counts window, or once on the whole
@@ -146,16 +147,16 @@ class ContactEstimator:
         cond_config = ConditioningConfig(fsr=self.config.fsr,
                                          threshold_counts=self.config.threshold_counts,
                                          noise_sigmas=self.config.noise_sigmas)
-        conditioner = (Conditioner(cond_config) if conditioner is None
-                       else conditioner.copy(None if conditioner.config == cond_config
-                                             else cond_config))
+        conditioning = (Conditioning(cond_config) if conditioning is None
+                        else conditioning.copy(None if conditioning.config == cond_config
+                                               else cond_config))
         self._calibration = calibration or Calibration()
-        conditioner.set_force_curves(*(self._calibration.force_curves or (None, None)))
+        conditioning.set_force_curves(*(self._calibration.force_curves or (None, None)))
         top, bottom = self._calibration.gain_maps()
-        if top is not None or conditioner.shape is not None:
-            conditioner.set_gain(top, bottom)
+        if top is not None or conditioning.shape is not None:
+            conditioning.set_gain(top, bottom)
         # Never changed after this: snapshots and kernels are made from it.
-        self._conditioner = conditioner
+        self._conditioning = conditioning
         self._shift = shift
         self._method = shift or get_method(self.config.method)
         if shift is not None and (shift.linear or shift.modelled or shift.function is None):
@@ -165,8 +166,8 @@ class ContactEstimator:
         self._build_lock = threading.Lock()
         # A missing kernel stops the estimator's maker (a node at start-up), not a scan.
         compiled_kernel.load_library()
-        if conditioner.shape is not None:
-            self._kernels = {conditioner.shape: self._new_kernel(conditioner.shape)}
+        if conditioning.shape is not None:
+            self._kernels = {conditioning.shape: self._new_kernel(conditioning.shape)}
         self._viewer = None
         self._viewer_lock = threading.Lock()
 
@@ -176,13 +177,13 @@ class ContactEstimator:
         return self._calibration
 
     @property
-    def conditioner(self) -> Conditioner:
+    def conditioning(self) -> Conditioning:
         """
         Return a snapshot of the conditioning: tare, gains, curves, the dead marks in force now.
 
         A copy: changing it changes nothing here. Read it once for a consistent view.
         """
-        snapshot = self._conditioner.copy()
+        snapshot = self._conditioning.copy()
         top, bottom = self.dead_masks()
         if top is not None:
             snapshot.set_dead(top, bottom)
@@ -190,18 +191,18 @@ class ContactEstimator:
 
     def dead_masks(self) -> tuple:
         """Return the (top, bottom) dead-taxel marks in force now (None, None: no shape yet)."""
-        shape = self._conditioner.shape
+        shape = self._conditioning.shape
         kernels = self._kernels
         kernel = kernels.get(shape) if shape is not None else (
             next(iter(kernels.values())) if len(kernels) == 1 else None)
         if kernel is None:
-            return self._conditioner.dead_masks()
+            return self._conditioning.dead_masks()
         dead = kernel.dead_masks()
         return dead[0], dead[1]
 
     def with_calibration(self, calibration: Calibration) -> 'ContactEstimator':
         """Return this estimator with ``calibration`` (force curves and gains too) in force."""
-        return ContactEstimator(self.config, calibration, self.conditioner, self._shift)
+        return ContactEstimator(self.config, calibration, self.conditioning, self._shift)
 
     def for_grid(self, rows: int, cols: int) -> 'ContactEstimator':
         """
@@ -211,7 +212,7 @@ class ContactEstimator:
         tare or gains of another grid say nothing of this one), its settings and the rest of
         its calibration kept, so the skin it has is estimated rather than every scan refused.
         """
-        shape = self._conditioner.shape
+        shape = self._conditioning.shape
         if shape is None or shape == (rows, cols):
             return self
         calibration = self._calibration
@@ -222,11 +223,11 @@ class ContactEstimator:
 
     def with_config(self, config: EstimatorConfig) -> 'ContactEstimator':
         """Return an estimator with other settings, keeping the tare and the calibration."""
-        return ContactEstimator(config, self._calibration, self.conditioner, self._shift)
+        return ContactEstimator(config, self._calibration, self.conditioning, self._shift)
 
     def with_tare(self, top_frames, bottom_frames) -> 'ContactEstimator':
         """Return this estimator tared from no-touch frames (N x rows x cols each)."""
-        tared = self.conditioner
+        tared = self.conditioning
         tared.tare(top_frames, bottom_frames)
         return ContactEstimator(self.config, self._calibration, tared, self._shift)
 
@@ -242,8 +243,19 @@ class ContactEstimator:
             viewer = self._viewer
             if viewer is None or viewer.shape != t.shape:
                 viewer = self._viewer = self._new_kernel(t.shape)
-            _, force = viewer.condition(t, b)
+            force = viewer.condition(t, b).force
         return force[0], force[1]
+
+    def conditioning_kernel(self, rows: int, cols: int) -> compiled_kernel.Kernel:
+        """
+        Return a new kernel of this estimator for ``rows`` x ``cols`` maps, its own to keep.
+
+        For a thread that conditions scans apart from the scanning one (a calibration reads its
+        presses' tared counts, cut taxels, line leak and forces from it: the scans' own
+        conditioning). Its dead marks are those in force now; the scanning kernel's are never
+        touched.
+        """
+        return self._new_kernel((int(rows), int(cols)), self.conditioning)
 
     @property
     def every_scan(self) -> bool:
@@ -334,12 +346,13 @@ class ContactEstimator:
                 self._kernels = {**self._kernels, t.shape: kernel}
         return kernel
 
-    def _new_kernel(self, shape: tuple) -> compiled_kernel.Kernel:
-        """Return a new kernel of this estimator for ``shape`` maps (the dead marks as made)."""
-        conditioner = self._conditioner
-        if conditioner.shape is None:
-            conditioner = conditioner.copy()  # state() fixes the shape: not on the original
-        state = conditioner.state(shape)
+    def _new_kernel(self, shape: tuple,
+                    conditioning: Conditioning = None) -> compiled_kernel.Kernel:
+        """Return a new kernel for ``shape`` maps from ``conditioning`` (default: as made)."""
+        conditioning = conditioning or self._conditioning
+        if conditioning.shape is None:
+            conditioning = conditioning.copy()  # state() fixes the shape: not on the original
+        state = conditioning.state(shape)
         return compiled_kernel.Kernel(compiled_kernel.KernelSettings(
             self._kernel_settings(), self.config.method, *state))
 
@@ -351,7 +364,7 @@ class ContactEstimator:
             spread_taxels=c.spread_taxels, bump_power=c.bump_power,
             activation_n=c.activation_n) for c in (cal.force_curves or (None, None))]
         slope_x, slope_y = cal.zero_slope_m_per_n
-        cond = self._conditioner.config
+        cond = self._conditioning.config
         return compiled_kernel.Settings(
             max_contacts=cfg.max_contacts, remove_crosstalk=cond.remove_crosstalk,
             fill_dead=cond.fill_dead, pitch_m=cfg.pitch_m,

@@ -8,7 +8,7 @@
 
 #include "internal.h"
 
-/* uncertainty.py's constants */
+/* the least mass with a centroid (counts), and the flat edge term (taxels) */
 #define MIN_MASS_COUNTS 1.0
 #define BORDER_SIGMA 0.2
 
@@ -62,7 +62,7 @@ double sk_sigma(const sk_kernel *k, const sk_pair *p, const double *window, int 
   double flat = BORDER_SIGMA * BORDER_SIGMA;
   if (p->cut_var > 0.0) {
     /*
-     * the shift method's own uncertainty of its profiles cut by the edge (taxelfit.c); a contact
+     * the shift method's own uncertainty of its profiles cut by the edge (taxel_fit.c); a contact
      * sharing the bottom load fits the mixture's share, which the flat rule still bounds
      */
     total += alone || p->cut_var > flat ? p->cut_var : flat;

@@ -7,7 +7,7 @@
 
 #include "internal.h"
 
-/* taxelfit.py's constants of the 2-D fit */
+/* the 2-D fit's constants */
 #define MIN_FREE 8
 #define ITERATIONS_2D 30
 #define HALVINGS 12
@@ -16,50 +16,7 @@
 #define PINNED 1e-3
 #define TOLERANCE_2D 1e-6
 
-/* Solve the 5 x 5 system a x = b by elimination with partial pivoting; 0 for a zero pivot. */
-static int solve5(double a[5][5], double b[5], double x[5])
-{
-  for (int j = 0; j < 5; j++) {
-    /* the pivot's size held, not read back through its row: each comparison waits on less */
-    int p = j;
-    double largest = fabs(a[j][j]);
-    for (int i = j + 1; i < 5; i++) {
-      double size = fabs(a[i][j]);
-      p = size > largest ? i : p;
-      largest = size > largest ? size : largest;
-    }
-    if (largest == 0.0) {
-      return 0;
-    }
-    if (p != j) {
-      for (int m = 0; m < 5; m++) {
-        double t = a[j][m];
-        a[j][m] = a[p][m];
-        a[p][m] = t;
-      }
-      double t = b[j];
-      b[j] = b[p];
-      b[p] = t;
-    }
-    for (int i = j + 1; i < 5; i++) {
-      double f = a[i][j] / a[j][j];
-      for (int m = j; m < 5; m++) {
-        a[i][m] -= f * a[j][m];
-      }
-      b[i] -= f * b[j];
-    }
-  }
-  for (int i = 4; i >= 0; i--) {
-    double v = b[i];
-    for (int m = i + 1; m < 5; m++) {
-      v -= a[i][m] * x[m];
-    }
-    x[i] = v / a[i][i];
-  }
-  return 1;
-}
-
-/* Whether a layer's window calls for fit_censored (taxelfit._fits_censored). */
+/* Whether a layer's window calls for fit_censored: saturated taxels and enough free ones. */
 static int fits_censored(const double *force, const double *censored, int m, int min_free)
 {
   int any = 0, free = 0;
@@ -96,7 +53,7 @@ static void cells_at(const double *params, int h, int w, const cells *at)
 }
 
 /*
- * Squared misfit of params, a bound taxel's only below it (taxelfit._censored_cost); the cells
+ * Squared misfit of params, a bound taxel's only below it; the cells
  * of params left in at, for the step that follows from them. sq: h w doubles.
  */
 static double censored_cost(const double *force, const double *bound, int h, int w,
@@ -118,7 +75,7 @@ static double censored_cost(const double *force, const double *bound, int h, int
 
 /*
  * params moved by step: a taxel at most for a centre, half a width for a width; a centre may
- * lie past the window's edge by PAST_EDGE widths (taxelfit._damped). out may be params.
+ * lie past the window's edge by PAST_EDGE widths. out may be params.
  */
 static void damped(const double *params, const double *step, int h, int w, double *out)
 {
@@ -194,7 +151,7 @@ static void normal_equations(const double *rows, int n, double normal[5][5], dou
 }
 
 /*
- * Gauss-Newton on censored_cost from params, in place (taxelfit._gauss_newton); bound: 1 where
+ * Gauss-Newton on censored_cost from params, in place; bound: 1 where
  * a taxel is a lower bound. Returns whether it converged. scratch: 6 (h + w) + 6 h w doubles.
  */
 static int gauss_newton(const double *force, const double *bound, int h, int w, double *params,
@@ -235,9 +192,10 @@ static int gauss_newton(const double *force, const double *bound, int h, int w, 
     for (int a = 0; a < 5; a++) {
       normal[a][a] += 1e-12;
     }
-    if (!solve5(normal, rhs, step)) {
+    if (!sk_solve(&normal[0][0], rhs, NPARAM)) {
       return 0;
     }
+    memcpy(step, rhs, sizeof(step));
     /* the centre's move as taken: a bound (past the edge, a width's floor) may hold it */
     damped(params, step, h, w, whole);
     double moves = fmax(fabs(whole[P_X] - params[P_X]), fabs(whole[P_Y] - params[P_Y]));
@@ -283,7 +241,7 @@ static int gauss_newton(const double *force, const double *bound, int h, int w, 
 
 /*
  * 2-D cell-integrated Gaussian fitted to one layer's window, its censored taxels lower bounds
- * (taxelfit.fit_censored_layer): found = (x, y) centre in, (x, y, mass) out; widths from the
+ * found = (x, y) centre in, (x, y, mass) out; widths from the
  * marginal fits; a mass > 0 is held fixed, else fitted. Unsettled, the censored taxels within
  * PINNED of their reading are taken as readings and the fit polished. Returns 0 (found
  * untouched) when it does not settle. scratch: 6 (h + w) + 7 h w doubles.
@@ -337,7 +295,7 @@ static int fit_censored(const double *force, const double *censored, int h, int 
 }
 
 /*
- * Refit the saturated layers in 2-D (taxelfit._censored_centres): the bottom first, whose mass
+ * Refit the saturated layers in 2-D: the bottom first, whose mass
  * (fitted, or summed when unsaturated) the top takes.
  */
 void sk_censored_centres(const double *force, const double *censored, int h, int w,

@@ -6,7 +6,7 @@
 
 #include "internal.h"
 
-/* shift.py's constants */
+/* the band (cycles per taxel) and the floor of a weight or determinant */
 #define BAND 0.2
 #define EPS 1e-12
 

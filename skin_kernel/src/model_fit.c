@@ -1,8 +1,8 @@
 /*
- * The forward model of the taxels fitted to one contact (skin_driver.core.estimation.taxelmodel
- * is the description: render_counts, residuals, levenberg_marquardt, best_radius, fit_contact;
- * cellops for the axis operators). A Hertz tip on a fine grid, blurred and summed per active
- * pad by separable operators, a film law per taxel, Levenberg-Marquardt on the counts.
+ * The forward model of the taxels fitted to one contact (model_fit): a Hertz tip on a fine
+ * grid, blurred and summed per active pad by separable operators, a film law per taxel,
+ * Levenberg-Marquardt on the counts (steps solved by solve.c). The model is the one the
+ * simulator renders with and the force calibration learns (model/taxelmodel.py).
  *
  * The operators are tabulated once per fit: along an axis, the weight of fine sample j in cell
  * k depends only on j - k * sub (a pad's overlap with each fine sample, convolved with the
@@ -15,6 +15,7 @@
 #include "internal.h"
 
 enum { X, Y, LOG_FORCE, DX, DY, LOG_RADIUS, LOG_ASPECT, ORIENTATION, NU };
+_Static_assert(NU <= SK_SOLVE_MAX, "a step of every parameter fits the solver");
 
 static const double STEPS[NU] = {0.02, 0.02, 0.01, 0.02, 0.02, 0.03, 0.03, 0.05};
 static const double MAX_MOVES[NU] = {0.5, 0.5, 0.5, 1.0, 1.0, 0.3, 0.3, 0.5};
@@ -43,8 +44,6 @@ typedef struct {
   size_t fine_cap, tmp_cap, load_cap, axes_cap;
   int failed;
 } fit_ctx;
-
-static double clamp(double v, double lo, double hi) { return v < lo ? lo : (v > hi ? hi : v); }
 
 /* cv2.getGaussianKernel(size, sigma, CV_64F) with the size cv2.GaussianBlur picks. */
 static double *gaussian_kernel(double sigma, int *half) {
@@ -206,8 +205,8 @@ static void render_layer(fit_ctx *c, double cx, double cy, const double *u, int 
   int h = c->h, w = c->w, sub = c->sub;
   double blur = c->blur[which];
   memset(out, 0, sizeof(double) * (size_t)(h * w));
-  double a = exp(clamp(u[LOG_RADIUS], log(0.05), log(4.0)));
-  double aspect = exp(clamp(u[LOG_ASPECT], -LOG_ASPECT_LIMIT, LOG_ASPECT_LIMIT));
+  double a = exp(sk_clip(u[LOG_RADIUS], log(0.05), log(4.0)));
+  double aspect = exp(sk_clip(u[LOG_ASPECT], -LOG_ASPECT_LIMIT, LOG_ASPECT_LIMIT));
   double reach = a * (aspect > 1.0 ? aspect : 1.0);
   int margin = (int)ceil(reach + 4.0 * blur) + 1;
   double step = 1.0 / sub, origin = margin + 0.5;
@@ -336,37 +335,6 @@ static void probe_residuals(fit_ctx *c, const double *u, const double *base, int
   film_residuals(c, c->layer, r);
 }
 
-/* Solve the n x n system a x = b in place (partial pivoting); -1 when singular. */
-static int solve(double *a, double *b, int n) {
-  for (int col = 0; col < n; col++) {
-    int piv = col;
-    for (int i = col + 1; i < n; i++)
-      if (fabs(a[i * n + col]) > fabs(a[piv * n + col])) piv = i;
-    if (a[piv * n + col] == 0.0) return -1;
-    if (piv != col) {
-      for (int j = 0; j < n; j++) {
-        double t = a[col * n + j];
-        a[col * n + j] = a[piv * n + j];
-        a[piv * n + j] = t;
-      }
-      double t = b[col];
-      b[col] = b[piv];
-      b[piv] = t;
-    }
-    for (int i = col + 1; i < n; i++) {
-      double f = a[i * n + col] / a[col * n + col];
-      for (int j = col; j < n; j++) a[i * n + j] -= f * a[col * n + j];
-      b[i] -= f * b[col];
-    }
-  }
-  for (int i = n - 1; i >= 0; i--) {
-    double acc = b[i];
-    for (int j = i + 1; j < n; j++) acc -= a[i * n + j] * b[j];
-    b[i] = acc / a[i * n + i];
-  }
-  return 0;
-}
-
 /* Levenberg-Marquardt over the free parameters (taxelmodel.levenberg_marquardt). */
 static double levenberg_marquardt(fit_ctx *c, double *u, const int *free_, int iterations,
                                   double *r, double *r2, double *jac, double *probe,
@@ -397,7 +365,7 @@ static double levenberg_marquardt(fit_ctx *c, double *u, const int *free_, int i
     }
     for (int a = 0; a < nf; a++) normal[a * nf + a] += damping * (normal[a * nf + a] + 1e-12);
     for (int a = 0; a < nf; a++) move[a] = rhs[a];
-    if (solve(normal, move, nf)) break;
+    if (!sk_solve(normal, move, nf)) break;
     double worst = 1.0;
     for (int a = 0; a < nf; a++) {
       double ratio = fabs(move[a] / MAX_MOVES[idx[a]]);

@@ -1,13 +1,14 @@
 /*
  * The force a saturated imprint carries: its censored taxels filled in by a bump fitted to its
- * rim, the bump's spread searched around the calibration's. Python description: imprint.py
- * (censored_force) and forcecurve.py (ForceCurve.with_rim).
+ * rim, the bump's spread searched around the calibration's (the force calibration fits the
+ * same bump: model/imprint.py, model/forcecurve.py).
  */
 #include <math.h>
 
 #include "internal.h"
 
-/* imprint.py's constants */
+/* the bump's spread (taxels): the least an imprint fits its own from, and the grid searched
+ * around the calibration's (factors) */
 #define MIN_FITTED_SPREAD 1.0
 #define SPREAD_LOW 0.5
 #define SPREAD_HIGH 2.0

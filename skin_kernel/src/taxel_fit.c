@@ -1,13 +1,14 @@
 /*
- * Shift of one contact's window: cell-integrated Gaussian profiles (taxel_fit) or the centroid
- * difference; a saturated layer is refitted in 2-D by censorfit.c.
+ * The taxel_fit shift of one contact's window: each layer's profiles along each axis fitted by
+ * Gaussians integrated over the taxel cells (gaussian_cells.c), Gauss-Newton steps solved by
+ * solve.c; a saturated layer is refitted in 2-D by censored_fit.c.
  */
 #include <math.h>
 #include <stddef.h>
 
 #include "internal.h"
 
-/* taxelfit.py's constants */
+/* the profile fits' constants */
 #define ITERATIONS 8
 #define TOLERANCE 1e-4
 #define MIN_EXPLAINED 0.5
@@ -17,139 +18,6 @@
 #define STEP_SPREAD 0.05
 #define STEP_HEIGHT 0.2
 #define CUT_WIDTH_SHARE 0.4
-/* Abramowitz and Stegun 7.1.26: erf to 1.5e-7, far below the counts' noise */
-static const double AS_P = 0.3275911;
-static const double AS[5] = {0.254829592, -0.284496736, 1.421413741, -1.453152027, 1.061405429};
-
-double sk_clip(double x, double lo, double hi)
-{
-  /* comparisons keep a NaN, as numpy.clip does */
-  return x < lo ? lo : (x > hi ? hi : x);
-}
-
-double sk_normal_cdf_of(double u, double gauss)
-{
-  double x = fabs(u) * (1.0 / sqrt(2.0));
-  double t = 1.0 / (1.0 + AS_P * x);
-  double poly = t * (AS[0] + t * (AS[1] + t * (AS[2] + t * (AS[3] + t * AS[4]))));
-  double half = 0.5 * poly * gauss;
-  /*
-   * 1 - half from u = 0 on, else half (half is never -0, so 0 + half is half): exact, and
-   * without a branch, so that a loop over edges runs two at a time (sk_axis_cells)
-   */
-  double above = u >= 0;
-  return above + (1.0 - 2.0 * above) * half;
-}
-
-double sk_normal_cdf(double u)
-{
-  double x = fabs(u) * (1.0 / sqrt(2.0));
-  return sk_normal_cdf_of(u, exp(-x * x));
-}
-
-void sk_axis_cells(double mu, double s, int n, double *g, double *d_mu, double *d_s)
-{
-  /*
-   * Edge by edge in separate passes, each cell's figures as in one: the exp calls apart, the
-   * long chains of the CDF's polynomial and the divisions of one edge do not wait on the next
-   * edge's call, and run two edges at a time. The arrays hold each edge's u, its Gaussian,
-   * then pdf, CDF and u pdf, until the cells are their differences.
-   */
-  for (int i = 0; i < n; i++) {
-    d_s[i] = ((i + 1) - 0.5 - mu) / s;
-  }
-  for (int i = 0; i < n; i++) {
-    d_mu[i] = exp(-0.5 * d_s[i] * d_s[i]);
-  }
-  for (int i = 0; i < n; i++) {
-    double u = d_s[i], gauss = d_mu[i], pdf = gauss * INV_SQRT2PI;
-    g[i] = sk_normal_cdf_of(u, gauss);
-    d_mu[i] = pdf;
-    d_s[i] = u * pdf;
-  }
-  double u0 = (-0.5 - mu) / s, gauss0 = exp(-0.5 * u0 * u0);
-  double pdf0 = gauss0 * INV_SQRT2PI, cdf0 = sk_normal_cdf_of(u0, gauss0), updf0 = u0 * pdf0;
-  for (int i = n - 1; i > 0; i--) {
-    g[i] = g[i] - g[i - 1];
-    d_mu[i] = -(d_mu[i] - d_mu[i - 1]) / s;
-    d_s[i] = -(d_s[i] - d_s[i - 1]) / s;
-  }
-  if (n > 0) {
-    g[0] = g[0] - cdf0;
-    d_mu[0] = -(d_mu[0] - pdf0) / s;
-    d_s[0] = -(d_s[0] - updf0) / s;
-  }
-}
-
-/*
- * Solve the 3 x 3 system a x = b as numpy.linalg.solve does with OpenBLAS (dgesv: left-looking
- * LU with partial pivoting, multipliers by the pivot's reciprocal, column-wise substitutions),
- * a stable order for the fits' narrow windows, which are ill-conditioned. Returns 0 for a zero
- * pivot.
- */
-static int solve3(double a[3][3], double b[3], double x[3])
-{
-  int piv[3];
-  for (int j = 0; j < 3; j++) {
-    for (int i = 0; i < j; i++) {
-      double t = a[i][j];
-      a[i][j] = a[piv[i]][j];
-      a[piv[i]][j] = t;
-    }
-    for (int i = 1; i < j; i++) {
-      double dot = 0.0;
-      for (int m = 0; m < i; m++) {
-        dot += a[i][m] * a[m][j];
-      }
-      a[i][j] = a[i][j] - dot;
-    }
-    for (int i = j; i < 3; i++) {
-      double dot = 0.0;
-      for (int m = 0; m < j; m++) {
-        dot += a[i][m] * a[m][j];
-      }
-      a[i][j] = a[i][j] + -1.0 * dot;
-    }
-    int p = j;
-    for (int i = j + 1; i < 3; i++) {
-      p = fabs(a[i][j]) > fabs(a[p][j]) ? i : p;
-    }
-    piv[j] = p;
-    if (a[p][j] == 0.0) {
-      return 0;
-    }
-    double inv = 1.0 / a[p][j];
-    for (int m = 0; m <= j; m++) {
-      double t = a[j][m];
-      a[j][m] = a[p][m];
-      a[p][m] = t;
-    }
-    for (int i = j + 1; i < 3; i++) {
-      a[i][j] *= inv;
-    }
-  }
-  for (int i = 0; i < 3; i++) {
-    x[i] = b[i];
-  }
-  for (int i = 0; i < 3; i++) {
-    double t = x[i];
-    x[i] = x[piv[i]];
-    x[piv[i]] = t;
-  }
-  for (int i = 0; i < 3; i++) {
-    for (int r = i + 1; r < 3; r++) {
-      x[r] += -x[i] * a[r][i];
-    }
-  }
-  for (int i = 2; i >= 0; i--) {
-    x[i] = x[i] / a[i][i];
-    for (int r = 0; r < i; r++) {
-      x[r] += -x[i] * a[r][i];
-    }
-  }
-  return 1;
-}
-
 /* Cells of the profile (mu, s) over len cells: differences of the CDF at the cell edges. */
 static void cells_of(double mu, double s, int len, double *cells)
 {
@@ -161,7 +29,7 @@ static void cells_of(double mu, double s, int len, double *cells)
   }
 }
 
-/* Profiles cut by the map's edge (taxelfit._cut_by_edge): a fixed width, start and bounds. */
+/* Profiles cut by the map's edge (cut_by_edge): a fixed width, start and bounds. */
 struct cut {
   int fixed[4];
   double width[4], mu[4], low[4], high[4];
@@ -239,7 +107,10 @@ static int fit_profiles(const double *profiles, int nn, const int *len, const st
       double normal[3][3] = {{n00 + 1e-12, n01, n02}, {n01, n11 + 1e-12, n12},
                              {n02, n12, n22 + 1e-12}};
       double rhs[3] = {r0, r1, r2};
-      solved = solve3(normal, rhs, step[j]);
+      solved = sk_solve(&normal[0][0], rhs, 3);
+      for (int a = 0; a < 3; a++) {
+        step[j][a] = rhs[a];
+      }
     }
     if (!solved) {
       break;
@@ -286,7 +157,7 @@ static int fit_profiles(const double *profiles, int nn, const int *len, const st
  * Profiles loaded in their first or last cell were cut by the map's edge (the window has an
  * empty cell around its load elsewhere): each takes the width of the same layer's profile along
  * the other axis when that one is whole, and its centre may lie past the edge. Returns whether
- * any was (taxelfit._cut_by_edge). Rows 0, 1: top and bottom along x; 2, 3 along y.
+ * any was. Rows 0, 1: top and bottom along x; 2, 3 along y.
  */
 static int cut_by_edge(const double *profiles, int nn, const int *len, const double *mu,
                        const double *width, struct cut *cut)
@@ -312,7 +183,7 @@ static int cut_by_edge(const double *profiles, int nn, const int *len, const dou
 /*
  * The variance (taxels**2, one axis of the shift) of the centres of the profiles cut by the
  * map's edge: each one's derivative by the width with the mass refitted, times CUT_WIDTH_SHARE
- * of the width (taxelfit._cut_variance). scratch: 3 nn doubles.
+ * of the width. scratch: 3 nn doubles.
  */
 static double cut_variance(const double *profiles, int nn, const int *len, const double *mu,
                            const double *width, double *scratch)
@@ -356,7 +227,7 @@ static int plateau(const double *layer, int m)
   return peak > 0 && at_peak >= 2;
 }
 
-/* Taxels on a film's turn-on step at half their force, in place (taxelfit._on_step) */
+/* Taxels on a film's turn-on step at half their force, in place */
 static void on_step(double *force, const double *counts, int m)
 {
   for (int layer = 0; layer < 2; layer++) {
@@ -382,22 +253,6 @@ static void on_step(double *force, const double *counts, int m)
         force[layer * m + i] *= 0.5;
       }
     }
-  }
-}
-
-/* Column profiles (summed over rows, in row order) and row profiles (numpy's pairwise sums). */
-void sk_profiles_of(const double *layer, int h, int w, int nn, double *along_x,
-                    double *along_y)
-{
-  for (int i = 0; i < nn; i++) {
-    along_x[i] = 0.0;
-    along_y[i] = 0.0;
-  }
-  for (int r = 0; r < h; r++) {
-    for (int c = 0; c < w; c++) {
-      along_x[c] += layer[r * w + c];
-    }
-    along_y[r] = sk_sum(layer + r * w, w);
   }
 }
 
@@ -442,31 +297,4 @@ void sk_taxel_fit(double *force, const double *counts, const double *censored, i
     worst = explained[j] < worst ? explained[j] : worst;
   }
   *confidence = worst > 1.0 ? 1.0 : worst;
-}
-
-void sk_centroid(const double *counts, int h, int w, double *scratch, double *dx, double *dy,
-                 double *confidence)
-{
-  int m = h * w, nn = h > w ? h : w;
-  double centre[4];
-  for (int layer = 0; layer < 2; layer++) {
-    double *along_x = scratch, *along_y = scratch + nn;
-    sk_profiles_of(counts + layer * m, h, w, nn, along_x, along_y);
-    double mass = sk_sum(along_x, w), sx = 0.0, sy = 0.0;
-    if (!(mass > 0)) {
-      *dx = *dy = *confidence = NAN;
-      return;
-    }
-    for (int c = 0; c < w; c++) {
-      sx += along_x[c] * c;
-    }
-    for (int r = 0; r < h; r++) {
-      sy += along_y[r] * r;
-    }
-    centre[layer] = sx / mass;
-    centre[2 + layer] = sy / mass;
-  }
-  *dx = centre[1] - centre[0];
-  *dy = centre[3] - centre[2];
-  *confidence = 1.0;
 }
