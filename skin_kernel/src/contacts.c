@@ -320,8 +320,7 @@ static void make_pair(sk_kernel *k, int q, sk_pair *p)
   p->bottom_cut = cut_at_edge(k, p, b, cut, k->scratch + 2 * n);
 }
 
-/* Copy pair p's window: counts (top, bottom), then its share of the force maps
- * (censoring.force_window). */
+/* Copy pair p's window: counts (top, bottom), then its share of the force maps. */
 void sk_pair_window(const sk_kernel *k, int q, double *out)
 {
   const sk_pair *p = &k->pairs[q];

@@ -283,9 +283,9 @@ static int finish(sk_kernel *k, sk_contact *out)
 }
 
 /*
- * Pair p's force sums with their rim loads, each saturated layer's filled in from its rim
- * (censoring.with_censored_sums). marked: p's window counts with the taxels the ADC cut at
- * full scale (censored there), when p->censored; 2 h w doubles of scratch follow it.
+ * Pair p's force sums with their rim loads (never more than the sum), each saturated layer's
+ * filled in from its rim (saturated_force.c). marked: p's window counts with the taxels the ADC
+ * cut at full scale (censored there), when p->censored; 2 h w doubles of scratch follow it.
  */
 static void imprint_forces(sk_kernel *k, sk_pair *p, const double *marked)
 {

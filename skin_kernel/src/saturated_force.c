@@ -60,7 +60,7 @@ static void bump(const imprint *im, double spread, double *phi)
   }
 }
 
-/* The least-squares fit of one spread on the free taxels (imprint._fill): 0 without a bump. */
+/* The least-squares fit of one spread on the free taxels: 0 without a bump. */
 static int fill(const imprint *im, double spread, double *phi, double *misfit, double *height)
 {
   const double *counts = im->counts, *force = im->force;

@@ -1,7 +1,9 @@
 """
-The compiled kernel through the estimator, and its forward model's fit beside the Python one.
+The compiled kernel through the estimator, and its forward model's fit of one contact.
 
-Edge cases, censoring, gains, dead taxels, line leak, map types, bad input, references.
+Edge cases, censoring (a saturated imprint's force filled in from its rim, the rim load), gains,
+dead taxels, line leak, map types, bad input, references; the model fit's known presses,
+censored taxels and taxel sensitivities.
 
 What the kernel finds on the family's scenes is held by the golden outputs (test_golden.py);
 its symmetries and invariances by test_kernel_behaviour.py.
@@ -18,21 +20,17 @@ import pytest
 
 from skin_driver.core.estimation.calibration.calibration import Calibration
 from skin_driver.core.estimation.calibration.prepared import prepared_estimator
+from skin_driver.core.estimation.model.forcecurve import ForceCurve
 from skin_driver.core.estimation.model.taxelmodel import (
-    DX as model_dx, DY as model_dy, fit_contact, LOG_ASPECT as model_aspect,
-    LOG_FORCE as model_force, LOG_RADIUS as model_radius, ORIENTATION as model_orientation,
-    render_counts, start_of, TaxelModel, X as model_x, Y as model_y)
-from skin_driver.core.estimation.scan.kernel import fit_contact as compiled_fit_contact
+    DX as model_dx, DY as model_dy, LOG_FORCE as model_force, LOG_RADIUS as model_radius,
+    render_counts, start_of, X as model_x, Y as model_y)
+from skin_driver.core.estimation.scan.kernel import fit_contact
 from skin_driver.core.estimation.scan.pipeline import ContactEstimator, EstimatorConfig
 from skin_driver.core.estimation.shift.methods import Method, REFERENCES
 from skin_driver.core.sim.experiments import calibrated_scene, make_scene
 from skin_driver.core.sim.physics import Press, render, SkinModel
 from skin_driver.core.sim.skins import family_skin
-
-# sk_model_fit against the learning's Python fit (taxelmodel.fit_contact): the same fit, its
-# sums in another order; a narrow window's fit grows ulp to 1e-9 taxels at most, an algorithm
-# change moves it by 1e-3 or more.
-TOLERANCE = 1e-7
+from taxel_presses import FILM, noisy, press as model_press
 
 
 def figures(contact) -> np.ndarray:
@@ -85,7 +83,7 @@ def test_rim_loads_of_a_force_calibration_are_added(skin):
 
 def test_a_censoring_force_curve_fills_in_the_saturated_imprint():
     # 3 N a taxel saturates this film: presses of 15 to 50 N read the ceiling at their centre,
-    # and the calibrated curve fills their force in from the rims (forcecurve, in Python).
+    # and the calibrated curve fills their force in from the rims.
     member = family_skin('saturating')
     rng = np.random.default_rng(3)
     data = calibrated_scene('random', member, rng, 2)
@@ -114,6 +112,67 @@ def test_taxels_the_adc_cut_are_censored():
         if i in cut:
             force = math.sqrt(sum(v * v for v in contact.force_xyz_n))
             assert force == pytest.approx(data.force_n[i], rel=0.05)
+
+
+def _reading_through(curve: ForceCurve) -> ContactEstimator:
+    # Untared, both layers read through the curve, the taxels sense the whole skin: a contact's
+    # force is its layers' summed taxel force, filled in and with its rim load.
+    return ContactEstimator(EstimatorConfig(fill_factor=1.0),
+                            Calibration(force_curves=(curve, curve)))
+
+
+def _imprint_force(est, counts) -> float:
+    (contact,) = est.process(counts, counts.copy())
+    return contact.force_n
+
+
+def _cross(centre: float) -> np.ndarray:
+    # Four rim taxels of 50 counts (1 N on a curve of 2 N per 100 counts) around one centre.
+    counts = np.zeros((8, 8))
+    counts[3, 4] = counts[5, 4] = counts[4, 3] = counts[4, 5] = 50.0
+    counts[4, 4] = centre
+    return counts
+
+
+@pytest.mark.parametrize('activation_n', [0.0, 0.1])
+def test_a_saturated_imprint_is_filled_in_from_its_rim_the_activation_besides_its_bump(
+        activation_n):
+    # The centre reads 95 counts (1.9 N), over the 90 at which the curve censors: a lower bound.
+    # A bump of 0.6 taxels (too narrow to fit its own: the calibration's is kept) is fitted to
+    # the rim's force above the activation; the centre carries the activation plus the bump's
+    # height, above the 1.9 N it reads.
+    curve = ForceCurve((0.0, 100.0), (0.0, 2.0), 90.0, 0.6, activation_n=activation_n)
+    phi_rim = math.exp(-0.5 / 0.6 ** 2)  # the unit bump one taxel from the centre
+    above = 1.0 - activation_n
+    expected = 4 * 1.0 + activation_n + above / phi_rim
+    assert _imprint_force(_reading_through(curve), _cross(95.0)) == pytest.approx(
+        expected, rel=1e-9)
+
+
+def test_a_wider_imprint_than_the_calibrations_bump_is_filled_in_by_its_own_spread():
+    # Hard case: a Gaussian imprint of 2 taxels' spread, its centre over the censoring ceiling
+    # (read at 95 counts), on a curve whose bump is 1.5 taxels: wide enough for each imprint's
+    # rim to tell its own spread. The force is the imprint's over the taxels read (those under
+    # the 40-count threshold read nothing). The calibration's narrower bump, its height fixed by
+    # the same rim, would put far more on the saturated centre and read it high.
+    rows, cols = np.indices((15, 15))
+    counts = 200.0 * np.exp(-((rows - 7) ** 2 + (cols - 7) ** 2) / (2 * 2.0 ** 2))
+    read = counts >= 40.0
+    truth = 0.02 * counts[read].sum()
+    seen = np.where(read, np.where(counts >= 90.0, 95.0, counts), 0.0)
+    curve = ForceCurve((0.0, 100.0), (0.0, 2.0), 90.0, 1.5)
+    assert _imprint_force(_reading_through(curve), seen) == pytest.approx(truth, rel=0.01)
+
+
+def test_the_rim_load_is_added_to_each_imprint_and_at_most_doubles_a_faint_one():
+    # A curve that learned 2 N of rim load (force no taxel reads): added to a press's 5.6 N; a
+    # faint imprint (one taxel of 60 counts, 1.2 N) is no press and reads twice its own force.
+    curve = ForceCurve((0.0, 100.0), (0.0, 2.0), rim_load_n=2.0)
+    est = _reading_through(curve)
+    assert _imprint_force(est, _cross(80.0)) == pytest.approx(4 * 1.0 + 1.6 + 2.0, rel=1e-9)
+    faint = np.zeros((8, 8))
+    faint[4, 4] = 60.0
+    assert _imprint_force(est, faint) == pytest.approx(2 * 1.2, rel=1e-9)
 
 
 def test_gains_scale_the_force():
@@ -350,62 +409,81 @@ def test_a_missing_kernel_stops_the_estimators_maker_naming_the_fix():
     assert '/nonexistent/libskin_kernel.so.0' in out.stderr
 
 
-# ---- the forward model's fit of one contact (sk_model_fit) against taxelmodel.fit_contact ----
-FILM = TaxelModel(pitch_m=0.005, fill_factor=0.9, cover_spread_m=0.001, layer_spread_m=0.002,
-                  film_scale=0.67, film_exponent=0.53, film_ceiling=3.3, film_activation_n=0.01)
+# ---- the forward model's fit of one contact (sk_model_fit) ----
 WINDOW = (10, 10)
 
 
-def _press(dx, dy, force=20.0, radius=0.8, aspect=1.0, orientation=0.0):
-    u = np.zeros(8)
-    u[model_x], u[model_y], u[model_dx], u[model_dy] = 4.3, 5.1, dx, dy
-    u[model_force], u[model_radius] = math.log(force), math.log(radius)
-    u[model_aspect], u[model_orientation] = math.log(aspect), orientation
-    return u
-
-
-def _noisy(counts):
-    # With the ADC's noise the misfit has a clear least: noise-free, it falls to rounding noise,
-    # where two orders of summation walk apart (and a round tip's turn means nothing at all).
-    return counts + np.random.default_rng(0).normal(0.0, 5.0, counts.shape)
-
-
-def _assert_fits(model, counts, censored, start, sensitivity=None):
-    python = fit_contact(model, counts, censored, start, sensitivity=sensitivity)
-    compiled = compiled_fit_contact(model, counts, censored, start, sensitivity=sensitivity)
-    np.testing.assert_allclose(compiled.u[:model_orientation], python.u[:model_orientation],
-                               rtol=0, atol=TOLERANCE)
-    # A nearly round tip's turn is barely defined (the misfit hardly moves with it): a few ulp
-    # of another order of summation move it by up to 1e-8 rad (measured), nothing else.
-    assert compiled.u[model_orientation] == pytest.approx(python.u[model_orientation], abs=1e-6)
-    assert compiled.misfit == pytest.approx(python.misfit, rel=TOLERANCE)
-    return compiled
+def _start(counts, truth, model=FILM):
+    # A first shift 0.3 taxels off on each axis, as a first method's would be.
+    return start_of(counts / 100.0, (truth[model_dx] + 0.3, truth[model_dy] - 0.3), model)
 
 
 @pytest.mark.parametrize('model, truth', [
-    (FILM, _press(0.5, 0.0)),                                  # half a taxel: the worst locking
-    (FILM, _press(1.3, -0.7, radius=1.4)),
-    (FILM, _press(0.3, 0.4, aspect=1.6, orientation=0.6)),     # an elliptical tip, turned
-    (replace(FILM, cover_spread_m=0.0, layer_spread_m=0.0), _press(0.6, 0.2)),  # no blur at all
+    (FILM, model_press(0.5, 0.0)),                              # half a taxel: the worst locking
+    (FILM, model_press(1.3, -0.7, radius=1.4)),
+    (FILM, model_press(0.3, 0.4, aspect=1.6, orientation=0.6)),  # an elliptical tip, turned
+    (replace(FILM, cover_spread_m=0.0, layer_spread_m=0.0), model_press(0.6, 0.2)),  # no blur
     (replace(FILM, cover_spread_m=0.0015, turn_on_pa=20000.0, film_step=0.25),  # a film's cliffs
-     _press(0.4, -0.3, force=12.0, radius=1.2)),
+     model_press(0.4, -0.3, force=12.0, radius=1.2)),
 ])
 def test_the_forward_model_fits_a_contact(model, truth):
-    counts = _noisy(render_counts(model, WINDOW, truth, 24))
-    start = start_of(counts / 100.0, (truth[model_dx] + 0.3, truth[model_dy] - 0.3), model)
-    fit = _assert_fits(model, counts, None, start)
     # The model's own press under the ADC's noise: the fit finds its shift.
+    counts = noisy(render_counts(model, WINDOW, truth, 24))
+    fit = fit_contact(model, counts, None, _start(counts, truth, model))
     assert fit.u[model_dx] == pytest.approx(truth[model_dx], abs=0.01)
     assert fit.u[model_dy] == pytest.approx(truth[model_dy], abs=0.01)
 
 
-def test_censored_taxels_and_taxel_sensitivities_are_fitted():
-    # Hard case: the peak saturated (lower bounds cut low) on taxels 10 % apart in sensitivity.
+@pytest.mark.parametrize('dx, dy', [(0.5, 0.0), (0.25, -0.5), (1.3, 0.7)])
+def test_a_noise_free_press_of_the_model_is_recovered(dx, dy):
+    # Hard case: half a taxel, where the imprint's sampling on cells biases a centroid most.
+    # Without noise the misfit's least is the press itself: place, force, shift and radius.
+    truth = model_press(dx, dy)
+    counts = render_counts(FILM, WINDOW, truth, 24)
+    fit = fit_contact(FILM, counts, None, _start(counts, truth))
+    recovered = [model_x, model_y, model_force, model_dx, model_dy, model_radius]
+    np.testing.assert_allclose(fit.u[recovered], truth[recovered], rtol=0, atol=1e-4)
+    assert fit.misfit < 1.0
+
+
+def test_censored_taxels_count_only_where_the_model_reads_below_them():
+    # The censored readings are lower bounds: cut 50 counts below the ceiling, the fit must not
+    # follow them down. Read as values, the cut peak pulls the force low.
+    truth = model_press(0.7, -0.4, force=200.0)
+    counts = render_counts(FILM, WINDOW, truth, 24)
+    censored = counts >= 0.9 * counts.max()
+    cut = np.where(censored, 0.9 * counts.max() - 50.0, counts)
+    fit = fit_contact(FILM, cut, censored, _start(counts, truth))
+    assert math.exp(fit.u[model_force]) == pytest.approx(200.0, rel=1e-3)
+    assert fit.u[model_dx] == pytest.approx(0.7, abs=1e-3)
+    assert fit.u[model_dy] == pytest.approx(-0.4, abs=1e-3)
+    as_values = fit_contact(FILM, cut, None, _start(counts, truth))
+    assert math.exp(as_values.u[model_force]) < 0.98 * 200.0
+
+
+@pytest.mark.parametrize('dx, dy', [(0.5, 0.0), (0.25, -0.5), (1.3, 0.7)])
+def test_the_fit_with_the_taxels_sensitivity_finds_the_shift_a_gain_pattern_would_bias(dx, dy):
+    # Hard case: taxels 10 % apart in sensitivity (FSR films do), the calibrated gains given.
     pattern = np.random.default_rng(2).uniform(0.9, 1.1, (2,) + WINDOW)
-    counts = _noisy(render_counts(FILM, WINDOW, _press(0.7, 0.5, force=200.0), 24, pattern))
+    truth = model_press(dx, dy)
+    counts = render_counts(FILM, WINDOW, truth, 24, pattern)
+    start = _start(counts, truth)
+    fit = fit_contact(FILM, counts, None, start, sensitivity=pattern)
+    assert fit.u[model_dx] == pytest.approx(dx, abs=1e-3)
+    assert fit.u[model_dy] == pytest.approx(dy, abs=1e-3)
+    # Without them the same fit is off by several thousandths of a taxel: the pattern's bias.
+    blind = fit_contact(FILM, counts, None, start)
+    assert max(abs(blind.u[model_dx] - dx), abs(blind.u[model_dy] - dy)) > 3e-3
+
+
+def test_censored_taxels_and_taxel_sensitivities_are_fitted():
+    # Hard case: the peak saturated (lower bounds cut low) on taxels 10 % apart in sensitivity,
+    # under the ADC's noise.
+    pattern = np.random.default_rng(2).uniform(0.9, 1.1, (2,) + WINDOW)
+    counts = noisy(render_counts(FILM, WINDOW, model_press(0.7, 0.5, force=200.0), 24, pattern))
     censored = counts >= 0.9 * counts.max()
     cut = np.where(censored, 0.9 * counts.max() - 50.0, counts)
     start = start_of(counts / 100.0, (1.0, 0.2), FILM)
-    fit = _assert_fits(FILM, cut, censored, start, pattern)
+    fit = fit_contact(FILM, cut, censored, start, sensitivity=pattern)
     assert fit.u[model_dx] == pytest.approx(0.7, abs=0.01)
     assert fit.u[model_dy] == pytest.approx(0.5, abs=0.01)

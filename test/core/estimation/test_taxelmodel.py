@@ -1,11 +1,11 @@
-"""Tests of the forward model of the taxels: its film, its rendering and its fit of a contact."""
+"""Tests of the forward model of the taxels: its film and its rendering (its fit: test_kernel)."""
 
 import math
 
 import numpy as np
 import pytest
 from skin_driver.core.estimation.model.taxelmodel import (
-    DX, DY, fit_contact, LOG_FORCE, LOG_RADIUS, render_counts, start_of, TaxelModel, X, Y)
+    DX, DY, LOG_FORCE, LOG_RADIUS, render_counts, TaxelModel, X, Y)
 
 MODEL = TaxelModel(pitch_m=0.005, fill_factor=0.9, cover_spread_m=0.001, layer_spread_m=0.002,
                    film_scale=0.67, film_exponent=0.53, film_ceiling=3.3, film_activation_n=0.01)
@@ -39,31 +39,6 @@ def test_a_press_at_a_taxel_centre_renders_symmetric_maps():
     np.testing.assert_allclose(bottom[4:9, :], bottom[4:9, :][::-1, :], atol=1e-9)
 
 
-@pytest.mark.parametrize('dx, dy', [(0.5, 0.0), (0.25, -0.5), (1.3, 0.7)])
-def test_the_fit_finds_a_sub_taxel_shift_where_pixel_locking_would_bias_it(dx, dy):
-    # Hard case: half a taxel, where the imprint's sampling on cells biases a centroid most.
-    truth = press(dx=dx, dy=dy)
-    counts = render_counts(MODEL, SHAPE, truth, 24)
-    force = counts / 100.0  # any map with the right centroid serves the start
-    start = start_of(force, (dx + 0.3, dy - 0.3), MODEL)
-    fit = fit_contact(MODEL, counts, None, start)
-    assert fit.u[DX] == pytest.approx(dx, abs=0.01)
-    assert fit.u[DY] == pytest.approx(dy, abs=0.01)
-    assert fit.misfit < 1.0
-
-
-def test_censored_taxels_count_only_where_the_model_reads_below_them():
-    truth = press(force=200.0)
-    counts = render_counts(MODEL, SHAPE, truth, 24)
-    censored = counts >= 0.9 * counts.max()
-    # The censored readings are lower bounds: cut them low, the fit must not follow.
-    cut = np.where(censored, 0.9 * counts.max() - 50.0, counts)
-    start = start_of(counts / 100.0, (0.7, -0.4), MODEL)
-    fit = fit_contact(MODEL, cut, censored, start)
-    assert fit.u[DX] == pytest.approx(0.4, abs=0.02)
-    assert fit.u[DY] == pytest.approx(-0.7, abs=0.02)
-
-
 def test_a_model_round_trips_through_its_mapping_and_rejects_what_no_skin_has():
     assert TaxelModel.from_dict(MODEL.to_dict()) == MODEL
     with pytest.raises(ValueError, match='fill_factor'):
@@ -93,18 +68,3 @@ def test_a_taxels_sensitivity_scales_its_load_before_the_film():
     even = np.full((2,) + SHAPE, 1.25)
     np.testing.assert_allclose(render_counts(MODEL, SHAPE, press(), 24, even),
                                render_counts(MODEL, SHAPE, press(force=25.0), 24), rtol=1e-12)
-
-
-@pytest.mark.parametrize('dx, dy', [(0.5, 0.0), (0.25, -0.5), (1.3, 0.7)])
-def test_the_fit_with_the_taxels_sensitivity_finds_the_shift_a_gain_pattern_would_bias(dx, dy):
-    # Hard case: taxels 10 % apart in sensitivity (FSR films do), the calibrated gains given.
-    pattern = np.random.default_rng(2).uniform(0.9, 1.1, (2,) + SHAPE)
-    truth = press(dx=dx, dy=dy)
-    counts = render_counts(MODEL, SHAPE, truth, 24, pattern)
-    start = start_of(counts / 100.0, (dx + 0.3, dy - 0.3), MODEL)
-    fit = fit_contact(MODEL, counts, None, start, sensitivity=pattern)
-    assert fit.u[DX] == pytest.approx(dx, abs=1e-3)
-    assert fit.u[DY] == pytest.approx(dy, abs=1e-3)
-    # Without them the same fit is off by several thousandths of a taxel: the pattern's bias.
-    blind = fit_contact(MODEL, counts, None, start)
-    assert max(abs(blind.u[DX] - dx), abs(blind.u[DY] - dy)) > 3e-3

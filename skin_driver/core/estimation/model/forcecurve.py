@@ -21,7 +21,9 @@ The rim load: the rim of every imprint carries load that no taxel reads, below t
 threshold or below the pressure at which a film turns on. For an imprint of a given shape, the
 part of its load under a pressure is about that pressure times the imprint's area, whatever the
 force: a constant per imprint, so one more non-negative number of the fit, added to every
-imprint's sum at run time (:meth:`ForceCurve.imprint_force`).
+imprint's sum at run time by the compiled kernel (``skin_kernel/src/kernel.c``), never more than
+the imprint reads: a faint imprint (a few taxels over the threshold, or noise) is no press, and
+must not become one.
 
 The curve is stored as knots in counts up to the highest count pressed, with the censoring
 ceiling, the bump's width and the rim load; past the knots the last slope goes on.
@@ -32,8 +34,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-
-from .imprint import censored_force
 
 __all__ = ['ForceCurve']
 
@@ -46,8 +46,8 @@ class ForceCurve:
     """
     Sensed taxel force (N) at the knots (counts above baseline): from (0, 0), never falling.
 
-    ``censor_counts`` > 0: taxels reading that many counts or more saturated; their force is
-    filled in by a bump of ``spread_taxels`` and ``bump_power`` (:func:`imprint.censored_force`).
+    ``censor_counts`` > 0: taxels reading that many counts or more saturated; the kernel fills
+    their force in by a bump of ``spread_taxels`` and ``bump_power`` (:mod:`imprint`).
     0: none. ``rim_load_n``: the sensed force at the rim of every imprint that no taxel reads,
     added to each imprint's sum (module docstring). ``activation_n``: the force every conducting
     taxel carries (the curve's activation), no part of a saturated imprint's bump.
@@ -91,15 +91,6 @@ class ForceCurve:
         object.__setattr__(self, 'rim_load_n', float(self.rim_load_n))
         object.__setattr__(self, 'activation_n', float(self.activation_n))
 
-    def with_rim(self, read: float) -> float:
-        """
-        Return an imprint's read force sum with the rim load that no taxel reads.
-
-        Never more than the imprint reads: a faint imprint (a few taxels over the threshold, or
-        noise) is no press, and must not become one.
-        """
-        return read + min(self.rim_load_n, read)
-
     def counts_to_force(self, counts) -> np.ndarray:
         """Return the sensed force of ``counts`` above baseline; the last slope goes on."""
         c = np.maximum(np.asarray(counts, dtype=np.float64), 0.0)
@@ -107,12 +98,6 @@ class ForceCurve:
         slope = (force[-1] - force[-2]) / (knots[-1] - knots[-2])  # 0 past a saturation
         return np.where(c <= knots[-1], np.interp(c, knots, force),
                         force[-1] + slope * (c - knots[-1]))
-
-    def imprint_force(self, counts: np.ndarray, force: np.ndarray) -> float:
-        """Return one imprint's summed force (2-D counts and taxel forces), censored, rim added."""
-        return self.with_rim(censored_force(counts, force, self.censor_counts,
-                                            self.spread_taxels, self.bump_power,
-                                            self.activation_n))
 
     def to_dict(self) -> dict:
         """Return the knots (and any censoring) as plain values (for YAML)."""

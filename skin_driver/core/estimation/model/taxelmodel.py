@@ -1,5 +1,5 @@
 """
-A forward model of the taxels with the skin's own parameters, and its fit to one contact.
+A forward model of the taxels with the skin's own parameters, and its fit to presses.
 
 Where ``taxel_fit`` (the kernel's taxel_fit.c) describes each imprint by Gaussians, this model
 renders the counts a press gives and fits them (issue #16, docs/estimation.md "The forward
@@ -23,10 +23,13 @@ model"):
 
 None of the skin's numbers is assumed: :mod:`taxellearn` learns them from the presses of known
 force a force calibration records, and the calibration keeps them (:class:`TaxelModel`). A
-contact is fitted by Levenberg-Marquardt on its window's tared counts, taxels the film or the
-ADC saturated taken as lower bounds; a round tip first, then an elliptical one from four
-orientations, the least misfit kept (the misfit of narrow imprints is rugged, so one start
-stops in side minima).
+scan's contact is fitted by the compiled kernel (``skin_kernel/src/model_fit.c``, bound as
+:func:`skin_driver.core.estimation.scan.kernel.fit_contact`): Levenberg-Marquardt on its
+window's tared counts, taxels the film or the ADC saturated taken as lower bounds; a round tip
+first, then an elliptical one from four orientations, the least misfit kept (the misfit of
+narrow imprints is rugged, so one start stops in side minima). This module keeps the pieces the
+learning fits its presses with (:func:`residuals`, :func:`levenberg_marquardt`,
+:func:`start_of`, :func:`best_radius`).
 """
 
 from __future__ import annotations
@@ -41,7 +44,7 @@ from ...common import least_squares
 from ...common.validate import check_number
 
 __all__ = ['TaxelModel', 'PressFit', 'hertz_profile', 'render_counts', 'residuals',
-           'levenberg_marquardt', 'best_radius', 'fit_contact', 'start_of', 'sub_for']
+           'levenberg_marquardt', 'best_radius', 'start_of', 'sub_for']
 
 # Per-press parameters: centre x, y (taxels of the window), log normal force (N), shift dx, dy
 # (taxels), log tip radius (taxels), log aspect, orientation (rad).
@@ -58,8 +61,6 @@ _LOG_ASPECT = (-0.9, 0.9)
 _SUB = (24, 48)
 _ROBUST_SHARE = 0.05
 _RADIUS_SCALES = (0.5, 0.63, 0.8, 1.0, 1.25, 1.6)
-_ORIENTATIONS = (0.0, math.pi / 4, math.pi / 2, 3 * math.pi / 4)
-_ELLIPSE_START = math.log(0.8)
 
 
 @dataclass(frozen=True)
@@ -324,30 +325,4 @@ def best_radius(residual, u: np.ndarray) -> np.ndarray:
         cost = float(r @ r)
         if cost < least:
             best, least = v, cost
-    return best
-
-
-def fit_contact(model: TaxelModel, counts: np.ndarray, censored: np.ndarray, u0: np.ndarray,
-                iterations: int = 10, sensitivity: np.ndarray = None) -> PressFit:
-    """
-    Return the least-misfit fit of one contact's (2, h, w) counts (module docstring).
-
-    ``sensitivity``: the window's per-taxel load factors (:func:`render_counts`) or None.
-    """
-    sub = sub_for(u0)
-
-    def residual(u):
-        return residuals(model, counts, censored, u, sub, sensitivity)
-
-    u0 = best_radius(residual, u0)
-    round_free = np.array([True] * 6 + [False] * 2)
-    u, cost = levenberg_marquardt(residual, u0, round_free, iterations)
-    best = PressFit(u, cost)
-    every = np.ones(8, dtype=bool)
-    for orientation in _ORIENTATIONS:
-        v = u.copy()
-        v[LOG_ASPECT], v[ORIENTATION] = _ELLIPSE_START, orientation
-        found, found_cost = levenberg_marquardt(residual, v, every, iterations)
-        if found_cost < best.misfit:
-            best = PressFit(found, found_cost)
     return best

@@ -455,9 +455,14 @@ def taxel_model_of(model) -> TaxelModelNumbers:
 def fit_contact(model, counts: np.ndarray, censored: np.ndarray, u0: np.ndarray,
                 iterations: int = 10, sensitivity: np.ndarray = None):
     """
-    Return :func:`taxelmodel.fit_contact` of the same arguments, compiled (``sk_model_fit``).
+    Return the forward model's least-misfit fit of one contact (``sk_model_fit``), a PressFit.
 
-    ``model`` is a :class:`taxelmodel.TaxelModel`; raises KernelMissing without the kernel.
+    ``counts``: the window's (2, h, w) tared counts; ``censored``: taxels whose reading is a
+    lower bound (bool, same shape, or None), which count only where the model reads below
+    them; ``u0``: the start (:func:`taxelmodel.start_of`); ``sensitivity``: the window's
+    per-taxel load factors (:func:`taxelmodel.render_counts`) or None. A round tip first, then
+    an elliptical one from four orientations (:mod:`taxelmodel`). ``model`` is a
+    :class:`taxelmodel.TaxelModel`; raises KernelMissing without the kernel.
     """
     from ..model.taxelmodel import PressFit
     lib = load_library()
