@@ -1,0 +1,118 @@
+"""The direction learned from presses of known direction: the gate, the kernel, the file."""
+
+import math
+
+import numpy as np
+import pytest
+from skin_driver.core.estimation.calibration.calibration import Calibration
+from skin_driver.core.estimation.calibration.direction import (DirectionCorrection, features,
+                                                               KnownPress, learn_direction)
+from skin_driver.core.estimation.calibration.prepared import prepared_estimator
+from skin_driver.core.estimation.calibration.session import CalibrationRefused
+from skin_driver.core.estimation.calibration.session import CalibrationSession
+from skin_driver.core.estimation.scan.kernel import DIRECTION_FEATURES
+from skin_driver.core.estimation.scan.pipeline import ContactEstimator, EstimatorConfig
+from skin_driver.core.sim.experiments import calibrated_scene
+from skin_driver.core.sim.physics import Press, render, SkinModel
+
+
+def _presses(bias, n=120, seed=0, noise=0.02):
+    """Presses of known azimuth whose measured shift is the true one plus bias(col, row)."""
+    rng = np.random.default_rng(seed)
+    out = []
+    for _ in range(n):
+        col, row = rng.uniform(3.0, 12.0, 2)
+        azimuth = rng.uniform(-math.pi, math.pi)
+        length = rng.uniform(0.5, 2.0)
+        bx, by = bias(col, row)
+        shift = (length * math.cos(azimuth) + bx + rng.normal(0.0, noise),
+                 length * math.sin(azimuth) + by + rng.normal(0.0, noise))
+        out.append(KnownPress(col, row, shift, rng.uniform(5.0, 15.0), azimuth))
+    return out
+
+
+def test_a_bias_that_follows_the_sub_taxel_phase_is_learned_and_kept():
+    presses = _presses(lambda c, r: (0.2 * math.sin(2 * math.pi * c),
+                                     0.2 * math.cos(2 * math.pi * r)))
+    learned = learn_direction(presses)
+    assert learned.kept
+    assert learned.after_deg < 0.5 * learned.before_deg
+    assert learned.presses == 120 and learned.folds == 5
+
+
+def test_noise_alone_is_not_kept_the_gate_cannot_make_a_skin_worse():
+    learned = learn_direction(_presses(lambda c, r: (0.0, 0.0), noise=0.05))
+    assert not learned.kept
+    assert learned.after_deg >= learned.before_deg * 0.97
+
+
+def test_too_few_presses_are_refused_before_and_after():
+    with pytest.raises(ValueError, match='at least 10'):
+        learn_direction(_presses(lambda c, r: (0.0, 0.0), n=9))
+    est = ContactEstimator(EstimatorConfig())
+    with pytest.raises(CalibrationRefused, match='at least 10'):
+        CalibrationSession(est, 'direction', azimuths_rad=[0.0] * 4)
+    with pytest.raises(CalibrationRefused, match='azimuths, not forces'):
+        CalibrationSession(est, 'direction', forces_n=[1.0] * 12)
+
+
+def _scan_shift(calibration):
+    model = SkinModel(noise_counts=0.0)
+    top, bottom = render(model, [Press(0.0372, 0.0411, 10.0, math.radians(30), 0.7, 0.003)],
+                         np.random.default_rng(0))
+    est = ContactEstimator(EstimatorConfig(), calibration)
+    return est.process(top, bottom)[0]
+
+
+def _correction(kept, x0=0.0, y0=0.0):
+    wx, wy = [0.0] * DIRECTION_FEATURES, [0.0] * DIRECTION_FEATURES
+    wx[0], wy[0] = x0, y0
+    return DirectionCorrection(kept, 10.0, wx, wy, 50, 5, 2.0, 1.0 if kept else 2.5)
+
+
+def test_the_kernel_applies_a_kept_correction_and_only_a_kept_one():
+    pitch = EstimatorConfig().pitch_m
+    plain = _scan_shift(Calibration())
+    moved = _scan_shift(Calibration(direction=_correction(True, 0.25, -0.5)))
+    ignored = _scan_shift(Calibration(direction=_correction(False, 0.25, -0.5)))
+    assert moved.shift_m[0] - plain.shift_m[0] == pytest.approx(0.25 * pitch, abs=1e-12)
+    assert moved.shift_m[1] - plain.shift_m[1] == pytest.approx(-0.5 * pitch, abs=1e-12)
+    assert moved.azimuth_rad == pytest.approx(math.atan2(*moved.shift_m[::-1]))
+    assert ignored.shift_m == plain.shift_m
+
+
+def test_the_kernel_and_the_fit_agree_on_the_features():
+    # A correction on one feature at a time moves the shift by that feature's value.
+    pitch = EstimatorConfig().pitch_m
+    plain = _scan_shift(Calibration())
+    sx, sy = plain.shift_m[0] / pitch, plain.shift_m[1] / pitch
+    x = features(plain.x_m / pitch, plain.y_m / pitch, sx, sy, plain.force_n, 10.0)[0]
+    for j in (1, 6, 12, 17, 19):
+        wx = [0.0] * DIRECTION_FEATURES
+        wx[j] = 0.1
+        cal = Calibration(direction=DirectionCorrection(True, 10.0, wx, [0.0] * 20, 50, 5, 2, 1))
+        assert _scan_shift(cal).shift_m[0] / pitch - sx == pytest.approx(0.1 * x[j], abs=1e-9)
+
+
+def test_the_correction_is_stored_and_an_old_file_still_loads(tmp_path):
+    cal = Calibration(direction=_correction(True, 0.1))
+    path = tmp_path / 'cal.yaml'
+    cal.save_yaml(path)
+    back = Calibration.load_yaml(path)
+    assert back.direction == cal.direction
+    assert 'held-out azimuth error 2.00 -> 1.00 deg' in back.describe()
+    Calibration().save_yaml(path)
+    assert 'direction' not in path.read_text()
+    assert Calibration.load_yaml(path).direction is None
+
+
+def test_presses_of_known_direction_lower_the_error_on_the_default_skin():
+    # split 4 frames (a robot's presses of known direction) through the evaluator's calibration.
+    data = calibrated_scene('random', 'default', np.random.default_rng(1), size=100,
+                            direction_presses=120)
+    assert int((data.split == 4).sum()) == 120
+    est, notes = prepared_estimator(data, 'taxel_fit')
+    assert est.calibration.direction is not None and est.calibration.direction.kept
+    assert any('direction correction from 120 presses applied' in n for n in notes)
+    d = est.calibration.direction
+    assert d.after_deg < d.before_deg
