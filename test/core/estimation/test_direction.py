@@ -8,7 +8,7 @@ from skin_driver.core.estimation.calibration.calibration import Calibration
 from skin_driver.core.estimation.calibration.direction import (DirectionCorrection, features,
                                                                KnownPress, learn_direction)
 from skin_driver.core.estimation.calibration.prepared import prepared_estimator
-from skin_driver.core.estimation.calibration.session import CalibrationRefused
+from skin_driver.core.estimation.calibration.session import CalibrationRefused, PressRecord
 from skin_driver.core.estimation.calibration.session import CalibrationSession
 from skin_driver.core.estimation.scan.kernel import DIRECTION_FEATURES
 from skin_driver.core.estimation.scan.pipeline import ContactEstimator, EstimatorConfig
@@ -37,7 +37,7 @@ def test_a_bias_that_follows_the_sub_taxel_phase_is_learned_and_kept():
     learned = learn_direction(presses)
     assert learned.kept
     assert learned.after_deg < 0.5 * learned.before_deg
-    assert learned.presses == 120 and learned.folds == 5
+    assert learned.presses + learned.left_out == 120 and learned.folds == 5
 
 
 def test_noise_alone_is_not_kept_the_gate_cannot_make_a_skin_worse():
@@ -116,3 +116,28 @@ def test_presses_of_known_direction_lower_the_error_on_the_default_skin():
     assert any('direction correction from 120 presses applied' in n for n in notes)
     d = est.calibration.direction
     assert d.after_deg < d.before_deg
+
+
+def test_a_press_far_off_its_azimuth_is_left_out_not_spoiling_the_rest():
+    presses = _presses(lambda c, r: (0.2 * math.sin(2 * math.pi * c), 0.0))
+    good = learn_direction(presses)
+    bad = presses[:7] + [KnownPress(5.0, 5.0, (1.0, 0.0), 10.0, math.pi)] + presses[7:]
+    learned = learn_direction(bad)
+    assert learned.left_out == 1 and learned.presses == good.presses
+    assert learned.weight_x == pytest.approx(good.weight_x)
+    assert '1 press left out' in learned.describe()
+
+
+def test_with_known_azimuths_a_press_left_out_keeps_its_azimuth():
+    est = ContactEstimator(EstimatorConfig())
+    azimuths = [0.1 * k for k in range(10)]
+    session = CalibrationSession(est, 'direction', azimuths_rad=azimuths)
+    counts = np.zeros((2, 16, 16))
+    for k in range(10):
+        shift = (float('nan'), 0.0) if k == 3 else (1e-3, 0.0)
+        note = session.add_press(PressRecord(10.0, shift, counts, place_m=(0.04, 0.04)))
+        if k == 3:
+            assert 'no layer shift' in note
+        else:
+            assert f'known azimuth {azimuths[k]:.3f} rad' in note
+    assert session.done and len(session.accepted) == 9

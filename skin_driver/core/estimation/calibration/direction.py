@@ -40,6 +40,9 @@ RIDGES = (0.3, 1.0, 3.0, 10.0, 30.0)
 # The share of the held-out error a correction must take off to be kept: the ridge is chosen on
 # the same folds, which flatters the chosen one a little.
 MARGIN = 0.03
+# A press whose measured azimuth is this far from its known one slipped, or its azimuth was not
+# the one given: it is left out rather than bend the map for the others.
+OUTLIER_DEG = 30.0
 
 
 @dataclass(frozen=True)
@@ -85,7 +88,8 @@ class DirectionCorrection:
     error with it) is below ``before_deg`` (without it) by the margin. ``weight_x``,
     ``weight_y`` are the map's weights per feature (taxels), ``force_ref_n`` the force the
     force feature is taken relative to, ``presses`` and ``folds`` what it learned from and how
-    it was checked, ``ridge`` the ridge chosen.
+    it was checked, ``ridge`` the ridge chosen, ``left_out`` the presses left out as outliers
+    (their measured azimuth more than OUTLIER_DEG from the known one).
     """
 
     kept: bool
@@ -97,6 +101,7 @@ class DirectionCorrection:
     before_deg: float
     after_deg: float
     ridge: float = 0.0
+    left_out: int = 0
 
     def __post_init__(self):
         """Reject weights of the wrong length, non-finite numbers and a force that is not > 0."""
@@ -115,8 +120,12 @@ class DirectionCorrection:
     def describe(self) -> str:
         """Return one line: kept or not, and the held-out error before and after (degrees)."""
         verdict = 'applied' if self.kept else 'not applied (no gain on held-out presses)'
+        left = (f'; {self.left_out} press{"es" if self.left_out > 1 else ""} left out (measured '
+                f'more than {OUTLIER_DEG:.0f} deg from the known azimuth)' if self.left_out
+                else '')
         return (f'direction correction from {self.presses} presses {verdict}: held-out azimuth '
-                f'error {self.before_deg:.2f} -> {self.after_deg:.2f} deg ({self.folds}-fold)')
+                f'error {self.before_deg:.2f} -> {self.after_deg:.2f} deg ({self.folds}-fold)'
+                f'{left}')
 
     def predict(self, shift: np.ndarray, x: np.ndarray) -> np.ndarray:
         """Return the corrected shifts (N x 2, taxels) of shifts and their features ``x``."""
@@ -128,7 +137,7 @@ class DirectionCorrection:
                 'weight_x': list(self.weight_x), 'weight_y': list(self.weight_y),
                 'presses': int(self.presses), 'folds': int(self.folds),
                 'before_deg': float(self.before_deg), 'after_deg': float(self.after_deg),
-                'ridge': float(self.ridge)}
+                'ridge': float(self.ridge), 'left_out': int(self.left_out)}
 
     @classmethod
     def from_dict(cls, doc) -> 'DirectionCorrection':
@@ -139,7 +148,7 @@ class DirectionCorrection:
                    weight_x=tuple(doc['weight_x']), weight_y=tuple(doc['weight_y']),
                    presses=int(doc['presses']), folds=int(doc['folds']),
                    before_deg=float(doc['before_deg']), after_deg=float(doc['after_deg']),
-                   ridge=float(doc.get('ridge', 0.0)))
+                   ridge=float(doc.get('ridge', 0.0)), left_out=int(doc.get('left_out', 0)))
 
 
 def _angle_errors_deg(shift: np.ndarray, azimuth: np.ndarray) -> np.ndarray:
@@ -176,12 +185,17 @@ def learn_direction(presses: Sequence[KnownPress], folds: int = FOLDS,
 
     The presses are dealt at random (``seed``) into ``folds`` folds; for each ridge each fold is
     predicted by the map fitted to the others, and the ridge whose held-out mean azimuth error
-    is least is taken. The final map is fitted to every press. Raises ValueError with fewer
-    than MIN_DIRECTION_PRESSES presses or without a measured shift.
+    is least is taken. The final map is fitted to every press. Presses without a measured shift
+    are dropped and those measured more than OUTLIER_DEG off their azimuth left out (counted).
+    Raises ValueError with fewer than MIN_DIRECTION_PRESSES presses left.
     """
     presses = [p for p in presses
                if all(map(math.isfinite, (p.col, p.row, *p.shift, p.force_n, p.azimuth_rad)))
                and math.hypot(*p.shift) > 0]
+    measured = len(presses)
+    presses = [p for p in presses if _angle_errors_deg(np.array([p.shift]),
+                                                       np.array([p.azimuth_rad]))[0]
+               <= OUTLIER_DEG]
     n = len(presses)
     if n < MIN_DIRECTION_PRESSES:
         raise ValueError(f'{n} presses with a measured shift; learning the direction needs at '
@@ -209,4 +223,4 @@ def learn_direction(presses: Sequence[KnownPress], folds: int = FOLDS,
     return DirectionCorrection(kept=after < before * (1.0 - margin), force_ref_n=force_ref,
                                weight_x=tuple(weights[:, 0]), weight_y=tuple(weights[:, 1]),
                                presses=n, folds=folds, before_deg=before, after_deg=after,
-                               ridge=float(ridge))
+                               ridge=float(ridge), left_out=measured - n)

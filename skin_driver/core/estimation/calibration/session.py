@@ -161,6 +161,10 @@ class CalibrationSession:
         self.forces_n = forces
         self.alphas_rad = alphas
         self.azimuths_rad = azimuths
+        # With known azimuths every press made takes the next one, counted or not: a press
+        # left out does not hand its azimuth to the next.
+        self.made = 0
+        self._azimuth_of = []
         # The direction is learned from the shift without a correction: one in force is set
         # aside in a private estimator that the scans are measured with again.
         self._plain = None
@@ -178,7 +182,9 @@ class CalibrationSession:
 
     @property
     def done(self) -> bool:
-        """Return True once the wanted presses are in."""
+        """Return True once the wanted presses are in (made, with known azimuths)."""
+        if self.azimuths_rad.size:
+            return self.made >= self.wanted
         return len(self.accepted) >= self.wanted
 
     def add_scan(self, top_counts, bottom_counts, contacts, wrench_n=None) -> str:
@@ -243,6 +249,7 @@ class CalibrationSession:
         """Add one press; return a note saying whether it counts (for a person)."""
         if self.done:
             return ''
+        self.made += 1
         if self.kind == 'offset' and not record.looks_normal:
             return self._ignore('press ignored: it did not look normal (its shift grew by '
                                 f'{record.shift_growth_m:.6f} m with its force); press straight '
@@ -257,10 +264,12 @@ class CalibrationSession:
                 'offset', 'compliance', 'direction'):
             return self._ignore('press ignored: no layer shift could be measured')
         self.accepted.append(record)
+        if self.azimuths_rad.size:
+            self._azimuth_of.append(float(self.azimuths_rad[self.made - 1]))
         n = len(self.accepted)
         known = f' of known force {self.forces_n[n - 1]:.2f} N' if self.forces_n.size else ''
         if self.azimuths_rad.size:
-            known = f' of known azimuth {self.azimuths_rad[n - 1]:.3f} rad'
+            known = f' of known azimuth {self._azimuth_of[-1]:.3f} rad'
         return f'press {n}/{self.wanted}{known} recorded ({record.peak_force_n:.2f} N as read)'
 
     def _ignore(self, note: str) -> str:
@@ -426,9 +435,8 @@ class CalibrationSession:
     def _fit_direction(self) -> Outcome:
         pitch = self.estimator.config.pitch_m
         cal = self.estimator.calibration
-        n = len(self.accepted)
         if self.azimuths_rad.size:
-            azimuths = self.azimuths_rad[:n]
+            azimuths = self._azimuth_of
         else:
             azimuths = [math.atan2(r.wrench_n[1], r.wrench_n[0]) for r in self.accepted]
         presses = []
