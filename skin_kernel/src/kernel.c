@@ -235,7 +235,7 @@ static void contact(const sk_kernel *k, int q, sk_contact *rec)
   double sx = p->dx * pitch - (c->x_p_m + c->slope_x_m_per_n * load);
   double sy = p->dy * pitch - (c->y_p_m + c->slope_y_m_per_n * load);
   if (c->direction.on && isfinite(p->sigma)) {
-    sk_direction_correct(&c->direction, p->col, p->row, normal, pitch, &sx, &sy);
+    sk_direction_correct(&c->direction, p->col, p->row, p->dx, p->dy, normal, pitch, &sx, &sy);
   }
   double magnitude = hypot(sx, sy);
   double snr = p->sigma > 0 ? magnitude / (p->sigma * pitch) : INFINITY;

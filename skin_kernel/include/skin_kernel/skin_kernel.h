@@ -54,9 +54,10 @@ typedef struct {
 /*
  * A correction of each contact's calibrated shift learned from presses of known direction
  * (calibration/direction.py): shift += weight . features, per axis, in taxels. The features,
- * in order: 1; sin and cos of 2 pi h times the contact's column, its row, the column plus the
- * shift's x and the row plus its y, for h = 1 then 2; the shift's x and y; the normal force over
- * force_ref_n, less 1. on 0: none.
+ * in order: for h = 1 then 2, sin and cos of 2 pi h
+ * (column + raw shift dx) less those of 2 pi h column, then the same of the row and dy; then
+ * sin and cos of 2 pi h column, of 2 pi h row, for h = 1 then 2 (the top imprint's phase); then
+ * the first four times the normal force over force_ref_n, less 1. on 0: none.
  */
 #define SK_DIRECTION_FEATURES 20
 typedef struct {

@@ -4,7 +4,11 @@ The direction learned from presses of known direction: a correction of the shift
 The default shift method (``taxel_fit``) errs on a skin by an amount that is, in good part, a
 function of cheap figures of each contact: where its imprints sit on the taxel grid (the
 sub-taxel phase of the top imprint and of the bottom one, which is the top one moved by the
-shift), how far they moved and how hard the press is. A robot or an instrumented probe that
+shift: each is placed with a bias that follows its phase, and the shift errs by the difference)
+and how hard the press is. The bottom imprint is where the raw shift puts it, the layers'
+misalignment included, so the correction also takes out the part of the zero that changes from
+spot to spot; an offset taken where the skin is used after it (the paper's protocol) is taken
+with the correction in force. A robot or an instrumented probe that
 presses at known azimuths gives that function's samples: for each press the calibrated shift
 the estimator measured and the press's true azimuth.
 
@@ -43,6 +47,9 @@ MARGIN = 0.03
 # A press whose measured azimuth is this far from its known one slipped, or its azimuth was not
 # the one given: it is left out rather than bend the map for the others.
 OUTLIER_DEG = 30.0
+# The fit's reweightings by the corrected shifts' lengths, and the least length taken (taxels).
+REWEIGHTS = 4
+_SHORTEST = 0.05
 
 
 @dataclass(frozen=True)
@@ -51,7 +58,8 @@ class KnownPress:
     One press of known azimuth as the estimator saw it, the correction not applied.
 
     ``col``, ``row``: the contact's place (taxels); ``shift``: its calibrated shift (taxels);
-    ``force_n``: its normal force as read; ``azimuth_rad``: the press's true azimuth.
+    ``force_n``: its normal force as read; ``azimuth_rad``: the press's true azimuth; ``raw``:
+    its raw shift (taxels, the offset not taken off; None: ``shift``).
     """
 
     col: float
@@ -59,23 +67,28 @@ class KnownPress:
     shift: tuple
     force_n: float
     azimuth_rad: float
+    raw: tuple = None
 
 
-def features(col, row, sx, sy, force_n, force_ref_n: float) -> np.ndarray:
+def features(col, row, dx, dy, force_n, force_ref_n: float) -> np.ndarray:
     """
     Return the correction's features of contacts (N x DIRECTION_FEATURES), as the kernel has them.
 
-    Arguments are arrays (or numbers) of the contacts' places and calibrated shifts (taxels) and
-    normal forces; the order is skin_kernel.h's (``sk_direction``).
+    Arguments are arrays (or numbers) of the contacts' places and raw shifts (taxels: where the
+    bottom imprint is from the top one) and normal forces; the order is skin_kernel.h's
+    (``sk_direction``).
     """
-    col, row, sx, sy, force = np.broadcast_arrays(*(np.atleast_1d(np.asarray(v, dtype=float))
-                                                    for v in (col, row, sx, sy, force_n)))
-    out = [np.ones_like(col)]
+    col, row, dx, dy, force = np.broadcast_arrays(*(np.atleast_1d(np.asarray(v, dtype=float))
+                                                    for v in (col, row, dx, dy, force_n)))
+    out, phases = [], []
     for h in (1, 2):
-        for place in (col, row, col + sx, row + sy):
-            phase = 2.0 * math.pi * h * place
-            out += [np.sin(phase), np.cos(phase)]
-    out += [sx, sy, force / force_ref_n - 1.0]
+        for top, moved in ((col, dx), (row, dy)):
+            a, b = 2.0 * math.pi * h * top, 2.0 * math.pi * h * (top + moved)
+            out += [np.sin(b) - np.sin(a), np.cos(b) - np.cos(a)]
+            phases += [np.sin(a), np.cos(a)]
+    out += phases
+    load = force / force_ref_n - 1.0
+    out += [f * load for f in out[:4]]
     return np.stack(out, axis=1)
 
 
@@ -161,20 +174,24 @@ def _ridge(x: np.ndarray, shift: np.ndarray, azimuth: np.ndarray, ridge: float) 
     Return the weights (features x 2) that turn the shifts closest to their true azimuths.
 
     Each press's residual is the corrected shift's part across its true azimuth over the
-    shift's length (the azimuth error, for small errors): linear in the weights, and what is
-    along the azimuth is left free, since a press of known direction does not say how long its
-    shift should be. Ridge on all but the constant.
+    corrected shift's length: the sine of its azimuth error. What is along the azimuth is left
+    free, since a press of known direction does not say how long its shift should be; over the
+    length of the correction before (reweighted, REWEIGHTS times) it is linear in the weights,
+    and a correction gains nothing by shortening the shifts (no feature is the shift itself, so
+    none can shorten them all). Ridge on every weight.
     """
     across = np.stack((-np.sin(azimuth), np.cos(azimuth)), axis=1)
-    scale = 1.0 / np.hypot(shift[:, 0], shift[:, 1])
-    design = np.concatenate((x * across[:, :1], x * across[:, 1:]), axis=1) * scale[:, None]
-    wanted = -np.sum(across * shift, axis=1) * scale
     m = x.shape[1]
-    penalty = np.full(2 * m, float(ridge))
-    penalty[[0, m]] = 0.0
-    a = design.T @ design + np.diag(penalty)
-    weights = np.linalg.lstsq(a, design.T @ wanted, rcond=None)[0]
-    return np.stack((weights[:m], weights[m:]), axis=1)
+    weights = np.zeros((m, 2))
+    for _ in range(REWEIGHTS):
+        corrected = shift + x @ weights
+        scale = 1.0 / np.maximum(np.hypot(corrected[:, 0], corrected[:, 1]), _SHORTEST)
+        design = np.concatenate((x * across[:, :1], x * across[:, 1:]), axis=1) * scale[:, None]
+        wanted = -np.sum(across * shift, axis=1) * scale
+        a = design.T @ design + float(ridge) * np.eye(2 * m)
+        flat = np.linalg.lstsq(a, design.T @ wanted, rcond=None)[0]
+        weights = np.stack((flat[:m], flat[m:]), axis=1)
+    return weights
 
 
 def learn_direction(presses: Sequence[KnownPress], folds: int = FOLDS,
@@ -205,7 +222,8 @@ def learn_direction(presses: Sequence[KnownPress], folds: int = FOLDS,
     azimuth = np.array([p.azimuth_rad for p in presses], dtype=float)
     force = np.array([p.force_n for p in presses], dtype=float)
     force_ref = float(np.median(force)) if np.median(force) > 0 else 1.0
-    x = features([p.col for p in presses], [p.row for p in presses], shift[:, 0], shift[:, 1],
+    raw = np.array([p.shift if p.raw is None else p.raw for p in presses], dtype=float)
+    x = features([p.col for p in presses], [p.row for p in presses], raw[:, 0], raw[:, 1],
                  force, force_ref)
     fold = np.random.default_rng(seed).permutation(n) % folds
     before = float(_angle_errors_deg(shift, azimuth).mean())

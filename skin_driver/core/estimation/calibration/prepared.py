@@ -9,9 +9,9 @@ forces of curves fitted to the normal presses of known force; then the split = 1
 calibrate fully: alpha = 0 frames give (x_p, y_p) and, with
 ``force_n``, the force curves; tilted ones with ``force_n`` the compliance. Then the split = 2
 frames, normal presses where the scored presses are made (the paper's protocol takes (x_p, y_p)
-at its own spot), re-take (x_p, y_p) alone, in the newtons of the curves just fitted. Last the
-split = 4 frames, tilted presses of known azimuth (a robot's calibration run), learn the
-direction's correction (:mod:`direction`), kept only when it gains on held-out presses. Without
+at its own spot), re-take (x_p, y_p) alone, in the newtons of the curves just fitted. Before
+them the split = 4 frames, tilted presses of known azimuth (a robot's calibration run), learn
+the direction's correction (:mod:`direction`), kept only when it gains on held-out presses. Without
 a split the single normal presses give (x_p, y_p); with none, the layers are taken as aligned.
 """
 
@@ -103,15 +103,16 @@ def prepared_estimator(data: Dataset, method: str, config: EstimatorConfig = Non
             notes.append(note)
         est, press_notes = calibrate_from_frames(est, data, presses)
         notes += press_notes
+        known = np.flatnonzero((data.split == 4) & (data.alpha_deg > 0))
+        if known.size:
+            # Before the offset where the skin is used: that one is taken with it in force.
+            est, note = _session(est, data, known, 'direction',
+                                 azimuths_rad=np.radians(data.azimuth_deg[known]))
+            notes.append(note)
         at_use = np.flatnonzero(data.split == 2)
         if at_use.size:
             est, offset_notes = calibrate_from_frames(est, data, at_use, full=False)
             notes += [f'{note} (at the place of use)' for note in offset_notes]
-        known = np.flatnonzero((data.split == 4) & (data.alpha_deg > 0))
-        if known.size:
-            est, note = _session(est, data, known, 'direction',
-                                 azimuths_rad=np.radians(data.azimuth_deg[known]))
-            notes.append(note)
     else:
         single_normal = np.flatnonzero((data.alpha_deg == 0) & (data.press_counts() == 1))
         est, notes = calibrate_from_frames(est, data, single_normal, full=False)

@@ -447,7 +447,8 @@ class CalibrationSession:
             presses.append(KnownPress(r.place_m[0] / pitch, r.place_m[1] / pitch,
                                       ((r.shift_m[0] - zero[0]) / pitch,
                                        (r.shift_m[1] - zero[1]) / pitch),
-                                      r.peak_force_n, float(azimuth)))
+                                      r.peak_force_n, float(azimuth),
+                                      (r.shift_m[0] / pitch, r.shift_m[1] / pitch)))
         correction = learn_direction(presses)
         new = self._updated(direction=correction)
         return Outcome(new, correction.presses, (correction.before_deg, correction.after_deg),
