@@ -12,9 +12,12 @@ stable with it).
 
 from __future__ import annotations
 
+import time
+
 import numpy as np
 
 from skin_driver.core.estimation.calibration.calibration import Calibration
+from skin_driver.core.estimation.calibration.prepared import prepared_estimator
 from skin_driver.core.estimation.shift.methods import DEFAULT_METHOD
 from skin_driver.core.sim.experiments import calibrated_scene, ROBOT_PRESS_S
 from skin_driver.core.sim.floor import mean_bound_deg
@@ -38,6 +41,18 @@ def _run(member, kind: str, size: int, presses: int, seed: int) -> tuple:
     return data, truth, run_method(data, DEFAULT_METHOD)
 
 
+def _back_to_back_us(data) -> float:
+    """Return the default's median cost per scored frame (us), its scans back to back."""
+    est, _ = prepared_estimator(data, DEFAULT_METHOD)
+    costs = []
+    for i in data.scored_frames():
+        top, bottom = data.top[i], data.bottom[i]
+        start = time.perf_counter()
+        est.process(top, bottom)
+        costs.append(time.perf_counter() - start)
+    return float(np.median(costs)) * 1e6
+
+
 def _cell(member, kind: str, size: int, counts, seed: int, oracle: bool) -> dict:
     row = {'skin': member.name, 'scene': kind, 'learned': {}}
     for n in counts:
@@ -47,7 +62,7 @@ def _cell(member, kind: str, size: int, counts, seed: int, oracle: bool) -> dict
         learned = run.calibration.direction
         row['learned'][n] = {
             'mean_error_deg': summary['mean_error_deg'], 'valid_share': summary['valid_share'],
-            'us_per_frame': run.us_per_frame,
+            'us_per_frame': _back_to_back_us(data),
             'applied': bool(learned is not None and learned.kept),
             'cv_before_deg': learned.before_deg if learned else None,
             'cv_after_deg': learned.after_deg if learned else None}
@@ -107,8 +122,8 @@ def direction_targets(res: dict, target) -> list:
            target('robot time of the calibration run [min]', minutes, '<= 15',
                   minutes <= 15.0, f'{top} presses at {res["robot_press_s"]} s', spec='.1f')]
     if costs:
-        out.append(target('default with the correction, 16 x 16 [us/frame] (evaluator, not '
-                          'pinned)', max(costs), '<= 30', max(costs) <= 30.0))
+        out.append(target(f'default with {top} known presses learned, 16 x 16, scans back to '
+                          'back [us/frame, median]', max(costs), '<= 30', max(costs) <= 30.0))
     return out
 
 
