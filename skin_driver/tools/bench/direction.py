@@ -138,10 +138,13 @@ def direction_markdown(res: dict, figure, table) -> list:
            f'{res["sizes"]["random"]} frames). A correction is applied only when it lowers the '
            'error on held-out folds of the known presses (`applied`). Floor: the oracle (the '
            "simulator's model fitted from the truth) and the Cramér–Rao bound on beta as a mean "
-           '|error| (sqrt(2/pi) sigma, over the presses whose derivatives are stable: `stable`).',
+           '|error| (sqrt(2/pi) sigma, over the presses whose derivatives are stable: `stable`; '
+           'a few presses whose beta the frame barely holds carry the mean, hence the median '
+           'sigma beside it).',
            '']
     head = (['skin', 'scene'] + [f'{n} presses [deg]' for n in counts]
-            + ['applied', 'ratio', 'oracle [deg]', 'CRB [deg]', 'stable'])
+            + ['applied', 'ratio', 'oracle [deg]', 'CRB [deg]', 'CRB median sigma [deg]',
+               'stable'])
     rows = []
     for r in res['rows']:
         last = r['learned'][counts[-1]]
@@ -150,6 +153,7 @@ def direction_markdown(res: dict, figure, table) -> list:
                     + ['yes' if last['applied'] else 'no', figure(r['ratio'], '.2f'),
                        figure(r.get('oracle_deg'), '.2f'),
                        figure(r['crb']['mean_abs_error_deg'], '.3f'),
+                       figure(r['crb']['median_sigma_deg'], '.3f'),
                        figure(r['crb']['stable_share'] and 100 * r['crb']['stable_share'],
                               '.0f') + ' %'])
     return out + table(head, rows) + ['']
