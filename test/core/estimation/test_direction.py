@@ -168,3 +168,10 @@ def test_without_azimuths_each_press_takes_its_wrenchs_and_one_without_is_ignore
     # Every press measured 0.05 rad off the azimuth its wrench gives.
     assert outcome.calibration.direction.before_deg == pytest.approx(math.degrees(0.05))
     assert outcome.presses_used == 10
+
+
+def test_a_chance_gain_of_a_few_presses_is_not_kept():
+    # Pure noise: over many seeds, some folds gain by chance; none may be kept.
+    kept = [learn_direction(_presses(lambda c, r: (0.0, 0.0), n=30, seed=s, noise=0.08),
+                            seed=s).kept for s in range(10)]
+    assert not any(kept)

@@ -16,8 +16,8 @@ the estimator measured and the press's true azimuth.
 (:func:`features`, in skin_kernel.h's order of ``sk_direction``) to a correction of the shift
 that turns it onto the true azimuth (only the part across the azimuth is known), and keeps
 it only when it lowers the mean azimuth error on presses it did not learn from: k-fold
-cross-validation over the presses, the ridge chosen on the same folds and a margin asked of the
-gain for that choice. The result says what it gained (the held-out folds' mean error before and
+cross-validation over the presses, the ridge chosen on the same folds, and a margin and a
+standard error of the per-press gains asked of the gain for that choice. The result says what it gained (the held-out folds' mean error before and
 after, degrees) and, whether kept or not, is what the calibration file stores. The kernel
 applies a kept correction per contact (skin_kernel/src/direction.c); fitting it is not a per-scan
 step, so it is here.
@@ -44,6 +44,8 @@ RIDGES = (0.3, 1.0, 3.0, 10.0, 30.0)
 # The share of the held-out error a correction must take off to be kept: the ridge is chosen on
 # the same folds, which flatters the chosen one a little.
 MARGIN = 0.03
+# Standard errors of the per-press gain that the held-out gain must reach.
+SIGNIFICANCE = 1.0
 # A press whose measured azimuth is this far from its known one slipped, or its azimuth was not
 # the one given: it is left out rather than bend the map for the others.
 OUTLIER_DEG = 30.0
@@ -202,9 +204,11 @@ def learn_direction(presses: Sequence[KnownPress], folds: int = FOLDS,
 
     The presses are dealt at random (``seed``) into ``folds`` folds; for each ridge each fold is
     predicted by the map fitted to the others, and the ridge whose held-out mean azimuth error
-    is least is taken. The final map is fitted to every press. Presses without a measured shift
-    are dropped and those measured more than OUTLIER_DEG off their azimuth left out (counted).
-    Raises ValueError with fewer than MIN_DIRECTION_PRESSES presses left.
+    is least is taken, and the map is kept when its held-out gain reaches the margin and
+    SIGNIFICANCE standard errors of the per-press gains. The final map is fitted to every
+    press. Presses without a measured shift are dropped and those measured more than
+    OUTLIER_DEG off their azimuth left out (counted). Raises ValueError with fewer than
+    MIN_DIRECTION_PRESSES presses left.
     """
     presses = [p for p in presses
                if all(map(math.isfinite, (p.col, p.row, *p.shift, p.force_n, p.azimuth_rad)))
@@ -226,19 +230,25 @@ def learn_direction(presses: Sequence[KnownPress], folds: int = FOLDS,
     x = features([p.col for p in presses], [p.row for p in presses], raw[:, 0], raw[:, 1],
                  force, force_ref)
     fold = np.random.default_rng(seed).permutation(n) % folds
-    before = float(_angle_errors_deg(shift, azimuth).mean())
-    best = (math.inf, ridges[0])
+    errors = _angle_errors_deg(shift, azimuth)
+    before = float(errors.mean())
+    best = (math.inf, ridges[0], errors)
     for ridge in ridges:
         predicted = np.empty_like(shift)
         for k in range(folds):
             learn, held = fold != k, fold == k
             weights = _ridge(x[learn], shift[learn], azimuth[learn], ridge)
             predicted[held] = shift[held] + x[held] @ weights
-        after = float(_angle_errors_deg(predicted, azimuth).mean())
-        best = min(best, (after, ridge))
-    after, ridge = best
+        held_out = _angle_errors_deg(predicted, azimuth)
+        best = min(best, (float(held_out.mean()), ridge, held_out), key=lambda b: b[0])
+    after, ridge, held_out = best
+    # The gain must stand out of the presses' own scatter (SIGNIFICANCE standard errors of the
+    # per-press gain) as well as reach the margin: a few dozen presses gain by chance.
+    gains = errors - held_out
+    spread = float(gains.std(ddof=1)) / math.sqrt(n)
+    kept = after < before * (1.0 - margin) and before - after > SIGNIFICANCE * spread
     weights = _ridge(x, shift, azimuth, ridge)
-    return DirectionCorrection(kept=after < before * (1.0 - margin), force_ref_n=force_ref,
+    return DirectionCorrection(kept=kept, force_ref_n=force_ref,
                                weight_x=tuple(weights[:, 0]), weight_y=tuple(weights[:, 1]),
                                presses=n, folds=folds, before_deg=before, after_deg=after,
                                ridge=float(ridge), left_out=measured - n)
