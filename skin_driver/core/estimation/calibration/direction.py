@@ -17,10 +17,10 @@ the estimator measured and the press's true azimuth.
 that turns it onto the true azimuth (only the part across the azimuth is known), and keeps
 it only when it lowers the mean azimuth error on presses it did not learn from: k-fold
 cross-validation over the presses, the ridge chosen on the same folds, and a margin and a
-standard error of the per-press gains asked of the gain for that choice. The result says what it gained (the held-out folds' mean error before and
-after, degrees) and, whether kept or not, is what the calibration file stores. The kernel
-applies a kept correction per contact (skin_kernel/src/direction.c); fitting it is not a per-scan
-step, so it is here.
+standard error of the per-press gains asked of the gain for that choice. The result says
+what it gained (the held-out folds' mean error before and after, degrees) and, whether kept or
+not, is what the calibration file stores. The kernel applies a kept correction per contact
+(skin_kernel/src/direction.c); fitting it is not a per-scan step, so it is here.
 """
 
 from __future__ import annotations
