@@ -12,6 +12,9 @@ parameters on ``node``, loads the calibration file into the estimator, and offer
   ``calibration.wrench_topic``;
 * ``~/calibrate_gains`` (skin_msgs/action/CalibrateGains): per-taxel gains from a plate over the
   skin or many presses spread over it;
+* ``~/calibrate_direction`` (skin_msgs/action/CalibrateDirection): a correction of the direction
+  from tilted presses of known azimuth (goal or wrench topic), kept only when it gains on
+  held-out presses;
 * ``~/reset_calibration`` (std_srvs/Trigger): the defaults, in force and in the file.
 
 A calibration takes seconds to minutes of presses, so each is an action: feedback after every
@@ -51,7 +54,8 @@ from skin_driver.core.estimation.calibration.session import CalibrationRefused, 
 from skin_driver.ros import conversions, qos
 from skin_driver.ros.params import declare
 from skin_driver.ros.paths import ros_home
-from skin_msgs.action import Calibrate, CalibrateCompliance, CalibrateForce, CalibrateGains
+from skin_msgs.action import (Calibrate, CalibrateCompliance, CalibrateDirection, CalibrateForce,
+                              CalibrateGains)
 from std_srvs.srv import Trigger
 
 MAX_CALIBRATION_PRESSES = 1000
@@ -97,8 +101,8 @@ def declare_calibration_parameters(node) -> None:
             low=1.0e-6, high=0.1)
     declare(node, 'calibration.wrench_topic', '',
             'geometry_msgs/WrenchStamped topic (best effort: any publisher) of a force/torque '
-            'sensor in the skin frame that ~/calibrate_compliance reads the load from; empty: '
-            'loads come in the goal.')
+            'sensor in the skin frame that ~/calibrate_compliance and ~/calibrate_direction read '
+            'the load from; empty: loads come in the goal.')
 
 
 def request_problem(presses: int, timeout: float, forces=()) -> str:
@@ -197,7 +201,9 @@ class CalibrationServices:
                 (CalibrateCompliance, '~/calibrate_compliance', 'compliance',
                  self._compliance_args, conversions.fill_compliance_result),
                 (CalibrateGains, '~/calibrate_gains', 'gains', self._gains_args,
-                 conversions.fill_gains_result)):
+                 conversions.fill_gains_result),
+                (CalibrateDirection, '~/calibrate_direction', 'direction', self._direction_args,
+                 conversions.fill_direction_result)):
             ActionServer(
                 node, action, name,
                 execute_callback=self._executor(action, kind, goal_args, answer),
@@ -435,6 +441,16 @@ class CalibrationServices:
         return problem, {'forces_n': forces, 'alphas_rad': alphas,
                          'presses': 0 if forces else (goal.presses
                                                       or self._param('calibration.presses'))}
+
+    def _direction_args(self, goal) -> tuple:
+        azimuths = list(goal.azimuths)
+        problem = request_problem(goal.presses, goal.timeout, azimuths)
+        if not problem and not azimuths and self._wrench_sub is None:
+            problem = ('no azimuths in the goal and no calibration.wrench_topic to read them '
+                       'from; give azimuths, or name the force sensor topic')
+        return problem, {'azimuths_rad': azimuths,
+                         'presses': 0 if azimuths else (goal.presses
+                                                        or self._param('calibration.presses'))}
 
     async def _polled(self, future: Future, watch):
         """Return ``future``'s result, calling ``watch`` (which may set it) every POLL_S."""

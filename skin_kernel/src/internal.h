@@ -167,4 +167,10 @@ void sk_model_refit(const sk_taxel_model *model, const double *counts, const dou
                     const double *sensitivity, int h, int w, double *start, double *dx,
                     double *dy);
 
+/* direction.c: the learned correction of a calibrated shift (metres, in place) and whether a
+ * correction's numbers can be used; dx, dy the raw shift (taxels) */
+void sk_direction_correct(const sk_direction *d, double col, double row, double dx, double dy,
+                          double normal_n, double pitch_m, double *sx_m, double *sy_m);
+int sk_direction_usable(const sk_direction *d);
+
 #endif

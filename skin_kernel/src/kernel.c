@@ -70,7 +70,10 @@ static const sk_field layout[] = {
   FIELD(sk_settings, fill_factor), FIELD(sk_settings, x_p_m), FIELD(sk_settings, y_p_m),
   FIELD(sk_settings, slope_x_m_per_n), FIELD(sk_settings, slope_y_m_per_n),
   FIELD(sk_settings, zero_ref_n), FIELD(sk_settings, calibration_var),
-  FIELD(sk_settings, curves), FIELD(sk_settings, model),
+  FIELD(sk_settings, curves), FIELD(sk_settings, model), FIELD(sk_settings, direction),
+  SIZE(sk_direction),
+  FIELD(sk_direction, on), FIELD(sk_direction, force_ref_n), FIELD(sk_direction, weight_x),
+  FIELD(sk_direction, weight_y),
   SIZE(sk_contact),
   FIELD(sk_contact, x_m), FIELD(sk_contact, y_m), FIELD(sk_contact, force_n),
   FIELD(sk_contact, area_m2), FIELD(sk_contact, shift_x_m), FIELD(sk_contact, shift_y_m),
@@ -112,6 +115,9 @@ static int refuse(const sk_settings *s, unsigned long settings_size, char *messa
              SK_NMETHODS - 1);
   } else if (!(s->pitch_m > 0) || !(s->fill_factor > 0) || !(s->compliance_m_per_n > 0)) {
     snprintf(text, sizeof text, "pitch, fill factor and compliance must be positive");
+  } else if (s->direction.on && !sk_direction_usable(&s->direction)) {
+    snprintf(text, sizeof text, "the direction correction needs a positive reference force "
+             "and finite weights");
   } else {
     return SK_OK;
   }
@@ -229,6 +235,9 @@ static void contact(const sk_kernel *k, int q, sk_contact *rec)
   double load = normal - c->zero_ref_n;
   double sx = p->dx * pitch - (c->x_p_m + c->slope_x_m_per_n * load);
   double sy = p->dy * pitch - (c->y_p_m + c->slope_y_m_per_n * load);
+  if (c->direction.on && isfinite(p->sigma)) {
+    sk_direction_correct(&c->direction, p->col, p->row, p->dx, p->dy, normal, pitch, &sx, &sy);
+  }
   double magnitude = hypot(sx, sy);
   double snr = p->sigma > 0 ? magnitude / (p->sigma * pitch) : INFINITY;
   double own = finite_or_zero(p->confidence);

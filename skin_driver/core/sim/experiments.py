@@ -32,12 +32,13 @@ import numpy as np
 from .physics import layer_shift_m, Press, render, render_plate, SkinModel
 from .skins import family_skin, FamilySkin
 from ..common.validate import check_int
-from ..estimation.data.dataset import Dataset
+from ..estimation.data.dataset import Dataset, PRESS_FIELDS
 
 __all__ = ['SCENE_KINDS', 'DIRECTION_KINDS', 'CALIBRATION_RADIUS_M', 'PAPER_ALPHA_DEG',
            'PAPER_BETAS_DEG', 'paper_presses', 'make_scene', 'make_seed_experiment',
            'make_random_experiment', 'make_border_experiment', 'make_multi_experiment',
-           'add_calibration_frames', 'calibrated_scene', 'render_scene', 'press_for_shift']
+           'add_calibration_frames', 'calibrated_scene', 'render_scene', 'press_for_shift',
+           'add_direction_frames', 'ROBOT_PRESS_S', 'DIRECTION_PRESSES', 'DIRECTION_TIPS_M']
 
 PAPER_ALPHA_DEG = 45.0
 PAPER_BETAS_DEG = tuple(float(b) for b in range(0, 360, 45))
@@ -52,6 +53,12 @@ ELLIPTICAL_SHARE = 0.3
 CALIBRATION_RADIUS_M = 0.004
 ALPHA_RANGE_DEG = (15.0, 60.0)
 TARE_FRAMES = 20
+# A robot's press of known direction: move, approach, load, hold, unload, in about 2.5 s; a
+# ten-minute calibration run gives DIRECTION_PRESSES of them (split 4).
+ROBOT_PRESS_S = 2.5
+DIRECTION_PRESSES = 240
+# The tips a robot changes between (diameters, round): the users' indenters are 3..7 mm.
+DIRECTION_TIPS_M = (0.003, 0.005, 0.007)
 
 
 def _span(model: SkinModel) -> tuple:
@@ -395,27 +402,75 @@ def add_calibration_frames(data: Dataset, model: SkinModel, rng: np.random.Gener
                                                     * p.tangential_force_n for p in presses]))
 
 
+def add_direction_frames(data: Dataset, skin, rng: np.random.Generator = None,
+                         presses: int = DIRECTION_PRESSES, tips_m: tuple = DIRECTION_TIPS_M,
+                         truth_out: list = None) -> Dataset:
+    """
+    Return ``data`` with a robot's presses of known direction in front (``split`` = 4).
+
+    Each is a tilted press (alpha 15..60 deg, the skin's ``force_range_n``, a random azimuth) at
+    a random spot at least a centimetre inside the taxel span, with the robot's round tips in
+    turn (``tips_m``, diameters): what a robot calibration run gives (:data:`ROBOT_PRESS_S` a
+    press). ``data`` must have a ``split``; its frames follow unchanged. ``truth_out``, when
+    given, is extended by the new frames' presses, in order.
+    """
+    member = skin if isinstance(skin, FamilySkin) else family_skin(skin)
+    model = member.model
+    rng = rng if rng is not None else np.random.default_rng(0)
+    if data.split is None:
+        raise ValueError('presses of known direction go in front of a dataset with a split')
+    frames = []
+    for i in range(int(presses)):
+        x, y = _interior_spot(model, rng, 0.01)
+        tip = float(tips_m[i % len(tips_m)])
+        frames.append([_random_press(rng, x, y, member.force_range_n,
+                                     diameter_range_m=(tip, tip), elliptical_share=0.0)])
+    front = _build(model, frames, rng, truth_out)
+    k = max(front.press_x_m.shape[1], data.press_x_m.shape[1])
+
+    def joined(name):
+        a, b = getattr(front, name), getattr(data, name)
+        if b is None:
+            return None
+        if name in PRESS_FIELDS:
+            a = np.pad(a, ((0, 0), (0, k - a.shape[1])), constant_values=np.nan)
+            b = np.pad(b, ((0, 0), (0, k - b.shape[1])), constant_values=np.nan)
+        return np.concatenate([a, b])
+
+    names = ('top', 'bottom', 'azimuth_deg', 'alpha_deg', 'force_n', 'x_m', 'y_m', *PRESS_FIELDS)
+    return Dataset(pitch_m=data.pitch_m, tare_top=data.tare_top, tare_bottom=data.tare_bottom,
+                   split=np.concatenate([np.full(front.frames, 4, np.uint8), data.split]),
+                   **{name: joined(name) for name in names})
+
+
 def calibrated_scene(kind: str, skin, rng: np.random.Generator = None, size: int = None,
-                     truth_out: list = None) -> Dataset:
+                     truth_out: list = None, direction_presses: int = 0) -> Dataset:
     """
     Render scene ``kind`` (:func:`make_scene`) after the user's calibration frames.
 
     The calibration frames (:func:`add_calibration_frames`, split 1) calibrate force curves,
     offset and compliance. In ``paper`` the scene's own normal presses at its spot re-take the
     offset (split 2): the paper's protocol takes (x_p, y_p) where it presses. ``truth_out``,
-    when given, is extended by the presses of every frame in the dataset's order.
+    when given, is extended by the presses of every frame in the dataset's order. With
+    ``direction_presses``, a robot's presses of known direction go in front
+    (:func:`add_direction_frames`, split 4), drawn from a generator of their own.
     """
     member = skin if isinstance(skin, FamilySkin) else family_skin(skin)
     rng = rng if rng is not None else np.random.default_rng(0)
-    scene_truth, calibration_truth = [], []
+    scene_truth, calibration_truth, direction_truth = [], [], []
     data = make_scene(kind, member, rng, size, scene_truth)
     at_use = data.alpha_deg == 0 if kind == 'paper' else None
     # A child generator for the calibration frames: ``rng`` goes on as after make_scene alone,
     # so a run draws the same scenes with and without calibration frames.
     data = add_calibration_frames(data, member.model, rng.spawn(1)[0], at_use=at_use,
                                   truth_out=calibration_truth)
+    if direction_presses:
+        # A generator of their own: the scene and the calibration frames stay those drawn
+        # without them.
+        data = add_direction_frames(data, member, rng.spawn(1)[0], direction_presses,
+                                    truth_out=direction_truth)
     if truth_out is not None:
-        truth_out.extend(calibration_truth + scene_truth)
+        truth_out.extend(direction_truth + calibration_truth + scene_truth)
     return data
 
 

@@ -10,7 +10,8 @@ from .cdr import (GridMarkers, read_contacts_head, read_skin_frame, SerializedMe
                   skin_frames_read_back)
 from .messages import (
     calibration_feedback, contact_fields, contact_markers, contact_to_msg, ContactArrayWriter,
-    contacts_to_array, counts_to_image, fill_compliance_result, fill_force_result,
+    contacts_to_array, counts_to_image, fill_compliance_result, fill_direction_result,
+    fill_force_result,
     fill_gains_result, fill_offset_result, frame_pitch, grid_markers, heatmap_markers,
     make_header,
     mount_transform, rgb_to_image, skin_frame_layers, skin_frame_to_msg, status_values,
@@ -19,8 +20,8 @@ from .messages import (
 __all__ = [
     'calibration_feedback', 'contact_fields', 'contact_markers', 'contact_to_msg',
     'ContactArrayWriter', 'contacts_to_array', 'counts_to_image', 'fill_compliance_result',
-    'fill_force_result', 'fill_gains_result', 'fill_offset_result', 'frame_pitch',
-    'grid_markers',
+    'fill_direction_result', 'fill_force_result', 'fill_gains_result', 'fill_offset_result',
+    'frame_pitch', 'grid_markers',
     'GridMarkers', 'heatmap_markers', 'make_header',
     'mount_transform', 'read_contacts_head', 'read_skin_frame', 'rgb_to_image',
     'SerializedMessages',

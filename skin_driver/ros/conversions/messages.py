@@ -14,7 +14,8 @@ from sensor_msgs.msg import Image
 from skin_driver.core.estimation.data.recording import layers_of
 from skin_driver.core.estimation.scan.heatmap import colour_map, grey_levels
 from skin_driver.core.estimation.scan.wrench import net_wrench, torque_about_origin
-from skin_msgs.action import Calibrate, CalibrateCompliance, CalibrateForce, CalibrateGains
+from skin_msgs.action import (Calibrate, CalibrateCompliance, CalibrateDirection, CalibrateForce,
+                              CalibrateGains)
 from skin_msgs.msg import SkinFrame, TactileContact, TactileContactArray
 from std_msgs.msg import ColorRGBA, Header
 from visualization_msgs.msg import Marker, MarkerArray
@@ -298,7 +299,7 @@ def calibration_feedback(action_goal, session, note: str):
 
 
 _CALIBRATIONS = {a.Goal: a for a in (Calibrate, CalibrateForce, CalibrateCompliance,
-                                     CalibrateGains)}
+                                     CalibrateGains, CalibrateDirection)}
 
 
 def fill_offset_result(result, cal, outcome) -> None:
@@ -321,6 +322,14 @@ def fill_compliance_result(result, cal, outcome) -> None:
     result.compliance = cal.compliance_m_per_n
     result.fitted = list(outcome.fitted) if outcome else []
     result.residuals = list(outcome.residuals) if outcome else []
+
+
+def fill_direction_result(result, cal, outcome) -> None:
+    """Fill a CalibrateDirection result with the correction in force (or the new one)."""
+    learned = cal.direction
+    result.applied = bool(learned is not None and learned.kept)
+    result.error_before = math.radians(learned.before_deg) if learned is not None else 0.0
+    result.error_after = math.radians(learned.after_deg) if learned is not None else 0.0
 
 
 def fill_gains_result(result, cal, outcome) -> None:

@@ -30,6 +30,7 @@ import numpy as np
 from skin_driver.core.estimation.shift.methods import DEFAULT_METHOD
 from skin_driver.tools.bench import estimators as bench_core, plots, tables
 from skin_driver.tools.bench.calibration import calibration_accuracy
+from skin_driver.tools.bench.direction import direction_learning
 from skin_driver.tools.bench.scoring import label, targets, tradeoffs, why_e2e
 from skin_driver.tools.evaluate.tables import json_safe
 
@@ -47,6 +48,9 @@ FULL = {
     'family_sizes': {'paper': 8, 'random': 150, 'border': 80, 'multi': 80},
     'family_all_methods': True, 'calibration_frames': 150,
     'forward_frames': 40, 'forward_skins': None,
+    'direction': {'skins': ['default', 'soft', 'sharp', 'loaded', 'saturating', 'film',
+                            'held_out:0', 'held_out:1', 'held_out:2', 'held_out:3'],
+                  'sizes': {'paper': 4, 'random': 150}, 'presses': [0, 30, 60, 120, 240]},
 }
 QUICK = {
     'grids': [16, 32], 'shifts': [0.5, 2.0], 'noises': [6.0], 'frames': 3,
@@ -57,6 +61,8 @@ QUICK = {
     'family_sizes': {'paper': 1, 'random': 15, 'border': 10, 'multi': 10},
     'family_all_methods': False, 'calibration_frames': 15,
     'forward_frames': 4, 'forward_skins': ['default'],
+    'direction': {'skins': ['default', 'held_out:2'], 'sizes': {'paper': 1, 'random': 20},
+                  'presses': [0, 60]},
 }
 
 
@@ -172,6 +178,11 @@ IN_PROCESS = (
      lambda cfg, args, log: bench_core.forward_family(cfg['forward_frames'],
                                                       cfg['forward_skins'], seed=args.seed,
                                                       log=log)),
+    ('direction', '8. direction learned from presses of known direction, beside the floor',
+     lambda cfg, args, log: direction_learning(cfg['direction']['skins'],
+                                               cfg['direction']['sizes'],
+                                               cfg['direction']['presses'], seed=args.seed,
+                                               log=log)),
     ('calibration', '6. force calibration on the family',
      lambda cfg, args, log: calibration_accuracy(cfg['calibration_frames'], seed=args.seed,
                                                  log=log)),

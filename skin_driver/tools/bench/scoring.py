@@ -7,6 +7,7 @@ Each target with the figure measured for it, and where the end-to-end time goes.
 from __future__ import annotations
 
 from skin_driver.core.estimation.shift.methods import DEFAULT_METHOD
+from skin_driver.tools.bench.direction import direction_targets
 
 # Issue #16 item 5: the default's cost per 16 x 16 frame pair, one core, back to back.
 ALONE_US = 30.0
@@ -74,6 +75,8 @@ def targets(res) -> list:
             out.append(_target('cost ratio default / seed at 16x16 (side by side)',
                                d16['median_us'] / s16['median_us'], '<= 1 (no greater cost)',
                                d16['median_us'] <= s16['median_us']))
+    if 'direction' in res:
+        out += direction_targets(res['direction'], _target)
     if 'e2e' in res:
         out += e2e_targets(res['e2e'])
     return out

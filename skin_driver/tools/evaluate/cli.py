@@ -19,7 +19,9 @@ re-take (x_p, y_p); only split = 0 frames are scored.
 ``--calibration-frames`` adds such frames to a generated dataset (or to the --skin data). With
 ``--skin`` the oracle (:mod:`core.sim.oracle`, the simulator's forward model fitted to each
 frame, started at the truth) is scored beside the methods, and each method's error is given in
-units of the oracle's (``--no-oracle`` skips it). ROS-free.
+units of the oracle's (``--no-oracle`` skips it). ``--direction-presses N`` (with
+``--calibration-frames``) adds N tilted presses of known direction (split = 4, a robot's
+calibration run) that learn the direction's correction. ROS-free.
 """
 
 from __future__ import annotations
@@ -75,6 +77,9 @@ def _parser() -> argparse.ArgumentParser:
                         '16 tilted presses of known load in front, as calibration frames '
                         '(split = 1); in the paper scene its normal presses at its spot '
                         're-take the offset (split = 2)')
+    parser.add_argument('--direction-presses', type=_count, default=0, metavar='N',
+                        help='with --calibration-frames: N tilted presses of known direction '
+                        '(split = 4; 240 are a ten-minute robot run) learn the direction')
     parser.add_argument('--no-oracle', action='store_true',
                         help='with --skin: do not fit the oracle (the forward model, a few ms '
                         'to tens of ms per frame)')
@@ -110,6 +115,16 @@ def _config(args) -> EstimatorConfig:
     return config
 
 
+def _scene(args, kind: str, skin: str, rng, truth_out: list = None):
+    """Return the scene the arguments ask for, with its calibration frames when asked."""
+    if not args.calibration_frames:
+        if args.direction_presses:
+            raise ValueError('--direction-presses needs --calibration-frames')
+        return make_scene(kind, skin, rng, args.size, truth_out)
+    return calibrated_scene(kind, skin, rng, args.size, truth_out,
+                            direction_presses=args.direction_presses)
+
+
 def main(argv=None) -> int:
     """Run the command line; return the exit status."""
     parser = _parser()
@@ -137,8 +152,7 @@ def main(argv=None) -> int:
             parser.error(f'--generate KIND must be one of {", ".join(SCENE_KINDS)}, got {kind!r}')
         try:
             check_writable(out)
-            scene = calibrated_scene if args.calibration_frames else make_scene
-            data = scene(kind, args.skin or 'default', rng, args.size)
+            data = _scene(args, kind, args.skin or 'default', rng)
             save_dataset(out, data)
         except (OSError, ValueError) as exc:
             print(f'error: {exc}', file=sys.stderr)
@@ -154,8 +168,7 @@ def main(argv=None) -> int:
         truth = None
         if args.skin:
             presses = []
-            scene = calibrated_scene if args.calibration_frames else make_scene
-            data = scene(args.scene, args.skin, rng, args.size, presses)
+            data = _scene(args, args.scene, args.skin, rng, presses)
             model = family_skin(args.skin).model
             scored = [presses[i] for i in data.scored_frames()]
             truth = None if args.no_oracle else (model, scored)

@@ -29,7 +29,7 @@ extern "C" {
  * (libskin_kernel.so.<SK_ABI_VERSION>), and sk_layout reports it with every struct's layout,
  * which the binding compares with its own mirrors before any other call.
  */
-#define SK_ABI_VERSION 12
+#define SK_ABI_VERSION 13
 
 /* Shift methods. */
 enum { SK_CENTROID = 0, SK_TAXEL_FIT = 1, SK_POC = 2, SK_MODEL_FIT = 3, SK_NMETHODS };
@@ -52,6 +52,21 @@ typedef struct {
   double activation_n;    /* force of every conducting taxel, not the bump's */
 } sk_curve;
 
+/*
+ * A correction of each contact's calibrated shift learned from presses of known direction
+ * (calibration/direction.py): shift += weight . features, per axis, in taxels. The features,
+ * in order: for h = 1 then 2, sin and cos of 2 pi h
+ * (column + raw shift dx) less those of 2 pi h column, then the same of the row and dy; then
+ * sin and cos of 2 pi h column, of 2 pi h row, for h = 1 then 2 (the top imprint's phase); then
+ * the first four times the normal force over force_ref_n, less 1. on 0: none.
+ */
+#define SK_DIRECTION_FEATURES 20
+typedef struct {
+  int on;
+  double force_ref_n;
+  double weight_x[SK_DIRECTION_FEATURES], weight_y[SK_DIRECTION_FEATURES];
+} sk_direction;
+
 /* Everything a kernel is built with besides the per-taxel arrays (SI units). */
 typedef struct {
   int rows, cols, max_contacts;
@@ -66,6 +81,7 @@ typedef struct {
   double calibration_var; /* the calibration's share of sigma**2, taxels**2 */
   sk_curve curves[2];     /* top, bottom */
   sk_taxel_model model;   /* model_fit's taxel model */
+  sk_direction direction; /* the learned correction of the shift */
 } sk_settings;
 
 /* One contact of a scan, strongest (normal force) first. */

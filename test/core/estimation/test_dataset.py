@@ -62,7 +62,7 @@ def test_minimal_file_without_optional_arrays(tmp_path):
     ({'alpha_deg': np.array([0.0, 95.0, 45.0])}, 'alpha_deg'),
     ({'azimuth_deg': np.array([math.nan, math.nan, 90.0])}, 'azimuth_deg is NaN'),
     ({'force_n': np.array([1.0, -1.0, 1.0])}, 'force_n must be non-negative'),
-    ({'split': np.array([0, 4, 1])}, 'split must be'),
+    ({'split': np.array([0, 5, 1])}, 'split must be'),
     ({'split': np.array([0, 1])}, 'split must be'),
 ])
 def test_validation(change, message):

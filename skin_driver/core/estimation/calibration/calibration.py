@@ -45,6 +45,7 @@ import os
 import numpy as np
 import yaml
 
+from .direction import DirectionCorrection
 from ..model.forcecurve import ForceCurve
 from ..model.taxelmodel import TaxelModel
 from ...common.atomic import write_atomically
@@ -241,6 +242,7 @@ class Calibration:
     taxel_model: TaxelModel = None
     leak_share: float = 0.0
     mount: 'SkinMount' = None
+    direction: DirectionCorrection = None
 
     def __post_init__(self):
         """Reject non-finite or negative values and malformed curves or gains."""
@@ -273,6 +275,8 @@ class Calibration:
             raise ValueError(f'taxel_model must be a TaxelModel, got {self.taxel_model!r}')
         if self.mount is not None and not isinstance(self.mount, SkinMount):
             raise ValueError(f'mount must be a SkinMount, got {self.mount!r}')
+        if self.direction is not None and not isinstance(self.direction, DirectionCorrection):
+            raise ValueError(f'direction must be a DirectionCorrection, got {self.direction!r}')
 
     def zero_m(self, normal_force_n: float) -> tuple:
         """Return the raw shift (x, y) of a normal press of this force: where beta is 0 from."""
@@ -343,6 +347,8 @@ class Calibration:
             parts.append('taxel gains')
         if self.taxel_model:
             parts.append(f'taxel model ({self.taxel_model.presses} presses)')
+        if self.direction:
+            parts.append(self.direction.describe())
         if self.mount:
             parts.append(f'mounted on {self.mount.parent_frame} ({self.mount.touches} touches)')
         if self.skin:
@@ -374,6 +380,9 @@ class Calibration:
             # Only when there is one: older readers see the file they know.
             out['mount'] = {k: list(v) if isinstance(v, tuple) else v
                             for k, v in asdict(self.mount).items()}
+        if self.direction is not None:
+            # Only when there is one, like the mount (issue #38's correction, direction.py).
+            out['direction'] = self.direction.to_dict()
         return out
 
     def save_yaml(self, path, make_parents: bool = False) -> None:
@@ -438,6 +447,8 @@ class Calibration:
                 values['leak_share'] = float(doc['leak_share'])
             if doc.get('mount') is not None:
                 values['mount'] = SkinMount.from_dict(doc['mount'])
+            if doc.get('direction') is not None:
+                values['direction'] = DirectionCorrection.from_dict(doc['direction'])
             cal = cls(**values)
         except (KeyError, TypeError, ValueError) as exc:
             raise ValueError(f'{path}: {exc}') from None

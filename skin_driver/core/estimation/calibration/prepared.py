@@ -9,8 +9,10 @@ forces of curves fitted to the normal presses of known force; then the split = 1
 calibrate fully: alpha = 0 frames give (x_p, y_p) and, with
 ``force_n``, the force curves; tilted ones with ``force_n`` the compliance. Then the split = 2
 frames, normal presses where the scored presses are made (the paper's protocol takes (x_p, y_p)
-at its own spot), re-take (x_p, y_p) alone, in the newtons of the curves just fitted. Without a
-split the single normal presses give (x_p, y_p); with none, the layers are taken as aligned.
+at its own spot), re-take (x_p, y_p) alone, in the newtons of the curves just fitted. Before
+them the split = 4 frames, tilted presses of known azimuth (a robot's calibration run), learn
+the direction's correction (:mod:`direction`), kept only when it gains on held-out presses. Without
+a split the single normal presses give (x_p, y_p); with none, the layers are taken as aligned.
 """
 
 from __future__ import annotations
@@ -101,6 +103,12 @@ def prepared_estimator(data: Dataset, method: str, config: EstimatorConfig = Non
             notes.append(note)
         est, press_notes = calibrate_from_frames(est, data, presses)
         notes += press_notes
+        known = np.flatnonzero((data.split == 4) & (data.alpha_deg > 0))
+        if known.size:
+            # Before the offset where the skin is used: that one is taken with it in force.
+            est, note = _session(est, data, known, 'direction',
+                                 azimuths_rad=np.radians(data.azimuth_deg[known]))
+            notes.append(note)
         at_use = np.flatnonzero(data.split == 2)
         if at_use.size:
             est, offset_notes = calibrate_from_frames(est, data, at_use, full=False)

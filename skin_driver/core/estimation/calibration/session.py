@@ -13,6 +13,9 @@ with :meth:`CalibrationSession.add_press`), and calls :meth:`finish` when :attr:
   reference wrench fed with each scan) give the layer shift per tangential newton.
 * ``gains``: a uniform load, or many presses spread over the skin, give the per-taxel gains
   (:mod:`gains` says what the user does).
+* ``direction``: tilted presses of known azimuth (``azimuths_rad``, or a reference wrench fed
+  with each scan), spread over the skin, give a correction of the shift that is kept only when
+  it lowers the azimuth error on presses it did not learn from (:mod:`direction`).
 
 :meth:`finish` returns the calibration in force with that part replaced; it never changes the
 estimator. Putting the result in force, and storing it, is the front end's business, so a
@@ -21,13 +24,14 @@ refusal (:class:`CalibrationRefused`) leaves everything as it was.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 import math
 from typing import Optional, Sequence
 
 import numpy as np
 
 from .calibration import calibrate_zero, Calibration, compliance_from_presses, SkinIdentity
+from .direction import KnownPress, learn_direction, MIN_DIRECTION_PRESSES
 from .forcefit import check_known_forces, fit_force_curve
 from .gains import gains_from_force_sums, limits_note, without_leak
 from .presses import PressSegmenter
@@ -37,7 +41,7 @@ from ..shift.methods import get_method
 __all__ = ['KINDS', 'PressRecord', 'Outcome', 'CalibrationRefused', 'CalibrationSession',
            'leak_share_of']
 
-KINDS = ('offset', 'force', 'compliance', 'gains')
+KINDS = ('offset', 'force', 'compliance', 'gains', 'direction')
 MIN_COMPLIANCE_PRESSES = 3
 
 
@@ -56,6 +60,7 @@ class PressRecord:
     raw counts read the ADC's full scale (2 x rows x cols, None where no taxel did): those
     readings are cut, and a force fit censors them. ``leak_share`` is the line leak the press
     showed as a share of a line's load (:func:`leak_share_of`; NaN where none did).
+    ``place_m`` is where its contact was (x, y), when one was found.
     """
 
     peak_force_n: float
@@ -66,6 +71,7 @@ class PressRecord:
     wrench_n: Optional[tuple] = None
     clipped: Optional[np.ndarray] = None
     leak_share: float = math.nan
+    place_m: Optional[tuple] = None
 
 
 @dataclass(frozen=True)
@@ -94,7 +100,8 @@ class CalibrationSession:
 
     def __init__(self, estimator, kind: str, presses: int = 0,
                  forces_n: Sequence[float] = (), alphas_rad: Sequence[float] = (),
-                 max_std_m: float = 0.0005, normal_tolerance_m: float = 0.0005,
+                 azimuths_rad: Sequence[float] = (), max_std_m: float = 0.0005,
+                 normal_tolerance_m: float = 0.0005,
                  start_force_n: float = 0.5, release_scans: int = 5,
                  skin: SkinIdentity = None):
         """
@@ -111,6 +118,18 @@ class CalibrationSession:
             raise CalibrationRefused(f'calibration kind {kind!r} is not one of {KINDS}')
         forces = np.asarray(forces_n, dtype=np.float64).ravel()
         alphas = np.asarray(alphas_rad, dtype=np.float64).ravel()
+        azimuths = np.asarray(azimuths_rad, dtype=np.float64).ravel()
+        if not np.isfinite(azimuths).all():
+            raise CalibrationRefused('every azimuth must be a finite number of radians')
+        if azimuths.size and kind != 'direction':
+            raise CalibrationRefused(f'a {kind} calibration takes no azimuths')
+        if kind == 'direction' and (forces.size or alphas.size):
+            raise CalibrationRefused('a direction calibration takes azimuths, not forces or '
+                                     'alphas')
+        if kind == 'direction' and 0 < max(azimuths.size, int(presses)) < MIN_DIRECTION_PRESSES:
+            raise CalibrationRefused(f'{max(azimuths.size, int(presses))} presses asked for; '
+                                     f'learning the direction needs at least '
+                                     f'{MIN_DIRECTION_PRESSES}')
         if not (np.isfinite(forces).all() and (forces > 0).all()):
             raise CalibrationRefused('every known force must be a positive number of newtons')
         if not (np.isfinite(alphas).all() and ((alphas >= 0) & (alphas < math.pi / 2)).all()):
@@ -132,7 +151,7 @@ class CalibrationSession:
                                      'alpha per force (or neither, with a reference wrench)')
         if kind in ('offset', 'gains') and forces.size:
             raise CalibrationRefused(f'a {kind} calibration takes no known forces')
-        wanted = int(forces.size or presses)
+        wanted = int(forces.size or azimuths.size or presses)
         if wanted < 1:
             raise CalibrationRefused('ask for at least one press')
         self.estimator = estimator
@@ -140,6 +159,17 @@ class CalibrationSession:
         self.wanted = wanted
         self.forces_n = forces
         self.alphas_rad = alphas
+        self.azimuths_rad = azimuths
+        # With known azimuths every press made takes the next one, counted or not: a press
+        # left out does not hand its azimuth to the next.
+        self.made = 0
+        self._azimuth_of = []
+        # The direction is learned from the shift without a correction: one in force is set
+        # aside in a private estimator that the scans are measured with again.
+        self._plain = None
+        if kind == 'direction' and estimator.calibration.direction is not None:
+            self._plain = estimator.with_calibration(replace(estimator.calibration,
+                                                             direction=None))
         self.max_std_m = max_std_m
         self.skin = skin
         self.accepted = []
@@ -151,7 +181,9 @@ class CalibrationSession:
 
     @property
     def done(self) -> bool:
-        """Return True once the wanted presses are in."""
+        """Return True once the wanted presses are in (made, with known azimuths)."""
+        if self.azimuths_rad.size:
+            return self.made >= self.wanted
         return len(self.accepted) >= self.wanted
 
     def add_scan(self, top_counts, bottom_counts, contacts, wrench_n=None) -> str:
@@ -163,9 +195,10 @@ class CalibrationSession:
         if self.done:
             return ''
         cal = self.estimator.calibration
+        contacts = self._uncorrected(top_counts, bottom_counts, contacts)
         if contacts:
             c = contacts[0]
-            payload = (top_counts, bottom_counts, wrench_n)
+            payload = (top_counts, bottom_counts, wrench_n, (c.x_m, c.y_m))
             zero = cal.zero_m(c.force_n)
             press = self._segmenter.add(c.force_n, (c.shift_m[0] + zero[0],
                                                     c.shift_m[1] + zero[1]), payload)
@@ -173,21 +206,29 @@ class CalibrationSession:
             press = self._segmenter.add(0.0, None)
         if press is None:
             return ''
-        scans = self._conditioned([(t, b) for t, b, _ in press.plateau])
+        scans = self._conditioned([(t, b) for t, b, _, _ in press.plateau])
         counts = np.mean([c.counts for c in scans], axis=0)
         clipped = [c.clipped for c in scans if c.clipped.any()]
-        wrenches = [w for _, _, w in press.plateau if w is not None]
+        wrenches = [w for _, _, w, _ in press.plateau if w is not None]
         wrench = tuple(np.mean(wrenches, axis=0)) if wrenches else None
         leaks = [leak_share_of(c.line_leak) for c in scans]
+        place = tuple(np.mean([p for _, _, _, p in press.plateau], axis=0))
         return self.add_press(PressRecord(
             peak_force_n=press.peak_force_n, shift_m=press.plateau_shift_m, counts=counts,
             looks_normal=press.looks_normal, shift_growth_m=press.shift_growth_m,
             wrench_n=wrench, clipped=np.any(clipped, axis=0) if clipped else None,
-            leak_share=_median_of_finite(leaks)))
+            leak_share=_median_of_finite(leaks), place_m=place))
+
+    def _uncorrected(self, top_counts, bottom_counts, contacts) -> list:
+        """Return the scan's contacts as measured without a direction correction."""
+        if self._plain is None:
+            return contacts
+        return self._plain.process(top_counts, bottom_counts)
 
     def record(self, top_counts, bottom_counts, contacts, wrench_n=None) -> PressRecord:
         """Return the record of a press seen in one scan at full load (no stream needed)."""
         cal = self.estimator.calibration
+        contacts = self._uncorrected(top_counts, bottom_counts, contacts)
         scan, = self._conditioned([(top_counts, bottom_counts)])
         counts = scan.counts
         clipped = scan.clipped if scan.clipped.any() else None
@@ -198,7 +239,8 @@ class CalibrationSession:
         c = contacts[0]
         zero = cal.zero_m(c.force_n)
         return PressRecord(c.force_n, (c.shift_m[0] + zero[0], c.shift_m[1] + zero[1]),
-                           counts, wrench_n=wrench_n, clipped=clipped, leak_share=leak)
+                           counts, wrench_n=wrench_n, clipped=clipped, leak_share=leak,
+                           place_m=(c.x_m, c.y_m))
 
     def _conditioned(self, scans: list) -> list:
         """
@@ -215,18 +257,27 @@ class CalibrationSession:
         """Add one press; return a note saying whether it counts (for a person)."""
         if self.done:
             return ''
+        self.made += 1
         if self.kind == 'offset' and not record.looks_normal:
             return self._ignore('press ignored: it did not look normal (its shift grew by '
                                 f'{record.shift_growth_m:.6f} m with its force); press straight '
                                 'down')
         if self.kind == 'compliance' and not self.forces_n.size and record.wrench_n is None:
             return self._ignore('press ignored: no reference wrench arrived during it')
+        if self.kind == 'direction' and not self.azimuths_rad.size and (
+                record.wrench_n is None or math.hypot(*record.wrench_n[:2]) <= 0):
+            return self._ignore('press ignored: no tangential reference wrench arrived during '
+                                'it, so its azimuth is not known')
         if not all(math.isfinite(v) for v in record.shift_m) and self.kind in (
-                'offset', 'compliance'):
+                'offset', 'compliance', 'direction'):
             return self._ignore('press ignored: no layer shift could be measured')
         self.accepted.append(record)
+        if self.azimuths_rad.size:
+            self._azimuth_of.append(float(self.azimuths_rad[self.made - 1]))
         n = len(self.accepted)
         known = f' of known force {self.forces_n[n - 1]:.2f} N' if self.forces_n.size else ''
+        if self.azimuths_rad.size:
+            known = f' of known azimuth {self._azimuth_of[-1]:.3f} rad'
         return f'press {n}/{self.wanted}{known} recorded ({record.peak_force_n:.2f} N as read)'
 
     def _ignore(self, note: str) -> str:
@@ -391,6 +442,29 @@ class CalibrationSession:
                        f'compliance {compliance:.4e} m/N from {n} presses with '
                        f'{tangential.min():.2f} to {tangential.max():.2f} N tangential; '
                        f'residual rms {math.sqrt(float(np.mean(residuals ** 2))):.6f} m')
+
+    def _fit_direction(self) -> Outcome:
+        pitch = self.estimator.config.pitch_m
+        cal = self.estimator.calibration
+        if self.azimuths_rad.size:
+            azimuths = self._azimuth_of
+        else:
+            azimuths = [math.atan2(r.wrench_n[1], r.wrench_n[0]) for r in self.accepted]
+        presses = []
+        for r, azimuth in zip(self.accepted, azimuths):
+            if r.place_m is None:
+                continue
+            zero = cal.zero_m(r.peak_force_n)
+            presses.append(KnownPress(r.place_m[0] / pitch, r.place_m[1] / pitch,
+                                      ((r.shift_m[0] - zero[0]) / pitch,
+                                       (r.shift_m[1] - zero[1]) / pitch),
+                                      r.peak_force_n, float(azimuth),
+                                      (r.shift_m[0] / pitch, r.shift_m[1] / pitch)))
+        correction = learn_direction(presses)
+        new = self._updated(direction=correction)
+        return Outcome(new, correction.presses, (correction.before_deg, correction.after_deg),
+                       (), correction.describe(),
+                       warnings=() if correction.kept else (correction.describe(),))
 
     def _fit_gains(self) -> Outcome:
         n = len(self.accepted)

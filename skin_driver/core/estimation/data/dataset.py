@@ -109,9 +109,10 @@ class Dataset:
         if self.split is not None:
             split = np.asarray(self.split)
             if split.shape != (n,) or split.dtype.kind not in 'uib' or not np.isin(
-                    split, (0, 1, 2, 3)).all():
+                    split, (0, 1, 2, 3, 4)).all():
                 raise ValueError(f'split must be ({n},) integers 0 (scored), 1 (calibration), '
-                                 '2 (offset at the place of use) or 3 (plate for the gains)')
+                                 '2 (offset at the place of use), 3 (plate for the gains) or 4 '
+                                 '(a tilted press of known direction)')
             set_(self, 'split', split.astype(np.uint8))
         if (self.tare_top is None) != (self.tare_bottom is None):
             raise ValueError('tare_top and tare_bottom must be given together')

@@ -36,16 +36,16 @@ import numpy as np
 
 from ...common.validate import check_pair
 
-__all__ = ['METHODS', 'ABI_VERSION', 'TaxelModelNumbers', 'Curve', 'Settings', 'ContactRecord',
-           'Status', 'Record', 'KernelSettings', 'Conditioned', 'Kernel', 'KernelMissing',
-           'KernelMismatch',
-           'load_library', 'library_candidates', 'fit_contact', 'taxel_model_of']
+__all__ = ['METHODS', 'ABI_VERSION', 'TaxelModelNumbers', 'Curve', 'Direction', 'Settings',
+           'ContactRecord', 'Status', 'Record', 'KernelSettings', 'Conditioned', 'Kernel',
+           'KernelMissing', 'KernelMismatch', 'load_library', 'library_candidates',
+           'fit_contact', 'taxel_model_of', 'direction_of', 'DIRECTION_FEATURES']
 
 # Shift methods the kernel runs, by their registered names (skin_kernel.h: SK_CENTROID, ...).
 METHODS = {'centroid': 0, 'taxel_fit': 1, 'poc': 2, 'model_fit': 3}
 
 # skin_kernel.h's SK_ABI_VERSION, the library's SOVERSION: libskin_kernel.so.<ABI_VERSION>.
-ABI_VERSION = 12
+ABI_VERSION = 13
 LIBRARY = f'libskin_kernel.so.{ABI_VERSION}'
 # The variable that names the library file to load, before any place searched.
 LIBRARY_VARIABLE = 'SKIN_KERNEL_LIBRARY'
@@ -83,6 +83,18 @@ class Curve(ctypes.Structure):
         'censor_counts', 'rim_load_n', 'spread_taxels', 'bump_power', 'activation_n')]
 
 
+# skin_kernel.h's SK_DIRECTION_FEATURES: the learned correction's features (direction.py).
+DIRECTION_FEATURES = 20
+
+
+class Direction(ctypes.Structure):
+    """skin_kernel.h's sk_direction: the shift's learned correction (on 0: none)."""
+
+    _fields_ = [('on', _int), ('force_ref_n', _double),
+                ('weight_x', _double * DIRECTION_FEATURES),
+                ('weight_y', _double * DIRECTION_FEATURES)]
+
+
 class Settings(ctypes.Structure):
     """skin_kernel.h's sk_settings: everything a kernel is built with but the taxel arrays."""
 
@@ -93,7 +105,7 @@ class Settings(ctypes.Structure):
             'pitch_m', 'compliance_m_per_n', 'min_force_n', 'min_confidence', 'min_shift_m',
             'force_scale', 'fill_factor', 'x_p_m', 'y_p_m', 'slope_x_m_per_n', 'slope_y_m_per_n',
             'zero_ref_n', 'calibration_var')]
-        + [('curves', Curve * 2), ('model', TaxelModelNumbers)])
+        + [('curves', Curve * 2), ('model', TaxelModelNumbers), ('direction', Direction)])
 
 
 class ContactRecord(ctypes.Structure):
@@ -122,7 +134,8 @@ class _Field(ctypes.Structure):
                 ('offset', ctypes.c_ulong), ('size', ctypes.c_ulong)]
 
 
-_MIRRORS = {'sk_taxel_model': TaxelModelNumbers, 'sk_curve': Curve, 'sk_settings': Settings,
+_MIRRORS = {'sk_taxel_model': TaxelModelNumbers, 'sk_curve': Curve, 'sk_direction': Direction,
+            'sk_settings': Settings,
             'sk_contact': ContactRecord, 'sk_status': Status}
 
 # One contact as Python reads it: a record's fields by name (numpy's view of the C struct).
@@ -450,6 +463,15 @@ def taxel_model_of(model) -> TaxelModelNumbers:
         film_scale=model.film_scale, film_exponent=model.film_exponent,
         film_ceiling=model.film_ceiling, film_activation_n=model.film_activation_n,
         turn_on_pa=model.turn_on_pa, film_step=model.film_step, full_scale=model.full_scale)
+
+
+def direction_of(correction) -> Direction:
+    """Return a :class:`direction.DirectionCorrection` as skin_kernel.h's sk_direction."""
+    if correction is None or not correction.kept:
+        return Direction()
+    return Direction(on=1, force_ref_n=correction.force_ref_n,
+                     weight_x=(_double * DIRECTION_FEATURES)(*correction.weight_x),
+                     weight_y=(_double * DIRECTION_FEATURES)(*correction.weight_y))
 
 
 def fit_contact(model, counts: np.ndarray, censored: np.ndarray, u0: np.ndarray,

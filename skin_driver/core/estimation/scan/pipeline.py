@@ -374,7 +374,8 @@ class ContactEstimator:
             y_p_m=cal.y_p_m, slope_x_m_per_n=slope_x, slope_y_m_per_n=slope_y,
             zero_ref_n=cal.zero_ref_n, calibration_var=self._calibration_variance(),
             curves=(compiled_kernel.Curve * 2)(*curves),
-            model=compiled_kernel.taxel_model_of(cal.taxel_model))
+            model=compiled_kernel.taxel_model_of(cal.taxel_model),
+            direction=compiled_kernel.direction_of(cal.direction))
 
 
 def _contact(r: compiled_kernel.Record) -> Contact:

@@ -1,0 +1,254 @@
+"""
+The direction learned from presses of known direction: a correction of the shift, and its gate.
+
+The default shift method (``taxel_fit``) errs on a skin by an amount that is, in good part, a
+function of cheap figures of each contact: where its imprints sit on the taxel grid (the
+sub-taxel phase of the top imprint and of the bottom one, which is the top one moved by the
+shift: each is placed with a bias that follows its phase, and the shift errs by the difference)
+and how hard the press is. The bottom imprint is where the raw shift puts it, the layers'
+misalignment included, so the correction also takes out the part of the zero that changes from
+spot to spot; an offset taken where the skin is used after it (the paper's protocol) is taken
+with the correction in force. A robot or an instrumented probe that
+presses at known azimuths gives that function's samples: for each press the calibrated shift
+the estimator measured and the press's true azimuth.
+
+:func:`learn_direction` fits a linear map (ridge regression) from the features
+(:func:`features`, in skin_kernel.h's order of ``sk_direction``) to a correction of the shift
+that turns it onto the true azimuth (only the part across the azimuth is known), and keeps
+it only when it lowers the mean azimuth error on presses it did not learn from: k-fold
+cross-validation over the presses, the ridge chosen on the same folds, and a margin and a
+standard error of the per-press gains asked of the gain for that choice. The result says
+what it gained (the held-out folds' mean error before and after, degrees) and, whether kept or
+not, is what the calibration file stores. The kernel applies a kept correction per contact
+(skin_kernel/src/direction.c); fitting it is not a per-scan step, so it is here.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+import math
+from typing import Sequence
+
+import numpy as np
+
+from ..scan.kernel import DIRECTION_FEATURES
+
+__all__ = ['KnownPress', 'DirectionCorrection', 'features', 'learn_direction',
+           'MIN_DIRECTION_PRESSES', 'FOLDS', 'RIDGES', 'MARGIN']
+
+MIN_DIRECTION_PRESSES = 10
+FOLDS = 5
+# Ridges tried (on features of order 1 and a sum of squares over the presses): the best on the
+# held-out folds is taken.
+RIDGES = (0.3, 1.0, 3.0, 10.0, 30.0)
+# The share of the held-out error a correction must take off to be kept: the ridge is chosen on
+# the same folds, which flatters the chosen one a little.
+MARGIN = 0.03
+# Standard errors of the per-press gain that the held-out gain must reach.
+SIGNIFICANCE = 1.0
+# A press whose measured azimuth is this far from its known one slipped, or its azimuth was not
+# the one given: it is left out rather than bend the map for the others.
+OUTLIER_DEG = 30.0
+# The fit's reweightings by the corrected shifts' lengths, and the least length taken (taxels).
+REWEIGHTS = 4
+_SHORTEST = 0.05
+
+
+@dataclass(frozen=True)
+class KnownPress:
+    """
+    One press of known azimuth as the estimator saw it, the correction not applied.
+
+    ``col``, ``row``: the contact's place (taxels); ``shift``: its calibrated shift (taxels);
+    ``force_n``: its normal force as read; ``azimuth_rad``: the press's true azimuth; ``raw``:
+    its raw shift (taxels, the offset not taken off; None: ``shift``).
+    """
+
+    col: float
+    row: float
+    shift: tuple
+    force_n: float
+    azimuth_rad: float
+    raw: tuple = None
+
+
+def features(col, row, dx, dy, force_n, force_ref_n: float) -> np.ndarray:
+    """
+    Return the correction's features of contacts (N x DIRECTION_FEATURES), as the kernel has them.
+
+    Arguments are arrays (or numbers) of the contacts' places and raw shifts (taxels: where the
+    bottom imprint is from the top one) and normal forces; the order is skin_kernel.h's
+    (``sk_direction``).
+    """
+    col, row, dx, dy, force = np.broadcast_arrays(*(np.atleast_1d(np.asarray(v, dtype=float))
+                                                    for v in (col, row, dx, dy, force_n)))
+    out, phases = [], []
+    for h in (1, 2):
+        for top, moved in ((col, dx), (row, dy)):
+            a, b = 2.0 * math.pi * h * top, 2.0 * math.pi * h * (top + moved)
+            out += [np.sin(b) - np.sin(a), np.cos(b) - np.cos(a)]
+            phases += [np.sin(a), np.cos(a)]
+    out += phases
+    load = force / force_ref_n - 1.0
+    out += [f * load for f in out[:4]]
+    return np.stack(out, axis=1)
+
+
+@dataclass(frozen=True)
+class DirectionCorrection:
+    """
+    A learned correction and what it gained on held-out presses.
+
+    ``kept`` is whether it is applied: only when ``after_deg`` (the held-out folds' mean azimuth
+    error with it) is below ``before_deg`` (without it) by the margin. ``weight_x``,
+    ``weight_y`` are the map's weights per feature (taxels), ``force_ref_n`` the force the
+    force feature is taken relative to, ``presses`` and ``folds`` what it learned from and how
+    it was checked, ``ridge`` the ridge chosen, ``left_out`` the presses left out as outliers
+    (their measured azimuth more than OUTLIER_DEG from the known one).
+    """
+
+    kept: bool
+    force_ref_n: float
+    weight_x: tuple
+    weight_y: tuple
+    presses: int
+    folds: int
+    before_deg: float
+    after_deg: float
+    ridge: float = 0.0
+    left_out: int = 0
+
+    def __post_init__(self):
+        """Reject weights of the wrong length, non-finite numbers and a force that is not > 0."""
+        for name in ('weight_x', 'weight_y'):
+            values = tuple(float(v) for v in getattr(self, name))
+            if len(values) != DIRECTION_FEATURES or not all(map(math.isfinite, values)):
+                raise ValueError(f'{name} must be {DIRECTION_FEATURES} finite numbers')
+            object.__setattr__(self, name, values)
+        if not (math.isfinite(self.force_ref_n) and self.force_ref_n > 0):
+            raise ValueError(f'force_ref_n must be a positive force, got {self.force_ref_n!r}')
+        for name in ('before_deg', 'after_deg', 'ridge'):
+            if not math.isfinite(float(getattr(self, name))):
+                raise ValueError(f'{name} must be a finite number')
+        object.__setattr__(self, 'kept', bool(self.kept))
+
+    def describe(self) -> str:
+        """Return one line: kept or not, and the held-out error before and after (degrees)."""
+        verdict = 'applied' if self.kept else 'not applied (no gain on held-out presses)'
+        left = (f'; {self.left_out} press{"es" if self.left_out > 1 else ""} left out (measured '
+                f'more than {OUTLIER_DEG:.0f} deg from the known azimuth)' if self.left_out
+                else '')
+        return (f'direction correction from {self.presses} presses {verdict}: held-out azimuth '
+                f'error {self.before_deg:.2f} -> {self.after_deg:.2f} deg ({self.folds}-fold)'
+                f'{left}')
+
+    def predict(self, shift: np.ndarray, x: np.ndarray) -> np.ndarray:
+        """Return the corrected shifts (N x 2, taxels) of shifts and their features ``x``."""
+        return shift + x @ np.stack((self.weight_x, self.weight_y), axis=1)
+
+    def to_dict(self) -> dict:
+        """Return the fields as plain Python values."""
+        return {'kept': self.kept, 'force_ref_n': float(self.force_ref_n),
+                'weight_x': list(self.weight_x), 'weight_y': list(self.weight_y),
+                'presses': int(self.presses), 'folds': int(self.folds),
+                'before_deg': float(self.before_deg), 'after_deg': float(self.after_deg),
+                'ridge': float(self.ridge), 'left_out': int(self.left_out)}
+
+    @classmethod
+    def from_dict(cls, doc) -> 'DirectionCorrection':
+        """Return the correction of a :meth:`to_dict` mapping (ValueError when malformed)."""
+        if not isinstance(doc, dict):
+            raise ValueError('direction must be a mapping')
+        return cls(kept=bool(doc['kept']), force_ref_n=float(doc['force_ref_n']),
+                   weight_x=tuple(doc['weight_x']), weight_y=tuple(doc['weight_y']),
+                   presses=int(doc['presses']), folds=int(doc['folds']),
+                   before_deg=float(doc['before_deg']), after_deg=float(doc['after_deg']),
+                   ridge=float(doc.get('ridge', 0.0)), left_out=int(doc.get('left_out', 0)))
+
+
+def _angle_errors_deg(shift: np.ndarray, azimuth: np.ndarray) -> np.ndarray:
+    turned = np.arctan2(shift[:, 1], shift[:, 0]) - azimuth
+    return np.degrees(np.abs((turned + math.pi) % (2.0 * math.pi) - math.pi))
+
+
+def _ridge(x: np.ndarray, shift: np.ndarray, azimuth: np.ndarray, ridge: float) -> np.ndarray:
+    """
+    Return the weights (features x 2) that turn the shifts closest to their true azimuths.
+
+    Each press's residual is the corrected shift's part across its true azimuth over the
+    corrected shift's length: the sine of its azimuth error. What is along the azimuth is left
+    free, since a press of known direction does not say how long its shift should be; over the
+    length of the correction before (reweighted, REWEIGHTS times) it is linear in the weights,
+    and a correction gains nothing by shortening the shifts (no feature is the shift itself, so
+    none can shorten them all). Ridge on every weight.
+    """
+    across = np.stack((-np.sin(azimuth), np.cos(azimuth)), axis=1)
+    m = x.shape[1]
+    weights = np.zeros((m, 2))
+    for _ in range(REWEIGHTS):
+        corrected = shift + x @ weights
+        scale = 1.0 / np.maximum(np.hypot(corrected[:, 0], corrected[:, 1]), _SHORTEST)
+        design = np.concatenate((x * across[:, :1], x * across[:, 1:]), axis=1) * scale[:, None]
+        wanted = -np.sum(across * shift, axis=1) * scale
+        a = design.T @ design + float(ridge) * np.eye(2 * m)
+        flat = np.linalg.lstsq(a, design.T @ wanted, rcond=None)[0]
+        weights = np.stack((flat[:m], flat[m:]), axis=1)
+    return weights
+
+
+def learn_direction(presses: Sequence[KnownPress], folds: int = FOLDS,
+                    ridges: Sequence[float] = RIDGES, margin: float = MARGIN,
+                    seed: int = 0) -> DirectionCorrection:
+    """
+    Return the correction learned from ``presses``, kept only when it gains on held-out ones.
+
+    The presses are dealt at random (``seed``) into ``folds`` folds; for each ridge each fold is
+    predicted by the map fitted to the others, and the ridge whose held-out mean azimuth error
+    is least is taken, and the map is kept when its held-out gain reaches the margin and
+    SIGNIFICANCE standard errors of the per-press gains. The final map is fitted to every
+    press. Presses without a measured shift are dropped and those measured more than
+    OUTLIER_DEG off their azimuth left out (counted). Raises ValueError with fewer than
+    MIN_DIRECTION_PRESSES presses left.
+    """
+    presses = [p for p in presses
+               if all(map(math.isfinite, (p.col, p.row, *p.shift, p.force_n, p.azimuth_rad)))
+               and math.hypot(*p.shift) > 0]
+    measured = len(presses)
+    presses = [p for p in presses if _angle_errors_deg(np.array([p.shift]),
+                                                       np.array([p.azimuth_rad]))[0]
+               <= OUTLIER_DEG]
+    n = len(presses)
+    if n < MIN_DIRECTION_PRESSES:
+        raise ValueError(f'{n} presses with a measured shift; learning the direction needs at '
+                         f'least {MIN_DIRECTION_PRESSES}')
+    folds = int(min(max(folds, 2), n))
+    shift = np.array([p.shift for p in presses], dtype=float)
+    azimuth = np.array([p.azimuth_rad for p in presses], dtype=float)
+    force = np.array([p.force_n for p in presses], dtype=float)
+    force_ref = float(np.median(force)) if np.median(force) > 0 else 1.0
+    raw = np.array([p.shift if p.raw is None else p.raw for p in presses], dtype=float)
+    x = features([p.col for p in presses], [p.row for p in presses], raw[:, 0], raw[:, 1],
+                 force, force_ref)
+    fold = np.random.default_rng(seed).permutation(n) % folds
+    errors = _angle_errors_deg(shift, azimuth)
+    before = float(errors.mean())
+    best = (math.inf, ridges[0], errors)
+    for ridge in ridges:
+        predicted = np.empty_like(shift)
+        for k in range(folds):
+            learn, held = fold != k, fold == k
+            weights = _ridge(x[learn], shift[learn], azimuth[learn], ridge)
+            predicted[held] = shift[held] + x[held] @ weights
+        held_out = _angle_errors_deg(predicted, azimuth)
+        best = min(best, (float(held_out.mean()), ridge, held_out), key=lambda b: b[0])
+    after, ridge, held_out = best
+    # The gain must stand out of the presses' own scatter (SIGNIFICANCE standard errors of the
+    # per-press gain) as well as reach the margin: a few dozen presses gain by chance.
+    gains = errors - held_out
+    spread = float(gains.std(ddof=1)) / math.sqrt(n)
+    kept = after < before * (1.0 - margin) and before - after > SIGNIFICANCE * spread
+    weights = _ridge(x, shift, azimuth, ridge)
+    return DirectionCorrection(kept=kept, force_ref_n=force_ref,
+                               weight_x=tuple(weights[:, 0]), weight_y=tuple(weights[:, 1]),
+                               presses=n, folds=folds, before_deg=before, after_deg=after,
+                               ridge=float(ridge), left_out=measured - n)
