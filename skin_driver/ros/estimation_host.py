@@ -277,6 +277,9 @@ class EstimationHost:
             if skin is not None:
                 # Its kernel now, not by the first scan on the thread that reads them.
                 estimator.ready_for(skin[0], skin[1])
+                # Drift tracked and time under load stay true across a change of parameters
+                # or calibration; a tare (another baseline) starts afresh.
+                estimator.carry_time_from(live.estimator)
             self._live = Live(estimator, skin, live.generation + 1)
 
     def _skin_grid(self) -> tuple:
@@ -376,7 +379,7 @@ class EstimationHost:
                 self._ask_for_skin(skin)
                 return
             start = time.perf_counter()
-            contacts = live.estimator.process(top, bottom)
+            contacts = live.estimator.process(top, bottom, device_time_us * 1e-6)
             cost = time.perf_counter() - start
             cpu.mark('estimate')
             # Converting here means a non-finite value never reaches a publisher.

@@ -231,6 +231,7 @@ void sk_force_of(sk_kernel *k)
     const unsigned char *clipped = k->clipped + layer * n;
     double *f = k->force + layer * n;
     const double *gain = k->has_gain ? k->gain + layer * n : NULL;
+    int creeps = k->s.drift.creep_per_decade > 0.0;
     /* a count of 0 (every taxel past the box) has the force 0 */
     for (int i = 0; i < n; i++) {
       f[i] = gain ? 0.0 * gain[i] : 0.0;
@@ -239,6 +240,9 @@ void sk_force_of(sk_kernel *k)
       for (int i = r * cols + box[2]; i < r * cols + box[3]; i++) {
         double v = force_at(table, size, c[i], clipped[i]);
         f[i] = gain ? v * gain[i] : v;
+        if (creeps && v != 0.0) {
+          f[i] /= sk_creep_factor(k, layer * n + i);
+        }
       }
     }
   }

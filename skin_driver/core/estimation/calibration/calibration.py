@@ -44,6 +44,7 @@ import os
 import numpy as np
 import yaml
 
+from .creep import CreepFit
 from ..model.forcecurve import ForceCurve
 from ..model.taxelmodel import TaxelModel
 from ...common.atomic import write_atomically
@@ -240,6 +241,7 @@ class Calibration:
     taxel_model: TaxelModel = None
     leak_share: float = 0.0
     mount: 'SkinMount' = None
+    creep: CreepFit = None
 
     def __post_init__(self):
         """Reject non-finite or negative values and malformed curves or gains."""
@@ -272,6 +274,8 @@ class Calibration:
             raise ValueError(f'taxel_model must be a TaxelModel, got {self.taxel_model!r}')
         if self.mount is not None and not isinstance(self.mount, SkinMount):
             raise ValueError(f'mount must be a SkinMount, got {self.mount!r}')
+        if self.creep is not None and not isinstance(self.creep, CreepFit):
+            raise ValueError(f'creep must be a CreepFit, got {self.creep!r}')
 
     def zero_m(self, normal_force_n: float) -> tuple:
         """Return the raw shift (x, y) of a normal press of this force: where beta is 0 from."""
@@ -344,6 +348,8 @@ class Calibration:
             parts.append(f'taxel model ({self.taxel_model.presses} presses)')
         if self.mount:
             parts.append(f'mounted on {self.mount.parent_frame} ({self.mount.touches} touches)')
+        if self.creep:
+            parts.append(self.creep.describe())
         if self.skin:
             parts.append(f'for {self.skin.describe()}')
         return '; '.join(parts) + (f'; made {self.made_utc}' if self.made_utc else '')
@@ -373,6 +379,8 @@ class Calibration:
             # Only when there is one: older readers see the file they know.
             out['mount'] = {k: list(v) if isinstance(v, tuple) else v
                             for k, v in asdict(self.mount).items()}
+        if self.creep is not None:
+            out['creep'] = self.creep.to_dict()
         return out
 
     def save_yaml(self, path, make_parents: bool = False) -> None:
@@ -437,6 +445,8 @@ class Calibration:
                 values['leak_share'] = float(doc['leak_share'])
             if doc.get('mount') is not None:
                 values['mount'] = SkinMount.from_dict(doc['mount'])
+            if doc.get('creep') is not None:
+                values['creep'] = CreepFit.from_dict(doc['creep'])
             cal = cls(**values)
         except (KeyError, TypeError, ValueError) as exc:
             raise ValueError(f'{path}: {exc}') from None

@@ -62,6 +62,11 @@ class EstimatorConfig:
     ``force_scale``: extra factor on the normal force (a user's force calibration; 1 = none).
     ``fill_factor``: sensitive fraction of the pitch on each axis; normal force = summed taxel
     forces / fill_factor**2.
+    Scans given their time (:meth:`ContactEstimator.process`'s ``time_s``): ``track_s``, the time
+    constant with which untouched taxels' baselines follow their drift (0: none); the creep
+    model a loaded taxel's force is corrected by, ``creep_per_decade`` (0: none),
+    ``creep_settle_s``, ``creep_recovery_s`` (defaults: the simulated family's middle; a
+    calibration's creep, :mod:`..calibration.creep`, replaces them).
     """
 
     method: str = DEFAULT_METHOD
@@ -76,6 +81,10 @@ class EstimatorConfig:
     force_scale: float = 1.0
     fsr: FsrModel = field(default_factory=FsrModel)
     fill_factor: float = 0.9
+    track_s: float = 60.0
+    creep_per_decade: float = 0.025
+    creep_settle_s: float = 1.0
+    creep_recovery_s: float = 60.0
 
     def __post_init__(self):
         """Validate every field and the method name."""
@@ -90,6 +99,10 @@ class EstimatorConfig:
         check_number(self.force_scale, 'force_scale', positive=True)
         check_number(self.fill_factor, 'fill_factor', low=0.05, high=1.0)
         check_int(self.max_contacts, 'max_contacts', low=0)
+        check_number(self.track_s, 'track_s', non_negative=True)
+        check_number(self.creep_per_decade, 'creep_per_decade', non_negative=True)
+        check_number(self.creep_settle_s, 'creep_settle_s', positive=True)
+        check_number(self.creep_recovery_s, 'creep_recovery_s', positive=True)
 
 
 @dataclass(frozen=True)
@@ -100,7 +113,8 @@ class Contact:
     ``shift_m`` is the calibrated layer shift; ``azimuth_rad`` (in (-pi, pi]) and the tangential
     part of ``force_xyz_n`` are meaningful only when ``direction_valid``; otherwise they are 0 and
     ``alpha_rad`` is 0. ``azimuth_sigma_rad`` is the 1-sigma uncertainty of the azimuth (pi when
-    there is no direction).
+    there is no direction). ``held_s`` is how long its taxels have been under load (scans
+    given their time; 0 otherwise).
     """
 
     x_m: float
@@ -114,6 +128,7 @@ class Contact:
     force_xyz_n: tuple
     confidence: float
     direction_valid: bool
+    held_s: float = 0.0
 
 
 class ContactEstimator:
@@ -169,6 +184,14 @@ class ContactEstimator:
             self._kernels = {conditioner.shape: self._new_kernel(conditioner.shape)}
         self._viewer = None
         self._viewer_lock = threading.Lock()
+        # Which tare this estimator's baselines come from: a tare starts the time afresh, any
+        # other change carries it (carry_time_from).
+        self._tare_epoch = object()
+
+    def _same_tare(self, made: 'ContactEstimator') -> 'ContactEstimator':
+        """Return ``made`` (from this estimator, its tare kept) marked as of this tare."""
+        made._tare_epoch = self._tare_epoch
+        return made
 
     @property
     def calibration(self) -> Calibration:
@@ -201,7 +224,8 @@ class ContactEstimator:
 
     def with_calibration(self, calibration: Calibration) -> 'ContactEstimator':
         """Return this estimator with ``calibration`` (force curves and gains too) in force."""
-        return ContactEstimator(self.config, calibration, self.conditioner, self._shift)
+        return self._same_tare(ContactEstimator(self.config, calibration, self.conditioner,
+                                                self._shift))
 
     def for_grid(self, rows: int, cols: int) -> 'ContactEstimator':
         """
@@ -222,7 +246,8 @@ class ContactEstimator:
 
     def with_config(self, config: EstimatorConfig) -> 'ContactEstimator':
         """Return an estimator with other settings, keeping the tare and the calibration."""
-        return ContactEstimator(config, self._calibration, self.conditioner, self._shift)
+        return self._same_tare(ContactEstimator(config, self._calibration, self.conditioner,
+                                                self._shift))
 
     def with_tare(self, top_frames, bottom_frames) -> 'ContactEstimator':
         """Return this estimator tared from no-touch frames (N x rows x cols each)."""
@@ -286,17 +311,46 @@ class ContactEstimator:
         return [(r.dx * p, r.dy * p)
                 for r in self._scan(top_counts, bottom_counts, every_pair=True)]
 
-    def process(self, top_counts, bottom_counts) -> list:
-        """Return the contacts in the two raw count maps, strongest (normal force) first."""
-        return [_contact(r) for r in self._scan(top_counts, bottom_counts) if r.kept]
+    def process(self, top_counts, bottom_counts, time_s: float = None) -> list:
+        """
+        Return the contacts in the two raw count maps, strongest (normal force) first.
 
-    def _scan(self, top_counts, bottom_counts, every_pair: bool = False) -> list:
+        ``time_s``: the scan's time (seconds, never going back), with which the baselines of
+        untouched taxels follow their drift and loaded taxels lose their creep; None: neither.
+        """
+        return [_contact(r) for r in self._scan(top_counts, bottom_counts, time_s=time_s)
+                if r.kept]
+
+    def drift(self) -> tuple:
+        """Return the last timed scan's (mean, largest |drift|) of each layer since the tare."""
+        kernel = self._kernels.get(self._conditioner.shape)
+        return kernel.drift if kernel is not None else ((0.0, 0.0), (0.0, 0.0))
+
+    def carry_time_from(self, other: 'ContactEstimator') -> 'ContactEstimator':
+        """
+        Return this estimator with ``other``'s tracked baselines and creep ages in force.
+
+        For a change of parameters or calibration of the same skin and tare, made off the hot
+        path: the time a skin has been loaded and how far it drifted stay true. Of another grid
+        or tare there is nothing to carry (a tare starts afresh).
+        """
+        shape = self._conditioner.shape
+        if (other is None or shape is None or other._conditioner.shape != shape
+                or other._tare_epoch is not self._tare_epoch):
+            return self
+        mine, theirs = self._kernels.get(shape), other._kernels.get(shape)
+        if mine is not None and theirs is not None:
+            mine.set_drift_state(theirs.drift_state())
+        return self
+
+    def _scan(self, top_counts, bottom_counts, every_pair: bool = False,
+              time_s: float = None) -> list:
         """Return the compiled kernel's records of the contacts (kernel.Kernel.scan)."""
         kernel = self._kernels.get(np.shape(top_counts))
         if kernel is None:
             kernel = self._kernel_for(top_counts, bottom_counts)
         if self._shift is None:
-            return kernel.scan(top_counts, bottom_counts, every_pair)
+            return kernel.scan(top_counts, bottom_counts, every_pair, time_s)
         return kernel.scan_shifted(top_counts, bottom_counts,
                                    self._reference(top_counts, bottom_counts), every_pair)
 
@@ -361,7 +415,19 @@ class ContactEstimator:
             y_p_m=cal.y_p_m, slope_x_m_per_n=slope_x, slope_y_m_per_n=slope_y,
             zero_ref_n=cal.zero_ref_n, calibration_var=self._calibration_variance(),
             curves=(compiled_kernel.Curve * 2)(*curves),
-            model=compiled_kernel.taxel_model_of(cal.taxel_model))
+            model=compiled_kernel.taxel_model_of(cal.taxel_model),
+            drift=self._drift_numbers())
+
+    def _drift_numbers(self) -> compiled_kernel.DriftNumbers:
+        """Return the kernel's tracking and creep: the calibration's creep, else the config's."""
+        cfg = self.config
+        creep = getattr(self.calibration, 'creep', None)
+        rate, settle, recovery = ((creep.per_decade, creep.settle_s, creep.recovery_s)
+                                  if creep is not None else
+                                  (cfg.creep_per_decade, cfg.creep_settle_s,
+                                   cfg.creep_recovery_s))
+        return compiled_kernel.DriftNumbers(track_s=cfg.track_s, creep_per_decade=rate,
+                                            settle_s=settle, recovery_s=recovery)
 
 
 def _contact(r: compiled_kernel.Record) -> Contact:
@@ -374,5 +440,5 @@ def _contact(r: compiled_kernel.Record) -> Contact:
         'shift_m': (r.shift_x_m, r.shift_y_m), 'azimuth_rad': r.azimuth_rad,
         'azimuth_sigma_rad': r.azimuth_sigma_rad, 'alpha_rad': r.alpha_rad,
         'force_xyz_n': (r.force_x_n, r.force_y_n, r.force_z_n), 'confidence': r.confidence,
-        'direction_valid': r.valid > 0})
+        'direction_valid': r.valid > 0, 'held_s': r.held_s})
     return contact

@@ -1,0 +1,179 @@
+"""
+Creep calibration: hold a known load for a few minutes, fit how the skin's reading rises.
+
+An FSR's conductance rises roughly with the logarithm of the time under load. The estimator
+divides each loaded taxel's force by ``1 + per_decade * log10(1 + age / settle_s)`` (the kernel's
+drift.c); this fits ``per_decade`` and ``settle_s`` of the user's skin from the force the
+estimator reads, without creep compensation, while one load is held still:
+``F(t) = F0 * (1 + per_decade * log10(1 + t / settle_s))``, ``t`` from the load's arrival.
+For each settling time on a grid the model is linear in ``F0`` and ``F0 * per_decade``; the
+least misfit wins. ``recovery_s`` (how fast a film forgets once unloaded) is not seen in a hold:
+it stays the estimator's.
+
+A :class:`CreepSession` takes each scan's time and contacts and says how far the hold has got;
+it refuses what is not a still hold: no load, a load that comes off, moves or changes.
+"""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass
+import math
+
+import numpy as np
+
+from ...common.validate import check_number
+
+__all__ = ['CreepFit', 'CreepError', 'CreepSession', 'fit_creep', 'MIN_HOLD_S']
+
+# A hold shorter than this leaves the log's slope to the noise of the first seconds.
+MIN_HOLD_S = 60.0
+# The settling times tried (seconds): a few per decade from a tenth to half a minute.
+_SETTLE_GRID = np.exp(np.linspace(math.log(0.1), math.log(30.0), 49))
+# A still load moves less than this many taxels and changes by less than this share of itself
+# beyond what creep explains.
+_MAX_MOVE_TAXELS = 0.5
+_MAX_MISFIT = 0.03
+
+
+class CreepError(ValueError):
+    """The scans were not a still, held load; the message says what was wrong."""
+
+
+@dataclass(frozen=True)
+class CreepFit:
+    """A skin's creep: rise per decade of time under load, settling and recovery times (s)."""
+
+    per_decade: float
+    settle_s: float
+    recovery_s: float = 60.0
+    load_n: float = 0.0
+    hold_s: float = 0.0
+    misfit: float = 0.0
+    made_utc: str = ''
+
+    def __post_init__(self):
+        """Reject non-finite or negative values."""
+        check_number(self.per_decade, 'creep per_decade', non_negative=True)
+        check_number(self.settle_s, 'creep settle_s', positive=True)
+        check_number(self.recovery_s, 'creep recovery_s', positive=True)
+        for name in ('load_n', 'hold_s', 'misfit'):
+            check_number(getattr(self, name), f'creep {name}', non_negative=True)
+
+    def factor(self, age_s):
+        """Return the reading's rise after ``age_s`` under load (1 at arrival)."""
+        return 1.0 + self.per_decade * np.log10(1.0 + np.maximum(age_s, 0.0) / self.settle_s)
+
+    def over_48_hours(self) -> float:
+        """Return the rise over 48 h of load, the makers' figure (a share)."""
+        return float(self.factor(48 * 3600.0) - 1.0)
+
+    def describe(self) -> str:
+        """Return one line for a log or a report."""
+        return (f'creep {100 * self.per_decade:.2f} % per decade (settles in '
+                f'{self.settle_s:.2f} s; {100 * self.over_48_hours():.1f} % over 48 h), from '
+                f'{self.load_n:.1f} N held {self.hold_s:.0f} s')
+
+    def to_dict(self) -> dict:
+        """Return the fields as plain values (the calibration file's ``creep``)."""
+        return {k: (v if isinstance(v, str) else float(v)) for k, v in asdict(self).items()}
+
+    @classmethod
+    def from_dict(cls, doc) -> 'CreepFit':
+        """Return the fit of a calibration file's ``creep`` mapping."""
+        if not isinstance(doc, dict):
+            raise ValueError('creep must be a mapping')
+        return cls(float(doc['per_decade']), float(doc['settle_s']),
+                   float(doc.get('recovery_s', 60.0)), float(doc.get('load_n', 0.0)),
+                   float(doc.get('hold_s', 0.0)), float(doc.get('misfit', 0.0)),
+                   str(doc.get('made_utc') or ''))
+
+
+def fit_creep(ages_s, forces_n, recovery_s: float = 60.0) -> CreepFit:
+    """
+    Return the creep that best explains ``forces_n`` read ``ages_s`` after the load arrived.
+
+    Raises CreepError when the series is too short or the load is not explained by creep (it
+    changed). ``misfit`` is the RMS of the residuals as a share of the load.
+    """
+    t = np.asarray(ages_s, dtype=np.float64)
+    f = np.asarray(forces_n, dtype=np.float64)
+    keep = np.isfinite(t) & np.isfinite(f) & (t >= 0)
+    t, f = t[keep], f[keep]
+    if t.size < 5 or not np.any(f > 0):
+        raise CreepError('no load held: fewer than 5 scans with a contact')
+    if t.max() < MIN_HOLD_S:
+        raise CreepError(f'held {t.max():.0f} s; hold the load still for at least '
+                         f'{MIN_HOLD_S:.0f} s (a few minutes is better)')
+    best = None
+    for settle in _SETTLE_GRID:
+        design = np.stack([np.ones_like(t), np.log10(1.0 + t / settle)], axis=1)
+        coef, *_ = np.linalg.lstsq(design, f, rcond=None)
+        residual = f - design @ coef
+        cost = float(residual @ residual)
+        if best is None or cost < best[0]:
+            best = (cost, settle, coef)
+    cost, settle, (f0, slope) = best
+    if not f0 > 0:
+        raise CreepError('the load read no force at its arrival')
+    misfit = math.sqrt(cost / t.size) / f0
+    if misfit > _MAX_MISFIT:
+        raise CreepError(f'the load changed by {100 * misfit:.1f} % beyond what creep explains '
+                         '(a moving or changing load); hold it still and calibrate again')
+    return CreepFit(max(float(slope / f0), 0.0), float(settle), float(recovery_s), float(f0),
+                    float(t.max()), float(misfit))
+
+
+class CreepSession:
+    """
+    The scans of one creep calibration: a single load put on, held still ``hold_s``.
+
+    :meth:`add` takes each scan's time and contacts (objects with ``x_m``, ``y_m``,
+    ``force_n``) and returns the share of the hold done (0..1); it raises CreepError as soon as
+    the load comes off or moves. :meth:`finish` fits the creep (:func:`fit_creep`).
+    """
+
+    def __init__(self, hold_s: float = 180.0, pitch_m: float = 0.005,
+                 recovery_s: float = 60.0):
+        """Expect a hold of ``hold_s`` seconds (at least MIN_HOLD_S)."""
+        self.hold_s = max(float(hold_s), MIN_HOLD_S)
+        self.pitch_m = float(pitch_m)
+        self.recovery_s = float(recovery_s)
+        self._start = None
+        self._where = None
+        self._ages, self._forces = [], []
+
+    @property
+    def held_s(self) -> float:
+        """Return how long the load has been held so far."""
+        return self._ages[-1] if self._ages else 0.0
+
+    def add(self, time_s: float, contacts) -> float:
+        """Add one scan; return the share of the hold done."""
+        if not contacts:
+            if self._start is not None:
+                raise CreepError(f'the load came off after {self.held_s:.1f} s; hold it still '
+                                 f'for {self.hold_s:.0f} s')
+            return 0.0
+        if len(contacts) > 1:
+            raise CreepError(f'{len(contacts)} contacts; hold one load')
+        c = contacts[0]
+        if self._start is None:
+            self._start, self._where = float(time_s), (c.x_m, c.y_m)
+        moved = math.hypot(c.x_m - self._where[0], c.y_m - self._where[1]) / self.pitch_m
+        if moved > _MAX_MOVE_TAXELS:
+            raise CreepError(f'the load moved by {moved:.1f} taxels after '
+                             f'{float(time_s) - self._start:.1f} s; hold it still')
+        self._ages.append(float(time_s) - self._start)
+        self._forces.append(float(c.force_n))
+        return min(self.held_s / self.hold_s, 1.0)
+
+    @property
+    def done(self) -> bool:
+        """Return whether the load has been held long enough."""
+        return self.held_s >= self.hold_s
+
+    def finish(self) -> CreepFit:
+        """Return the fitted creep; CreepError when the hold is not enough for one."""
+        if self._start is None:
+            raise CreepError('no load held: no scan had a contact')
+        return fit_creep(self._ages, self._forces, self.recovery_s)
