@@ -240,7 +240,7 @@ void sk_force_of(sk_kernel *k)
       for (int i = r * cols + box[2]; i < r * cols + box[3]; i++) {
         double v = force_at(table, size, c[i], clipped[i]);
         f[i] = gain ? v * gain[i] : v;
-        if (creeps && v != 0.0) {
+        if (creeps && k->age[layer * n + i] > 0.0) {
           f[i] /= sk_creep_factor(k, layer * n + i);
         }
       }

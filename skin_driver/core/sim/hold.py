@@ -7,7 +7,8 @@ hold costs the frames it is scored at plus a sparse trail (every ``step_s``) tha
 of the baseline see the time go by, as a live skin's scans would.
 
 ``hold_scene``: after ``lead_s`` unloaded, one tilted press at the skin's paper force, held
-``hold_s``; frames labelled ``1s``, ``1min``, ``10min``, ``60min`` on the way; released a
+``hold_s``; frames labelled ``1s``, ``1min``, ``10min``, ``60min`` on the way (each label
+``SCORED_FRAMES`` frames, 0.1 s apart); released a
 second after ``hold_s`` for ``rest_s``; pressed again the same (``repress``, 1 s into the
 second press). ``idle_scene``: no press at all for ``duration_s`` (a frame every ``step_s``).
 """
@@ -23,13 +24,17 @@ from .drift import held_age
 from .physics import Press, render_held
 from .skins import FamilySkin
 
-__all__ = ['HeldFrame', 'HeldScene', 'hold_scene', 'idle_scene', 'HOLD_LABELS']
+__all__ = ['HeldFrame', 'HeldScene', 'hold_scene', 'idle_scene', 'HOLD_LABELS',
+           'SCORED_FRAMES']
 
 TARE_FRAMES = 20
 # The scored frames of a hold: seconds after the press's start (the second press's for repress).
 HOLD_LABELS = {'1s': 1.0, '1min': 60.0, '10min': 600.0, '60min': 3600.0}
 # A press's first second, as a scan at 100 Hz and more would see it settle.
 _ONSET_S = (0.01, 0.03, 0.1, 0.3, 0.6, 1.0)
+# Each label scores this many frames, 0.1 s apart from its time on: one frame's noise is not
+# the hold's doing.
+SCORED_FRAMES = 5
 
 
 @dataclass(frozen=True)
@@ -77,8 +82,9 @@ def hold_scene(member: FamilySkin, seed: int = 0, lead_s: float = 600.0, hold_s:
     off1 = on1 + hold_s + 1.0
     on2 = off1 + rest_s
     loads = [(on1, off1), (on2, math.inf)]
-    labels = {on1 + t: label for label, t in HOLD_LABELS.items() if t <= hold_s}
-    labels[on2 + 1.0] = 'repress'
+    starts = {on1 + t: label for label, t in HOLD_LABELS.items() if t <= hold_s}
+    starts[on2 + 1.0] = 'repress'
+    labels = {t + 0.1 * k: label for t, label in starts.items() for k in range(SCORED_FRAMES)}
     times = set(np.arange(step_s, lead_s, step_s).tolist())
     # a scan just before each press: a live skin's scans come every millisecond or so
     times |= {on1 - 0.01} | {on1 + t for t in _ONSET_S}

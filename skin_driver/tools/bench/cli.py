@@ -27,8 +27,10 @@ import cv2
 import numpy as np
 
 from skin_driver.core.estimation.shift.methods import DEFAULT_METHOD
+from skin_driver.core.sim.skins import HELD_OUT, skin_names
 from skin_driver.tools.bench import estimators as bench_core, plots, tables
 from skin_driver.tools.bench.calibration import calibration_accuracy
+from skin_driver.tools.bench.drift import drift_bench
 from skin_driver.tools.bench.scoring import label, targets, tradeoffs, why_e2e
 from skin_driver.tools.evaluate.tables import json_safe
 
@@ -46,6 +48,8 @@ FULL = {
     'family_sizes': {'paper': 8, 'random': 150, 'border': 80, 'multi': 80},
     'family_all_methods': True, 'calibration_frames': 150,
     'forward_frames': 40, 'forward_skins': None,
+    'drift_skins': None, 'drift_held_out': 6, 'drift_hours': 8.0, 'drift_step_s': 10.0,
+    'drift_cost_repeats': 10,
 }
 QUICK = {
     'grids': [16, 32], 'shifts': [0.5, 2.0], 'noises': [6.0], 'frames': 3,
@@ -56,6 +60,8 @@ QUICK = {
     'family_sizes': {'paper': 1, 'random': 15, 'border': 10, 'multi': 10},
     'family_all_methods': False, 'calibration_frames': 15,
     'forward_frames': 4, 'forward_skins': ['default'],
+    'drift_skins': ['default', 'harsh'], 'drift_held_out': 1, 'drift_hours': 8.0,
+    'drift_step_s': 30.0, 'drift_cost_repeats': 2,
 }
 
 
@@ -169,6 +175,11 @@ def _in_process(cfg, args, res, log) -> None:
                                                seed=args.seed, log=log)
     log('6. force calibration on the family')
     res['calibration'] = calibration_accuracy(cfg['calibration_frames'], seed=args.seed, log=log)
+    log('8. drift and creep over hours')
+    res['drift'] = drift_bench(
+        (cfg['drift_skins'] or skin_names())
+        + [f'{HELD_OUT}{i}' for i in range(cfg['drift_held_out'])], cfg['drift_hours'],
+        cfg['drift_step_s'], cfg['drift_cost_repeats'], seed=args.seed, log=log)
     log('4. scale')
     res['scaling'] = bench_core.scaling(cfg['scale_grids'], cfg['contacts'],
                                         [DEFAULT_METHOD, 'seed'], cfg['scale_frames'],

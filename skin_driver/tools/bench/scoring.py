@@ -7,6 +7,7 @@ Each target with the figure measured for it, and where the end-to-end time goes.
 from __future__ import annotations
 
 from skin_driver.core.estimation.shift.methods import DEFAULT_METHOD
+from skin_driver.tools.bench.drift import drift_targets
 
 # Issue #16 item 5: the default's cost per 16 x 16 frame pair, one core, back to back.
 ALONE_US = 30.0
@@ -76,6 +77,8 @@ def targets(res) -> list:
                                d16['median_us'] <= s16['median_us']))
     if 'e2e' in res:
         out += e2e_targets(res['e2e'])
+    if 'drift' in res:
+        out += [_target(*t) for t in drift_targets(res['drift'])]
     return out
 
 

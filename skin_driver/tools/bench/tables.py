@@ -5,6 +5,7 @@ from __future__ import annotations
 from skin_driver.core.estimation.shift.methods import DEFAULT_METHOD
 from skin_driver.core.sim.experiments import DIRECTION_KINDS
 from skin_driver.core.sim.oracle import ORACLE
+from skin_driver.tools.bench.drift import drift_section
 from skin_driver.tools.bench.scoring import ALONE_US, label
 
 
@@ -102,6 +103,8 @@ def markdown(res, images) -> str:
         out += _calibration_section(res['calibration'])
     if 'forward' in res:
         out += _forward_section(res['forward'])
+    if 'drift' in res:
+        out += drift_section(res['drift'])
     if 'e2e' in res:
         out += _e2e_section(res, images)
     return '\n'.join(out) + '\n'
