@@ -25,8 +25,9 @@ from ...common.validate import check_number
 
 __all__ = ['CreepFit', 'CreepError', 'CreepSession', 'fit_creep', 'MIN_HOLD_S']
 
-# A hold shorter than this leaves the log's slope to the noise of the first seconds.
-MIN_HOLD_S = 60.0
+# A hold shorter than this leaves the log's slope to the noise of the first seconds; a few
+# minutes (the action's default) see the rate over two decades.
+MIN_HOLD_S = 5.0
 # The settling times tried (seconds): a few per decade from a tenth to half a minute.
 _SETTLE_GRID = np.exp(np.linspace(math.log(0.1), math.log(30.0), 49))
 # A still load moves less than this many taxels and changes by less than this share of itself
@@ -176,4 +177,7 @@ class CreepSession:
         """Return the fitted creep; CreepError when the hold is not enough for one."""
         if self._start is None:
             raise CreepError('no load held: no scan had a contact')
+        if not self.done:
+            raise CreepError(f'held {self.held_s:.0f} s of the {self.hold_s:.0f} s asked; hold '
+                             'the load still that long')
         return fit_creep(self._ages, self._forces, self.recovery_s)
