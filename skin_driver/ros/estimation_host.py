@@ -47,6 +47,7 @@ from skin_driver.core.estimation.shift.methods import DEFAULT_METHOD, get_method
 from skin_driver.core.protocol.realtime import StageCpu
 from skin_driver.ros import conversions, diagnostics, qos
 from skin_driver.ros.calibration_services import CalibrationServices
+from skin_driver.ros.creep_calibration import CreepCalibration
 from skin_driver.ros.estimator_params import estimator_config, ESTIMATOR_PARAMETERS
 from skin_driver.ros.frames import default_frame_id
 from skin_driver.ros.hot_path import LatestOnly, Listened
@@ -96,6 +97,7 @@ class EstimationHost:
         self.calibration = CalibrationServices(node, lambda: self._live.estimator,
                                                self.put_calibration)
         self.mount = MountCalibration(node, lambda: self._skin, self._skin_grid, self._put_mount)
+        self.creep = CreepCalibration(node, lambda: self._live.estimator, self._put_creep)
         # The scans a tare averages: filled and resized by the estimating thread alone.
         self._recent = RecentScans(self._p('tare.frames'))
         self._recent_size = self._recent_wanted = self._p('tare.frames')
@@ -294,6 +296,13 @@ class EstimationHost:
         path = self.calibration.write_and_put(replace(calibration, mount=mount))
         return f'; written to {path}'
 
+    def _put_creep(self, fit) -> str:
+        """Store a creep fitted from a held load with the calibration; return where."""
+        calibration = self._live.estimator.calibration
+        path = self.calibration.write_and_put(replace(calibration, creep=replace(
+            fit, made_utc=utc_now())))
+        return f'; written to {path}'
+
     def put_calibration(self, calibration) -> None:
         """Put ``calibration`` in force (with its force curves and gains)."""
         self._swap(lambda estimator: estimator.with_calibration(calibration))
@@ -379,7 +388,8 @@ class EstimationHost:
                 self._ask_for_skin(skin)
                 return
             start = time.perf_counter()
-            contacts = live.estimator.process(top, bottom, device_time_us * 1e-6)
+            scan_s = device_time_us * 1e-6
+            contacts = live.estimator.process(top, bottom, scan_s)
             cost = time.perf_counter() - start
             cpu.mark('estimate')
             # Converting here means a non-finite value never reaches a publisher.
@@ -406,6 +416,7 @@ class EstimationHost:
         self._skin = header.frame_id
         self.calibration.feed(top, bottom, contacts)
         self.mount.feed(contacts)
+        self.creep.feed(scan_s, contacts)
         cpu.mark('bookkeeping')
         self._cpu_reading.serve()
 

@@ -34,6 +34,9 @@ _SETTLE_GRID = np.exp(np.linspace(math.log(0.1), math.log(30.0), 49))
 # beyond what creep explains.
 _MAX_MOVE_TAXELS = 0.5
 _MAX_MISFIT = 0.03
+# A load has arrived once it reads this share of what it reads _SETTLED_S on.
+_ARRIVED = 0.97
+_SETTLED_S = 2.0
 
 
 class CreepError(ValueError):
@@ -180,4 +183,12 @@ class CreepSession:
         if not self.done:
             raise CreepError(f'held {self.held_s:.0f} s of the {self.hold_s:.0f} s asked; hold '
                              'the load still that long')
-        return fit_creep(self._ages, self._forces, self.recovery_s)
+        ages, forces = np.array(self._ages), np.array(self._forces)
+        # The load's arrival (a hand or a robot puts it down over a fraction of a second) is no
+        # creep: the fit starts once the reading is within a few percent of what it reads two
+        # seconds on. The ages still count from the first scan that read it, as the
+        # estimator's do.
+        later = forces[(ages >= _SETTLED_S) & (ages <= _SETTLED_S + 1.0)]
+        reference = float(np.median(later)) if later.size else forces[-1]
+        arrived = int(np.argmax(forces >= _ARRIVED * reference))
+        return fit_creep(ages[arrived:], forces[arrived:], self.recovery_s)

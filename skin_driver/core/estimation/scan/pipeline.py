@@ -37,6 +37,7 @@ tangential components point along the azimuth, the direction in which the top la
 from __future__ import annotations
 
 from dataclasses import dataclass, field, replace
+import math
 import threading
 
 import numpy as np
@@ -325,6 +326,13 @@ class ContactEstimator:
         """Return the last timed scan's (mean, largest |drift|) of each layer since the tare."""
         kernel = self._kernels.get(self._conditioner.shape)
         return kernel.drift if kernel is not None else ((0.0, 0.0), (0.0, 0.0))
+
+    def creep_factor(self, held_s: float) -> float:
+        """Return what the creep in force divides a taxel's force by after ``held_s`` loaded."""
+        d = self._drift_numbers()
+        if not d.creep_per_decade > 0:
+            return 1.0
+        return 1.0 + d.creep_per_decade * math.log10(1.0 + max(held_s, 0.0) / d.settle_s)
 
     def carry_time_from(self, other: 'ContactEstimator') -> 'ContactEstimator':
         """
