@@ -41,6 +41,7 @@ from rclpy.event_handler import PublisherEventCallbacks
 from sensor_msgs.msg import Image
 from skin_driver.core.estimation.calibration.calibration import PARTS, SkinMount, utc_now
 from skin_driver.core.estimation.calibration.tare import RecentScans
+from skin_driver.core.estimation.scan.drift import drift_status
 from skin_driver.core.estimation.scan.heatmap import colour_map, grey_levels
 from skin_driver.core.estimation.scan.pipeline import ContactEstimator, EstimatorConfig
 from skin_driver.core.estimation.shift.methods import DEFAULT_METHOD, get_method, method_names
@@ -572,7 +573,11 @@ class EstimationHost:
                for stage, us in self._cpu_reading.ask().items()},
             **self.calibration.diagnostic_values(),
         }
+        drifted, drift_warning = drift_status(self._live.estimator)
+        values.update(drifted)
         level, message = diagnostics.OK, self.calibration.note
+        if drift_warning:
+            level, message = diagnostics.WARN, drift_warning
         if self.calibration.warning:
             level, message = diagnostics.WARN, self.calibration.warning
         if tally.estimated == 0:

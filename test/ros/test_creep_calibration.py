@@ -6,6 +6,7 @@ import pytest
 from rclpy.action import ActionClient
 from rosutil import spin_until
 from skin_driver.core.estimation.calibration.calibration import Calibration
+from skin_driver.ros.conversions import status_values
 from skin_msgs.action import CalibrateCreep
 
 pytestmark = pytest.mark.ros
@@ -50,7 +51,11 @@ def test_a_load_that_moves_ends_the_goal_with_the_reason_and_changes_nothing(tmp
 
 def test_no_load_a_bad_goal_and_a_cancel_each_end_with_a_message_and_change_nothing(
         tmp_path, capfd):
-    with pipeline(tmp_path, scene([]), rate_hz=100.0) as (_, _, direction, _, executor):
+    with pipeline(tmp_path, scene([]), rate_hz=100.0) as (_, _, direction, probe, executor):
+        # the diagnostics show the tare's offsets and the drift followed since (issue #36)
+        assert spin_until(executor, lambda: any(
+            'drift since the tare, top [counts]' in status_values(s)
+            for _, s in probe.statuses if s.name.endswith('contact estimation')), 10.0)
         status, result = send_goal(executor, direction, CalibrateCreep, ACTION,
                                    CalibrateCreep.Goal(hold=1.0))
         assert status == GoalStatus.STATUS_ABORTED

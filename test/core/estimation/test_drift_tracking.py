@@ -8,6 +8,7 @@ import pytest
 
 from skin_driver.core.estimation.calibration.calibration import Calibration
 from skin_driver.core.estimation.calibration.creep import CreepFit
+from skin_driver.core.estimation.scan.drift import drift_status
 from skin_driver.core.estimation.scan.pipeline import ContactEstimator, EstimatorConfig
 from skin_driver.core.sim.drift import Drift
 from skin_driver.core.sim.hold import hold_scene, idle_scene
@@ -125,3 +126,18 @@ def test_direction_and_location_do_not_move_over_an_hours_hold():
     assert abs(math.remainder(last.azimuth_rad - first.azimuth_rad, 2 * math.pi)) < math.radians(2)
     assert math.hypot(last.x_m - first.x_m, last.y_m - first.y_m) < 2e-4
     assert Press  # the press of the scene is the sim's own
+
+
+def test_the_diagnostics_show_the_tare_and_the_drift_and_warn_when_a_taxel_drifts_apart():
+    assert drift_status(ContactEstimator()) == ({'tare': 'none (the assumed baseline)'}, '')
+    scene = idle_scene(family_skin('harsh'), duration_s=8 * 3600.0, step_s=60.0)
+    estimator = _estimator(scene)
+    values, warning = drift_status(estimator)
+    assert warning == '' and 'min 0, max 64' in values['tare offset, top [counts]']
+    assert values['drift since the tare, top [counts]'] == '+0.0 mean, 0.0 largest'
+    for f in scene.frames:
+        estimator.process(f.top, f.bottom, f.time_s)
+    values, warning = drift_status(estimator)
+    # the harsh skin's taxels drift by their own factors: some far from their layer's mean
+    assert 'more than the touch threshold (40)' in warning and 'tare the unloaded skin' in warning
+    assert 'largest' in values['drift since the tare, bottom [counts]']
