@@ -10,9 +10,10 @@
  * outputs.
  *
  * A kernel is built once per estimator from its state (tare, gains, force tables, settings) and
- * is not changed afterwards, except for dead-taxel marks that a touch revives (reported): that
- * is the per-scan state, owned by whoever runs the scans; a kernel is never used by two threads
- * at once.
+ * is not changed afterwards, except for its per-scan state: dead-taxel marks that a touch
+ * revives (reported) and, for scans given their time, the baselines that follow drift and each
+ * taxel's age under load (drift.c, sk_drift_state). It is owned by whoever runs the scans; a
+ * kernel is never used by two threads at once.
  */
 #ifndef SKIN_KERNEL_SKIN_KERNEL_H
 #define SKIN_KERNEL_SKIN_KERNEL_H

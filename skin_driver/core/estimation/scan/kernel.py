@@ -11,8 +11,9 @@ A :class:`Kernel` copies an estimator's state once (tare, gains, force tables, s
 preallocated buffers, so a scan costs one copy of the maps into its buffer and one foreign call.
 Maps of uint16, as the driver and the datasets give them, are copied as they are (any value is
 a count, no check); others are checked and copied as float64.
-The kernel owns the dead-taxel marks its scans revive (:meth:`Kernel.dead_masks`): it is the
-estimation's one piece of mutable state, and whoever runs the scans owns it.
+The kernel owns the dead-taxel marks its scans revive (:meth:`Kernel.dead_masks`) and, for
+scans given their time, the baselines that follow drift and each taxel's age under load
+(:meth:`Kernel.drift_state`): the estimation's mutable state, which whoever runs the scans owns.
 
 The structs of skin_kernel.h are mirrored here field by field (:class:`Settings`,
 :class:`ContactRecord`, ...); before any other call the binding compares every mirror with the
@@ -270,7 +271,8 @@ class Kernel:
     One estimator's compiled state and buffers; scans run one at a time.
 
     The kernel is the estimation's one piece of mutable state: the dead-taxel marks its scans
-    revive. Whoever runs the scans owns it; :meth:`dead_masks` gives a consistent snapshot.
+    revive, the drift followed and the time under load. Whoever runs the scans owns it;
+    :meth:`dead_masks`, :attr:`drift` and :meth:`drift_state` give consistent snapshots.
     """
 
     def __init__(self, spec: KernelSettings):

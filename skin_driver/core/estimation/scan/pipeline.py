@@ -139,8 +139,9 @@ class ContactEstimator:
     Every scan is one call of the compiled kernel (:mod:`kernel`).
 
     An estimator does not change once made: its config, calibration and tare are fixed, and a
-    change (``with_*``) makes a new one, which a live host swaps in whole. The one piece of
-    mutable state is the kernel's: the dead-taxel marks that its scans revive. It belongs to the
+    change (``with_*``) makes a new one, which a live host swaps in whole. The mutable state is
+    the kernel's: the dead-taxel marks that its scans revive and, for scans given their time,
+    the drift followed and the time under load (:meth:`carry_time_from`). It belongs to the
     thread that runs the scans (:meth:`process`, :meth:`measure_shifts`); other threads read
     snapshots (:meth:`dead_masks`, :attr:`conditioner`) or condition maps on a kernel of their
     own (:meth:`maps_of`). A kernel is built when the estimator is made if the maps' shape is
