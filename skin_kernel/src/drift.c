@@ -96,7 +96,7 @@ void sk_drift_step(sk_kernel *k, const double *maps, double time_s)
 double sk_creep_factor(const sk_kernel *k, int i)
 {
   const sk_drift *d = &k->s.drift;
-  return 1.0 + d->creep_per_decade * log10(1.0 + k->age[i] / d->settle_s);
+  return (1.0 + d->creep_per_decade * log10(1.0 + k->age[i] / d->settle_s)) * k->creep_at_1s;
 }
 
 double sk_held_s(const sk_kernel *k, const sk_pair *p)

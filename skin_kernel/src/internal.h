@@ -48,6 +48,7 @@ struct sk_kernel {
   /* time (drift.c): the tare's baseline, each taxel's age under load, the last scan's time */
   double *tare, *age;
   double last_time, drift_mean[2], drift_max[2];
+  double creep_at_1s;               /* 1 / the creep of a load held 1 s (the reference) */
 };
 
 /* The sum of n numbers in order (the sums are of at most a window's taxels, so a plain loop

@@ -55,9 +55,10 @@ typedef struct {
 /*
  * Time in the scans (drift.c), for scans given their time: track_s, the time constant with which
  * an untouched taxel's baseline follows its reading (a touched one's follows its layer's drift
- * only), 0: none; a loaded taxel's force is divided by 1 + creep_per_decade * log10(1 + age /
- * settle_s), 0: none. A taxel's age under load (sk_contact.held_s) grows while it reads a
- * touch and decays by exp(-t / recovery_s) once unloaded (recovery_s 0: at once).
+ * only), 0: none; a loaded taxel's force is divided by its creep c(age) = 1 + creep_per_decade
+ * * log10(1 + age / settle_s) over c(1 s), 0: none (a load reads what it read 1 s after it
+ * arrived, when a calibration press is read). A taxel's age under load (sk_contact.held_s)
+ * grows while it reads a touch and decays by exp(-t / recovery_s) once unloaded (0: at once).
  */
 typedef struct {
   double track_s, creep_per_decade, settle_s, recovery_s;

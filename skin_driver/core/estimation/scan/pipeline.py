@@ -333,7 +333,9 @@ class ContactEstimator:
         d = self._drift_numbers()
         if not d.creep_per_decade > 0:
             return 1.0
-        return 1.0 + d.creep_per_decade * math.log10(1.0 + max(held_s, 0.0) / d.settle_s)
+        # drift.c's: the creep of the age over that of a load held 1 s
+        return ((1.0 + d.creep_per_decade * math.log10(1.0 + max(held_s, 0.0) / d.settle_s))
+                / (1.0 + d.creep_per_decade * math.log10(1.0 + 1.0 / d.settle_s)))
 
     def carry_time_from(self, other: 'ContactEstimator') -> 'ContactEstimator':
         """
