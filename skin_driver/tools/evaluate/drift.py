@@ -53,7 +53,7 @@ def calibrate_creep(skin: str, seed: int = 0, config: EstimatorConfig = None):
     scene = hold_scene(member, seed=10_000 + seed, lead_s=60.0,
                        hold_s=CALIBRATION_HOLD_S + 30.0, rest_s=20.0, step_s=10.0)
     estimator = ContactEstimator(config).with_tare(scene.tare_top, scene.tare_bottom)
-    session = CreepSession(CALIBRATION_HOLD_S, member.model.pitch_m)
+    session = CreepSession(CALIBRATION_HOLD_S, member.model.pitch_m, config.creep_recovery_s)
     for frame in scene.frames:
         contacts = estimator.process(frame.top, frame.bottom, frame.time_s)
         if session.done:
