@@ -10,7 +10,7 @@ def test_the_hours_section_reports_every_mode_the_targets_and_the_cost_side_by_s
     names = {t['name']: t for t in targets({'drift': res})}
     phantoms = next(t for n, t in names.items() if n.startswith('phantom contacts'))
     assert phantoms['met'] and phantoms['measured'] == '0'
-    force = next(t for n, t in names.items() if n.startswith('|F| after 60 min'))
+    force = next(t for n, t in names.items() if n.startswith('force (magnitude) after 60 min'))
     assert 'uncorrected' in force['note'] and 'default creep' in force['note']
     cost = next(t for n, t in names.items() if n.startswith("cost of a scan's time"))
     assert 'without' in cost['note'] and cost['limit'] == '<= 2 us'
