@@ -75,7 +75,8 @@ def drift_targets(res) -> list:
     out.append((f'phantom contacts over {res["hours"]:g} h unloaded, baselines followed',
                 phantoms, '0', phantoms == 0, f'{off} on the worst skin with the tare alone',
                 'd'))
-    for key, limit, what in (('force_60min', FORCE_LIMIT, 'force (magnitude) after 60 min against 1 s'),
+    for key, limit, what in (('force_60min', FORCE_LIMIT,
+                              'force (magnitude) after 60 min against 1 s'),
                              ('force_repress', REPRESS_LIMIT,
                               're-press after an hour held, against the first')):
         worst, skin = _worst(holds, 'calibrated', key)
