@@ -4,6 +4,7 @@ from action_msgs.msg import GoalStatus
 from pipeline import pipeline, scene, send_goal
 import pytest
 from rclpy.action import ActionClient
+from rclpy.parameter import Parameter
 from rosutil import spin_until
 from skin_driver.core.estimation.calibration.calibration import Calibration
 from skin_driver.ros.conversions import status_values
@@ -81,3 +82,20 @@ def test_no_load_a_bad_goal_and_a_cancel_each_end_with_a_message_and_change_noth
     logged = capfd.readouterr().err
     assert 'creep calibration goal rejected' in logged
     assert 'creep calibration: cancelled after' in logged
+
+
+def test_a_change_of_parameters_keeps_how_long_a_press_has_been_held(tmp_path):
+    held = scene([{'time_s': 1.0, 'force_n': 10.0, 'duration_s': 30.0}])
+    with pipeline(tmp_path, held, rate_hz=100.0) as (_, _, direction, probe, executor):
+
+        def longest():
+            return max((c.held for m in probe.contacts for c in m.contacts), default=0.0)
+        assert spin_until(executor, lambda: longest() > 3.0, 15.0)
+        generation = direction.host.live.generation
+        direction.set_parameters([Parameter('min_confidence', value=0.2)])
+        assert spin_until(executor, lambda: direction.host.live.generation > generation, 5.0)
+        before = len(probe.contacts)
+        assert spin_until(executor, lambda: len(probe.contacts) > before + 20, 5.0)
+        # the new estimator's first contacts: the time under load carried over, not restarted
+        after = [c.held for m in probe.contacts[before + 10:] for c in m.contacts]
+        assert after and min(after) > 3.0

@@ -142,20 +142,21 @@ def _same_contacts(made, published) -> bool:
 
     The live estimator's scans carry their time: its baselines follow the drift of untouched
     taxels and presses lose their creep (per-scan state that a copy made afterwards has not
-    seen), so forces may differ by a percent and a faint direction's figures by its noise;
-    ``held`` is the live one's alone. What tells estimators apart stays: where, how hard,
-    whether there is a direction and which.
+    seen), so forces may differ by a percent or two and a faint direction's figures by its
+    noise; ``held`` is the live one's alone. What tells estimators apart stays: where, how
+    hard, and for a direction both trust, whether it is valid and which way it points.
     """
     if len(made) != len(published):
         return False
     for fields, msg in zip(made, published):
         x, y, _, magnitude, normal, azimuth = fields[:6]
         confidence, valid = fields[18], fields[19]
-        if (valid != msg.direction_valid or abs(x - msg.location.x) > 1e-4
-                or abs(y - msg.location.y) > 1e-4
-                or abs(normal - msg.normal_force) > 0.02 * msg.normal_force + 1e-3
-                or abs(magnitude - msg.magnitude) > 0.02 * msg.magnitude + 1e-3
-                or abs(confidence - msg.confidence) > 0.05
+        if (abs(x - msg.location.x) > 1e-4 or abs(y - msg.location.y) > 1e-4
+                or abs(normal - msg.normal_force) > 0.03 * msg.normal_force + 1e-3
+                or abs(magnitude - msg.magnitude) > 0.03 * msg.magnitude + 1e-3):
+            return False
+        if min(confidence, msg.confidence) > 0.7 and (
+                valid != msg.direction_valid
                 or (valid and abs(math.remainder(azimuth - msg.azimuth, 2 * math.pi)) > 0.05)):
             return False
     return True

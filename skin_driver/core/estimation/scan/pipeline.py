@@ -325,7 +325,10 @@ class ContactEstimator:
 
     def drift(self) -> tuple:
         """Return the last timed scan's (mean, largest |drift|) of each layer since the tare."""
-        kernel = self._kernels.get(self._conditioner.shape)
+        kernels = self._kernels
+        shape = self._conditioner.shape
+        kernel = kernels.get(shape) if shape is not None else (
+            next(iter(kernels.values())) if len(kernels) == 1 else None)
         return kernel.drift if kernel is not None else ((0.0, 0.0), (0.0, 0.0))
 
     def creep_factor(self, held_s: float) -> float:
@@ -345,13 +348,13 @@ class ContactEstimator:
         path: the time a skin has been loaded and how far it drifted stay true. Of another grid
         or tare there is nothing to carry (a tare starts afresh).
         """
-        shape = self._conditioner.shape
-        if (other is None or shape is None or other._conditioner.shape != shape
-                or other._tare_epoch is not self._tare_epoch):
+        if other is None or other._tare_epoch is not self._tare_epoch:
             return self
-        mine, theirs = self._kernels.get(shape), other._kernels.get(shape)
-        if mine is not None and theirs is not None:
-            mine.set_drift_state(theirs.drift_state())
+        # Each grid's kernel, tared or not (an untared estimator's is made for the scans' grid).
+        theirs = other._kernels
+        for shape, mine in self._kernels.items():
+            if shape in theirs:
+                mine.set_drift_state(theirs[shape].drift_state())
         return self
 
     def _scan(self, top_counts, bottom_counts, every_pair: bool = False,
