@@ -129,7 +129,12 @@ def test_direction_and_location_do_not_move_over_an_hours_hold():
 
 
 def test_the_diagnostics_show_the_tare_and_the_drift_and_warn_when_a_taxel_drifts_apart():
-    assert drift_status(ContactEstimator()) == ({'tare': 'none (the assumed baseline)'}, '')
+    values, warning = drift_status(ContactEstimator())
+    assert values['tare'] == 'none (the assumed baseline)' and warning == ''
+    assert values['creep correction'] == 'default: 2.50 % per decade, settles in 1 s'
+    calibrated = ContactEstimator(calibration=Calibration(creep=CreepFit(0.04, 2.0)))
+    assert drift_status(calibrated)[0]['creep correction'].startswith(
+        'calibrated: creep 4.00 % per decade')
     scene = idle_scene(family_skin('harsh'), duration_s=8 * 3600.0, step_s=60.0)
     estimator = _estimator(scene)
     values, warning = drift_status(estimator)

@@ -1,9 +1,9 @@
 """
 What a skin's baselines have done since its tare, for the diagnostics: offsets, drift, a warning.
 
-The tare's offsets (each layer's mean and range of unloaded counts) and the drift the scans'
-baseline tracking followed since (:mod:`kernel`'s ``drift``, each layer's mean and largest). A
-touched taxel's baseline follows only its layer's mean drift; where one taxel has drifted from
+The creep correction in force, the tare's offsets (each layer's mean and range of unloaded
+counts) and the drift the scans' baseline tracking followed since (:mod:`kernel`'s ``drift``,
+each layer's mean and largest). A touched taxel's baseline follows only its layer's mean drift; where one taxel has drifted from
 that mean by more than the touch threshold, a press there reads wrong by as much, and no
 correction covers it: then the warning says to tare the unloaded skin again.
 """
@@ -17,10 +17,15 @@ __all__ = ['drift_status']
 
 def drift_status(estimator) -> tuple:
     """Return (diagnostic values, warning or '') of ``estimator``'s tare and tracked drift."""
-    values = {}
+    creep = estimator.calibration.creep
+    config = estimator.config
+    values = {'creep correction': (
+        f'calibrated: {creep.describe()}' if creep is not None else
+        f'default: {100 * config.creep_per_decade:.2f} % per decade, settles in '
+        f'{config.creep_settle_s:g} s')}
     conditioner = estimator.conditioner
     if conditioner.shape is None:
-        return {'tare': 'none (the assumed baseline)'}, ''
+        return {**values, 'tare': 'none (the assumed baseline)'}, ''
     baseline = conditioner.state(conditioner.shape).baseline
     (mean, largest) = estimator.drift()
     for i, layer in enumerate(('top', 'bottom')):
