@@ -3,9 +3,10 @@ What a skin's baselines have done since its tare, for the diagnostics: offsets, 
 
 The creep correction in force, the tare's offsets (each layer's mean and range of unloaded
 counts) and the drift the scans' baseline tracking followed since (:mod:`kernel`'s ``drift``,
-each layer's mean and largest). A touched taxel's baseline follows only its layer's mean drift; where one taxel has drifted from
-that mean by more than the touch threshold, a press there reads wrong by as much, and no
-correction covers it: then the warning says to tare the unloaded skin again.
+each layer's mean and largest). A touched taxel's baseline follows only its layer's mean
+drift; where one taxel has drifted from that mean by more than the touch threshold, a press
+there reads wrong by as much, and no correction covers it: then the warning says to tare the
+unloaded skin again.
 """
 
 from __future__ import annotations
