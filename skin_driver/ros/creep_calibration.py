@@ -25,6 +25,10 @@ MAX_HOLD_S = 3600.0
 # Seconds between two feedbacks (the scans come hundreds a second).
 FEEDBACK_S = 0.5
 NOTHING = '; the previous calibration stays in force'
+# What a calibration with a rest asks for next, by the session's phase.
+_DUE = {'release': 'held long enough: take the load off now',
+        'rest': 'load off: put it back in a moment, where it was',
+        'repress': 'load back: hold it two seconds'}
 
 
 class _Running:
@@ -37,6 +41,7 @@ class _Running:
         self.error = ''
         self.force = 0.0
         self.fed_s = -math.inf
+        self.phase = session.phase
 
 
 class CreepCalibration:
@@ -69,12 +74,19 @@ class CreepCalibration:
             return
         if read:
             running.force = read[0].force_n
-        held = running.session.held_s
-        if read and held - running.fed_s >= FEEDBACK_S:
+        session = running.session
+        held, phase = session.held_s, session.phase
+        note = _DUE.get(phase, '')
+        if phase != running.phase and note:
+            running.phase = phase
+            self._node.get_logger().info(f'creep calibration: {note}')
+        elif phase == 'hold' and read and held - running.fed_s >= FEEDBACK_S:
             running.fed_s = held
-            running.goal.publish_feedback(CalibrateCreep.Feedback(
-                held=held, hold=running.session.hold_s, force=running.force,
-                note=f'held {held:.1f} of {running.session.hold_s:.0f} s'))
+            note = f'held {held:.1f} of {session.hold_s:.0f} s'
+        else:
+            return
+        running.goal.publish_feedback(CalibrateCreep.Feedback(
+            held=held, hold=session.hold_s, force=running.force, note=note))
 
     # ---- action ------------------------------------------------------------------------------
     def _on_goal(self, request) -> GoalResponse:
@@ -92,7 +104,7 @@ class CreepCalibration:
     @staticmethod
     def _problem(goal) -> str:
         """Return why the goal cannot be served, or ''."""
-        for name in ('load', 'hold', 'timeout'):
+        for name in ('load', 'hold', 'rest', 'timeout'):
             value = getattr(goal, name)
             if not (math.isfinite(value) and value >= 0.0):
                 return f'{name} {value} is not a number >= 0'
@@ -100,8 +112,11 @@ class CreepCalibration:
             return (f'hold {goal.hold:g} s is not in [{MIN_HOLD_S:g}, {MAX_HOLD_S:g}] s; a few '
                     'minutes (0: the default) see the creep best')
         hold = goal.hold or DEFAULT_HOLD_S
-        if goal.timeout and goal.timeout < hold:
-            return f'timeout {goal.timeout:g} s is shorter than the hold ({hold:g} s)'
+        if goal.rest > MAX_HOLD_S:
+            return f'rest {goal.rest:g} s is over {MAX_HOLD_S:g} s'
+        if goal.timeout and goal.timeout < hold + goal.rest:
+            return (f'timeout {goal.timeout:g} s is shorter than the hold and the rest '
+                    f'({hold + goal.rest:g} s)')
         return ''
 
     async def _execute(self, goal_handle):
@@ -126,9 +141,9 @@ class CreepCalibration:
             return f'refused: {problem}{NOTHING}', goal_handle.abort
         estimator = self._get_estimator()
         hold = goal.hold or DEFAULT_HOLD_S
-        timeout = goal.timeout or hold + 60.0
+        timeout = goal.timeout or hold + 2.0 * goal.rest + 60.0
         session = CreepSession(hold, estimator.config.pitch_m,
-                               estimator.config.creep_recovery_s)
+                               estimator.config.creep_recovery_s, goal.rest)
         running = self._running = _Running(session, goal_handle, estimator)
         self._node.get_logger().info(
             f'creep calibration: put one load on the skin and hold it still for {hold:.0f} s '
@@ -144,8 +159,10 @@ class CreepCalibration:
         if running.error:
             return f'{running.error}{NOTHING}', goal_handle.abort
         if outcome == 'timeout':
-            why = ('no load arrived' if session.held_s == 0 and not session.done
-                   else f'the load was held {session.held_s:.0f} of {hold:.0f} s')
+            why = ('no load arrived' if session.held_s == 0 else
+                   f'the load was held {session.held_s:.0f} of {hold:.0f} s'
+                   if session.phase == 'hold' else
+                   f'the load was not taken off and put back ({_DUE[session.phase]})')
             return f'timed out after {timeout:.0f} s: {why}{NOTHING}', goal_handle.abort
         try:
             fit = session.finish()
@@ -153,11 +170,13 @@ class CreepCalibration:
         except (CreepError, OSError, ValueError) as err:
             return f'{err}{NOTHING}', goal_handle.abort
         result.per_decade, result.settle = fit.per_decade, fit.settle_s
+        result.recovery = fit.recovery_s
         result.over_48h, result.load_read = fit.over_48_hours(), fit.load_n
         result.success = True
         known = (f'; the load weighs {goal.load:.2f} N, read {fit.load_n:.2f} N at its arrival'
                  if goal.load > 0 else '')
-        return f'{fit.describe()}{known}{written}', goal_handle.abort
+        recovered = (f'; recovers in {fit.recovery_s:.0f} s' if goal.rest > 0 else '')
+        return f'{fit.describe()}{recovered}{known}{written}', goal_handle.abort
 
 
 class _Read:

@@ -1,5 +1,7 @@
 """The creep action on the direction node: a held load in, its creep out, in the file; refusals."""
 
+import re
+
 from action_msgs.msg import GoalStatus
 from pipeline import pipeline, scene, send_goal
 import pytest
@@ -34,6 +36,24 @@ def test_a_load_held_still_gives_the_creep_in_the_result_the_file_and_the_estima
     stored = Calibration.load_yaml(tmp_path / 'calibration.yaml').creep
     assert stored is not None and stored.per_decade == pytest.approx(result.per_decade)
     assert stored.made_utc and in_force == stored
+
+
+def test_with_a_rest_the_feedback_says_when_to_take_the_load_off_and_put_it_back(tmp_path):
+    feedback = []
+    off_and_on = scene([{'time_s': 1.0, 'force_n': 10.0, 'duration_s': 9.0},
+                        {'time_s': 12.0, 'force_n': 10.0, 'duration_s': 5.0}])
+    with pipeline(tmp_path, off_and_on, rate_hz=100.0) as (_, _, direction, _, executor):
+        status, result = send_goal(
+            executor, direction, CalibrateCreep, ACTION,
+            CalibrateCreep.Goal(hold=6.0, rest=2.0, timeout=25.0), timeout_s=35.0,
+            feedback=feedback.append)
+    assert status == GoalStatus.STATUS_SUCCEEDED and result.success, result.message
+    notes = [f.note for f in feedback if not re.match(r'held [\d.]+ of', f.note)]
+    assert notes == ['held long enough: take the load off now',
+                     'load off: put it back in a moment, where it was',
+                     'load back: hold it two seconds']
+    # A film that does not creep does not say how it recovers: the estimator's stays.
+    assert result.recovery == 60.0 and 'recovers in 60 s' in result.message
 
 
 def test_a_load_that_moves_ends_the_goal_with_the_reason_and_changes_nothing(tmp_path):

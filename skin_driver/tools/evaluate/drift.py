@@ -9,7 +9,8 @@ sparse trail), each scanned by the estimator four ways, all tared at time 0:
 * ``default``: tracking and the creep correction with the estimator's defaults (the family's
   middle).
 * ``calibrated``: tracking and the creep fitted to this skin by a creep calibration (a load
-  held three minutes, :mod:`..calibration.creep`) on a hold of its own (another seed).
+  held three minutes, taken off for one and put back, :mod:`..calibration.creep`) on a hold of
+  its own (another seed).
 
 Reported: ``|F|`` after 1, 10 and 60 minutes and at a re-press (1 s into a press made two
 minutes after an hour's hold ended) as the change from its value 1 s into the first press; the
@@ -36,8 +37,9 @@ __all__ = ['MODES', 'hold_report', 'idle_report', 'calibrate_creep', 'drift_repo
 
 MODES = ('off', 'tracking', 'default', 'calibrated')
 LATER = ('1min', '10min', '60min', 'repress')
-# The creep calibration's hold (s): "a few minutes".
+# The creep calibration's hold (s): "a few minutes"; then a rest and the load put back.
 CALIBRATION_HOLD_S = 180.0
+CALIBRATION_REST_S = 60.0
 
 
 def _configs(base: EstimatorConfig) -> dict:
@@ -51,9 +53,10 @@ def calibrate_creep(skin: str, seed: int = 0, config: EstimatorConfig = None):
     config = replace(config or EstimatorConfig(pitch_m=member.model.pitch_m),
                      creep_per_decade=0.0)
     scene = hold_scene(member, seed=10_000 + seed, lead_s=60.0,
-                       hold_s=CALIBRATION_HOLD_S + 30.0, rest_s=20.0, step_s=10.0)
+                       hold_s=CALIBRATION_HOLD_S + 30.0, rest_s=CALIBRATION_REST_S, step_s=10.0)
     estimator = ContactEstimator(config).with_tare(scene.tare_top, scene.tare_bottom)
-    session = CreepSession(CALIBRATION_HOLD_S, member.model.pitch_m, config.creep_recovery_s)
+    session = CreepSession(CALIBRATION_HOLD_S, member.model.pitch_m, config.creep_recovery_s,
+                           CALIBRATION_REST_S)
     for frame in scene.frames:
         contacts = estimator.process(frame.top, frame.bottom, frame.time_s)
         if session.done:

@@ -7,7 +7,7 @@ import pytest
 
 from skin_driver.core.estimation.calibration.calibration import Calibration
 from skin_driver.core.estimation.calibration.creep import (CreepError, CreepFit, CreepSession,
-                                                           fit_creep)
+                                                           fit_creep, fit_recovery)
 from skin_driver.tools.evaluate.drift import calibrate_creep
 
 AGES = np.concatenate([[0.01, 0.03, 0.1, 0.3, 0.6], np.arange(1.0, 181.0, 1.0)])
@@ -88,3 +88,26 @@ def test_the_creep_is_kept_in_the_calibration_file_and_an_older_file_loads_witho
     Calibration().save_yaml(path)
     assert 'creep' not in path.read_text()
     assert Calibration.load_yaml(path).creep is None
+
+
+def test_a_rest_and_a_second_press_tell_how_fast_the_film_recovers():
+    truth = CreepFit(0.04, 2.0, 90.0)
+    remembered = 180.0 * np.exp(-60.0 / 90.0)
+    ratio = float(truth.factor(remembered + 1.0) / truth.factor(1.0))
+    assert fit_recovery(truth, 180.0, 60.0, ratio) == pytest.approx(90.0, rel=1e-6)
+    # a film that hardly creeps says nothing of its recovery
+    assert fit_recovery(CreepFit(0.001, 1.0), 180.0, 60.0, 1.0) is None
+    session = CreepSession(hold_s=170.0, rest_s=60.0)
+    for age in AGES:
+        session.add(10.0 + age, [_contact(8.0 * float(truth.factor(age)))])
+    assert session.phase == 'release' and not session.done
+    session.add(191.0, [_contact(8.0)])  # still on: the release is awaited
+    session.add(192.0, [])
+    assert session.phase == 'rest'
+    for age in (0.0, 0.5, 0.8, 1.0, 1.2, 1.4):
+        force = 8.0 * float(truth.factor(180.0 * np.exp(-(60.0 + age) / 90.0) + age))
+        session.add(252.0 + age, [_contact(force)])
+    assert session.done
+    fit = session.finish()
+    assert fit.per_decade == pytest.approx(0.04, rel=0.1)
+    assert 45.0 < fit.recovery_s < 180.0
