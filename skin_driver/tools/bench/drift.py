@@ -115,15 +115,16 @@ def drift_section(res) -> list:
            're-press as its change from 1 s into the first press (%), the change of azimuth and '
            'location over the hour. Modes: `off` scans without a time (the tare believed '
            'forever), `tracking` baselines followed but no creep corrected, `default` the '
-           "estimator's default creep (the family's middle), `calibrated` the creep a "
-           'three-minute creep calibration fitted on a hold of its own. Simulated hours are '
-           'rendered at the frames scored (docs/drift.md).', '']
+           "estimator's default creep (the family's middle), `calibrated` the creep a creep "
+           'calibration fitted on a hold of its own (three minutes held, one off, two seconds '
+           'back). Simulated hours are rendered at the frames scored (docs/drift.md).', '']
     out += format_drift(res).split('\n')
     out += ['', f'Cost of the time on the same 16 x 16 frames, interleaved ({cost["scans"]} '
             f'scans each): {cost["without"]:.1f} us a scan without it, {cost["with"]:.1f} us '
             f'with it: {cost["added_us"]:+.2f} us.', '']
     fits = [(h['skin'], h['creep_fit'], h['calibration_error']) for h in res['holds']]
     out += ['Creep calibration: ' + '; '.join(
-        f'{skin} {100 * fit["per_decade"]:.2f} %/decade, settles {fit["settle_s"]:.1f} s'
+        f'{skin} {100 * fit["per_decade"]:.2f} %/decade, settles {fit["settle_s"]:.1f} s, '
+        f'recovers {fit["recovery_s"]:.0f} s'
         if fit else f'{skin}: {error}' for skin, fit, error in fits) + '.', '']
     return out
