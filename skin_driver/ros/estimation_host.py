@@ -41,12 +41,14 @@ from rclpy.event_handler import PublisherEventCallbacks
 from sensor_msgs.msg import Image
 from skin_driver.core.estimation.calibration.calibration import PARTS, SkinMount, utc_now
 from skin_driver.core.estimation.calibration.tare import RecentScans
+from skin_driver.core.estimation.scan.drift import drift_status
 from skin_driver.core.estimation.scan.heatmap import colour_map, grey_levels
 from skin_driver.core.estimation.scan.pipeline import ContactEstimator, EstimatorConfig
 from skin_driver.core.estimation.shift.methods import DEFAULT_METHOD, get_method, method_names
 from skin_driver.core.protocol.realtime import StageCpu
 from skin_driver.ros import conversions, diagnostics, qos
 from skin_driver.ros.calibration_services import CalibrationServices
+from skin_driver.ros.creep_calibration import CreepCalibration
 from skin_driver.ros.estimator_params import estimator_config, ESTIMATOR_PARAMETERS
 from skin_driver.ros.frames import default_frame_id
 from skin_driver.ros.hot_path import LatestOnly, Listened
@@ -96,6 +98,7 @@ class EstimationHost:
         self.calibration = CalibrationServices(node, lambda: self._live.estimator,
                                                self.put_calibration)
         self.mount = MountCalibration(node, lambda: self._skin, self._skin_grid, self._put_mount)
+        self.creep = CreepCalibration(node, lambda: self._live.estimator, self._put_creep)
         # The scans a tare averages: filled and resized by the estimating thread alone.
         self._recent = RecentScans(self._p('tare.frames'))
         self._recent_size = self._recent_wanted = self._p('tare.frames')
@@ -277,6 +280,9 @@ class EstimationHost:
             if skin is not None:
                 # Its kernel now, not by the first scan on the thread that reads them.
                 estimator.ready_for(skin[0], skin[1])
+                # Drift tracked and time under load stay true across a change of parameters
+                # or calibration; a tare (another baseline) starts afresh.
+                estimator.carry_time_from(live.estimator)
             self._live = Live(estimator, skin, live.generation + 1)
 
     def _skin_grid(self) -> tuple:
@@ -289,6 +295,13 @@ class EstimationHost:
         mount = SkinMount(parent, fit.translation_m, fit.rpy_rad, fit.rms_residual_m,
                           len(fit.residuals_m), utc_now())
         path = self.calibration.write_and_put(replace(calibration, mount=mount))
+        return f'; written to {path}'
+
+    def _put_creep(self, fit) -> str:
+        """Store a creep fitted from a held load with the calibration; return where."""
+        calibration = self._live.estimator.calibration
+        path = self.calibration.write_and_put(replace(calibration, creep=replace(
+            fit, made_utc=utc_now())))
         return f'; written to {path}'
 
     def put_calibration(self, calibration) -> None:
@@ -376,7 +389,8 @@ class EstimationHost:
                 self._ask_for_skin(skin)
                 return
             start = time.perf_counter()
-            contacts = live.estimator.process(top, bottom)
+            scan_s = device_time_us * 1e-6
+            contacts = live.estimator.process(top, bottom, scan_s)
             cost = time.perf_counter() - start
             cpu.mark('estimate')
             # Converting here means a non-finite value never reaches a publisher.
@@ -403,6 +417,7 @@ class EstimationHost:
         self._skin = header.frame_id
         self.calibration.feed(top, bottom, contacts)
         self.mount.feed(contacts)
+        self.creep.feed(scan_s, contacts)
         cpu.mark('bookkeeping')
         self._cpu_reading.serve()
 
@@ -558,7 +573,11 @@ class EstimationHost:
                for stage, us in self._cpu_reading.ask().items()},
             **self.calibration.diagnostic_values(),
         }
+        drifted, drift_warning = drift_status(self._live.estimator)
+        values.update(drifted)
         level, message = diagnostics.OK, self.calibration.note
+        if drift_warning:
+            level, message = diagnostics.WARN, drift_warning
         if self.calibration.warning:
             level, message = diagnostics.WARN, self.calibration.warning
         if tally.estimated == 0:

@@ -341,7 +341,7 @@ class PatchesNode(Node):
                 wrench=Wrench(force=Vector3(x=f[0], y=f[1], z=f[2]),
                               torque=Vector3(x=t[0], y=t[1], z=t[2])),
                 area=c.area, confidence=c.confidence, direction_valid=c.direction_valid,
-                patch=patch.name))
+                held=c.held, patch=patch.name))
         self._link_publisher(link)
         return out, link, sum_wrenches(wrenches)
 

@@ -234,6 +234,7 @@ void sk_force_in(const sk_kernel *k, const double *counts, const unsigned char *
     const unsigned char *cut = clipped ? clipped + layer * n : NULL;
     double *f = force + layer * n;
     const double *gain = k->has_gain ? k->gain + layer * n : NULL;
+    int creeps = k->s.drift.creep_per_decade > 0.0;
     /* a count of 0 (every taxel past the box) has the force 0 */
     for (int i = 0; i < n; i++) {
       f[i] = gain ? 0.0 * gain[i] : 0.0;
@@ -242,6 +243,9 @@ void sk_force_in(const sk_kernel *k, const double *counts, const unsigned char *
       for (int i = r * cols + box[2]; i < r * cols + box[3]; i++) {
         double v = force_at(table, size, c[i], cut ? cut[i] : 0);
         f[i] = gain ? v * gain[i] : v;
+        if (creeps && k->age[layer * n + i] > 0.0) {
+          f[i] /= sk_creep_factor(k, layer * n + i);
+        }
       }
     }
   }

@@ -49,6 +49,10 @@ struct sk_kernel {
   int *labels, *iscratch;           /* n, 4 n */
   double *fit;                      /* a contact's 4 windows (4 n), then the shift's scratch */
   int revived;
+  /* time (drift.c): the tare's baseline, each taxel's age under load, the last scan's time */
+  double *tare, *age;
+  double last_time, drift_mean[2], drift_max[2];
+  double creep_at_1s;               /* 1 / the creep of a load held 1 s (the reference) */
 };
 
 /* The sum of n numbers in order (the sums are of at most a window's taxels, so a plain loop
@@ -86,6 +90,12 @@ int sk_pair_layers(sk_kernel *k);
 void sk_share_bottom(sk_kernel *k, int kn, const double *bottom);
 /* contacts.c: pair q's window, counts (top, bottom) then its share of the force maps */
 void sk_pair_window(const sk_kernel *k, int q, double *out);
+
+/* drift.c: the time's step of a scan at time_s (after its touch counts), a taxel's creep factor
+ * (index into the (2, n) maps), the longest age under load in pair p's window */
+void sk_drift_step(sk_kernel *k, const double *maps, double time_s);
+double sk_creep_factor(const sk_kernel *k, int i);
+double sk_held_s(const sk_kernel *k, const sk_pair *p);
 
 #define SK_PI 3.14159265358979323846
 

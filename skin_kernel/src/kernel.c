@@ -34,7 +34,7 @@ void sk_free(sk_kernel *k)
   }
   double *arrays[] = {k->baseline, k->threshold, k->noise, k->gain, k->leak_gate, k->live,
                       k->live_count, k->table_force, k->raw, k->counts, k->force, k->line_share, k->tops,
-                      k->fractions, k->scratch, k->fit};
+                      k->fractions, k->scratch, k->fit, k->tare, k->age};
   for (size_t i = 0; i < sizeof(arrays) / sizeof(arrays[0]); i++) {
     free(arrays[i]);
   }
@@ -74,6 +74,10 @@ static const sk_field layout[] = {
   SIZE(sk_direction),
   FIELD(sk_direction, on), FIELD(sk_direction, force_ref_n), FIELD(sk_direction, weight_x),
   FIELD(sk_direction, weight_y),
+  FIELD(sk_settings, drift),
+  SIZE(sk_drift),
+  FIELD(sk_drift, track_s), FIELD(sk_drift, creep_per_decade), FIELD(sk_drift, settle_s),
+  FIELD(sk_drift, recovery_s),
   SIZE(sk_contact),
   FIELD(sk_contact, x_m), FIELD(sk_contact, y_m), FIELD(sk_contact, force_n),
   FIELD(sk_contact, area_m2), FIELD(sk_contact, shift_x_m), FIELD(sk_contact, shift_y_m),
@@ -83,9 +87,10 @@ static const sk_field layout[] = {
   FIELD(sk_contact, dy), FIELD(sk_contact, sigma), FIELD(sk_contact, top_force_n),
   FIELD(sk_contact, bottom_force_n), FIELD(sk_contact, shift_confidence),
   FIELD(sk_contact, valid), FIELD(sk_contact, kept), FIELD(sk_contact, pair),
-  FIELD(sk_contact, censored),
+  FIELD(sk_contact, censored), FIELD(sk_contact, held_s),
   SIZE(sk_status),
   FIELD(sk_status, pairs), FIELD(sk_status, censored), FIELD(sk_status, revived),
+  FIELD(sk_status, drift_mean), FIELD(sk_status, drift_max),
 };
 
 int sk_layout(const sk_field **fields, int *abi_version)
@@ -118,6 +123,12 @@ static int refuse(const sk_settings *s, unsigned long settings_size, char *messa
   } else if (s->direction.on && !sk_direction_usable(&s->direction)) {
     snprintf(text, sizeof text, "the direction correction needs a positive reference force "
              "and finite weights");
+  } else if (!(s->drift.track_s >= 0) || !(s->drift.creep_per_decade >= 0)
+             || !isfinite(s->drift.track_s) || !isfinite(s->drift.creep_per_decade)
+             || (s->drift.creep_per_decade > 0
+                 && !(s->drift.settle_s > 0 && s->drift.recovery_s > 0))) {
+    snprintf(text, sizeof text, "drift: track_s and creep_per_decade finite and >= 0, "
+             "settle_s and recovery_s positive with creep");
   } else {
     return SK_OK;
   }
@@ -188,13 +199,18 @@ int sk_new(const sk_settings *settings, unsigned long settings_size, const doubl
   size_t imprint_scratch = 5 * (size_t)n;
   k->fit = copy_of(NULL, 4 * (size_t)n
                    + (shift_scratch > imprint_scratch ? shift_scratch : imprint_scratch));
+  k->tare = copy_of(baseline, 2 * n);
+  k->age = calloc(2 * (size_t)n, sizeof(double));
+  k->last_time = NAN;
+  k->creep_at_1s = s->drift.creep_per_decade > 0
+    ? 1.0 / (1.0 + s->drift.creep_per_decade * log10(1.0 + 1.0 / s->drift.settle_s)) : 1.0;
   k->labels = malloc(sizeof(int) * n);
   k->iscratch = malloc(sizeof(int) * 4 * n);
   if (!k->baseline || !k->threshold || !k->noise || (gain && !k->gain) || !k->leak_gate
       || !k->dead || !k->clipped || !k->live
       || !k->live_count || !k->table_force || !k->raw || !k->counts || !k->force
       || !k->line_share || !k->pairs || !k->tops || !k->fractions || !k->scratch || !k->fit || !k->labels
-      || !k->iscratch) {
+      || !k->iscratch || !k->tare || !k->age) {
     sk_free(k);
     if (message && message_size) {
       snprintf(message, message_size, "no memory for a kernel of %d x %d taxels", rows, cols);
@@ -273,6 +289,7 @@ static void contact(const sk_kernel *k, int q, sk_contact *rec)
   rec->top_force_n = p->top_force;
   rec->bottom_force_n = p->bottom_force;
   rec->shift_confidence = p->confidence;
+  rec->held_s = sk_held_s(k, p);
 }
 
 /* Write the records of the last scan's pairs to out, strongest first; returns their number. */
@@ -338,12 +355,13 @@ static void model_refit(sk_kernel *k, sk_pair *p, const sk_taxel_model *model, c
 }
 
 /* One scan of maps known to hold counts (sk_scan, sk_scan_counts). */
-static int scan(sk_kernel *k, const double *maps, int every_pair, sk_shift_fn shift,
-                void *user, sk_contact *out, sk_status *status)
+static int scan(sk_kernel *k, const double *maps, double time_s, int every_pair,
+                sk_shift_fn shift, void *user, sk_contact *out, sk_status *status)
 {
   k->revived = 0;
   k->npairs = 0;
   sk_touch_counts(k, maps);
+  sk_drift_step(k, maps, time_s);
   sk_force_of(k);
   int count = sk_pair_layers(k);
   k->npairs = count;
@@ -427,6 +445,10 @@ static int scan(sk_kernel *k, const double *maps, int every_pair, sk_shift_fn sh
   status->pairs = count;
   status->censored = censored;
   status->revived = k->revived != 0;
+  for (int layer = 0; layer < 2; layer++) {
+    status->drift_mean[layer] = k->drift_mean[layer];
+    status->drift_max[layer] = k->drift_max[layer];
+  }
   return finish(k, out);
 }
 
@@ -445,18 +467,20 @@ static int check_maps(const sk_kernel *k, const double *maps)
   return SK_OK;
 }
 
-int sk_scan(sk_kernel *k, const double *maps, int every_pair, sk_contact *out,
+int sk_scan(sk_kernel *k, const double *maps, double time_s, int every_pair, sk_contact *out,
             sk_status *status)
 {
   int checked = check_maps(k, maps);
-  return checked == SK_OK ? scan(k, maps, every_pair, NULL, NULL, out, status) : checked;
+  return checked == SK_OK ? scan(k, maps, time_s, every_pair, NULL, NULL, out, status)
+    : checked;
 }
 
 int sk_scan_shifted(sk_kernel *k, const double *maps, int every_pair, sk_shift_fn shift,
                     void *user, sk_contact *out, sk_status *status)
 {
   int checked = check_maps(k, maps);
-  return checked == SK_OK ? scan(k, maps, every_pair, shift, user, out, status) : checked;
+  return checked == SK_OK ? scan(k, maps, NAN, every_pair, shift, user, out, status)
+    : checked;
 }
 
 int sk_condition(sk_kernel *k, const double *maps, double *counts, double *force,
@@ -501,15 +525,15 @@ int sk_force(const sk_kernel *k, const double *counts, const unsigned char *clip
   return SK_OK;
 }
 
-int sk_scan_counts(sk_kernel *k, const uint16_t *maps, int every_pair, sk_contact *out,
-                   sk_status *status)
+int sk_scan_counts(sk_kernel *k, const uint16_t *maps, double time_s, int every_pair,
+                   sk_contact *out, sk_status *status)
 {
   /* exact as doubles: the scan is sk_scan's to the bit */
   int n2 = 2 * k->n;
   for (int i = 0; i < n2; i++) {
     k->raw[i] = maps[i];
   }
-  return scan(k, k->raw, every_pair, NULL, NULL, out, status);
+  return scan(k, k->raw, time_s, every_pair, NULL, NULL, out, status);
 }
 
 void sk_dead(const sk_kernel *k, unsigned char *out)

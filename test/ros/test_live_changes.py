@@ -5,6 +5,8 @@ Every contacts message must be what one estimator in force made of its scan (no 
 of a change), and every scan the reader handed over is either published or counted.
 """
 
+import math
+
 from action_msgs.msg import GoalStatus
 from pipeline import call, pipeline, send_goal
 import pytest
@@ -115,9 +117,8 @@ def test_changes_under_a_2_khz_fused_reader_never_tear_a_scan_nor_lose_one(tmp_p
     for msg in sorted(contacts, key=lambda m: m.sequence):
         top, bottom = conversions.skin_frame_layers(frames[msg.sequence])
         for g in range(at, generations[-1] + 1):
-            made = [conversions.contact_to_msg(msg.header, c)
-                    for c in copies[g].process(top, bottom)]
-            if made == list(msg.contacts):
+            made = [conversions.contact_fields(c) for c in copies[g].process(top, bottom)]
+            if _same_contacts(made, msg.contacts):
                 at = g
                 used.add(g)
                 break
@@ -133,6 +134,32 @@ def test_changes_under_a_2_khz_fused_reader_never_tear_a_scan_nor_lose_one(tmp_p
                       + tally.before_skin_checked)
     assert (tally.refused, tally.left_for_newer, tally.before_skin_checked) == (0, 0, 0)
     assert tally.estimated > 2000
+
+
+def _same_contacts(made, published) -> bool:
+    """
+    Return whether the published contacts are those made again of the same scan.
+
+    The live estimator's scans carry their time: its baselines follow the drift of untouched
+    taxels and presses lose their creep (per-scan state that a copy made afterwards has not
+    seen), so forces may differ by a percent or two and a faint direction's figures by its
+    noise; ``held`` is the live one's alone. What tells estimators apart stays: where, how
+    hard, and for a direction both trust, whether it is valid and which way it points.
+    """
+    if len(made) != len(published):
+        return False
+    for fields, msg in zip(made, published):
+        x, y, _, magnitude, normal, azimuth = fields[:6]
+        confidence, valid = fields[18], fields[19]
+        if (abs(x - msg.location.x) > 1e-4 or abs(y - msg.location.y) > 1e-4
+                or abs(normal - msg.normal_force) > 0.03 * msg.normal_force + 1e-3
+                or abs(magnitude - msg.magnitude) > 0.03 * msg.magnitude + 1e-3):
+            return False
+        if min(confidence, msg.confidence) > 0.7 and (
+                valid != msg.direction_valid
+                or (valid and abs(math.remainder(azimuth - msg.azimuth, 2 * math.pi)) > 0.05)):
+            return False
+    return True
 
 
 def test_a_direction_node_checks_the_skin_its_frames_show_before_estimating_them(tmp_path):

@@ -31,6 +31,8 @@ Optional physics of real films and tips (all off by default, so older skins rend
 * ``normal_shift_m_per_n``: the bottom imprint also moves with the normal load (an anisotropic
   or pre-sheared layer), so the zero shift depends on how hard one presses.
 * The FSR's resistance floor ``FsrModel.r_min_ohm`` is a hard saturation already.
+* ``drift`` (:mod:`.drift`): creep under load and drift of the offsets over time; only
+  :func:`render_held`, which takes a time, renders it.
 """
 
 from __future__ import annotations
@@ -43,13 +45,15 @@ from typing import Sequence
 import numpy as np
 
 # How a taxel samples a profile is the estimation's description too (cellops).
+from .drift import creep_factor, Drift, offset_counts
 from ..estimation.model.cellops import (axis_operator as _axis_operator, blur as _blur,
                                         gather as _gather)
 from ..estimation.model.fsr import FsrModel
 from ..estimation.model.taxelmodel import hertz_profile
 
 __all__ = ['SkinModel', 'Press', 'render', 'render_plate', 'render_force', 'render_expected',
-           'expected_counts', 'layer_shift_m', 'taxel_spread', 'contact_radius_m']
+           'expected_counts', 'layer_shift_m', 'taxel_spread', 'contact_radius_m', 'render_held',
+           'drift_spread']
 
 
 @dataclass(frozen=True)
@@ -124,6 +128,7 @@ class SkinModel:
     turn_on_ohm: float = 0.0
     hertz_reference_n: float = 0.0
     normal_shift_m_per_n: tuple = (0.0, 0.0)
+    drift: Drift = Drift()
 
     def __post_init__(self):
         """Reject inconsistent parameters."""
@@ -297,9 +302,26 @@ def taxel_spread(model: SkinModel) -> tuple:
     return gain, offset
 
 
-def _film_counts(model: SkinModel, force: np.ndarray, layer: int) -> np.ndarray:
+@lru_cache(maxsize=64)
+def drift_spread(model: SkinModel) -> tuple:
+    """Return per-layer (creep rate, offset drift factor) maps, 2 x rows x cols, by the seed."""
+    # A stream of its own: the gains and offsets of a seed stay those it always had.
+    rng = np.random.default_rng([model.seed, 0xD71F7])
+    shape = (2, model.rows, model.cols)
+    d = model.drift
+    rate = d.creep_per_decade * (1.0 + d.creep_spread * rng.uniform(-1.0, 1.0, shape))
+    factor = 1.0 + d.offset_spread * rng.standard_normal(shape)
+    rate.flags.writeable = False
+    factor.flags.writeable = False
+    return rate, factor
+
+
+def _film_counts(model: SkinModel, force: np.ndarray, layer: int,
+                 drift: np.ndarray = None) -> np.ndarray:
     """Return noise-free counts of one layer's force map: FSR, step, offset, crosstalk."""
     gain, offset = taxel_spread(model)
+    if drift is not None:
+        offset = offset + drift
     fsr = model.fsr
     counts = fsr.force_to_counts(force * gain[layer])
     if model.turn_on_ohm > 0:
@@ -324,8 +346,8 @@ def _kill_dead(model: SkinModel, counts: np.ndarray, layer: int) -> np.ndarray:
 
 
 def _electronics(model: SkinModel, force: np.ndarray, layer: int,
-                 rng: np.random.Generator) -> np.ndarray:
-    counts = _film_counts(model, force, layer)
+                 rng: np.random.Generator, drift: np.ndarray = None) -> np.ndarray:
+    counts = _film_counts(model, force, layer, drift)
     if model.noise_counts > 0:
         counts = counts + rng.normal(0.0, model.noise_counts, counts.shape)
     counts = _kill_dead(model, counts, layer)
@@ -364,3 +386,24 @@ def render_plate(model: SkinModel, load_n: float, rng: np.random.Generator) -> t
     sensed = load_n if pressure > model.turn_on_pa else 0.0
     force = np.full((model.rows, model.cols), float(sensed))
     return _electronics(model, force, 0, rng), _electronics(model, force, 1, rng)
+
+
+def render_held(model: SkinModel, presses: Sequence[Press], ages_s: Sequence[float],
+                time_s: float, rng: np.random.Generator) -> tuple:
+    """
+    Return (top, bottom) uint16 maps at ``time_s`` after the tare, of presses held for a time.
+
+    ``ages_s`` is each press's equivalent age under load (:func:`drift.held_age`): its taxels
+    sense its force times their creep factor. Every offset has drifted by ``time_s``
+    (:mod:`.drift`). With ``Drift()`` this is :func:`render` of the presses.
+    """
+    top = np.zeros((model.rows, model.cols))
+    bottom = np.zeros_like(top)
+    rate, factor = drift_spread(model)
+    for press, age in zip(presses, ages_s):
+        t, b = _press_maps(model, press)
+        top += t * creep_factor(model.drift, rate[0], age)
+        bottom += b * creep_factor(model.drift, rate[1], age)
+    common = offset_counts(model.drift, time_s)
+    return (_electronics(model, top, 0, rng, common * factor[0]),
+            _electronics(model, bottom, 1, rng, common * factor[1]))

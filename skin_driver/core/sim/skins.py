@@ -5,7 +5,8 @@ Each skin differs from the project's own simulated skin (``default``) in one or 
 skin can: FSR curve and saturation, layer compliance (shifts from 0.1 to 6 taxels), cover and
 elastic-layer spread, per-taxel gains and offsets, passive-matrix crosstalk, noise, layer
 misalignment, films that turn on at a pressure with a step to a few kilohms, tips whose contact
-grows with the load (Hertz), a zero shift that moves with the normal load. Each also names the
+grows with the load (Hertz), a zero shift that moves with the normal load, creep under a held
+load and drift of the offsets over hours (:mod:`.drift`). Each also names the
 forces its scenes press with, so that its shifts are meaningful: ``paper_force_n`` for the
 paper's protocol (alpha = 45 deg) and ``force_range_n`` for random presses. Everything is
 fixed by the skin's ``seed``: the same name always gives the same skin.
@@ -22,6 +23,7 @@ import math
 
 import numpy as np
 
+from .drift import Drift
 from .physics import SkinModel
 from ..estimation.model.fsr import FsrModel
 
@@ -61,51 +63,63 @@ _FILM_FSR = FsrModel(r_series_ohm=2200.0, r_min_ohm=250.0, r_max_ohm=3500.0,
 
 _FAMILY = (
     FamilySkin('default', "the project's own simulated skin (seed prototype), 0.36 mm misaligned",
-               SkinModel(misalignment_m=(3e-4, -2e-4)), 10.0, (5.0, 15.0)),
+               SkinModel(misalignment_m=(3e-4, -2e-4),
+                         drift=Drift(0.015, 0.2, 1.0, 60.0, 6.0, 15.0)), 10.0, (5.0, 15.0)),
     FamilySkin('soft', 'soft thick layer: 3-6 taxel shifts at 25-40 N, wide bottom imprint',
                SkinModel(compliance_m_per_n=9e-4, spread_m=0.003, cover_spread_m=0.0015,
-                         fsr=_SOFT_FSR, misalignment_m=(-4e-4, 3e-4), seed=2),
+                         fsr=_SOFT_FSR, misalignment_m=(-4e-4, 3e-4), seed=2,
+                         drift=Drift(0.05, 0.3, 2.0, 120.0, -4.0, 25.0, 3.0 * 3600.0, 0.2)),
                32.0, (25.0, 40.0)),
     FamilySkin('stiff', 'stiff thin layer: shifts of 0.1-1 taxel at 10-60 N',
                SkinModel(compliance_m_per_n=1.2e-4, spread_m=0.001, fsr=_SOFT_FSR,
-                         noise_counts=4.0, seed=3),
+                         noise_counts=4.0, seed=3,
+                         drift=Drift(0.005, 0.1, 0.5, 30.0, 2.0, 8.0)),
                20.0, (10.0, 60.0)),
     FamilySkin('crosstalk', 'strong passive-matrix crosstalk (1.2 % of each row and column)',
-               SkinModel(crosstalk=0.012, baseline_spread_counts=10.0, seed=4),
+               SkinModel(crosstalk=0.012, baseline_spread_counts=10.0, seed=4,
+                         drift=Drift(0.02, 0.2, 1.0, 60.0, 10.0, 10.0, 6.0 * 3600.0, 0.1)),
                12.0, (6.0, 18.0)),
     FamilySkin('saturating', 'FSRs saturate at 3 N per taxel: flat-topped imprints',
-               SkinModel(compliance_m_per_n=3e-4, fsr=_SATURATING_FSR, seed=5),
+               SkinModel(compliance_m_per_n=3e-4, fsr=_SATURATING_FSR, seed=5,
+                         drift=Drift(0.03, 0.2, 1.5, 90.0, 8.0, 20.0)),
                20.0, (10.0, 60.0)),
     FamilySkin('noisy', 'noise 10 counts, gains +-10 %, offsets, misaligned by half a taxel',
                SkinModel(compliance_m_per_n=5e-4, noise_counts=10.0, gain_spread=0.1,
-                         baseline_spread_counts=20.0, misalignment_m=(2.0e-3, -1.5e-3), seed=6),
+                         baseline_spread_counts=20.0, misalignment_m=(2.0e-3, -1.5e-3), seed=6,
+                         drift=Drift(0.025, 0.3, 1.0, 60.0, 12.0, 30.0, 2.0 * 3600.0, 0.3)),
                15.0, (8.0, 30.0)),
     FamilySkin('sharp', 'thin cover and layer (0.2 / 0.6 mm spread), 80 % fill: sharp imprints',
                SkinModel(compliance_m_per_n=4e-4, spread_m=0.0006, cover_spread_m=0.0002,
-                         fill_factor=0.8, seed=7),
+                         fill_factor=0.8, seed=7,
+                         drift=Drift(0.01, 0.2, 0.7, 45.0, -6.0, 12.0)),
                15.0, (8.0, 30.0)),
     FamilySkin('blurred', 'thick cover and layer (2 / 4 mm spread), compliant',
-               SkinModel(compliance_m_per_n=1e-3, spread_m=0.004, cover_spread_m=0.002, seed=8),
+               SkinModel(compliance_m_per_n=1e-3, spread_m=0.004, cover_spread_m=0.002, seed=8,
+                         drift=Drift(0.04, 0.2, 2.0, 90.0, 5.0, 20.0, 8.0 * 3600.0)),
                10.0, (5.0, 20.0)),
     FamilySkin('flat_fsr', 'weak FSR response (flat curve) and 8 counts of noise',
                SkinModel(compliance_m_per_n=6e-4, fsr=_FLAT_FSR, noise_counts=8.0,
-                         gain_spread=0.05, seed=9),
+                         gain_spread=0.05, seed=9,
+                         drift=Drift(0.035, 0.25, 1.0, 60.0, 9.0, 15.0)),
                15.0, (8.0, 30.0)),
     FamilySkin('harsh', 'everything at once: crosstalk, gains, offsets, noise, misalignment',
                SkinModel(compliance_m_per_n=8e-4, spread_m=0.0025, crosstalk=0.006,
                          gain_spread=0.1, baseline_spread_counts=15.0, noise_counts=8.0,
-                         misalignment_m=(-1.5e-3, 2.0e-3), fsr=_SOFT_FSR, seed=10),
+                         misalignment_m=(-1.5e-3, 2.0e-3), fsr=_SOFT_FSR, seed=10,
+                         drift=Drift(0.055, 0.3, 2.5, 150.0, 15.0, 30.0, 3.0 * 3600.0, 0.3)),
                20.0, (10.0, 40.0)),
     FamilySkin('film', 'films open below 20 kPa, stepping to 4 kOhm; Hertz tips; floor at 12 N',
                SkinModel(compliance_m_per_n=4e-4, spread_m=0.0015, cover_spread_m=0.0005,
                          fsr=_FILM_FSR, turn_on_pa=2.0e4, turn_on_ohm=4000.0,
                          hertz_reference_n=20.0, gain_spread=0.05, noise_counts=5.0,
-                         misalignment_m=(1.0e-3, 5e-4), seed=11),
+                         misalignment_m=(1.0e-3, 5e-4), seed=11,
+                         drift=Drift(0.02, 0.2, 1.0, 60.0, -8.0, 20.0)),
                20.0, (10.0, 40.0)),
     FamilySkin('loaded', 'zero shift moving 0.2 taxel per 20 N of normal load, Hertz tips',
                SkinModel(compliance_m_per_n=6e-4, hertz_reference_n=15.0,
                          normal_shift_m_per_n=(4e-5, -3e-5), turn_on_pa=1.0e4,
-                         crosstalk=0.004, gain_spread=0.04, seed=12),
+                         crosstalk=0.004, gain_spread=0.04, seed=12,
+                         drift=Drift(0.03, 0.2, 1.5, 60.0, 7.0, 25.0, 5.0 * 3600.0, 0.2)),
                15.0, (8.0, 30.0)),
 )
 _BY_NAME = {s.name: s for s in _FAMILY}
@@ -131,6 +145,16 @@ def _films_and_tips(pick, rng, force: float, pitch: float, fsr: FsrModel) -> dic
     return extra
 
 
+def _drift(pick) -> Drift:
+    """Return a held-out draw's creep (2.5-30 % over 48 h) and offset drift."""
+    settle = pick(0.5, 3.0)
+    decades = math.log10(1.0 + 48.0 * 3600.0 / settle)
+    return Drift(creep_per_decade=pick(0.025, 0.30) / decades, creep_spread=pick(0.0, 0.3),
+                 settle_s=settle, recovery_s=pick(30.0, 180.0),
+                 offset_counts_per_hour=pick(-15.0, 15.0), thermal_counts=pick(0.0, 30.0),
+                 thermal_period_s=pick(2.0, 8.0) * 3600.0, offset_spread=pick(0.0, 0.3))
+
+
 def held_out_skin(seed: int) -> FamilySkin:
     """
     Return a skin drawn at random within the family's ranges, named ``held_out:<seed>``.
@@ -139,8 +163,9 @@ def held_out_skin(seed: int) -> FamilySkin:
     presses take half to one and a half times that force. Two in three draws have films that
     turn on at 5 to 30 kPa (half of them stepping to a few kilohms), two in three Hertz tips,
     one in two a zero shift that moves with the normal load (up to 0.2 taxel at the paper
-    force); the divider's series resistor is 1 to 3.3 kOhm. These are drawn after the rest, so
-    the other parameters of a seed are those it always had.
+    force); the divider's series resistor is 1 to 3.3 kOhm; every draw creeps by 2.5 to 30 %
+    over 48 h and its offsets drift (:mod:`.drift`). These are drawn after the rest, so the
+    other parameters of a seed are those it always had.
     """
     seed = int(seed)
     if seed < 0:
@@ -163,6 +188,7 @@ def held_out_skin(seed: int) -> FamilySkin:
         noise_counts=pick(2.0, 10.0),
         misalignment_m=(offset * math.cos(angle), offset * math.sin(angle)), seed=1000 + seed)
     model = replace(model, **_films_and_tips(pick, rng, force, pitch, fsr))
+    model = replace(model, drift=_drift(pick))
     return FamilySkin(f'{HELD_OUT}{seed}',
                       f'held out (seed {seed}): {shift_taxels:.1f} taxel shift at {force:.0f} N, '
                       f'saturates at {fsr.force_at_r_min_n:.0f} N per taxel'

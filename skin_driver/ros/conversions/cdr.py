@@ -23,7 +23,7 @@ from .messages import (fill_contact, grid_markers, net_wrench_fields, palette_rg
                        skin_frame_to_msg)
 
 _CDR_LE = b'\x00\x01\x00\x00'  # encapsulation header: plain CDR, little-endian
-_CONTACT_DOUBLES = 19  # TactileContact after its header: 19 float64, then direction_valid
+_CONTACT_DOUBLES = 19  # TactileContact after its header: 19 float64, then direction_valid, held
 
 
 class _Layout:
@@ -69,8 +69,8 @@ class SerializedMessages:
         found = self._contact_at.get(key)
         if found is None:
             layout = _Layout(key).header(len(self._fid)).add('d', 8, _CONTACT_DOUBLES)
-            # direction_valid, then patch: one skin's contacts name no patch (an empty string).
-            layout.add('?', 1).add('I', 4).add('s', 1, 1)
+            # direction_valid, held, then patch: one skin's contacts name no patch (empty).
+            layout.add('?', 1).add('d', 8).add('I', 4).add('s', 1, 1)
             found = self._contact_at[key] = (Struct(layout.format), layout.offset - key)
         return found
 
@@ -125,7 +125,8 @@ class SerializedMessages:
                         frame_id=self.frame_id)
         # location.z and shift.z (2 and 10) are 0 in every contact message.
         fields = [tuple(0.0 if i in (2, 10) else 0.5 + i + k / 7
-                        for i in range(_CONTACT_DOUBLES)) + (k == 0,) for k in range(3)]
+                        for i in range(_CONTACT_DOUBLES)) + (k == 0, 60.0 * k + 0.25)
+                  for k in range(3)]
         msgs = [fill_contact(header, values) for values in fields]
         array_msg = TactileContactArray(header=header, sequence=7, device_time_us=2 ** 40 + 3,
                                         contacts=msgs)

@@ -85,7 +85,7 @@ def contact_fields(contact) -> tuple:
     Return a core Contact's message fields in TactileContact's order, after the header.
 
     location x, y, z; magnitude; normal_force; azimuth; azimuth_sigma; polar; shift x, y, z;
-    force x, y, z; torque x, y, z; area; confidence; direction_valid. Raise ValueError for a
+    force x, y, z; torque x, y, z; area; confidence; direction_valid; held. Raise ValueError for a
     non-finite value: a contact message never carries NaN or inf. Fields a contact never sets
     (location.z, shift.z) are 0; the torque is r x F about the frame origin.
     """
@@ -102,7 +102,8 @@ def contact_fields(contact) -> tuple:
     polar = _finite(contact.alpha_rad, 'polar')
     return (x, y, 0.0, math.sqrt(fx * fx + fy * fy + fz * fz), normal_force, azimuth, sigma,
             polar, sx, sy, 0.0, fx, fy, fz, *torque_about_origin(x, y, (fx, fy, fz)), area,
-            confidence, bool(contact.direction_valid))
+            confidence, bool(contact.direction_valid),
+            max(0.0, _finite(getattr(contact, 'held_s', 0.0), 'held')))
 
 
 def contact_to_msg(header: Header, contact, out: TactileContact = None) -> TactileContact:
@@ -123,7 +124,7 @@ def fill_contact(header: Header, fields: tuple, out: TactileContact = None) -> T
     fields as bytes and checks itself against this.
     """
     (x, y, _, magnitude, normal_force, azimuth, sigma, polar, sx, sy, _, fx, fy, fz, tx, ty, tz,
-     area, confidence, direction_valid) = fields
+     area, confidence, direction_valid, held) = fields
     msg = TactileContact() if out is None else out
     msg.header = header
     msg.location.x, msg.location.y = x, y
@@ -138,6 +139,7 @@ def fill_contact(header: Header, fields: tuple, out: TactileContact = None) -> T
     msg.area = area
     msg.confidence = confidence
     msg.direction_valid = direction_valid
+    msg.held = held
     return msg
 
 

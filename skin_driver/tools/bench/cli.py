@@ -28,9 +28,11 @@ import cv2
 import numpy as np
 
 from skin_driver.core.estimation.shift.methods import DEFAULT_METHOD
+from skin_driver.core.sim.skins import HELD_OUT, skin_names
 from skin_driver.tools.bench import estimators as bench_core, plots, tables
 from skin_driver.tools.bench.calibration import calibration_accuracy
 from skin_driver.tools.bench.direction import direction_learning
+from skin_driver.tools.bench.drift import drift_bench
 from skin_driver.tools.bench.scoring import label, targets, tradeoffs, why_e2e
 from skin_driver.tools.evaluate.tables import json_safe
 
@@ -51,6 +53,8 @@ FULL = {
     'direction': {'skins': ['default', 'soft', 'sharp', 'loaded', 'saturating', 'film',
                             'held_out:0', 'held_out:1', 'held_out:2', 'held_out:3'],
                   'sizes': {'paper': 4, 'random': 150}, 'presses': [0, 30, 60, 120, 240]},
+    'drift_skins': None, 'drift_held_out': 6, 'drift_hours': 8.0, 'drift_step_s': 10.0,
+    'drift_cost_repeats': 10,
 }
 QUICK = {
     'grids': [16, 32], 'shifts': [0.5, 2.0], 'noises': [6.0], 'frames': 3,
@@ -63,6 +67,8 @@ QUICK = {
     'forward_frames': 4, 'forward_skins': ['default'],
     'direction': {'skins': ['default', 'held_out:2'], 'sizes': {'paper': 1, 'random': 20},
                   'presses': [0, 60]},
+    'drift_skins': ['default', 'harsh'], 'drift_held_out': 1, 'drift_hours': 8.0,
+    'drift_step_s': 30.0, 'drift_cost_repeats': 2,
 }
 
 
@@ -183,6 +189,11 @@ IN_PROCESS = (
                                                cfg['direction']['sizes'],
                                                cfg['direction']['presses'], seed=args.seed,
                                                log=log)),
+    ('drift', '9. drift and creep over hours',
+     lambda cfg, args, log: drift_bench(
+         (cfg['drift_skins'] or skin_names())
+         + [f'{HELD_OUT}{i}' for i in range(cfg['drift_held_out'])], cfg['drift_hours'],
+         cfg['drift_step_s'], cfg['drift_cost_repeats'], seed=args.seed, log=log)),
     ('calibration', '6. force calibration on the family',
      lambda cfg, args, log: calibration_accuracy(cfg['calibration_frames'], seed=args.seed,
                                                  log=log)),

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 from skin_driver.core.estimation.shift.methods import DEFAULT_METHOD
 from skin_driver.tools.bench.direction import direction_targets
+from skin_driver.tools.bench.drift import drift_targets
 
 # Issue #16 item 5: the default's cost per 16 x 16 frame pair, one core, back to back.
 ALONE_US = 30.0
@@ -79,6 +80,8 @@ def targets(res) -> list:
         out += direction_targets(res['direction'], _target)
     if 'e2e' in res:
         out += e2e_targets(res['e2e'])
+    if 'drift' in res:
+        out += [_target(*t) for t in drift_targets(res['drift'])]
     return out
 
 

@@ -6,6 +6,7 @@ from skin_driver.core.estimation.shift.methods import DEFAULT_METHOD
 from skin_driver.core.sim.experiments import DIRECTION_KINDS
 from skin_driver.core.sim.oracle import ORACLE
 from skin_driver.tools.bench.direction import direction_markdown
+from skin_driver.tools.bench.drift import drift_section
 from skin_driver.tools.bench.scoring import ALONE_US, label
 
 
@@ -116,6 +117,8 @@ def markdown(res, images) -> str:
         out += _forward_section(res['forward'])
     if 'direction' in res:
         out += direction_markdown(res['direction'], figure, _table)
+    if 'drift' in res:
+        out += drift_section(res['drift'])
     if 'e2e' in res:
         out += _e2e_section(res, images)
     return '\n'.join(out) + '\n'

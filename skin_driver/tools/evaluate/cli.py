@@ -7,6 +7,7 @@ Usage::
                                             [--json]
     python -m skin_driver.evaluate --skin NAME [--scene KIND] [--size N] [--seed N] [...]
     python -m skin_driver.evaluate --generate KIND OUT.npz [--skin NAME] [--size N] [--seed N]
+    python -m skin_driver.evaluate --skin NAME --scene hold|idle [--seed N] [--json]
     python -m skin_driver.evaluate --list-skins | --list-methods
 
 The single normal presses calibrate (x_p, y_p); every single tilted press's strongest contact is
@@ -21,7 +22,10 @@ re-take (x_p, y_p); only split = 0 frames are scored.
 frame, started at the truth) is scored beside the methods, and each method's error is given in
 units of the oracle's (``--no-oracle`` skips it). ``--direction-presses N`` (with
 ``--calibration-frames``) adds N tilted presses of known direction (split = 4, a robot's
-calibration run) that learn the direction's correction. ROS-free.
+calibration run) that learn the direction's correction. ``--scene hold`` and ``--scene idle``
+take the skin through simulated hours instead (:mod:`.drift`): |F| of a press held an hour, a
+re-press, phantom contacts over 8 h unloaded, with and without following drift and correcting
+creep. ROS-free.
 """
 
 from __future__ import annotations
@@ -33,6 +37,7 @@ import sys
 import numpy as np
 
 from skin_driver.core.common.atomic import check_writable
+from skin_driver.core.estimation.calibration.creep import CreepFit
 from skin_driver.core.estimation.data.dataset import load_dataset, save_dataset
 from skin_driver.core.estimation.scan.kernel import KernelMissing
 from skin_driver.core.estimation.scan.pipeline import EstimatorConfig
@@ -40,10 +45,14 @@ from skin_driver.core.estimation.shift.methods import DEFAULT_METHOD, method_nam
 from skin_driver.core.sim.experiments import calibrated_scene, make_scene, SCENE_KINDS
 from skin_driver.core.sim.skins import family_skin, GRID, HELD_OUT, skin_names
 from skin_driver.ros.estimator_params import estimator_config, load_direction_parameters
+from skin_driver.tools.evaluate.drift import (calibrate_creep, format_drift, hold_report,
+                                              idle_report)
 from skin_driver.tools.evaluate.scoring import evaluate
 from skin_driver.tools.evaluate.tables import format_table, json_safe, write_contacts
 
-__all__ = ['main']
+__all__ = ['main', 'DRIFT_SCENES']
+
+DRIFT_SCENES = ('hold', 'idle')
 
 
 def _parser() -> argparse.ArgumentParser:
@@ -62,8 +71,9 @@ def _parser() -> argparse.ArgumentParser:
                         help='generate the data from this skin of the family (see --list-skins; '
                              'held_out:N for one drawn at random, seed N; NAME@N on an N x N '
                              'grid over the same patch)')
-    parser.add_argument('--scene', default='paper', choices=SCENE_KINDS,
-                        help='scene kind rendered with --skin (default paper)')
+    parser.add_argument('--scene', default='paper', choices=SCENE_KINDS + DRIFT_SCENES,
+                        help='scene kind rendered with --skin (default paper); hold and idle: '
+                        'simulated hours of a held press and of an unloaded skin')
     parser.add_argument('--size', type=_count, default=None,
                         help='repeats (paper) or frames (other scenes) to render')
     parser.add_argument('--generate', nargs=2, metavar=('KIND', 'OUT'),
@@ -161,6 +171,8 @@ def main(argv=None) -> int:
         return 0
     if bool(args.data) == bool(args.skin):
         parser.error('give a dataset .npz or --skin NAME (not both)')
+    if args.scene in DRIFT_SCENES:
+        return _over_hours(args)
     try:
         if args.contacts:
             check_writable(args.contacts)
@@ -194,6 +206,34 @@ def main(argv=None) -> int:
     else:
         print(source)
         print(format_table(report))
+    return 0
+
+
+def _over_hours(args) -> int:
+    """Report the --skin's hold or idle scene (simulated hours); return the exit status."""
+    try:
+        config = _config(args)
+        if args.scene == 'hold':
+            creep, error = calibrate_creep(args.skin, args.seed, config)
+            hold = hold_report(args.skin, args.seed, config, creep)
+            hold['calibration_error'] = error
+            report = {'holds': [hold], 'idles': []}
+        else:
+            report = {'holds': [], 'idles': [idle_report(args.skin, args.seed, config=config)]}
+    except KernelMissing as exc:
+        print(f'error: {exc}', file=sys.stderr)
+        return 2
+    report['hours'] = 8.0
+    if args.json:
+        print(json.dumps(json_safe({'skin': args.skin, 'scene': args.scene, **report})))
+        return 0
+    print(f'skin {args.skin}, scene {args.scene}, seed {args.seed}')
+    table = format_drift(report).split('\n\n')
+    print(table[0] if args.scene == 'hold' else table[1])
+    if args.scene == 'hold':
+        fit = report['holds'][0]['creep_fit']
+        print(f'creep calibration: {CreepFit.from_dict(fit).describe()}' if fit else
+              f"creep calibration refused: {report['holds'][0]['calibration_error']}")
     return 0
 
 

@@ -11,9 +11,10 @@
  * presses from, so that it never conditions a scan a second way.
  *
  * A kernel is built once per estimator from its state (tare, gains, force tables, settings) and
- * is not changed afterwards, except for dead-taxel marks that a touch revives (reported): that
- * is the per-scan state, owned by whoever runs the scans; a kernel is never used by two threads
- * at once.
+ * is not changed afterwards, except for its per-scan state: dead-taxel marks that a touch
+ * revives (reported) and, for scans given their time, the baselines that follow drift and each
+ * taxel's age under load (drift.c, sk_drift_state). It is owned by whoever runs the scans; a
+ * kernel is never used by two threads at once.
  */
 #ifndef SKIN_KERNEL_SKIN_KERNEL_H
 #define SKIN_KERNEL_SKIN_KERNEL_H
@@ -29,7 +30,7 @@ extern "C" {
  * (libskin_kernel.so.<SK_ABI_VERSION>), and sk_layout reports it with every struct's layout,
  * which the binding compares with its own mirrors before any other call.
  */
-#define SK_ABI_VERSION 13
+#define SK_ABI_VERSION 14
 
 /* Shift methods. */
 enum { SK_CENTROID = 0, SK_TAXEL_FIT = 1, SK_POC = 2, SK_MODEL_FIT = 3, SK_NMETHODS };
@@ -67,6 +68,18 @@ typedef struct {
   double weight_x[SK_DIRECTION_FEATURES], weight_y[SK_DIRECTION_FEATURES];
 } sk_direction;
 
+/*
+ * Time in the scans (drift.c), for scans given their time: track_s, the time constant with which
+ * an untouched taxel's baseline follows its reading (a touched one's follows its layer's drift
+ * only), 0: none; a loaded taxel's force is divided by its creep c(age) = 1 + creep_per_decade
+ * * log10(1 + age / settle_s) over c(1 s), 0: none (a load reads what it read 1 s after it
+ * arrived, when a calibration press is read). A taxel's age under load (sk_contact.held_s)
+ * grows while it reads a touch and decays by exp(-t / recovery_s) once unloaded (0: at once).
+ */
+typedef struct {
+  double track_s, creep_per_decade, settle_s, recovery_s;
+} sk_drift;
+
 /* Everything a kernel is built with besides the per-taxel arrays (SI units). */
 typedef struct {
   int rows, cols, max_contacts;
@@ -82,6 +95,7 @@ typedef struct {
   sk_curve curves[2];     /* top, bottom */
   sk_taxel_model model;   /* model_fit's taxel model */
   sk_direction direction; /* the learned correction of the shift */
+  sk_drift drift;         /* baseline tracking and creep (scans with a time) */
 } sk_settings;
 
 /* One contact of a scan, strongest (normal force) first. */
@@ -95,6 +109,7 @@ typedef struct {
   int kept;               /* 1 when the normal force reaches the minimum: a contact to report */
   int pair;               /* index of the contact among the scan's pairs */
   int censored;           /* bit 0: the top layer reached its censor counts, bit 1: the bottom */
+  double held_s;          /* the longest time under load of its taxels (creep's age), s */
 } sk_contact;
 
 /* What a scan found besides its contacts. */
@@ -102,6 +117,8 @@ typedef struct {
   int pairs;              /* contacts found, reported or not */
   int censored;           /* bits as sk_contact.censored, over every contact */
   int revived;            /* 1 when the scan revived dead-taxel marks (sk_dead) */
+  /* each layer's baseline drift since the tare (tracked), its mean and largest |drift|, counts */
+  double drift_mean[2], drift_max[2];
 } sk_status;
 
 /* One field of a struct above (field NULL: the struct's own size), for sk_layout. */
@@ -141,21 +158,22 @@ int sk_new(const sk_settings *settings, unsigned long settings_size, const doubl
 void sk_free(sk_kernel *k);
 
 /*
- * Estimate the contacts of one scan: maps is the (2, rows, cols) raw counts. Writes one record
+ * Estimate the contacts of one scan taken at time_s (seconds, any origin; not finite: no time,
+ * nothing tracked): maps is the (2, rows, cols) raw counts. Writes one record
  * per contact found (at most max_contacts) to out and the scan's status; returns the number of
  * records, or SK_ERR_NOT_FINITE / SK_ERR_NEGATIVE when the maps hold a value that is not a
  * count. Without every_pair, a contact too light to report (kept 0) gets no shift (0) and no
  * sigma (inf).
  */
-int sk_scan(sk_kernel *k, const double *maps, int every_pair, sk_contact *out,
+int sk_scan(sk_kernel *k, const double *maps, double time_s, int every_pair, sk_contact *out,
             sk_status *status);
 
 /*
  * sk_scan of maps as the ADC gives them, (2, rows, cols) unsigned 16-bit counts: every value is
  * a count, so there is no error to return.
  */
-int sk_scan_counts(sk_kernel *k, const uint16_t *maps, int every_pair, sk_contact *out,
-                   sk_status *status);
+int sk_scan_counts(sk_kernel *k, const uint16_t *maps, double time_s, int every_pair,
+                   sk_contact *out, sk_status *status);
 
 /*
  * A shift given by the caller for one contact: window is its (2, h, w) tared counts (top,
@@ -195,6 +213,15 @@ int sk_force(const sk_kernel *k, const double *counts, const unsigned char *clip
 
 /* Copy the dead-taxel marks in force, (2, rows, cols), to out. */
 void sk_dead(const sk_kernel *k, unsigned char *out);
+
+/*
+ * The time's per-scan state, to carry it into another kernel of the same skin (a parameter
+ * changed; a tare starts afresh): each taxel's baseline drift since the tare (2, rows, cols),
+ * its age under load (2, rows, cols), the last scan's time. Returns the count of doubles
+ * (4 rows cols + 1), written to out unless NULL; sk_set_drift_state reads as many.
+ */
+int sk_drift_state(const sk_kernel *k, double *out);
+void sk_set_drift_state(sk_kernel *k, const double *state);
 
 /*
  * Fit a skin's forward model to one contact's window: counts (2, rows, cols) tared counts,

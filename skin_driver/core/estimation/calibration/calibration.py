@@ -46,6 +46,7 @@ import numpy as np
 import yaml
 
 from .direction import DirectionCorrection
+from .creep import CreepFit
 from ..model.forcecurve import ForceCurve
 from ..model.taxelmodel import TaxelModel
 from ...common.atomic import write_atomically
@@ -243,6 +244,7 @@ class Calibration:
     leak_share: float = 0.0
     mount: 'SkinMount' = None
     direction: DirectionCorrection = None
+    creep: CreepFit = None
 
     def __post_init__(self):
         """Reject non-finite or negative values and malformed curves or gains."""
@@ -277,6 +279,8 @@ class Calibration:
             raise ValueError(f'mount must be a SkinMount, got {self.mount!r}')
         if self.direction is not None and not isinstance(self.direction, DirectionCorrection):
             raise ValueError(f'direction must be a DirectionCorrection, got {self.direction!r}')
+        if self.creep is not None and not isinstance(self.creep, CreepFit):
+            raise ValueError(f'creep must be a CreepFit, got {self.creep!r}')
 
     def zero_m(self, normal_force_n: float) -> tuple:
         """Return the raw shift (x, y) of a normal press of this force: where beta is 0 from."""
@@ -351,6 +355,8 @@ class Calibration:
             parts.append(self.direction.describe())
         if self.mount:
             parts.append(f'mounted on {self.mount.parent_frame} ({self.mount.touches} touches)')
+        if self.creep:
+            parts.append(self.creep.describe())
         if self.skin:
             parts.append(f'for {self.skin.describe()}')
         return '; '.join(parts) + (f'; made {self.made_utc}' if self.made_utc else '')
@@ -383,6 +389,8 @@ class Calibration:
         if self.direction is not None:
             # Only when there is one, like the mount (issue #38's correction, direction.py).
             out['direction'] = self.direction.to_dict()
+        if self.creep is not None:
+            out['creep'] = self.creep.to_dict()
         return out
 
     def save_yaml(self, path, make_parents: bool = False) -> None:
@@ -449,6 +457,8 @@ class Calibration:
                 values['mount'] = SkinMount.from_dict(doc['mount'])
             if doc.get('direction') is not None:
                 values['direction'] = DirectionCorrection.from_dict(doc['direction'])
+            if doc.get('creep') is not None:
+                values['creep'] = CreepFit.from_dict(doc['creep'])
             cal = cls(**values)
         except (KeyError, TypeError, ValueError) as exc:
             raise ValueError(f'{path}: {exc}') from None

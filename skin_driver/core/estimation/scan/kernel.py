@@ -11,8 +11,9 @@ A :class:`Kernel` copies an estimator's state once (tare, gains, force tables, s
 preallocated buffers, so a scan costs one copy of the maps into its buffer and one foreign call.
 Maps of uint16, as the driver and the datasets give them, are copied as they are (any value is
 a count, no check); others are checked and copied as float64.
-The kernel owns the dead-taxel marks its scans revive (:meth:`Kernel.dead_masks`): it is the
-estimation's one piece of mutable state, and whoever runs the scans owns it.
+The kernel owns the dead-taxel marks its scans revive (:meth:`Kernel.dead_masks`) and, for
+scans given their time, the baselines that follow drift and each taxel's age under load
+(:meth:`Kernel.drift_state`): the estimation's mutable state, which whoever runs the scans owns.
 :meth:`Kernel.condition` and :meth:`Kernel.force` give a scan's conditioning alone (tared
 counts, cut taxels, the line leak taken off, forces): what a calibration reads its presses from.
 
@@ -36,7 +37,7 @@ import numpy as np
 
 from ...common.validate import check_pair
 
-__all__ = ['METHODS', 'ABI_VERSION', 'TaxelModelNumbers', 'Curve', 'Direction', 'Settings',
+__all__ = ['METHODS', 'ABI_VERSION', 'TaxelModelNumbers', 'Curve', 'Direction', 'DriftNumbers', 'Settings',
            'ContactRecord', 'Status', 'Record', 'KernelSettings', 'Conditioned', 'Kernel',
            'KernelMissing', 'KernelMismatch', 'load_library', 'library_candidates',
            'fit_contact', 'taxel_model_of', 'direction_of', 'DIRECTION_FEATURES']
@@ -45,7 +46,7 @@ __all__ = ['METHODS', 'ABI_VERSION', 'TaxelModelNumbers', 'Curve', 'Direction', 
 METHODS = {'centroid': 0, 'taxel_fit': 1, 'poc': 2, 'model_fit': 3}
 
 # skin_kernel.h's SK_ABI_VERSION, the library's SOVERSION: libskin_kernel.so.<ABI_VERSION>.
-ABI_VERSION = 13
+ABI_VERSION = 14
 LIBRARY = f'libskin_kernel.so.{ABI_VERSION}'
 # The variable that names the library file to load, before any place searched.
 LIBRARY_VARIABLE = 'SKIN_KERNEL_LIBRARY'
@@ -57,6 +58,7 @@ _FIX = ('build it with `make setup` (or `colcon build` in the workspace), or nam
         f'file in {LIBRARY_VARIABLE}')
 
 _double, _int = ctypes.c_double, ctypes.c_int
+_NO_TIME = _double(float('nan'))  # a scan without a time: nothing tracked
 
 
 class KernelMissing(RuntimeError):
@@ -95,6 +97,13 @@ class Direction(ctypes.Structure):
                 ('weight_y', _double * DIRECTION_FEATURES)]
 
 
+class DriftNumbers(ctypes.Structure):
+    """skin_kernel.h's sk_drift: baseline tracking and creep of scans with a time (0s: none)."""
+
+    _fields_ = [(name, _double) for name in (
+        'track_s', 'creep_per_decade', 'settle_s', 'recovery_s')]
+
+
 class Settings(ctypes.Structure):
     """skin_kernel.h's sk_settings: everything a kernel is built with but the taxel arrays."""
 
@@ -105,7 +114,8 @@ class Settings(ctypes.Structure):
             'pitch_m', 'compliance_m_per_n', 'min_force_n', 'min_confidence', 'min_shift_m',
             'force_scale', 'fill_factor', 'x_p_m', 'y_p_m', 'slope_x_m_per_n', 'slope_y_m_per_n',
             'zero_ref_n', 'calibration_var')]
-        + [('curves', Curve * 2), ('model', TaxelModelNumbers), ('direction', Direction)])
+        + [('curves', Curve * 2), ('model', TaxelModelNumbers), ('direction', Direction),
+           ('drift', DriftNumbers)])
 
 
 class ContactRecord(ctypes.Structure):
@@ -115,13 +125,15 @@ class ContactRecord(ctypes.Structure):
         'x_m', 'y_m', 'force_n', 'area_m2', 'shift_x_m', 'shift_y_m', 'azimuth_rad',
         'azimuth_sigma_rad', 'alpha_rad', 'force_x_n', 'force_y_n', 'force_z_n', 'confidence',
         'dx', 'dy', 'sigma', 'top_force_n', 'bottom_force_n', 'shift_confidence')]
-        + [(name, _int) for name in ('valid', 'kept', 'pair', 'censored')])
+        + [(name, _int) for name in ('valid', 'kept', 'pair', 'censored')]
+        + [('held_s', _double)])
 
 
 class Status(ctypes.Structure):
     """skin_kernel.h's sk_status: what a scan found besides its contacts."""
 
-    _fields_ = [('pairs', _int), ('censored', _int), ('revived', _int)]
+    _fields_ = [('pairs', _int), ('censored', _int), ('revived', _int),
+                ('drift_mean', _double * 2), ('drift_max', _double * 2)]
 
 
 # skin_kernel.h's sk_shift_fn: (user, window, h, w, shift out) -> 0, or anything else: none.
@@ -135,6 +147,7 @@ class _Field(ctypes.Structure):
 
 
 _MIRRORS = {'sk_taxel_model': TaxelModelNumbers, 'sk_curve': Curve, 'sk_direction': Direction,
+            'sk_drift': DriftNumbers,
             'sk_settings': Settings,
             'sk_contact': ContactRecord, 'sk_status': Status}
 
@@ -231,9 +244,9 @@ def load_library() -> ctypes.CDLL:
 def _sign(lib: ctypes.CDLL) -> None:
     """Set the argument and result types of the library's functions."""
     ptr, ulong = ctypes.c_void_p, ctypes.c_ulong
-    # sk_scan and sk_scan_counts (kernel, maps, every_pair, out, status) have no argtypes: a
-    # Kernel passes the same c_void_p objects and a Python int every time, and a scan is where
-    # their checks would cost.
+    # sk_scan and sk_scan_counts (kernel, maps, time, every_pair, out, status) have no argtypes:
+    # a Kernel passes the same c_void_p objects, a c_double and a Python int every time, and a
+    # scan is where their checks would cost.
     signatures = {'sk_layout': (_int, [ptr, ptr]), 'sk_abi_version': (_int, []),
                   'sk_new': (_int, [ptr, ulong] + [ptr] * 6 + [ptr, ctypes.c_char_p, ulong]),
                   'sk_free': (None, [ptr]),
@@ -242,6 +255,7 @@ def _sign(lib: ctypes.CDLL) -> None:
                   'sk_dead': (None, [ptr, ptr]),
                   'sk_condition': (_int, [ptr, ptr, ptr, ptr, ptr, ptr]),
                   'sk_force': (_int, [ptr, ptr, ptr, ptr]),
+                  'sk_drift_state': (_int, [ptr, ptr]), 'sk_set_drift_state': (None, [ptr, ptr]),
                   'sk_model_fit': (_int, [ptr, _int, _int, ptr, ptr, ptr, ptr, _int, ptr, ptr])}
     for name, (restype, argtypes) in signatures.items():
         function = getattr(lib, name, None)
@@ -284,7 +298,8 @@ class Kernel:
     One estimator's compiled state and buffers; scans run one at a time.
 
     The kernel is the estimation's one piece of mutable state: the dead-taxel marks its scans
-    revive. Whoever runs the scans owns it; :meth:`dead_masks` gives a consistent snapshot.
+    revive, the drift followed and the time under load. Whoever runs the scans owns it;
+    :meth:`dead_masks`, :attr:`drift` and :meth:`drift_state` give consistent snapshots.
     """
 
     def __init__(self, spec: KernelSettings):
@@ -327,11 +342,8 @@ class Kernel:
         self._status = Status()
         outputs = (_address(self._out), ctypes.c_void_p(ctypes.addressof(self._status)))
         # By whether the maps are uint16 counts: the function, its top and bottom buffers, and
-        # its arguments for reported contacts only and for every contact (measure_shifts wants
-        # the light ones too).
-        self._scans = tuple((scan, maps[0], maps[1],
-                             tuple((self._handle, _address(maps), every) + outputs
-                                   for every in (0, 1)))
+        # its arguments before and after the scan's time.
+        self._scans = tuple((scan, maps[0], maps[1], (self._handle, _address(maps)), outputs)
                             for scan, maps in ((lib.sk_scan, self._maps),
                                                (lib.sk_scan_counts, self._counts)))
         self._lock = threading.Lock()
@@ -346,20 +358,23 @@ class Kernel:
             top, bottom = check_pair(top, bottom, self.shape)
         return counts, top, bottom
 
-    def scan(self, top, bottom, every_pair: bool = False) -> list:
+    def scan(self, top, bottom, every_pair: bool = False, time_s: float = None) -> list:
         """
         Return the :class:`Record` of each contact in the raw maps, strongest first.
 
         Without ``every_pair`` a contact too light to report (``kept`` 0) gets no shift. Dead
-        taxels that read a touch are revived in the kernel. Bad maps raise ValueError saying
-        what is wrong.
+        taxels that read a touch are revived in the kernel. ``time_s``, the scan's time in
+        seconds (any origin, never going back), lets baselines follow drift and forces lose
+        their creep (the settings' ``drift``); None: nothing tracked. Bad maps raise ValueError
+        saying what is wrong.
         """
         counts, top, bottom = self._checked(top, bottom)
-        scan, top_buffer, bottom_buffer, args = self._scans[counts]
+        scan, top_buffer, bottom_buffer, (handle, maps), (out, status) = self._scans[counts]
+        clock = _NO_TIME if time_s is None else _double(time_s)
         with self._lock:
             top_buffer[...] = top
             bottom_buffer[...] = bottom
-            count = scan(*args[every_pair])
+            count = scan(handle, maps, clock, int(every_pair), out, status)
             if count < 0:
                 check_pair(top, bottom, self.shape)
                 raise ValueError('top or bottom holds a value that is not a count')
@@ -444,6 +459,27 @@ class Kernel:
         if status != _OK:
             raise ValueError('counts hold a value that is not a number')
         return force
+
+    @property
+    def drift(self) -> tuple:
+        """Return the last scan's (mean, largest |drift|) of each layer's baseline, counts."""
+        with self._lock:
+            return (tuple(self._status.drift_mean), tuple(self._status.drift_max))
+
+    def drift_state(self) -> np.ndarray:
+        """Return the time's per-scan state (``sk_drift_state``): to carry into another kernel."""
+        with self._lock:
+            out = np.zeros(self._lib.sk_drift_state(self._handle, None))
+            self._lib.sk_drift_state(self._handle, _address(out))
+        return out
+
+    def set_drift_state(self, state: np.ndarray) -> None:
+        """Put another kernel's :meth:`drift_state` of the same grid in force here."""
+        state = np.ascontiguousarray(state, dtype=np.float64)
+        if state.shape != (4 * self.shape[0] * self.shape[1] + 1,):
+            raise ValueError(f'a drift state of {state.shape} for a {self.shape} kernel')
+        with self._lock:
+            self._lib.sk_set_drift_state(self._handle, _address(state))
 
     def dead_masks(self) -> np.ndarray:
         """Return a snapshot of the kernel's dead-taxel marks, (2, rows, cols) bool."""

@@ -37,6 +37,7 @@ tangential components point along the azimuth, the direction in which the top la
 from __future__ import annotations
 
 from dataclasses import dataclass, field, replace
+import math
 import threading
 
 import numpy as np
@@ -62,6 +63,11 @@ class EstimatorConfig:
     ``force_scale``: extra factor on the normal force (a user's force calibration; 1 = none).
     ``fill_factor``: sensitive fraction of the pitch on each axis; normal force = summed taxel
     forces / fill_factor**2.
+    Scans given their time (:meth:`ContactEstimator.process`'s ``time_s``): ``track_s``, the time
+    constant with which untouched taxels' baselines follow their drift (0: none); the creep
+    model a loaded taxel's force is corrected by, ``creep_per_decade`` (0: none),
+    ``creep_settle_s``, ``creep_recovery_s`` (defaults: the simulated family's middle; a
+    calibration's creep, :mod:`..calibration.creep`, replaces them).
     """
 
     method: str = DEFAULT_METHOD
@@ -76,6 +82,10 @@ class EstimatorConfig:
     force_scale: float = 1.0
     fsr: FsrModel = field(default_factory=FsrModel)
     fill_factor: float = 0.9
+    track_s: float = 60.0
+    creep_per_decade: float = 0.025
+    creep_settle_s: float = 1.0
+    creep_recovery_s: float = 60.0
 
     def __post_init__(self):
         """Validate every field and the method name."""
@@ -90,6 +100,10 @@ class EstimatorConfig:
         check_number(self.force_scale, 'force_scale', positive=True)
         check_number(self.fill_factor, 'fill_factor', low=0.05, high=1.0)
         check_int(self.max_contacts, 'max_contacts', low=0)
+        check_number(self.track_s, 'track_s', non_negative=True)
+        check_number(self.creep_per_decade, 'creep_per_decade', non_negative=True)
+        check_number(self.creep_settle_s, 'creep_settle_s', positive=True)
+        check_number(self.creep_recovery_s, 'creep_recovery_s', positive=True)
 
 
 @dataclass(frozen=True)
@@ -100,7 +114,8 @@ class Contact:
     ``shift_m`` is the calibrated layer shift; ``azimuth_rad`` (in (-pi, pi]) and the tangential
     part of ``force_xyz_n`` are meaningful only when ``direction_valid``; otherwise they are 0 and
     ``alpha_rad`` is 0. ``azimuth_sigma_rad`` is the 1-sigma uncertainty of the azimuth (pi when
-    there is no direction).
+    there is no direction). ``held_s`` is how long its taxels have been under load (scans
+    given their time; 0 otherwise).
     """
 
     x_m: float
@@ -114,6 +129,7 @@ class Contact:
     force_xyz_n: tuple
     confidence: float
     direction_valid: bool
+    held_s: float = 0.0
 
 
 class ContactEstimator:
@@ -123,8 +139,9 @@ class ContactEstimator:
     Every scan is one call of the compiled kernel (:mod:`kernel`).
 
     An estimator does not change once made: its config, calibration and tare are fixed, and a
-    change (``with_*``) makes a new one, which a live host swaps in whole. The one piece of
-    mutable state is the kernel's: the dead-taxel marks that its scans revive. It belongs to the
+    change (``with_*``) makes a new one, which a live host swaps in whole. The mutable state is
+    the kernel's: the dead-taxel marks that its scans revive and, for scans given their time,
+    the drift followed and the time under load (:meth:`carry_time_from`). It belongs to the
     thread that runs the scans (:meth:`process`, :meth:`measure_shifts`); other threads read
     snapshots (:meth:`dead_masks`, :attr:`conditioning`) or condition maps on a kernel of their
     own (:meth:`maps_of`, :meth:`conditioning_kernel`). A kernel is built when the estimator is
@@ -170,6 +187,14 @@ class ContactEstimator:
             self._kernels = {conditioning.shape: self._new_kernel(conditioning.shape)}
         self._viewer = None
         self._viewer_lock = threading.Lock()
+        # Which tare this estimator's baselines come from: a tare starts the time afresh, any
+        # other change carries it (carry_time_from).
+        self._tare_epoch = object()
+
+    def _same_tare(self, made: 'ContactEstimator') -> 'ContactEstimator':
+        """Return ``made`` (from this estimator, its tare kept) marked as of this tare."""
+        made._tare_epoch = self._tare_epoch
+        return made
 
     @property
     def calibration(self) -> Calibration:
@@ -202,7 +227,8 @@ class ContactEstimator:
 
     def with_calibration(self, calibration: Calibration) -> 'ContactEstimator':
         """Return this estimator with ``calibration`` (force curves and gains too) in force."""
-        return ContactEstimator(self.config, calibration, self.conditioning, self._shift)
+        return self._same_tare(ContactEstimator(self.config, calibration, self.conditioning,
+                                                self._shift))
 
     def for_grid(self, rows: int, cols: int) -> 'ContactEstimator':
         """
@@ -223,7 +249,8 @@ class ContactEstimator:
 
     def with_config(self, config: EstimatorConfig) -> 'ContactEstimator':
         """Return an estimator with other settings, keeping the tare and the calibration."""
-        return ContactEstimator(config, self._calibration, self.conditioning, self._shift)
+        return self._same_tare(ContactEstimator(config, self._calibration, self.conditioning,
+                                                self._shift))
 
     def with_tare(self, top_frames, bottom_frames) -> 'ContactEstimator':
         """Return this estimator tared from no-touch frames (N x rows x cols each)."""
@@ -298,17 +325,58 @@ class ContactEstimator:
         return [(r.dx * p, r.dy * p)
                 for r in self._scan(top_counts, bottom_counts, every_pair=True)]
 
-    def process(self, top_counts, bottom_counts) -> list:
-        """Return the contacts in the two raw count maps, strongest (normal force) first."""
-        return [_contact(r) for r in self._scan(top_counts, bottom_counts) if r.kept]
+    def process(self, top_counts, bottom_counts, time_s: float = None) -> list:
+        """
+        Return the contacts in the two raw count maps, strongest (normal force) first.
 
-    def _scan(self, top_counts, bottom_counts, every_pair: bool = False) -> list:
+        ``time_s``: the scan's time (seconds, never going back), with which the baselines of
+        untouched taxels follow their drift and loaded taxels lose their creep; None: neither.
+        """
+        return [_contact(r) for r in self._scan(top_counts, bottom_counts, time_s=time_s)
+                if r.kept]
+
+    def drift(self) -> tuple:
+        """Return the last timed scan's (mean, largest |drift|) of each layer since the tare."""
+        kernels = self._kernels
+        shape = self._conditioning.shape
+        kernel = kernels.get(shape) if shape is not None else (
+            next(iter(kernels.values())) if len(kernels) == 1 else None)
+        return kernel.drift if kernel is not None else ((0.0, 0.0), (0.0, 0.0))
+
+    def creep_factor(self, held_s: float) -> float:
+        """Return what the creep in force divides a taxel's force by after ``held_s`` loaded."""
+        d = self._drift_numbers()
+        if not d.creep_per_decade > 0:
+            return 1.0
+        # drift.c's: the creep of the age over that of a load held 1 s
+        return ((1.0 + d.creep_per_decade * math.log10(1.0 + max(held_s, 0.0) / d.settle_s))
+                / (1.0 + d.creep_per_decade * math.log10(1.0 + 1.0 / d.settle_s)))
+
+    def carry_time_from(self, other: 'ContactEstimator') -> 'ContactEstimator':
+        """
+        Return this estimator with ``other``'s tracked baselines and creep ages in force.
+
+        For a change of parameters or calibration of the same skin and tare, made off the hot
+        path: the time a skin has been loaded and how far it drifted stay true. Of another grid
+        or tare there is nothing to carry (a tare starts afresh).
+        """
+        if other is None or other._tare_epoch is not self._tare_epoch:
+            return self
+        # Each grid's kernel, tared or not (an untared estimator's is made for the scans' grid).
+        theirs = other._kernels
+        for shape, mine in self._kernels.items():
+            if shape in theirs:
+                mine.set_drift_state(theirs[shape].drift_state())
+        return self
+
+    def _scan(self, top_counts, bottom_counts, every_pair: bool = False,
+              time_s: float = None) -> list:
         """Return the compiled kernel's records of the contacts (kernel.Kernel.scan)."""
         kernel = self._kernels.get(np.shape(top_counts))
         if kernel is None:
             kernel = self._kernel_for(top_counts, bottom_counts)
         if self._shift is None:
-            return kernel.scan(top_counts, bottom_counts, every_pair)
+            return kernel.scan(top_counts, bottom_counts, every_pair, time_s)
         return kernel.scan_shifted(top_counts, bottom_counts,
                                    self._reference(top_counts, bottom_counts), every_pair)
 
@@ -375,7 +443,19 @@ class ContactEstimator:
             zero_ref_n=cal.zero_ref_n, calibration_var=self._calibration_variance(),
             curves=(compiled_kernel.Curve * 2)(*curves),
             model=compiled_kernel.taxel_model_of(cal.taxel_model),
-            direction=compiled_kernel.direction_of(cal.direction))
+            direction=compiled_kernel.direction_of(cal.direction),
+            drift=self._drift_numbers())
+
+    def _drift_numbers(self) -> compiled_kernel.DriftNumbers:
+        """Return the kernel's tracking and creep: the calibration's creep, else the config's."""
+        cfg = self.config
+        creep = getattr(self.calibration, 'creep', None)
+        rate, settle, recovery = ((creep.per_decade, creep.settle_s, creep.recovery_s)
+                                  if creep is not None else
+                                  (cfg.creep_per_decade, cfg.creep_settle_s,
+                                   cfg.creep_recovery_s))
+        return compiled_kernel.DriftNumbers(track_s=cfg.track_s, creep_per_decade=rate,
+                                            settle_s=settle, recovery_s=recovery)
 
 
 def _contact(r: compiled_kernel.Record) -> Contact:
@@ -388,5 +468,5 @@ def _contact(r: compiled_kernel.Record) -> Contact:
         'shift_m': (r.shift_x_m, r.shift_y_m), 'azimuth_rad': r.azimuth_rad,
         'azimuth_sigma_rad': r.azimuth_sigma_rad, 'alpha_rad': r.alpha_rad,
         'force_xyz_n': (r.force_x_n, r.force_y_n, r.force_z_n), 'confidence': r.confidence,
-        'direction_valid': r.valid > 0})
+        'direction_valid': r.valid > 0, 'held_s': r.held_s})
     return contact
