@@ -45,8 +45,8 @@ import os
 import numpy as np
 import yaml
 
-from .direction import DirectionCorrection
 from .creep import CreepFit
+from .direction import DirectionCorrection
 from ..model.forcecurve import ForceCurve
 from ..model.taxelmodel import TaxelModel
 from ...common.atomic import write_atomically

@@ -37,9 +37,9 @@ import numpy as np
 
 from ...common.validate import check_pair
 
-__all__ = ['METHODS', 'ABI_VERSION', 'TaxelModelNumbers', 'Curve', 'Direction', 'DriftNumbers', 'Settings',
-           'ContactRecord', 'Status', 'Record', 'KernelSettings', 'Conditioned', 'Kernel',
-           'KernelMissing', 'KernelMismatch', 'load_library', 'library_candidates',
+__all__ = ['METHODS', 'ABI_VERSION', 'TaxelModelNumbers', 'Curve', 'Direction', 'DriftNumbers',
+           'Settings', 'ContactRecord', 'Status', 'Record', 'KernelSettings', 'Conditioned',
+           'Kernel', 'KernelMissing', 'KernelMismatch', 'load_library', 'library_candidates',
            'fit_contact', 'taxel_model_of', 'direction_of', 'DIRECTION_FEATURES']
 
 # Shift methods the kernel runs, by their registered names (skin_kernel.h: SK_CENTROID, ...).
@@ -147,8 +147,7 @@ class _Field(ctypes.Structure):
 
 
 _MIRRORS = {'sk_taxel_model': TaxelModelNumbers, 'sk_curve': Curve, 'sk_direction': Direction,
-            'sk_drift': DriftNumbers,
-            'sk_settings': Settings,
+            'sk_drift': DriftNumbers, 'sk_settings': Settings,
             'sk_contact': ContactRecord, 'sk_status': Status}
 
 # One contact as Python reads it: a record's fields by name (numpy's view of the C struct).
