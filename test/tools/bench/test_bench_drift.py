@@ -18,7 +18,7 @@ def test_the_hours_section_reports_every_mode_the_targets_and_the_cost_side_by_s
     for mode in ('off', 'tracking', 'default', 'calibrated'):
         assert f'| default | 8 % | {mode} |' in text
     assert 'Creep calibration: default' in text
-    assert '## 8. Hours' in tables.markdown(
+    assert '## 9. Hours' in tables.markdown(
         {'machine': dict.fromkeys(('cpu_model', 'cores', 'cores_usable', 'load_before',
                                    'load_after', 'python', 'numpy', 'opencv', 'rclpy',
                                    'skimage', 'rmw'), ''),
