@@ -392,6 +392,7 @@ def main(argv=None) -> int:
     try:
         earlier = _earlier_report(args.out) if args.only else None
         res = run(args)
+        took = res['elapsed_s']
         if earlier is not None:
             res = merge(earlier, res, args.only)
     except (RuntimeError, ValueError) as err:
@@ -400,7 +401,7 @@ def main(argv=None) -> int:
         print(f'bench: {err}', file=sys.stderr)
         return 1
     write(res, args.out)
-    print(f'wrote {os.path.join(args.out, "benchmarks.md")} in {res["elapsed_s"]:.0f} s')
+    print(f'wrote {os.path.join(args.out, "benchmarks.md")} after {took:.0f} s')
     for t in res['targets']:
         print(f'  {"ok  " if t["met"] else "MISS"} {t["name"]}: {t["measured"]} ({t["limit"]})')
     silent = broken_runs(res)
