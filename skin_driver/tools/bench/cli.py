@@ -256,6 +256,8 @@ def merge(report: dict, res: dict, parts) -> dict:
     if bool(report.get('quick')) != bool(res['quick']):
         raise ValueError('--only adds to a report of the same size: the report in --out was '
                          f'{"" if report.get("quick") else "not "}made with --quick')
+    # The new parts as the report's JSON holds them (text keys, None for NaN), like the others.
+    res = json.loads(json.dumps(json_safe(res), default=float))
     merged = dict(report)
     merged.update({p: res[p] for p in parts if p in res})
     earlier = [dict(u, parts=[p for p in u['parts'] if p not in parts])

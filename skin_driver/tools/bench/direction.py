@@ -54,13 +54,14 @@ def _back_to_back_us(data) -> float:
 
 
 def _cell(member, kind: str, size: int, counts, seed: int, oracle: bool) -> dict:
+    # Keyed by the number of presses as text: the report is read back from its JSON (--only).
     row = {'skin': member.name, 'scene': kind, 'learned': {}}
     for n in counts:
         data, truth, run = _run(member, kind, size, n, seed)
         scored = data.select(data.scored_frames())
         summary = score_run(scored, run)['summary']
         learned = run.calibration.direction
-        row['learned'][n] = {
+        row['learned'][str(n)] = {
             'mean_error_deg': summary['mean_error_deg'], 'valid_share': summary['valid_share'],
             'us_per_frame': _back_to_back_us(data),
             'applied': bool(learned is not None and learned.kept),
@@ -72,8 +73,8 @@ def _cell(member, kind: str, size: int, counts, seed: int, oracle: bool) -> dict
         row['oracle_deg'] = score_run(scored, MethodRun(ORACLE, Calibration(), contacts, us))[
             'summary']['mean_error_deg']
     row['crb'] = mean_bound_deg(member.model, presses)
-    today = row['learned'][counts[0]]['mean_error_deg']
-    best = row['learned'][counts[-1]]['mean_error_deg']
+    today = row['learned'][str(counts[0])]['mean_error_deg']
+    best = row['learned'][str(counts[-1])]['mean_error_deg']
     row['ratio'] = best / today if today and best is not None else None
     return row
 
@@ -102,14 +103,15 @@ def direction_learning(skins, sizes: dict, counts, seed: int = 0, oracle: bool =
 def direction_targets(res: dict, target) -> list:
     """Return the issue's targets of section 8, made by ``target`` (scoring._target)."""
     rows, top = res['rows'], res['counts'][-1]
+    key = str(top)
     minutes = top * res['robot_press_s'] / 60.0
     random = [r for r in rows if r['scene'] == 'random']
     learnable = [r for r in random if r['skin'] in LEARNABLE or ':' in r['skin']]
     worst = max((r['ratio'] for r in learnable if r['ratio'] is not None), default=None)
     worse = [r['skin'] for r in rows if r['ratio'] is not None and r['ratio'] > 1.0]
-    paper = [r['learned'][top]['mean_error_deg'] for r in rows if r['scene'] == 'paper'
-             and r['learned'][top]['mean_error_deg'] is not None]
-    costs = [r['learned'][top]['us_per_frame'] for r in rows if r['skin'] == 'default']
+    paper = [r['learned'][key]['mean_error_deg'] for r in rows if r['scene'] == 'paper'
+             and r['learned'][key]['mean_error_deg'] is not None]
+    costs = [r['learned'][key]['us_per_frame'] for r in rows if r['skin'] == 'default']
     out = [target(f'random spots, default with {top} known presses / today (worst of '
                   f'{len(learnable)} learnable skins)', worst, '<= 0.50',
                   worst is not None and worst <= 0.5,
@@ -147,9 +149,9 @@ def direction_markdown(res: dict, figure, table) -> list:
                'stable'])
     rows = []
     for r in res['rows']:
-        last = r['learned'][counts[-1]]
+        last = r['learned'][str(counts[-1])]
         rows.append([r['skin'], r['scene']]
-                    + [figure(r['learned'][n]['mean_error_deg'], '.2f') for n in counts]
+                    + [figure(r['learned'][str(n)]['mean_error_deg'], '.2f') for n in counts]
                     + ['yes' if last['applied'] else 'no', figure(r['ratio'], '.2f'),
                        figure(r.get('oracle_deg'), '.2f'),
                        figure(r['crb']['mean_abs_error_deg'], '.3f'),

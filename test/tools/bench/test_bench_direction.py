@@ -12,14 +12,14 @@ def test_known_presses_against_the_error_with_the_floor_beside():
     paper, random = res['rows']
     assert (paper['scene'], random['scene']) == ('paper', 'random')
     for row in res['rows']:
-        assert set(row['learned']) == {0, 40}
-        assert not row['learned'][0]['applied']  # no known presses: nothing learned
-        assert row['learned'][40]['cv_before_deg'] > 0
+        assert set(row['learned']) == {'0', '40'}
+        assert not row['learned']['0']['applied']  # no known presses: nothing learned
+        assert row['learned']['40']['cv_before_deg'] > 0
         # The floor beside: the oracle's error and the bound, both below the default's.
-        assert 0 < row['crb']['mean_abs_error_deg'] < row['learned'][0]['mean_error_deg']
-        assert 0 < row['oracle_deg'] < row['learned'][0]['mean_error_deg']
-        assert row['ratio'] == (row['learned'][40]['mean_error_deg']
-                                / row['learned'][0]['mean_error_deg'])
+        assert 0 < row['crb']['mean_abs_error_deg'] < row['learned']['0']['mean_error_deg']
+        assert 0 < row['oracle_deg'] < row['learned']['0']['mean_error_deg']
+        assert row['ratio'] == (row['learned']['40']['mean_error_deg']
+                                / row['learned']['0']['mean_error_deg'])
     lines = '\n'.join(direction_markdown(res, figure, _table))
     assert '| skin | scene | 0 presses [deg] | 40 presses [deg] | applied | ratio | oracle [deg]' \
         in lines
