@@ -85,6 +85,20 @@ def test_a_press_off_the_curve_is_left_out_by_name():
                                rtol=0.02)
 
 
+def test_presses_judged_by_another_layer_are_left_out_and_no_other():
+    counts, gains, sensed, known = bumps(np.linspace(5.0, 60.0, 16), SKIN)
+    known, sensed = known.copy(), sensed.copy()
+    known[6] *= 3.0
+    sensed[6] *= 3.0
+    # Told press 7 is wrong, the fit leaves it out without being asked to look for it.
+    fit = fit_force_curve(counts, gains, sensed, known, left_out=(6,), may_leave_out=False)
+    assert fit.left_out == (6,)
+    assert max(abs(fit.residuals_n[k]) / known[k] for k in range(16) if k != 6) < 0.05
+    # Not told, and not allowed to leave any out, the fit is refused naming the press.
+    with pytest.raises(ValueError, match='press 7 of'):
+        fit_force_curve(counts, gains, sensed, known, may_leave_out=False)
+
+
 def test_several_presses_off_the_curve_are_left_out_while_most_agree():
     counts, gains, sensed, known = bumps(np.linspace(5.0, 60.0, 16), SKIN)
     known, sensed = known.copy(), sensed.copy()

@@ -333,7 +333,8 @@ def check_known_forces(known_n) -> None:
 
 def fit_force_curve(press_counts: Sequence[np.ndarray], press_gains: Sequence[np.ndarray],
                     sensed_n: Sequence[float], known_n: Sequence[float],
-                    assumed: FsrModel = None, full_scale: int = None) -> CurveFit:
+                    assumed: FsrModel = None, full_scale: int = None, left_out: tuple = (),
+                    may_leave_out: bool = True) -> CurveFit:
     """
     Fit one layer's curve; raise ValueError with the reason when it must be refused.
 
@@ -343,6 +344,10 @@ def fit_force_curve(press_counts: Sequence[np.ndarray], press_gains: Sequence[np
     (known force times fill_factor**2) and ``known_n[k]`` the known force for messages. The
     curve is the force ``assumed`` (default :class:`FsrModel`) gives the counts, raised to a
     power and scaled (module docstring): the identity on a skin that matches the assumption.
+
+    Presses indexed in ``left_out`` are not fitted (another layer's fit judged their known force
+    wrong). With ``may_leave_out`` false no other press is left out: a layer whose presses then
+    disagree is refused rather than fitted on fewer, lower-spanning presses.
     """
     assumed = assumed or FsrModel()
     full_scale = assumed.full_scale if full_scale is None else int(full_scale)
@@ -356,7 +361,7 @@ def fit_force_curve(press_counts: Sequence[np.ndarray], press_gains: Sequence[np
         raise ValueError(f'press {empty[0] + 1} ({known[empty[0]]:.2f} N) loaded no taxel')
     # One press that disagrees (a wrong known force, two things touching) would bend the curve
     # for all: the worst is left out and the rest refitted, while most presses still agree.
-    kept = list(range(len(presses)))
+    kept = [k for k in range(len(presses)) if k not in left_out]
     fitted = np.zeros_like(known)
     fewest = max(MIN_PRESSES, (len(presses) + 1) // 2)
     while True:
@@ -368,6 +373,9 @@ def fit_force_curve(press_counts: Sequence[np.ndarray], press_gains: Sequence[np
         if relative.max() <= MAX_RELATIVE_RESIDUAL:
             break
         rest = [k for k in kept if k != worst]
+        if not may_leave_out:
+            raise ValueError(f'press {worst + 1} of {known[worst]:.2f} N is fitted as '
+                             f'{fitted[worst]:.2f} N; the presses disagree with one curve')
         if len(rest) < fewest or known[rest].max() < MIN_FORCE_SPAN * known[rest].min():
             left = len(presses) - len(kept)
             raise ValueError(f'press {worst + 1} of {known[worst]:.2f} N is fitted as '

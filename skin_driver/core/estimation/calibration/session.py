@@ -340,12 +340,17 @@ class CalibrationSession:
         fits = {}
         notes = ''
         # The normal force is the bottom layer's sum: its curve must fit. The top layer (the
-        # same film) may borrow it when its own presses do not make a curve.
+        # same film) may borrow it when its own presses do not make a curve. A press's known
+        # force is right or wrong for both layers, so the bottom's fit alone says which presses
+        # are left out: a top curve that fits only by leaving out others would be bent at the
+        # ends its own imprints do not pin, and the bottom's is the better guess.
         for layer, name in ((1, 'bottom'), (0, 'top')):
             counts = [m[layer] for m in marked]
+            judged = {} if name == 'bottom' else {'left_out': fits['bottom'].left_out,
+                                                    'may_leave_out': False}
             try:
                 fits[name] = fit_force_curve(counts, [gains[layer]] * n, known * fill * fill,
-                                             known, conditioning.config.fsr)
+                                             known, conditioning.config.fsr, **judged)
             except ValueError as err:
                 if name == 'bottom':
                     raise CalibrationRefused(f'{name} layer: {err}{self._clipping()}') from None
