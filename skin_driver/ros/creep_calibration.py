@@ -176,7 +176,12 @@ class CreepCalibration:
         known = (f'; the load weighs {goal.load:.2f} N, read {fit.load_n:.2f} N at its arrival'
                  if goal.load > 0 else '')
         recovered = (f'; recovers in {fit.recovery_s:.0f} s' if goal.rest > 0 else '')
-        return f'{fit.describe()}{recovered}{known}{written}', goal_handle.abort
+        # The rate is that of the newtons read: through the assumed film's curve it is off by
+        # as much as the skin's own curve bends away from it.
+        assumed = ('; fitted on the assumed film (no force calibration in force): calibrate '
+                   'force first, then creep' if estimator.calibration.force_curves is None
+                   else '')
+        return f'{fit.describe()}{recovered}{known}{assumed}{written}', goal_handle.abort
 
 
 class _Read:

@@ -31,6 +31,8 @@ def test_a_load_held_still_gives_the_creep_in_the_result_the_file_and_the_estima
     assert 0.0 <= result.per_decade < 0.01 and result.held >= 6.0
     assert result.load_read > 5.0 and 'the load weighs 10.00 N' in result.message
     assert 'written to' in result.message
+    # no force calibration was in force: the result says which comes first
+    assert 'calibrate force first, then creep' in result.message
     assert len(feedback) >= 8 and feedback[-1].hold == 6.0
     assert all(b.held > a.held for a, b in zip(feedback, feedback[1:]))
     stored = Calibration.load_yaml(tmp_path / 'calibration.yaml').creep

@@ -92,9 +92,9 @@ def drift_targets(res) -> list:
     alone = next((h['off']['azimuth_deg'] for h in holds if h['skin'] == skin), None)
     note = f'worst on {skin}'
     if alone is not None:
-        # The shift is measured on counts, which the correction leaves as they are.
-        note += (f'; {abs(alone):.2f} deg with the tare alone there: the creep reshapes the '
-                 'imprint, a force correction does not')
+        note += f'; {abs(alone):.2f} deg with the tare alone there'
+    if turn is not None and turn >= 1.0:
+        note += f'; {turn - 1.0:.2f} deg over'
     out.append(('azimuth change over an hour held, creep calibrated (deg)', turn, '< 1 deg',
                 turn is not None and turn < 1.0, note, '.2f'))
     cost = res['cost']['added_us']
@@ -113,7 +113,8 @@ def drift_section(res) -> list:
            f"Skins: {skins}. A tilted press at each skin's paper force held an hour, released "
            'for two minutes and pressed again; |F| after 1, 10 and 60 minutes and at the '
            're-press as its change from 1 s into the first press (%), the change of azimuth and '
-           'location over the hour. Modes: `off` scans without a time (the tare believed '
+           'location over the hour, each skin calibrated first as its user would (gains, force '
+           'curves, offset, compliance). Modes: `off` scans without a time (the tare believed '
            'forever), `tracking` baselines followed but no creep corrected, `default` the '
            "estimator's default creep (the family's middle), `calibrated` the creep a creep "
            'calibration fitted on a hold of its own (three minutes held, one off, two seconds '

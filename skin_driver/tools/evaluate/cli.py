@@ -46,7 +46,7 @@ from skin_driver.core.sim.experiments import calibrated_scene, make_scene, SCENE
 from skin_driver.core.sim.skins import family_skin, GRID, HELD_OUT, skin_names
 from skin_driver.ros.estimator_params import estimator_config, load_direction_parameters
 from skin_driver.tools.evaluate.drift import (calibrate_creep, format_drift, hold_report,
-                                              idle_report)
+                                              idle_report, user_calibration)
 from skin_driver.tools.evaluate.scoring import evaluate
 from skin_driver.tools.evaluate.tables import format_table, json_safe, write_contacts
 
@@ -213,13 +213,15 @@ def _over_hours(args) -> int:
     """Report the --skin's hold or idle scene (simulated hours); return the exit status."""
     try:
         config = _config(args)
+        calibration = user_calibration(args.skin, args.seed, config)
         if args.scene == 'hold':
-            creep, error = calibrate_creep(args.skin, args.seed, config)
-            hold = hold_report(args.skin, args.seed, config, creep)
+            creep, error = calibrate_creep(args.skin, args.seed, config, calibration)
+            hold = hold_report(args.skin, args.seed, config, creep, calibration)
             hold['calibration_error'] = error
             report = {'holds': [hold], 'idles': []}
         else:
-            report = {'holds': [], 'idles': [idle_report(args.skin, args.seed, config=config)]}
+            report = {'holds': [], 'idles': [idle_report(args.skin, args.seed, config=config,
+                                                         calibration=calibration)]}
     except KernelMissing as exc:
         print(f'error: {exc}', file=sys.stderr)
         return 2

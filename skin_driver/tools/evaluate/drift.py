@@ -2,7 +2,11 @@
 A skin over hours: the force of a press held an hour, a re-press, phantom contacts while idle.
 
 Scenes of :mod:`skin_driver.core.sim.hold` (simulated hours, rendered at the frames scored and a
-sparse trail), each scanned by the estimator four ways, all tared at time 0:
+sparse trail), each scanned by the estimator four ways, all tared at time 0 and all with the
+user's calibration in force (gains, force curves, offset and compliance from the family's
+calibration frames, as every scene of the evaluator has: :func:`user_calibration`); a force
+read through the assumed film's curve bends with the load, so a creep it does not see would
+turn the azimuth of a press held an hour:
 
 * ``off``: scans without a time (the driver before it had one): the tare is believed forever.
 * ``tracking``: the baselines of untouched taxels follow their drift; no creep correction.
@@ -28,12 +32,14 @@ import numpy as np
 
 from skin_driver.core.estimation.calibration.calibration import Calibration
 from skin_driver.core.estimation.calibration.creep import CreepError, CreepSession
+from skin_driver.core.estimation.calibration.prepared import prepared_estimator
 from skin_driver.core.estimation.scan.pipeline import ContactEstimator, EstimatorConfig
+from skin_driver.core.sim.experiments import calibrated_scene
 from skin_driver.core.sim.hold import HOLD_LABELS, hold_scene, idle_scene
 from skin_driver.core.sim.skins import family_skin
 
 __all__ = ['MODES', 'hold_report', 'idle_report', 'calibrate_creep', 'drift_report',
-           'format_drift']
+           'format_drift', 'user_calibration']
 
 MODES = ('off', 'tracking', 'default', 'calibrated')
 LATER = ('1min', '10min', '60min', 'repress')
@@ -47,14 +53,32 @@ def _configs(base: EstimatorConfig) -> dict:
             'default': base, 'calibrated': base}
 
 
-def calibrate_creep(skin: str, seed: int = 0, config: EstimatorConfig = None):
-    """Return the creep a creep calibration fits on ``skin`` (a hold of its own), or its error."""
+def user_calibration(skin: str, seed: int = 0, config: EstimatorConfig = None) -> Calibration:
+    """
+    Return the calibration a user makes of ``skin`` before using it (no creep part).
+
+    Gains, force curves, offset and compliance from the family's calibration frames
+    (:func:`experiments.calibrated_scene`), as the evaluator's other scenes calibrate.
+    """
+    data = calibrated_scene('random', family_skin(skin), np.random.default_rng([0xCA1, seed]), 1)
+    estimator, _ = prepared_estimator(data, (config or EstimatorConfig()).method, config)
+    return estimator.calibration
+
+
+def calibrate_creep(skin: str, seed: int = 0, config: EstimatorConfig = None,
+                    calibration: Calibration = None):
+    """
+    Return the creep a creep calibration fits on ``skin`` (a hold of its own), or its error.
+
+    ``calibration`` is what is in force while it runs (the user's force curves: the creep is
+    fitted on the newtons they give).
+    """
     member = family_skin(skin)
     config = replace(config or EstimatorConfig(pitch_m=member.model.pitch_m),
                      creep_per_decade=0.0)
     scene = hold_scene(member, seed=10_000 + seed, lead_s=60.0,
                        hold_s=CALIBRATION_HOLD_S + 30.0, rest_s=CALIBRATION_REST_S, step_s=10.0)
-    estimator = ContactEstimator(config).with_tare(scene.tare_top, scene.tare_bottom)
+    estimator = ContactEstimator(config, calibration).with_tare(scene.tare_top, scene.tare_bottom)
     session = CreepSession(CALIBRATION_HOLD_S, member.model.pitch_m, config.creep_recovery_s,
                            CALIBRATION_REST_S)
     for frame in scene.frames:
@@ -84,8 +108,12 @@ def _mean_contact(found) -> dict:
 
 
 def hold_report(skin: str, seed: int = 0, config: EstimatorConfig = None,
-                creep=None) -> dict:
-    """Return each mode's figures of the hold scene of ``skin`` (module doc)."""
+                creep=None, calibration: Calibration = None) -> dict:
+    """
+    Return each mode's figures of the hold scene of ``skin`` (module doc).
+
+    ``calibration`` is in force in every mode, with ``creep`` in it in ``calibrated``.
+    """
     member = family_skin(skin)
     base = config or EstimatorConfig(pitch_m=member.model.pitch_m)
     scene = hold_scene(member, seed=seed)
@@ -94,9 +122,10 @@ def hold_report(skin: str, seed: int = 0, config: EstimatorConfig = None,
     for mode, cfg in _configs(base).items():
         if mode == 'calibrated' and creep is None:
             continue
-        calibration = Calibration(creep=creep) if mode == 'calibrated' else None
-        estimator = ContactEstimator(cfg, calibration).with_tare(scene.tare_top,
-                                                                 scene.tare_bottom)
+        in_force = calibration or Calibration()
+        if mode == 'calibrated':
+            in_force = replace(in_force, creep=creep)
+        estimator = ContactEstimator(cfg, in_force).with_tare(scene.tare_top, scene.tare_bottom)
         seen = {}
         for frame in scene.frames:
             contacts = estimator.process(frame.top, frame.bottom,
@@ -127,14 +156,19 @@ def hold_report(skin: str, seed: int = 0, config: EstimatorConfig = None,
 
 
 def idle_report(skin: str, seed: int = 0, hours: float = 8.0, step_s: float = 10.0,
-                config: EstimatorConfig = None) -> dict:
-    """Return the phantom contacts on ``skin`` left idle ``hours``, without and with tracking."""
+                config: EstimatorConfig = None, calibration: Calibration = None) -> dict:
+    """
+    Return the phantom contacts on ``skin`` left idle ``hours``, without and with tracking.
+
+    ``calibration`` is in force (none by default).
+    """
     member = family_skin(skin)
     base = config or EstimatorConfig(pitch_m=member.model.pitch_m)
     scene = idle_scene(member, seed=seed, duration_s=hours * 3600.0, step_s=step_s)
     out = {'skin': skin, 'hours': hours, 'frames': len(scene.frames)}
     for mode in ('off', 'tracking'):
-        estimator = ContactEstimator(base).with_tare(scene.tare_top, scene.tare_bottom)
+        estimator = ContactEstimator(base, calibration).with_tare(scene.tare_top,
+                                                                  scene.tare_bottom)
         phantoms, first = 0, math.nan
         for frame in scene.frames:
             found = len(estimator.process(frame.top, frame.bottom,
@@ -150,16 +184,21 @@ def idle_report(skin: str, seed: int = 0, hours: float = 8.0, step_s: float = 10
 
 def drift_report(skins, seed: int = 0, hours: float = 8.0, step_s: float = 10.0,
                  config: EstimatorConfig = None, log=None) -> dict:
-    """Return :func:`hold_report` (with a creep calibration) and :func:`idle_report` per skin."""
+    """
+    Return :func:`hold_report` (with a creep calibration) and :func:`idle_report` per skin.
+
+    Each skin is first calibrated as its user would (:func:`user_calibration`).
+    """
     holds, idles = [], []
     for name in skins:
         if log:
             log(f'drift: {name}')
-        creep, error = calibrate_creep(name, seed, config)
-        report = hold_report(name, seed, config, creep)
+        calibration = user_calibration(name, seed, config)
+        creep, error = calibrate_creep(name, seed, config, calibration)
+        report = hold_report(name, seed, config, creep, calibration)
         report['calibration_error'] = error
         holds.append(report)
-        idles.append(idle_report(name, seed, hours, step_s, config))
+        idles.append(idle_report(name, seed, hours, step_s, config, calibration))
     return {'holds': holds, 'idles': idles, 'hours': hours, 'step_s': step_s,
             'labels_s': HOLD_LABELS}
 

@@ -346,8 +346,8 @@ class CalibrationSession:
         # ends its own imprints do not pin, and the bottom's is the better guess.
         for layer, name in ((1, 'bottom'), (0, 'top')):
             counts = [m[layer] for m in marked]
-            judged = {} if name == 'bottom' else {'left_out': fits['bottom'].left_out,
-                                                    'may_leave_out': False}
+            judged = ({} if name == 'bottom' else
+                      {'left_out': fits['bottom'].left_out, 'may_leave_out': False})
             try:
                 fits[name] = fit_force_curve(counts, [gains[layer]] * n, known * fill * fill,
                                              known, conditioning.config.fsr, **judged)
