@@ -48,6 +48,33 @@ def test_noise_alone_is_not_kept_the_gate_cannot_make_a_skin_worse():
     assert learned.after_deg >= learned.before_deg * 0.97
 
 
+def _phase_bias(c, r):
+    return 0.15 * math.sin(2 * math.pi * c), 0.15 * math.cos(2 * math.pi * r)
+
+
+def test_renders_of_the_same_physics_teach_more_than_the_few_presses_and_are_judged_on_them():
+    # 30 presses sample the phase bias thinly; 1500 rendered ones of the same physics pin it.
+    presses = _presses(_phase_bias, n=30, seed=1)
+    alone = learn_direction(presses)
+    both = learn_direction(presses, rendered=_presses(_phase_bias, n=1500, seed=2))
+    # (renders measured more than 30 deg off their azimuth are left out, as presses are)
+    assert both.kept and both.rendered > 1400 and both.presses == 30
+    assert both.after_deg < alone.after_deg
+    assert 'rendered' in both.describe() and 'judged on 30 presses' in both.describe()
+    assert DirectionCorrection.from_dict(both.to_dict()) == both
+
+
+def test_renders_of_other_physics_are_not_kept_the_presses_judge_them():
+    # The model the renders come from is wrong (its bias turns the other way): on the presses
+    # the map learned from them does worse than none, so it is not the one kept.
+    presses = _presses(_phase_bias, n=120)
+    wrong = _presses(lambda c, r: tuple(-v for v in _phase_bias(c, r)), n=1500, seed=2)
+    learned = learn_direction(presses, rendered=wrong)
+    assert learned.rendered == 0 and learned.kept
+    noise_only = learn_direction(_presses(lambda c, r: (0.0, 0.0), noise=0.05), rendered=wrong)
+    assert not noise_only.kept
+
+
 def test_too_few_presses_are_refused_before_and_after():
     with pytest.raises(ValueError, match='at least 10'):
         learn_direction(_presses(lambda c, r: (0.0, 0.0), n=9))
@@ -119,7 +146,8 @@ def test_presses_of_known_direction_lower_the_error_on_the_default_skin():
     assert int((data.split == 4).sum()) == 120
     est, notes = prepared_estimator(data, 'taxel_fit')
     assert est.calibration.direction is not None and est.calibration.direction.kept
-    assert any('direction correction from 120 presses applied' in n for n in notes)
+    # Learned from renders of the skin's taxel model, judged on the robot's presses.
+    assert any('rendered' in n and 'judged on 120 presses applied' in n for n in notes)
     d = est.calibration.direction
     assert d.after_deg < d.before_deg
 

@@ -37,8 +37,11 @@ def presses_on(skin, rng):
                                              r_max_ohm=3000.0, force_at_r_min_n=30.0)),
 ], ids=['sharp', 'soft_other_film'])
 def test_the_skin_is_learned_from_its_presses_of_known_force(skin):
+    radii = []
     learned = learn_taxel_model(presses_on(skin, np.random.default_rng(3)), skin.pitch_m,
-                                film_start(FsrModel()), 4095.0)
+                                film_start(FsrModel()), 4095.0, radii_out=radii)
+    # each press's tip, fitted with the skin (the presses' 4 mm)
+    assert np.array(radii) * skin.pitch_m == pytest.approx(np.full(FORCES.size, 0.004), rel=0.1)
     assert learned.layer_spread_m == pytest.approx(skin.spread_m, rel=0.03)
     assert learned.cover_spread_m == pytest.approx(skin.cover_spread_m, rel=0.1, abs=5e-5)
     # The pads' fill trades with the film's scale (both set how much of a load a taxel reads),

@@ -104,7 +104,9 @@ class DirectionCorrection:
     ``weight_y`` are the map's weights per feature (taxels), ``force_ref_n`` the force the
     force feature is taken relative to, ``presses`` and ``folds`` what it learned from and how
     it was checked, ``ridge`` the ridge chosen, ``left_out`` the presses left out as outliers
-    (their measured azimuth more than OUTLIER_DEG from the known one).
+    (their measured azimuth more than OUTLIER_DEG from the known one). ``rendered`` is how
+    many presses rendered from the skin's taxel model the map was fitted to (0: it was fitted
+    to the presses themselves); such a map's held-out error is its error on every press.
     """
 
     kept: bool
@@ -117,6 +119,7 @@ class DirectionCorrection:
     after_deg: float
     ridge: float = 0.0
     left_out: int = 0
+    rendered: int = 0
 
     def __post_init__(self):
         """Reject weights of the wrong length, non-finite numbers and a force that is not > 0."""
@@ -138,9 +141,13 @@ class DirectionCorrection:
         left = (f'; {self.left_out} press{"es" if self.left_out > 1 else ""} left out (measured '
                 f'more than {OUTLIER_DEG:.0f} deg from the known azimuth)' if self.left_out
                 else '')
-        return (f'direction correction from {self.presses} presses {verdict}: held-out azimuth '
-                f'error {self.before_deg:.2f} -> {self.after_deg:.2f} deg ({self.folds}-fold)'
-                f'{left}')
+        source = (f'direction correction from {self.rendered} presses rendered from the '
+                  f"skin's taxel model, judged on {self.presses} presses {verdict}: azimuth "
+                  f'error {self.before_deg:.2f} -> {self.after_deg:.2f} deg' if self.rendered
+                  else f'direction correction from {self.presses} presses {verdict}: held-out '
+                  f'azimuth error {self.before_deg:.2f} -> {self.after_deg:.2f} deg '
+                  f'({self.folds}-fold)')
+        return source + left
 
     def predict(self, shift: np.ndarray, x: np.ndarray) -> np.ndarray:
         """Return the corrected shifts (N x 2, taxels) of shifts and their features ``x``."""
@@ -152,7 +159,8 @@ class DirectionCorrection:
                 'weight_x': list(self.weight_x), 'weight_y': list(self.weight_y),
                 'presses': int(self.presses), 'folds': int(self.folds),
                 'before_deg': float(self.before_deg), 'after_deg': float(self.after_deg),
-                'ridge': float(self.ridge), 'left_out': int(self.left_out)}
+                'ridge': float(self.ridge), 'left_out': int(self.left_out),
+                'rendered': int(self.rendered)}
 
     @classmethod
     def from_dict(cls, doc) -> 'DirectionCorrection':
@@ -163,7 +171,8 @@ class DirectionCorrection:
                    weight_x=tuple(doc['weight_x']), weight_y=tuple(doc['weight_y']),
                    presses=int(doc['presses']), folds=int(doc['folds']),
                    before_deg=float(doc['before_deg']), after_deg=float(doc['after_deg']),
-                   ridge=float(doc.get('ridge', 0.0)), left_out=int(doc.get('left_out', 0)))
+                   ridge=float(doc.get('ridge', 0.0)), left_out=int(doc.get('left_out', 0)),
+                   rendered=int(doc.get('rendered', 0)))
 
 
 def _angle_errors_deg(shift: np.ndarray, azimuth: np.ndarray) -> np.ndarray:
@@ -196,9 +205,31 @@ def _ridge(x: np.ndarray, shift: np.ndarray, azimuth: np.ndarray, ridge: float) 
     return weights
 
 
+def _usable(presses: Sequence[KnownPress]) -> tuple:
+    """Return (presses with a measured shift within OUTLIER_DEG of their azimuth, measured)."""
+    measured = [p for p in presses
+                if all(map(math.isfinite, (p.col, p.row, *p.shift, p.force_n, p.azimuth_rad)))
+                and math.hypot(*p.shift) > 0]
+    kept = [p for p in measured if _angle_errors_deg(np.array([p.shift]),
+                                                     np.array([p.azimuth_rad]))[0]
+            <= OUTLIER_DEG]
+    return kept, len(measured)
+
+
+def _arrays(presses: Sequence[KnownPress], force_ref: float) -> tuple:
+    """Return (features, calibrated shifts, azimuths) of presses."""
+    shift = np.array([p.shift for p in presses], dtype=float)
+    azimuth = np.array([p.azimuth_rad for p in presses], dtype=float)
+    force = np.array([p.force_n for p in presses], dtype=float)
+    raw = np.array([p.shift if p.raw is None else p.raw for p in presses], dtype=float)
+    x = features([p.col for p in presses], [p.row for p in presses], raw[:, 0], raw[:, 1],
+                 force, force_ref)
+    return x, shift, azimuth
+
+
 def learn_direction(presses: Sequence[KnownPress], folds: int = FOLDS,
                     ridges: Sequence[float] = RIDGES, margin: float = MARGIN,
-                    seed: int = 0) -> DirectionCorrection:
+                    seed: int = 0, rendered: Sequence[KnownPress] = ()) -> DirectionCorrection:
     """
     Return the correction learned from ``presses``, kept only when it gains on held-out ones.
 
@@ -209,26 +240,21 @@ def learn_direction(presses: Sequence[KnownPress], folds: int = FOLDS,
     press. Presses without a measured shift are dropped and those measured more than
     OUTLIER_DEG off their azimuth left out (counted). Raises ValueError with fewer than
     MIN_DIRECTION_PRESSES presses left.
+
+    ``rendered`` (:mod:`.rendered`: presses rendered from the skin's taxel model) gives one more
+    candidate: the map fitted to them alone, for each ridge, judged on every press (none of
+    which it learned from). The candidate with the least held-out error is the one the margin
+    and the significance then judge.
     """
-    presses = [p for p in presses
-               if all(map(math.isfinite, (p.col, p.row, *p.shift, p.force_n, p.azimuth_rad)))
-               and math.hypot(*p.shift) > 0]
-    measured = len(presses)
-    presses = [p for p in presses if _angle_errors_deg(np.array([p.shift]),
-                                                       np.array([p.azimuth_rad]))[0]
-               <= OUTLIER_DEG]
+    presses, measured = _usable(presses)
     n = len(presses)
     if n < MIN_DIRECTION_PRESSES:
         raise ValueError(f'{n} presses with a measured shift; learning the direction needs at '
                          f'least {MIN_DIRECTION_PRESSES}')
     folds = int(min(max(folds, 2), n))
-    shift = np.array([p.shift for p in presses], dtype=float)
-    azimuth = np.array([p.azimuth_rad for p in presses], dtype=float)
-    force = np.array([p.force_n for p in presses], dtype=float)
-    force_ref = float(np.median(force)) if np.median(force) > 0 else 1.0
-    raw = np.array([p.shift if p.raw is None else p.raw for p in presses], dtype=float)
-    x = features([p.col for p in presses], [p.row for p in presses], raw[:, 0], raw[:, 1],
-                 force, force_ref)
+    force = np.median([p.force_n for p in presses])
+    force_ref = float(force) if force > 0 else 1.0
+    x, shift, azimuth = _arrays(presses, force_ref)
     fold = np.random.default_rng(seed).permutation(n) % folds
     errors = _angle_errors_deg(shift, azimuth)
     before = float(errors.mean())
@@ -242,13 +268,25 @@ def learn_direction(presses: Sequence[KnownPress], folds: int = FOLDS,
         held_out = _angle_errors_deg(predicted, azimuth)
         best = min(best, (float(held_out.mean()), ridge, held_out), key=lambda b: b[0])
     after, ridge, held_out = best
+    weights = None
+    renders, _ = _usable(rendered)
+    if len(renders) >= MIN_DIRECTION_PRESSES:
+        xr, shift_r, azimuth_r = _arrays(renders, force_ref)
+        for r in ridges:
+            fitted = _ridge(xr, shift_r, azimuth_r, r)
+            judged = _angle_errors_deg(shift + x @ fitted, azimuth)
+            if judged.mean() < after:
+                after, ridge, held_out, weights = float(judged.mean()), r, judged, fitted
     # The gain must stand out of the presses' own scatter (SIGNIFICANCE standard errors of the
     # per-press gain) as well as reach the margin: a few dozen presses gain by chance.
     gains = errors - held_out
     spread = float(gains.std(ddof=1)) / math.sqrt(n)
     kept = after < before * (1.0 - margin) and before - after > SIGNIFICANCE * spread
-    weights = _ridge(x, shift, azimuth, ridge)
+    from_renders = weights is not None
+    if not from_renders:
+        weights = _ridge(x, shift, azimuth, ridge)
     return DirectionCorrection(kept=kept, force_ref_n=force_ref,
                                weight_x=tuple(weights[:, 0]), weight_y=tuple(weights[:, 1]),
                                presses=n, folds=folds, before_deg=before, after_deg=after,
-                               ridge=float(ridge), left_out=measured - n)
+                               ridge=float(ridge), left_out=measured - n,
+                               rendered=len(renders) if from_renders else 0)

@@ -35,6 +35,7 @@ from .direction import KnownPress, learn_direction, MIN_DIRECTION_PRESSES
 from .forcefit import check_known_forces, fit_force_curve
 from .gains import gains_from_force_sums, limits_note, without_leak
 from .presses import PressSegmenter
+from .rendered import render_known_presses
 from .taxellearn import film_start, learn_taxel_model, LearningPress
 from ..shift.methods import get_method
 
@@ -43,6 +44,9 @@ __all__ = ['KINDS', 'PressRecord', 'Outcome', 'CalibrationRefused', 'Calibration
 
 KINDS = ('offset', 'force', 'compliance', 'gains', 'direction')
 MIN_COMPLIANCE_PRESSES = 3
+# The direction's presses the taxel model is learned from, to render more (.rendered): the
+# learning's cost grows with each, and a few dozen at several tips pin the skin's numbers.
+MODEL_PRESSES = 32
 
 
 class CalibrationRefused(ValueError):
@@ -465,11 +469,40 @@ class CalibrationSession:
                                        (r.shift_m[1] - zero[1]) / pitch),
                                       r.peak_force_n, float(azimuth),
                                       (r.shift_m[0] / pitch, r.shift_m[1] / pitch)))
-        correction = learn_direction(presses)
+        rendered, note = self._rendered(presses)
+        correction = learn_direction(presses, rendered=rendered)
         new = self._updated(direction=correction)
         return Outcome(new, correction.presses, (correction.before_deg, correction.after_deg),
-                       (), correction.describe(),
+                       (), correction.describe() + note,
                        warnings=() if correction.kept else (correction.describe(),))
+
+    def _rendered(self, presses: list) -> tuple:
+        """
+        Return (presses rendered from the skin's taxel model, a note when there are none).
+
+        The model is learned from an even sample of the recorded presses (at most
+        MODEL_PRESSES: the learning's cost grows with each), each at the force it was read.
+        """
+        estimator = self.estimator
+        pitch = estimator.config.pitch_m
+        conditioning = estimator.conditioning  # one snapshot
+        if conditioning.shape is None:
+            return [], '; no presses rendered (the estimator has no tare)'
+        fsr = conditioning.config.fsr
+        sensitivity = conditioning.sensitivity_maps()
+        records = [r for r in self.accepted
+                   if r.place_m is not None and all(math.isfinite(v) for v in r.shift_m)]
+        step = max(1, math.ceil(len(records) / MODEL_PRESSES))
+        learning = [LearningPress(r.counts, r.clipped, r.peak_force_n,
+                                  (r.shift_m[0] / pitch, r.shift_m[1] / pitch), sensitivity)
+                    for r in records[::step]]
+        radii = []
+        try:
+            model = learn_taxel_model(learning, pitch, film_start(fsr), fsr.full_scale,
+                                      radii_out=radii)
+        except ValueError as err:
+            return [], f'; no presses rendered ({err})'
+        return render_known_presses(estimator, model, presses, radii), ''
 
     def _fit_gains(self) -> Outcome:
         n = len(self.accepted)

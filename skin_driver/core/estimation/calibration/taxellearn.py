@@ -23,8 +23,8 @@ from typing import Sequence
 import numpy as np
 
 from ..model.fsr import FsrModel
-from ..model.taxelmodel import (best_radius, levenberg_marquardt, LOG_FORCE, MAX_MOVES, residuals,
-                                start_of, STEPS, sub_for, TaxelModel)
+from ..model.taxelmodel import (best_radius, levenberg_marquardt, LOG_FORCE, LOG_RADIUS, MAX_MOVES,
+                                residuals, start_of, STEPS, sub_for, TaxelModel)
 from ...common import least_squares
 
 __all__ = ['LearningPress', 'learn_taxel_model', 'film_start']
@@ -102,12 +102,14 @@ def _window(press: LearningPress) -> tuple:
 
 
 def learn_taxel_model(presses: Sequence[LearningPress], pitch_m: float, film: tuple,
-                      full_scale: float, iterations: int = 40) -> TaxelModel:
+                      full_scale: float, iterations: int = 40, radii_out: list = None
+                      ) -> TaxelModel:
     """
     Return the skin's taxel model learned from ``presses`` (module docstring).
 
     ``film`` is the (scale, exponent, ceiling, activation) to start from (:func:`film_start`).
-    Raises ValueError when no press has load on both layers.
+    ``radii_out``, when given, is extended by the tip radius (taxels) fitted to each press
+    that loaded both layers. Raises ValueError when no press has load on both layers.
     """
     windows = [(_window(p), p) for p in presses
                if np.asarray(p.counts)[0].any() and np.asarray(p.counts)[1].any()]
@@ -128,7 +130,9 @@ def learn_taxel_model(presses: Sequence[LearningPress], pitch_m: float, film: tu
                         iterations)
     if found[1] < best[1]:
         best = found
-    g, cost = best
+    g, cost, fitted = best
+    if radii_out is not None:
+        radii_out.extend(math.exp(u[LOG_RADIUS]) for u in fitted)
     taxels = sum(c.size for (c, _, _), _ in windows)
     return replace(_model(pitch_m, full_scale, g), presses=len(windows),
                    misfit_counts=math.sqrt(cost / taxels))
@@ -143,7 +147,7 @@ def _start(film: tuple, fill: float) -> np.ndarray:
 
 def _learn_from(windows: list, pitch: float, full_scale: float, g: np.ndarray,
                 iterations: int) -> tuple:
-    """Return (skin parameters, misfit) of the joint fit started at ``g`` (:func:`_model`)."""
+    """Return (skin parameters, misfit, press parameters) of the joint fit started at ``g``."""
     model = _model(pitch, full_scale, g)
     presses_u, subs = [], []
     for (counts, censored, sensitivity), press in windows:
@@ -156,9 +160,9 @@ def _learn_from(windows: list, pitch: float, full_scale: float, g: np.ndarray,
         u, _ = levenberg_marquardt(residual, best_radius(residual, u), _FREE, 6)
         presses_u.append(u)
         subs.append(sub)
-    g, _, cost = _joint(pitch, full_scale, g, presses_u, subs, [w for w, _ in windows],
-                        iterations)
-    return g, cost
+    g, fitted, cost = _joint(pitch, full_scale, g, presses_u, subs, [w for w, _ in windows],
+                             iterations)
+    return g, cost, fitted
 
 
 def _joint(pitch: float, full_scale: float, g: np.ndarray, presses_u: list, subs: list,
