@@ -490,8 +490,8 @@ class CalibrationSession:
             return [], '; no presses rendered (the estimator has no tare)'
         fsr = conditioning.config.fsr
         sensitivity = conditioning.sensitivity_maps()
-        records = [r for r in self.accepted
-                   if r.place_m is not None and all(math.isfinite(v) for v in r.shift_m)]
+        # (add_press took only presses whose shift was measured)
+        records = [r for r in self.accepted if r.place_m is not None]
         step = max(1, math.ceil(len(records) / MODEL_PRESSES))
         learning = [LearningPress(r.counts, r.clipped, r.peak_force_n,
                                   (r.shift_m[0] / pitch, r.shift_m[1] / pitch), sensitivity)
