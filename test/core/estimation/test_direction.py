@@ -75,6 +75,20 @@ def test_renders_of_other_physics_are_not_kept_the_presses_judge_them():
     assert not noise_only.kept
 
 
+def test_the_renders_map_is_chosen_on_the_renders_not_by_the_presses_that_judge_it():
+    # Renders of a bias a third too strong, few enough for the ridge to matter: presses of the
+    # true bias and presses of the renders' own would each pick the ridge that suits them, a
+    # choice made by peeking at the presses that judge it. The ridge is chosen on the renders,
+    # so the same renders give the same map whatever presses judge it.
+    renders = _presses(lambda c, r: tuple(1.3 * v for v in _phase_bias(c, r)), n=80, seed=2,
+                       noise=0.1)
+    judged = [learn_direction(_presses(lambda c, r, k=k: tuple(k * v for v in _phase_bias(c, r)),
+                                       n=30, seed=1), rendered=renders) for k in (1.0, 1.3)]
+    assert all(j.kept and j.rendered > 70 for j in judged)
+    assert judged[0].ridge == judged[1].ridge
+    assert judged[0].weight_x == judged[1].weight_x
+
+
 def test_too_few_presses_are_refused_before_and_after():
     with pytest.raises(ValueError, match='at least 10'):
         learn_direction(_presses(lambda c, r: (0.0, 0.0), n=9))

@@ -227,6 +227,28 @@ def _arrays(presses: Sequence[KnownPress], force_ref: float) -> tuple:
     return x, shift, azimuth
 
 
+def _cross_validated(x: np.ndarray, shift: np.ndarray, azimuth: np.ndarray, folds: int,
+                     ridges: Sequence[float], seed: int) -> tuple:
+    """
+    Return (held-out mean error, its ridge, the per-press held-out errors) of the best ridge.
+
+    The presses are dealt at random (``seed``) into ``folds`` folds; for each ridge each fold is
+    predicted by the map fitted to the others.
+    """
+    n = len(shift)
+    fold = np.random.default_rng(seed).permutation(n) % folds
+    best = (math.inf, ridges[0], None)
+    for ridge in ridges:
+        predicted = np.empty_like(shift)
+        for k in range(folds):
+            learn, held = fold != k, fold == k
+            weights = _ridge(x[learn], shift[learn], azimuth[learn], ridge)
+            predicted[held] = shift[held] + x[held] @ weights
+        held_out = _angle_errors_deg(predicted, azimuth)
+        best = min(best, (float(held_out.mean()), ridge, held_out), key=lambda b: b[0])
+    return best
+
+
 def learn_direction(presses: Sequence[KnownPress], folds: int = FOLDS,
                     ridges: Sequence[float] = RIDGES, margin: float = MARGIN,
                     seed: int = 0, rendered: Sequence[KnownPress] = ()) -> DirectionCorrection:
@@ -242,9 +264,10 @@ def learn_direction(presses: Sequence[KnownPress], folds: int = FOLDS,
     MIN_DIRECTION_PRESSES presses left.
 
     ``rendered`` (:mod:`.rendered`: presses rendered from the skin's taxel model) gives one more
-    candidate: the map fitted to them alone, for each ridge, judged on every press (none of
-    which it learned from). The candidate with the least held-out error is the one the margin
-    and the significance then judge.
+    candidate: the map fitted to them alone, its ridge chosen by the same cross-validation over
+    the renders, judged on every press (none of which it learned from or chose by). The
+    candidate with the least held-out error is the one the margin and the significance then
+    judge.
     """
     presses, measured = _usable(presses)
     n = len(presses)
@@ -255,28 +278,20 @@ def learn_direction(presses: Sequence[KnownPress], folds: int = FOLDS,
     force = np.median([p.force_n for p in presses])
     force_ref = float(force) if force > 0 else 1.0
     x, shift, azimuth = _arrays(presses, force_ref)
-    fold = np.random.default_rng(seed).permutation(n) % folds
     errors = _angle_errors_deg(shift, azimuth)
     before = float(errors.mean())
-    best = (math.inf, ridges[0], errors)
-    for ridge in ridges:
-        predicted = np.empty_like(shift)
-        for k in range(folds):
-            learn, held = fold != k, fold == k
-            weights = _ridge(x[learn], shift[learn], azimuth[learn], ridge)
-            predicted[held] = shift[held] + x[held] @ weights
-        held_out = _angle_errors_deg(predicted, azimuth)
-        best = min(best, (float(held_out.mean()), ridge, held_out), key=lambda b: b[0])
-    after, ridge, held_out = best
+    after, ridge, held_out = _cross_validated(x, shift, azimuth, folds, ridges, seed)
     weights = None
     renders, _ = _usable(rendered)
     if len(renders) >= MIN_DIRECTION_PRESSES:
+        # The renders' ridge is chosen on the renders: the presses judge one map, and a choice
+        # among several on the presses that judge it would flatter the one chosen.
         xr, shift_r, azimuth_r = _arrays(renders, force_ref)
-        for r in ridges:
-            fitted = _ridge(xr, shift_r, azimuth_r, r)
-            judged = _angle_errors_deg(shift + x @ fitted, azimuth)
-            if judged.mean() < after:
-                after, ridge, held_out, weights = float(judged.mean()), r, judged, fitted
+        _, r, _ = _cross_validated(xr, shift_r, azimuth_r, folds, ridges, seed)
+        fitted = _ridge(xr, shift_r, azimuth_r, r)
+        judged = _angle_errors_deg(shift + x @ fitted, azimuth)
+        if judged.mean() < after:
+            after, ridge, held_out, weights = float(judged.mean()), r, judged, fitted
     # The gain must stand out of the presses' own scatter (SIGNIFICANCE standard errors of the
     # per-press gain) as well as reach the margin: a few dozen presses gain by chance.
     gains = errors - held_out
