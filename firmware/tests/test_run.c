@@ -83,11 +83,53 @@ static void information_repeats_once_a_second_between_frames(void **state) {
   assert_int_equal(infos, 4); /* boot, then at 1 s, 2 s and 3 s */
 }
 
+static void information_keeps_to_whole_seconds_when_scans_come_off_the_second(void **state) {
+  (void)state;
+  /* Scans 300 ms apart: an information frame goes out at the first scan at or after each whole
+     second, up to 200 ms late, and the next one is still due at the next whole second, not a
+     second after the late one (which would lose one frame in six). */
+  fake.time_step_us = 300000u;
+  skin_fw_start();
+  for (int i = 0; i < 40; i++) { /* the last scan at 12.0 s */
+    skin_fw_step();
+  }
+  fake_drain();
+  uint32_t infos = 0;
+  for (uint32_t i = 0; i < fake.n_sent; i++) {
+    infos += is_info(i);
+  }
+  assert_int_equal(infos, 13); /* boot, then at 1.2, 2.1, 3.0, 4.2, ... 12.0 s */
+}
+
+static void after_a_stall_one_information_frame_not_a_burst(void **state) {
+  (void)state;
+  fake.time_step_us = 100000u;
+  skin_fw_start();
+  for (int i = 0; i < 5; i++) {
+    skin_fw_step();
+  }
+  fake.time_step_us = 5000000u; /* the board stalls for 5 s */
+  skin_fw_step();
+  fake.time_step_us = 100000u;
+  for (int i = 0; i < 9; i++) {
+    skin_fw_step();
+  }
+  fake_drain();
+  uint32_t infos = 0;
+  for (uint32_t i = 0; i < fake.n_sent; i++) {
+    infos += is_info(i);
+  }
+  assert_int_equal(infos, 2); /* boot, then one after the stall; the next is due 1 s later */
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test_setup(boot_sends_the_information_before_the_first_frame, setup),
       cmocka_unit_test_setup(each_step_waits_for_the_tick_then_scans, setup),
       cmocka_unit_test_setup(information_repeats_once_a_second_between_frames, setup),
+      cmocka_unit_test_setup(information_keeps_to_whole_seconds_when_scans_come_off_the_second,
+                             setup),
+      cmocka_unit_test_setup(after_a_stall_one_information_frame_not_a_burst, setup),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -39,7 +39,12 @@ void skin_fw_step(void) {
   if (info_len && scan.last_time_us >= next_info_us) {
     /* Between two data frames: the previous one has left once the link is idle again. */
     skin_link_send_when_idle(info_frame, info_len);
-    next_info_us = scan.last_time_us + SKIN_FW_INFO_PERIOD_US;
+    /* On a fixed schedule of device time: a late scan delays one information frame, not every
+       one after it. After a stall of over a period, one frame, not a burst to catch up. */
+    next_info_us += SKIN_FW_INFO_PERIOD_US;
+    if (next_info_us <= scan.last_time_us) {
+      next_info_us = scan.last_time_us + SKIN_FW_INFO_PERIOD_US;
+    }
   }
   skin_scan_send(&scan, len);
 }
