@@ -27,3 +27,20 @@ def test_known_presses_against_the_error_with_the_floor_beside():
     minutes = targets['robot time of the calibration run [min]']
     assert minutes['measured'] == '1.7' and minutes['met']
     assert "paper's protocol with 40 known presses (worst skin)" in targets
+
+
+def _row(skin, scene, errors):
+    return {'skin': skin, 'scene': scene, 'ratio': errors[-1] / errors[0],
+            'learned': {str(n): {'mean_error_deg': e, 'us_per_frame': 10.0}
+                        for n, e in zip((0, 60, 240), errors)}}
+
+
+def test_a_cell_made_worse_at_any_number_of_presses_is_named():
+    # Worse at 60 presses and back at 240: a user who stops at 60 gets the worse one.
+    res = {'counts': [0, 60, 240], 'robot_press_s': 2.5,
+           'rows': [_row('default', 'random', (1.0, 0.8, 0.7)),
+                    _row('loaded', 'paper', (0.5, 0.6, 0.5))]}
+    targets = {t['name']: t for t in direction_targets(res, _target)}
+    worse = targets['cells made worse by the known presses (any skin, scene, presses)']
+    assert not worse['met'] and worse['measured'] == '1'
+    assert 'loaded paper (60)' in worse['note'] and 'default' not in worse['note']
