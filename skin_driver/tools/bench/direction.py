@@ -116,9 +116,10 @@ def direction_targets(res: dict, target) -> list:
     learnable = [r for r in random if r['skin'] in LEARNABLE or ':' in r['skin']]
     worst = max((r['ratio'] for r in learnable if r['ratio'] is not None), default=None)
     # Worse at any number of presses, not the largest alone: a run of 60 presses is a
-    # calibration a user may make too.
+    # calibration a user may make too. (Today's own cell is never above itself.)
+    today = str(res['counts'][0])
     worse = [f'{r["skin"]} {r["scene"]} ({n})' for r in rows for n, v in r['learned'].items()
-             if n != str(res['counts'][0]) and _worse(v, r['learned'][str(res['counts'][0])])]
+             if _worse(v, r['learned'][today])]
     paper = [r['learned'][key]['mean_error_deg'] for r in rows if r['scene'] == 'paper'
              and r['learned'][key]['mean_error_deg'] is not None]
     costs = [r['learned'][key]['us_per_frame'] for r in rows if r['skin'] == 'default']
