@@ -18,6 +18,46 @@ case $fw in
   1) ;;
   *) exit "$fw" ;;
 esac
+# A bound on the whole run (SKIN_TEST_WALL_S, 0 for none), several times what it takes: a
+# process stuck where no test's timeout reaches it (between two tests, say) fails the run in
+# time to read why, not at CI's own limit. Past the bound every Python process of the run prints
+# its threads' stacks (SIGUSR1, test/conftest.py), and then the run is stopped.
+wall="${SKIN_TEST_WALL_S:-1800}"
+descendants() {  # of $1, leaving out $2's
+  local kid
+  for kid in $(pgrep -P "$1" || true); do
+    [ "$kid" = "$2" ] && continue
+    echo "$kid"
+    descendants "$kid" "$2"
+  done
+}
+watchdog=
+if [ "$wall" -gt 0 ]; then
+  (
+    sleep "$wall" </dev/null >/dev/null 2>&1
+    echo "run-tests: the suite ran past its ${wall} s bound (SKIN_TEST_WALL_S): the stacks" \
+         "of its Python processes follow, then it is stopped" >&2
+    me=$BASHPID
+    procs=$(descendants "$$" "$me")
+    for p in $procs; do
+      case "$(cat "/proc/$p/comm" 2>/dev/null || true)" in
+        python*) kill -USR1 "$p" 2>/dev/null || true ;;
+      esac
+    done
+    sleep 10
+    kill -TERM $procs 2>/dev/null || true
+    sleep 5
+    kill -KILL $procs 2>/dev/null || true
+  ) &
+  watchdog=$!
+  # However this script ends (Ctrl-C too), the watchdog and its sleep end with it.
+  stop_watchdog() {
+    local sleeping
+    sleeping=$(pgrep -P "$watchdog" || true)
+    kill "$watchdog" $sleeping 2>/dev/null || true
+  }
+  trap stop_watchdog EXIT
+fi
 set +e
 tools/with-env.sh python -m pytest -n "${SKIN_TEST_WORKERS:-2}" "$@"
 rc=$?
