@@ -23,12 +23,27 @@ esac
 # time to read why, not at CI's own limit. Past the bound every Python process of the run prints
 # its threads' stacks (SIGUSR1, test/conftest.py), and then the run is stopped.
 wall="${SKIN_TEST_WALL_S:-1800}"
-descendants() {  # of $1, leaving out $2's
-  local kid
-  for kid in $(pgrep -P "$1" || true); do
-    [ "$kid" = "$2" ] && continue
-    echo "$kid"
-    descendants "$kid" "$2"
+descendants() {  # of $1, leaving out $2 and its own; from /proc, as procps may be missing
+  local stat line pid kid p
+  local -A parent=()
+  for stat in /proc/[0-9]*/stat; do
+    line=$(<"$stat") 2>/dev/null || continue
+    pid=${stat#/proc/}
+    # The fields after the command name, which may hold spaces: state, then the parent.
+    read -r _ parent[${pid%/stat}] _ <<<"${line##*) }"
+  done
+  local frontier=("$1") next
+  while [ "${#frontier[@]}" -gt 0 ]; do
+    next=()
+    for kid in "${!parent[@]}"; do
+      for p in "${frontier[@]}"; do
+        if [ "${parent[$kid]}" = "$p" ] && [ "$kid" != "$2" ]; then
+          echo "$kid"
+          next+=("$kid")
+        fi
+      done
+    done
+    frontier=("${next[@]}")
   done
 }
 watchdog=
