@@ -68,7 +68,7 @@ if [ "$wall" -gt 0 ]; then
   # However this script ends (Ctrl-C too), the watchdog and its sleep end with it.
   stop_watchdog() {
     local sleeping
-    sleeping=$(pgrep -P "$watchdog" || true)
+    sleeping=$(descendants "$watchdog" "")
     kill "$watchdog" $sleeping 2>/dev/null || true
   }
   trap stop_watchdog EXIT
