@@ -46,7 +46,6 @@ descendants() {  # of $1, leaving out $2 and its own; from /proc, as procps may 
     frontier=("${next[@]}")
   done
 }
-watchdog=
 if [ "$wall" -gt 0 ]; then
   (
     sleep "$wall" </dev/null >/dev/null 2>&1
