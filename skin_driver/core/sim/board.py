@@ -14,6 +14,10 @@ measures).  Every frame that leaves the board has exactly one fate the
 board can name: intact, damaged by the line, of the wrong size, or still unread in the pty when
 the cable was pulled (see the frames_* counters).
 
+A scene that drifts (``drift``, :mod:`.scene`) is rendered with its creep and offset drift
+(:func:`physics.render_held`): each press by its equivalent age under load at the scene's time,
+the offsets by the board's clock, which runs on across the passes of a looped scene.
+
 Like the firmware, the board says who it is (docs/protocol.md, board information frame): once
 before its first frame and then once a second of device time, between two frames. By default
 it is a fixed fake board (:func:`sim_board_info`: board ``sim``, the scene's grid and pitch);
@@ -32,6 +36,7 @@ import time
 import numpy as np
 
 from . import physics
+from .drift import held_age
 from .line import damage
 from .pty_line import PtyLine
 from .scene import load_scene, Scene
@@ -114,6 +119,12 @@ class SimulatedSkin:
         if replay and not self.loop:
             raise ValueError('replay needs loop: only a looped scene repeats its scans')
         self._replay = bool(replay)
+        if replay and self.scene.drifts:
+            raise ValueError('replay sends one pass again and again: a scene that drifts '
+                             'cannot be replayed')
+        # Per press, the loads its film remembers (Scene.loads), found once.
+        self._loads = ([list(self.scene.loads(i)) for i in range(len(self.scene.presses))]
+                       if self.scene.drifts else None)
         self._replayed = None  # the scans of one pass, with replay
         self._rng = np.random.default_rng(seed)
         self._truth: dict = {}
@@ -324,7 +335,7 @@ class SimulatedSkin:
         if self._replayed:
             scan = self._replayed[index % len(self._replayed)]
         else:
-            scan = self._render(self._scene_time(seconds))
+            scan = self._render(self._scene_time(seconds), device_time_us / 1e6)
         top, bottom = scan.top, scan.bottom
         wire_shape = self._wire_shape
         wrong_shape = wire_shape is not None and wire_shape != top.shape
@@ -358,11 +369,17 @@ class SimulatedSkin:
             self.info_frames_sent += 1
             self._info_due_us = (device_time_us // INFO_PERIOD_US + 1) * INFO_PERIOD_US
 
-    def _render(self, t: float) -> _Scan:
-        """Render the scan of scene time t."""
+    def _render(self, t: float, clock_s: float = 0.0) -> _Scan:
+        """Render the scan of scene time t; a drifting scene's offsets at the clock's time."""
         active = self.scene.active_at(t)
         presses = tuple(p for _, p in active)
-        top, bottom = physics.render(self.scene.model, presses, self._rng)
+        if self._loads is None:
+            top, bottom = physics.render(self.scene.model, presses, self._rng)
+        else:
+            drift = self.scene.model.drift
+            ages = [held_age(drift, self._loads[i], t) for i, _ in active]
+            top, bottom = physics.render_held(self.scene.model, presses, ages, clock_s,
+                                              self._rng)
         top.flags.writeable = False
         bottom.flags.writeable = False
         return _Scan(t, presses, tuple(i for i, _ in active), top, bottom,

@@ -15,11 +15,23 @@ A scene file is a mapping::
       - {time_s: 0.5, force_n: 10, alpha_deg: 45, beta_deg: 90, duration_s: 1.0, ramp_s: 0.2,
          label: tilted}       # label: optional, a name for a group of presses
     generator: {kind: random, seed: 1, count: 20, ...}     # optional, adds generated presses
+    drift: {creep_per_decade: 0.05, offset_counts_per_hour: 360}   # optional (below)
+    mount: {xyz: [0.1, 0.0, 0.3], rpy: [0.0, 1.5708, 0.0]}     # optional (below)
 
 Generators: ``kind: random`` (presses at random spots, ranges given per field) and ``kind: paper``
 (the paper's protocol as :func:`experiments.paper_presses` defines it: ``repeats``,
 ``leading_normal``, ``normal_per_repeat``, ``force_n`` (default: the skin's ``paper_force_n``),
 one press every ``interval_s`` from ``start_s``).
+
+``drift`` makes a live board render creep and offset drift over time (:mod:`.drift`): a
+mapping of :class:`Drift` fields (the skin's drift, whatever the model had), or ``true`` for
+the drift of the ``skin`` named (the family's skins have one). A press creeps by its
+equivalent age under load (:func:`.drift.held_age` over the presses of every repetition whose
+discs overlap it, so a press soon after another at that spot starts where the film got to);
+the offsets drift with the board's clock, which runs on when a looped scene starts again.
+``mount`` is the skin frame's pose on its parent link (``xyz`` in metres, ``rpy`` in radians,
+as in a URDF joint): :meth:`Scene.mount_points` gives where the presses labelled ``mount``
+touch in the parent frame, the points a mount calibration is given.
 
 ``model`` keys are the fields of :class:`skin_driver.core.sim.physics.SkinModel`.  Angles are in
 degrees in the file only; everything a scene returns is SI with angles in radians.  A press's force
@@ -31,6 +43,7 @@ from __future__ import annotations
 
 import dataclasses
 from dataclasses import dataclass
+import functools
 import importlib.resources
 import math
 import os
@@ -40,6 +53,7 @@ from typing import Any, Mapping
 import numpy as np
 import yaml
 
+from .drift import Drift, held_age
 from .experiments import PAPER_FORCE_N, paper_presses
 from .physics import Press, SkinModel
 from .skins import family_skin
@@ -49,7 +63,7 @@ PRESS_FIELDS = ('time_s', 'x_m', 'y_m', 'force_n', 'alpha_deg', 'beta_deg', 'rad
                 'duration_s')
 DEFAULT_RAMP_S = 0.1
 _TOP_LEVEL = ('name', 'description', 'model', 'skin', 'repeat', 'period_s', 'defaults',
-              'presses', 'generator')
+              'presses', 'generator', 'drift', 'mount')
 
 
 @dataclass(frozen=True)
@@ -97,6 +111,8 @@ class Scene:
     repeat: int = 1
     period_s: float = 0.0
     description: str = ''
+    drifts: bool = False  # a live board renders the model's drift (creep, offsets) over time
+    mount: tuple = ()  # (x, y, z, roll, pitch, yaw) of the skin frame on its parent, or none
 
     @property
     def duration_s(self) -> float:
@@ -126,10 +142,88 @@ class Scene:
         """Return the presses of one label (one repetition), in the order of the script."""
         return [p for p in self.presses if p.label == label]
 
+    def loads(self, index: int) -> tuple:
+        """
+        Return the (on, off) scene times, in order and merged, of the loads a press's film sees.
+
+        Those are the press's own and those of every press whose disc overlaps its disc, in
+        every repetition: the film under a press remembers them all (:func:`.drift.held_age`).
+        """
+        return _loads(self, index)
+
+    def held_ages(self, t: float) -> list:
+        """Return (physics Press, equivalent age under load, s) of every press acting at t."""
+        drift = self.model.drift
+        return [(press, held_age(drift, list(self.loads(i)), t))
+                for i, press in self.active_at(t)]
+
+    def mount_points(self, label: str = 'mount') -> list:
+        """Return where each press of ``label`` touches, (x, y, z) m in the mount's parent."""
+        if not self.mount:
+            raise ValueError(f'scene {self.name!r} has no mount: give mount: {{xyz, rpy}}')
+        x, y, z, roll, pitch, yaw = self.mount
+        rotation = _rotation(roll, pitch, yaw)
+        return [tuple(float(v) for v in rotation @ (p.x_m, p.y_m, 0.0) + (x, y, z))
+                for p in self.labelled(label)]
+
     def hold_times(self) -> list:
         """Return (scene time, press index) at the middle of every press, all repetitions."""
         return [(k * self.period_s + p.time_s + p.duration_s / 2.0, i)
                 for k in range(self.repeat) for i, p in enumerate(self.presses)]
+
+
+@functools.lru_cache(maxsize=4096)
+def _loads(scene: Scene, index: int) -> tuple:
+    mine = scene.presses[index]
+    near = [p for p in scene.presses
+            if math.hypot(p.x_m - mine.x_m, p.y_m - mine.y_m) < p.radius_m + mine.radius_m]
+    spans = sorted((k * scene.period_s + p.time_s, k * scene.period_s + p.end_s)
+                   for k in range(scene.repeat) for p in near)
+    merged = []
+    for on, off in spans:
+        if merged and on <= merged[-1][1]:
+            merged[-1] = (merged[-1][0], max(merged[-1][1], off))
+        else:
+            merged.append((on, off))
+    return tuple(merged)
+
+
+def _rotation(roll: float, pitch: float, yaw: float) -> np.ndarray:
+    """Return the rotation matrix of URDF roll, pitch, yaw (about fixed x, y, z in turn)."""
+    cr, sr, cp, sp, cy, sy = (f(a) for a in (roll, pitch, yaw) for f in (math.cos, math.sin))
+    return np.array([[cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr],
+                     [sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr],
+                     [-sp, cp * sr, cp * cr]])
+
+
+def _drift(data: Any, model: SkinModel) -> tuple:
+    """Return (model, whether it drifts) of a scene's drift key."""
+    if data is None or data is False:
+        return model, False
+    if data is True:
+        if not (model.drift.creeps or model.drift.drifts):
+            raise ValueError('drift: true needs a skin that drifts (a skin of the family); '
+                             'else give a mapping of Drift fields')
+        return model, True
+    names = [f.name for f in dataclasses.fields(Drift)]
+    if not isinstance(data, Mapping) or set(data) - set(names):
+        raise ValueError(f'drift: must be true or a mapping of {", ".join(names)}, got {data!r}')
+    try:
+        drift = Drift(**{k: _number('drift', k, v) for k, v in data.items()})
+    except (TypeError, ValueError) as err:
+        raise ValueError(f'drift: {err}') from None
+    return dataclasses.replace(model, drift=drift), True
+
+
+def _mount(data: Any) -> tuple:
+    """Return (x, y, z, roll, pitch, yaw) of a scene's mount key, () without one."""
+    if data is None:
+        return ()
+    if not isinstance(data, Mapping) or set(data) != {'xyz', 'rpy'} or not all(
+            isinstance(data[k], (list, tuple)) and len(data[k]) == 3 for k in ('xyz', 'rpy')):
+        raise ValueError(f'mount: must be {{xyz: [x, y, z], rpy: [roll, pitch, yaw]}}, got '
+                         f'{data!r}')
+    return tuple(_number('mount', k, v) for k in ('xyz', 'rpy') for v in data[k])
 
 
 def _number(where: str, field: str, value: Any) -> float:
@@ -351,8 +445,10 @@ def scene_from_dict(data: Any, name: str = 'scene') -> Scene:
         raise ValueError(f'period_s: must be at least the end of the last press ({last_end} s), '
                          f'got {period}')
     description = data.get('description', '')
+    model, drifts = _drift(data.get('drift'), model)
     return Scene(name=str(data.get('name', name)), model=model, presses=tuple(presses),
-                 repeat=repeat, period_s=period, description=str(description))
+                 repeat=repeat, period_s=period, description=str(description), drifts=drifts,
+                 mount=_mount(data.get('mount')))
 
 
 def bundled_scene_names(folder: str = '') -> list:

@@ -1,5 +1,6 @@
 """Tests of the simulated skin on a real pseudo-terminal, read with pyserial and the decoder."""
 
+from dataclasses import replace
 import os
 import select
 import struct
@@ -12,6 +13,8 @@ import pytest
 from skin_driver.core.protocol.wire import (BoardInfo, encode_frame, encode_info, FrameDecoder,
                                             header_crc, SYNC)
 from skin_driver.core.sim.board import sim_board_info, SIM_UID, SimulatedSkin
+from skin_driver.core.sim.drift import Drift
+from skin_driver.core.sim.physics import render, render_held
 from skin_driver.core.sim.scene import scene_from_dict
 
 RATE_HZ = 200.0
@@ -234,3 +237,40 @@ def test_a_version_1_board_sends_no_identity_and_another_its_own():
     assert reader.decoder.board_info is None and v1.info_frames_sent == 0
     with pytest.raises(ValueError, match='identity'):
         SimulatedSkin('seed', identity='nucleo')
+
+
+def drifting_scene(**drift):
+    """Return a noiseless skin, idle for 0.25 s, then pressed at the centre, that drifts."""
+    return scene_from_dict({'model': {'noise_counts': 0.0}, 'drift': drift, 'presses': [{
+        'time_s': 0.25, 'x_m': 0.0375, 'y_m': 0.0375, 'force_n': 10.0, 'alpha_deg': 0.0,
+        'beta_deg': 0.0, 'radius_m': 0.004, 'duration_s': 1000.0, 'ramp_s': 0.0}]})
+
+
+def test_a_scene_that_drifts_creeps_under_its_press_and_drifts_by_the_boards_clock():
+    # 10 counts a second of offset drift, 20 % a decade of creep: plain within a second.
+    scene = drifting_scene(creep_per_decade=0.2, offset_counts_per_hour=36000.0)
+    frames = frames_of(SimulatedSkin(scene, rate_hz=RATE_HZ), 200)
+    press = scene.presses[0].press()
+    for f in frames:
+        t = f.device_time_us / 1e6
+        if t < 0.25:
+            # Idle: every taxel reads its offset, risen by the drift so far.
+            assert (f.top == np.rint(20.0 + 10.0 * t)).all(), t
+        elif t > 0.25:
+            top, bottom = render_held(scene.model, [press], [t - 0.25], t, None)
+            np.testing.assert_array_equal(f.top, top)
+            np.testing.assert_array_equal(f.bottom, bottom)
+    # The press reads more the longer it is held; without drift it would not.
+    loaded = [f for f in frames if f.device_time_us > 300_000]
+    assert loaded[-1].top.max() > loaded[0].top.max()
+    still = render(replace(scene.model, drift=Drift()), [press], None)[0]
+    assert loaded[-1].top.max() > still.max() + 20
+
+
+def test_a_scene_without_drift_renders_as_before_and_one_with_it_cannot_be_replayed():
+    scene = drifting_scene(offset_counts_per_hour=36000.0)
+    still = replace(scene, drifts=False)
+    frames = frames_of(SimulatedSkin(still, rate_hz=RATE_HZ), 20)
+    assert all((f.top == 20).all() for f in frames)
+    with pytest.raises(ValueError, match='cannot be replayed'):
+        SimulatedSkin(replace(scene, period_s=2000.0), loop=True, replay=True)

@@ -5,9 +5,11 @@ import re
 
 import numpy as np
 import pytest
+from skin_driver.core.estimation.calibration.creep import CreepSession
+from skin_driver.core.estimation.calibration.mount import MountSession
 from skin_driver.core.estimation.calibration.session import CalibrationSession
 from skin_driver.core.estimation.scan.pipeline import ContactEstimator, EstimatorConfig
-from skin_driver.core.sim.physics import Press, render
+from skin_driver.core.sim.physics import Press, render, render_held
 from skin_driver.core.sim.scene import find_scene, load_scene
 
 SCAN_S = 0.02
@@ -70,3 +72,57 @@ def test_the_calibrate_scene_calibrates_offset_force_compliance_and_gains_in_tur
         assert abs(contact.force_n / press.normal_force_n - 1.0) < 0.05
         if alpha:
             assert abs(math.degrees(contact.alpha_rad) - alpha) < 2.0
+
+
+def test_the_header_lists_the_azimuths_points_and_hold_of_the_direction_mount_and_creep_presses():
+    scene = load_scene('calibrate')
+    header = find_scene('calibrate').read_text()
+    direction = scene.labelled('direction')
+    assert len(direction) >= 10 and {p.alpha_deg for p in direction} == {35.0}
+    assert listed(header, 'azimuths')[0] == pytest.approx(
+        [math.radians(p.beta_deg) for p in direction], abs=1e-4)
+    points = [[float(v) for v in re.findall(r'[xyz]: ([-\d.]+)', found)]
+              for found in re.findall(r'\{(x: [^}]*)\}', header)]
+    assert np.ravel(points) == pytest.approx(np.ravel(scene.mount_points()), abs=1e-4)
+    assert len(points) == len(scene.labelled('mount')) == 6
+    # The held press outlasts the hold the header asks for, and comes back after the rest.
+    held, again = scene.labelled('creep')
+    hold, rest = (float(re.search(rf'{name} (\d+)', header).group(1)) for name in ('hold', 'rest'))
+    assert held.duration_s - 2 * held.ramp_s > hold + 1.0
+    assert again.time_s - held.end_s == rest and (again.x_m, again.y_m) == (held.x_m, held.y_m)
+    assert scene.drifts and scene.model.drift.creep_per_decade == 0.06
+
+
+def test_the_calibrate_scenes_touches_give_its_mount_and_its_held_press_its_creep():
+    scene = load_scene('calibrate')
+    rng = np.random.default_rng(1)
+    est = ContactEstimator(EstimatorConfig()).with_tare(
+        *(np.stack(layer) for layer in zip(*[render(scene.model, [], rng) for _ in range(20)])))
+
+    def scans(start_s, end_s, step_s=SCAN_S):
+        """Yield (time, top, bottom, contacts) of each scan, rendered with the scene's creep."""
+        for t in np.arange(start_s, end_s, step_s):
+            pressed = scene.held_ages(float(t))
+            top, bottom = render_held(scene.model, [p for p, _ in pressed],
+                                      [a for _, a in pressed], 0.0, rng)
+            yield float(t), top, bottom, est.process(top, bottom)
+
+    mount = MountSession(6, scene.mount_points())
+    for *_, contacts in scans(128.0, 140.0):
+        mount.add_scan(contacts)
+    fit = mount.finish()
+    x, y, z, roll, pitch, yaw = scene.mount
+    assert fit.translation_m == pytest.approx((x, y, z), abs=1e-3)
+    assert max(fit.residuals_m) < 1e-3
+    # The recipe's order: the force curves first, so that the creep is fitted on true newtons.
+    header = find_scene('calibrate').read_text()
+    force = CalibrationSession(est, 'force', forces_n=listed(header, 'forces')[0])
+    for _, top, bottom, contacts in scans(22.0, 52.0):
+        force.add_scan(top, bottom, contacts)
+    est = est.with_calibration(force.finish().calibration)
+    creep = CreepSession(180.0, rest_s=30.0)
+    for t, _, _, contacts in scans(148.0, 372.0, 0.05):
+        creep.add(t, contacts)
+    assert creep.done
+    found = creep.finish()
+    assert found.per_decade == pytest.approx(scene.model.drift.creep_per_decade, rel=0.1)

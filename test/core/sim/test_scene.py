@@ -163,3 +163,41 @@ def test_time_outside_scene_or_not_finite_has_no_presses():
     assert scene.presses_at(-1.0) == []
     assert scene.presses_at(float('nan')) == []
     assert scene.presses_at(scene.duration_s + 1.0) == []
+
+
+def test_a_scene_asks_for_drift_with_its_fields_or_its_family_skin_and_gives_its_mount():
+    base = {'presses': [{'time_s': 0.0, 'x_m': 0.01, 'y_m': 0.01, 'force_n': 1.0,
+                         'alpha_deg': 0.0, 'beta_deg': 0.0, 'radius_m': 0.004,
+                         'duration_s': 1.0}]}
+    assert not scene_from_dict(base).drifts
+    given = scene_from_dict({**base, 'drift': {'creep_per_decade': 0.05}})
+    assert given.drifts and given.model.drift.creep_per_decade == 0.05
+    family = scene_from_dict({**base, 'skin': 'soft', 'drift': True})
+    assert family.drifts and family.model.drift.creeps
+    for bad, why in (({'drift': True}, 'needs a skin that drifts'),
+                     ({'drift': {'creep_per_decade': -1.0}}, 'creep_per_decade'),
+                     ({'drift': {'speed': 1.0}}, 'mapping of creep_per_decade'),
+                     ({'mount': {'xyz': [0, 0, 0]}}, 'mount: must be')):
+        with pytest.raises(ValueError, match=why):
+            scene_from_dict({**base, **bad})
+    with pytest.raises(ValueError, match='has no mount'):
+        scene_from_dict(base).mount_points()
+    # Turned a quarter about z and lifted: (x, y, 0) on the skin is (-y, x, 0.5) on the parent.
+    mounted = scene_from_dict({**base, 'mount': {'xyz': [0, 0, 0.5],
+                                                 'rpy': [0, 0, math.pi / 2]}})
+    assert mounted.mount_points('')[0] == pytest.approx((-0.01, 0.01, 0.5))
+
+
+def test_a_press_remembers_the_loads_on_its_spot_in_every_repetition():
+    scene = scene_from_dict({'repeat': 2, 'period_s': 10.0, 'presses': [
+        {'time_s': 1.0, 'x_m': 0.02, 'y_m': 0.02, 'force_n': 1.0, 'alpha_deg': 0.0,
+         'beta_deg': 0.0, 'radius_m': 0.004, 'duration_s': 2.0},
+        {'time_s': 2.0, 'x_m': 0.025, 'y_m': 0.02, 'force_n': 1.0, 'alpha_deg': 0.0,
+         'beta_deg': 0.0, 'radius_m': 0.004, 'duration_s': 2.0},
+        {'time_s': 5.0, 'x_m': 0.06, 'y_m': 0.06, 'force_n': 1.0, 'alpha_deg': 0.0,
+         'beta_deg': 0.0, 'radius_m': 0.004, 'duration_s': 1.0}]})
+    # The first two overlap in place and time: one load from 1 to 4 s, in each repetition.
+    assert scene.loads(0) == scene.loads(1) == ((1.0, 4.0), (11.0, 14.0))
+    assert scene.loads(2) == ((5.0, 6.0), (15.0, 16.0))
+    (_, age), = scene.held_ages(5.5)
+    assert age == pytest.approx(0.5)
