@@ -42,7 +42,8 @@ from sensor_msgs.msg import Image
 from skin_driver.core.estimation.calibration.calibration import PARTS, SkinMount, utc_now
 from skin_driver.core.estimation.calibration.tare import RecentScans
 from skin_driver.core.estimation.scan.drift import drift_status
-from skin_driver.core.estimation.scan.heatmap import colour_map, grey_levels
+from skin_driver.core.estimation.scan.heatmap import (colour_map, display_scale, grey_levels,
+                                                      top_down)
 from skin_driver.core.estimation.scan.pipeline import ContactEstimator, EstimatorConfig
 from skin_driver.core.estimation.shift.methods import DEFAULT_METHOD, get_method, method_names
 from skin_driver.core.protocol.realtime import StageCpu
@@ -203,8 +204,13 @@ class EstimationHost:
                 low=1, high=10000)
         declare(node, 'viz_rate', 15.0,
                 'Heatmap images and markers per second (0 turns them off).', low=0.0, high=1000.0)
-        declare(node, 'viz_full_scale', 10.0,
-                'Force per taxel (newtons) drawn at the top of the colour scale.',
+        # The colour scale's least top: on the seed's 5 mm skin the strongest taxel of a press
+        # carries about a fifth of it, so a 2 N press fills the scale and a 1 N one half; an
+        # idle skin's taxels read nothing above the touch threshold and stay dark.
+        declare(node, 'viz_full_scale', 0.4,
+                'Least force per taxel (newtons) at the top of the colour scale of heatmaps and '
+                'markers: the scale reaches the strongest taxel of the scan, never less than '
+                'this, so a light touch fills it and an idle skin stays dark.',
                 low=0.001, high=1000.0)
         declare(node, 'diagnostics_period', 1.0, 'Seconds between two /diagnostics reports.',
                 low=0.1, high=60.0)
@@ -499,12 +505,12 @@ class EstimationHost:
             return
         self._drawn = latest
         header, pitch, top, bottom, contacts, estimator = latest
-        full = self._p('viz_full_scale')
         forces = dict(zip(('top', 'bottom'), estimator.maps_of(top, bottom)))
+        full = display_scale(self._p('viz_full_scale'), *forces.values())
         for layer in ('top', 'bottom'):
             if layer in wanted:
-                self._pub_heat[layer].publish(
-                    conversions.rgb_to_image(header, colour_map(forces[layer], full)))
+                self._pub_heat[layer].publish(conversions.rgb_to_image(
+                    header, colour_map(top_down(forces[layer]), full)))
         if 'markers' in wanted:
             self._publish_markers(header, forces['top'], float(pitch), contacts, full)
 

@@ -61,6 +61,15 @@ def test_rviz_config_shows_the_heatmaps_markers_and_wrench():
     assert topics == {'/skin/top/heatmap', '/skin/bottom/heatmap', '/skin/markers',
                       '/skin/wrench'}
     assert manager['Global Options']['Fixed Frame'] == 'skin_link'
+    # Each display is named for what its topic carries: the wrench is the net one of all
+    # contacts, not the strongest contact's force.
+    names = {d.get('Topic', {}).get('Value', d['Class']): d['Name'] for d in manager['Displays']}
+    assert names == {
+        'rviz_default_plugins/Grid': 'Taxel grid (16 x 16 at 5 mm)',
+        '/skin/markers': 'Taxel forces and contacts',
+        '/skin/top/heatmap': 'Top layer heatmap (seen from above)',
+        '/skin/bottom/heatmap': 'Bottom layer heatmap (seen from above)',
+        '/skin/wrench': 'Net wrench of all contacts (at the skin origin)'}
 
 
 def test_rviz_config_follows_the_launch_namespace(tmp_path, monkeypatch):
