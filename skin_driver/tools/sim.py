@@ -3,7 +3,8 @@ The simulated skin from the command line: a board on a pty, or a scene rendered 
 
 Run ``python -m skin_driver.tools.sim --scene seed --rate 100 --link /tmp/skin`` and open the
 printed port (or the link) like the real board.  The first stdout line is ``SKIN_PORT <path>``;
-human messages go to stderr.  ``--export OUT.npz`` renders the scene offline into a dataset.
+human messages go to stderr.  ``--export OUT.npz`` renders the scene offline into a dataset;
+``--goals`` prints the calibration goals its labelled presses answer (:mod:`.scene_goals`).
 The board itself is :mod:`skin_driver.core.sim.board`.
 """
 
@@ -22,6 +23,7 @@ from skin_driver.core.protocol.wire import BoardInfo
 from skin_driver.core.sim.board import SIM, SimulatedSkin
 from skin_driver.core.sim.experiments import render_scene
 from skin_driver.core.sim.scene import bundled_scene_names, load_scene
+from skin_driver.tools.scene_goals import scene_goals
 
 
 # ---- command line ---------------------------------------------------------------------------
@@ -45,6 +47,9 @@ def _parser() -> argparse.ArgumentParser:
     parser.add_argument('--seed', type=int, default=0, help='noise seed, 0 or more (0)')
     parser.add_argument('--export', metavar='OUT.npz', default=None,
                         help='render the scene into a dataset file and exit, without a pty')
+    parser.add_argument('--goals', action='store_true',
+                        help='print the calibration goals the scene\'s labelled presses answer '
+                             '(ros2 action send_goal commands, namespace /skin) and exit')
     parser.add_argument('--samples-per-press', type=int, default=1,
                         help='dataset samples per press with --export (1)')
     parser.add_argument('--board-info', default=SIM, metavar='TEXT',
@@ -97,6 +102,10 @@ def main(argv=None) -> int:
                 identity = BoardInfo.parse(args.board_info)
             except ValueError as err:
                 raise ValueError(f'--board-info: {err}') from None
+        if args.goals:
+            for start_s, label, command in scene_goals(scene):
+                print(f'# {label}: its first press at {start_s:g} s\n{command}')
+            return 0
         if args.export:
             data = render_scene(scene, seed=args.seed, samples_per_press=args.samples_per_press)
             save_dataset(args.export, data)
@@ -119,7 +128,7 @@ def main(argv=None) -> int:
     announce_epoch(skin.epoch_monotonic)
     model = scene.model
     print(f'sim: scene {scene.name!r} ({scene.duration_s:.1f} s{", looped" if args.loop else ""}'
-          f'), {model.rows}x{model.cols} taxels at {args.rate:g} Hz on {skin.port}'
+          f'{", drifting" if scene.drifts else ""}), {model.rows}x{model.cols} taxels at {args.rate:g} Hz on {skin.port}'
           + (f' (link {port})' if args.link else '') + '; Ctrl-C stops', file=sys.stderr)
     try:
         done.wait(args.duration)
