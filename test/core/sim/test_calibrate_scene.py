@@ -41,7 +41,7 @@ def play(scene, est, session, start_s, end_s, rng):
             return
 
 
-def test_the_calibrate_scene_calibrates_offset_force_compliance_and_gains_in_turn():
+def test_the_calibrate_scene_calibrates_in_turn_and_plays_the_presses_of_known_azimuth():
     scene = load_scene('calibrate')
     header = find_scene('calibrate').read_text()
     rng = np.random.default_rng(0)
@@ -65,6 +65,11 @@ def test_the_calibrate_scene_calibrates_offset_force_compliance_and_gains_in_tur
     assert abs(cal.compliance_m_per_n / scene.model.compliance_m_per_n - 1.0) < 0.1
     # The plate covers the skin: no gain at its limits.
     assert outcomes['gains'].warnings == ()
+    # Every press of known azimuth is taken (fitting them renders for half a minute more; the
+    # direction calibration's own tests fit).
+    session = CalibrationSession(est, 'direction', azimuths_rad=listed(header, 'azimuths')[0])
+    play(scene, est, session, 103.0, 125.0, rng)
+    assert session.done and len(session.accepted) == len(scene.labelled('direction')) == 12
     # What the calibrated estimator reads of presses the calibration never saw.
     for force, alpha in ((18.0, 0.0), (30.0, 30.0)):
         press = Press(0.041, 0.033, force, math.radians(alpha), 1.0, 0.004)
