@@ -48,7 +48,7 @@ def _parser() -> argparse.ArgumentParser:
     parser.add_argument('--export', metavar='OUT.npz', default=None,
                         help='render the scene into a dataset file and exit, without a pty')
     parser.add_argument('--goals', action='store_true',
-                        help='print the calibration goals the scene\'s labelled presses answer '
+                        help="print the calibration goals the scene's labelled presses answer "
                              '(ros2 action send_goal commands, namespace /skin) and exit')
     parser.add_argument('--samples-per-press', type=int, default=1,
                         help='dataset samples per press with --export (1)')
@@ -128,7 +128,8 @@ def main(argv=None) -> int:
     announce_epoch(skin.epoch_monotonic)
     model = scene.model
     print(f'sim: scene {scene.name!r} ({scene.duration_s:.1f} s{", looped" if args.loop else ""}'
-          f'{", drifting" if scene.drifts else ""}), {model.rows}x{model.cols} taxels at {args.rate:g} Hz on {skin.port}'
+          f'{", drifting" if scene.drifts else ""}), {model.rows}x{model.cols} taxels at '
+          f'{args.rate:g} Hz on {skin.port}'
           + (f' (link {port})' if args.link else '') + '; Ctrl-C stops', file=sys.stderr)
     try:
         done.wait(args.duration)

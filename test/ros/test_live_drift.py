@@ -1,13 +1,13 @@
-"""The live simulator drifts: creep calibration and baseline tracking tried on it, as a user would."""
+"""The live sim drifts: creep calibration and baseline tracking tried on it, as a user does."""
 
 from dataclasses import replace
 import math
 
 from action_msgs.msg import GoalStatus
+import numpy as np
 from pipeline import call, pipeline, send_goal
 import pytest
 from rosutil import spin_until
-import numpy as np
 from skin_driver.core.estimation.calibration.calibration import Calibration
 from skin_driver.core.estimation.calibration.session import CalibrationSession
 from skin_driver.core.estimation.scan.pipeline import ContactEstimator, EstimatorConfig
