@@ -25,7 +25,7 @@ from rclpy.action import ActionClient
 from rclpy.executors import ExternalShutdownException
 from rclpy.node import Node
 from skin_driver.core.estimation.calibration.calibration import Calibration
-from skin_driver.core.estimation.scan.heatmap import text_map
+from skin_driver.core.estimation.scan.heatmap import text_map, top_down
 from skin_driver.core.estimation.scan.pipeline import ContactEstimator, EstimatorConfig
 from skin_driver.core.estimation.shift.methods import DEFAULT_METHOD, REFERENCES
 from skin_driver.core.sim.scene import find_scene, scene_from_dict
@@ -174,7 +174,8 @@ class DemoMonitor:
         lines = [f'skin_driver demo - {self.status}', '']
         if self.last_frame is not None and self.live:
             top, bottom = (layer.astype(np.float64) for layer in self.last_frame)
-            left, right = text_map(top, 3000.0), text_map(bottom, 3000.0)
+            # Seen from above, as the heatmap images: x to the right, y up.
+            left, right = (text_map(top_down(layer), 3000.0) for layer in (top, bottom))
             lines.append(f'{"top layer":<34}bottom layer')
             lines += [f'{a}  {b}' for a, b in zip(left, right)]
             lines.append('')
