@@ -131,3 +131,7 @@ def test_the_calibrate_scenes_touches_give_its_mount_and_its_held_press_its_cree
     assert creep.done
     found = creep.finish()
     assert found.per_decade == pytest.approx(scene.model.drift.creep_per_decade, rel=0.1)
+    # The load back after 30 s off tells the recovery: the film's is 60 s, the fit's an
+    # effective one in its own model's terms (docs/drift.md), within a factor of 1.5 of it.
+    recovery_s = scene.model.drift.recovery_s
+    assert recovery_s / 1.5 < found.recovery_s < 1.5 * recovery_s
