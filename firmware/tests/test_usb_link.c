@@ -53,6 +53,9 @@ bool tud_cdc_n_write_clear(uint8_t itf) {
   return true;
 }
 
+static uint32_t now_us;
+uint32_t board_time_us32(void) { return now_us; }
+
 static uint8_t frame[1048];
 static uint8_t frame2[1048];
 
@@ -63,6 +66,7 @@ static int setup(void **state) {
   cdc.room = 2048;
   usb_link_reset();
   usb_link_discarded = 0;
+  now_us = 0xFFFF0000u; /* the clock wraps during the tests */
   for (uint32_t i = 0; i < sizeof frame; i++) {
     frame[i] = (uint8_t)(i * 7u + 1u);
     frame2[i] = (uint8_t)(i * 3u + 5u);
@@ -165,6 +169,41 @@ static void mount_closes_the_session(void **state) {
   assert_int_equal(cdc.clears, clears + 1);
 }
 
+/* The port open, nothing read: the frame waits up to USB_LINK_STALL_US, then goes. */
+static void host_stopped_reading(void **state) {
+  (void)state;
+  cdc.room = 100;
+  board_link_send(frame, sizeof frame);
+  cdc.room = 0;
+  now_us += USB_LINK_STALL_US;
+  assert_false(board_link_idle()); /* at the bound: still waiting */
+  assert_int_equal(usb_link_discarded, 0);
+  now_us += 1u;
+  assert_true(board_link_idle());
+  assert_int_equal(usb_link_discarded, 1);
+  assert_int_equal(cdc.fifo_len, 100); /* what was in the FIFO stays: the host may read it */
+}
+
+/* A slow reader is not a stopped one: each byte taken restarts the wait. */
+static void slow_reader_keeps_the_frame(void **state) {
+  (void)state;
+  cdc.room = 0;
+  board_link_send(frame, sizeof frame);
+  uint32_t polls = 0;
+  while (!board_link_idle()) {
+    assert_true(++polls < 100);
+    /* Every other poll the host has taken 64 bytes; the polls between find the FIFO full,
+     * 150 % of the bound after the frame was handed but 75 % after the last byte taken. */
+    now_us += USB_LINK_STALL_US / 2u + USB_LINK_STALL_US / 4u;
+    if (polls % 2u == 0u) {
+      cdc.room += 64;
+    }
+  }
+  assert_int_equal(usb_link_discarded, 0);
+  assert_int_equal(cdc.fifo_len, sizeof frame);
+  assert_memory_equal(cdc.fifo, frame, sizeof frame);
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test_setup(frame_fits, setup),
@@ -174,6 +213,8 @@ int main(void) {
       cmocka_unit_test_setup(reopen_starts_on_a_frame, setup),
       cmocka_unit_test_setup(rts_alone_keeps_the_session, setup),
       cmocka_unit_test_setup(mount_closes_the_session, setup),
+      cmocka_unit_test_setup(host_stopped_reading, setup),
+      cmocka_unit_test_setup(slow_reader_keeps_the_frame, setup),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -8,7 +8,9 @@
  *
  * With no host holding the port open (DTR low, or not enumerated) frames are discarded, not
  * queued: the scans keep their rate and the host starts on a frame's first byte when it opens
- * the port (the FIFO is cleared then).
+ * the port (the FIFO is cleared then). A host that holds the port open but has stopped reading
+ * does not stop the board either: after USB_LINK_STALL_US without a byte taken, the rest of the
+ * frame is discarded (the driver sees a torn frame and resynchronises on the next).
  */
 #include "usb_link.h"
 
@@ -18,6 +20,7 @@
 volatile uint32_t usb_link_discarded;
 static const uint8_t *pending;
 static uint32_t left;
+static uint32_t progress_us; /* when the FIFO last took a byte of the pending frame */
 
 void usb_link_reset(void) {
   pending = 0;
@@ -37,6 +40,13 @@ static void pump(void) {
   pending += n;
   left -= n;
   tud_cdc_write_flush();
+  const uint32_t now = board_time_us32();
+  if (n != 0u) {
+    progress_us = now;
+  } else if ((uint32_t)(now - progress_us) > USB_LINK_STALL_US) {
+    usb_link_discarded++;
+    usb_link_reset();
+  }
 }
 
 void usb_link_poll(void) {
@@ -47,6 +57,7 @@ void usb_link_poll(void) {
 void board_link_send(const uint8_t *buf, uint32_t len) {
   pending = buf;
   left = len;
+  progress_us = board_time_us32();
   pump();
 }
 

@@ -7,6 +7,12 @@
 
 #include <stdint.h>
 
+/*
+ * How long a frame may wait with the port open and not one byte taken before it is discarded:
+ * far longer than the 2 kB FIFO takes to drain at any rate the host reads (a few ms).
+ */
+#define USB_LINK_STALL_US 100000u
+
 /* Give the USB stack the CPU (tud_task) and move what waits into the CDC FIFO. */
 void usb_link_poll(void);
 
