@@ -13,14 +13,16 @@ test: setup
 demo: setup
 	@$(RUN) python -m skin_driver.tools.demo $(ARGS)
 
-# Both board images (build/fw-arm/boards/*/*.elf, .bin); installs the toolchain as root.
+# The board images (build/fw-arm/boards/*/*.elf, .bin); installs the toolchain as root.
 firmware:
 	@bash tools/setup-firmware.sh && bash tools/build-firmware.sh
 
 # The Nucleo-F446RE image through its ST-LINK with st-flash (stlink-tools); OpenOCD instead:
-# cmake --build build/fw-arm --target flash-openocd. docs/firmware.md.
+# cmake --build build/fw-arm --target flash-openocd. LINK=usb writes the USB image (the link
+# over the expander's USB connector) instead of the USART one. docs/firmware.md.
+LINK ?= usart
 flash: firmware
-	@cmake --build build/fw-arm --target flash
+	@cmake -DSKIN_FW_LINK=$(LINK) build/fw-arm >/dev/null && cmake --build build/fw-arm --target flash
 
 bench: setup
 	@$(RUN) python -m skin_driver.tools.bench.cli $(ARGS)

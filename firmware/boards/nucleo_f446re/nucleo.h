@@ -84,6 +84,8 @@ void nucleo_timers_init(void);
 void nucleo_rows_init(void);
 void nucleo_adc_init(void);
 void nucleo_link_init(void);
+/* Called while the core waits for the scan tick: the USB link runs its stack there. */
+void nucleo_link_poll(void);
 void nucleo_crc_init(void);
 
 #endif

@@ -126,4 +126,26 @@
  */
 #define SKIN_BOARD_SCAN_RATE_HZ 80
 
+/* ---- Link over USB (the USB image, skin_fw_nucleo_f446re_usb) ---------------------------- */
+
+/*
+ * The expander's USB connector: D- on PA11, D+ on PA12 (OTG_FS_DM/DP, AF10: the only pins of
+ * the OTG FS core on the LQFP64), its GND to the Nucleo's GND; VBUS is not sensed (PA9 is
+ * USART1's TX) and powers nothing. Checked in usb/usb_pins_check.c.
+ */
+#define SKIN_BOARD_USB_DM SKIN_PIN(A, 11)
+#define SKIN_BOARD_USB_DP SKIN_PIN(A, 12)
+
+/*
+ * Scans per second over USB. A version-1 frame of 16 x 16 (1 048 bytes) at 500 scans/s is
+ * 524 kB/s, 58 % of the 900 kB/s published for TinyUSB's CDC on an F4 (docs/firmware.md, "What
+ * the link carries"); 1 000 needs the smaller version-2 frame.
+ */
+#define SKIN_BOARD_USB_SCAN_RATE_HZ 500
+
+#ifdef SKIN_FW_LINK_USB
+#undef SKIN_BOARD_SCAN_RATE_HZ
+#define SKIN_BOARD_SCAN_RATE_HZ SKIN_BOARD_USB_SCAN_RATE_HZ
+#endif
+
 #endif

@@ -1,7 +1,8 @@
 /*
  * Reset and vectors of the STM32F446RE: enable the FPU (the image uses the hard-float ABI), copy
- * .data, clear .bss, call main. No interrupt is enabled (the firmware polls), but every vector
- * leads somewhere defined: a fault stops the board with NUCLEO_FAULT_EXCEPTION.
+ * .data, clear .bss, call main. No interrupt is enabled (the firmware polls) but the USB image's
+ * OTG FS interrupt; every other vector leads somewhere defined: a fault stops the board with
+ * NUCLEO_FAULT_EXCEPTION.
  */
 #include <stdint.h>
 #include <string.h>
@@ -12,6 +13,8 @@ extern uint32_t _sidata, _sdata, _edata, _sbss, _ebss, _estack;
 int main(void);
 void Reset_Handler(void);
 void Default_Handler(void);
+/* The USB image's (usb/usb_hw.c); elsewhere never enabled, so a fault if it ever fires. */
+void OTG_FS_IRQHandler(void) __attribute__((weak, alias("Default_Handler")));
 
 typedef void (*handler_t)(void);
 
@@ -32,7 +35,9 @@ __attribute__((section(".isr_vector"), used)) const struct vector_table vector_t
             Reset_Handler, D, D, D, D, D, /* NMI, HardFault, MemManage, BusFault, UsageFault */
             0, 0, 0, 0,                    /* reserved */
             D, D, 0, D, D,                 /* SVCall, DebugMonitor, reserved, PendSV, SysTick */
-            D8, D8, D8, D8, D8, D8, D8, D8, D8, D8, D8, D8, D, /* 97 interrupts */
+            D8, D8, D8, D8, D8, D8, D8, D8,                    /* interrupts 0..63 */
+            D, D, D, OTG_FS_IRQHandler, D, D, D, D,            /* 64..71: 67 is OTG FS */
+            D8, D8, D8, D,                                     /* 72..96 */
         },
 };
 

@@ -42,6 +42,7 @@ void board_wait_scan_tick(void) {
    * missed ticks are not made up. Bounded by two periods in case the timer was stopped. */
   const uint32_t start = TIM2->CNT;
   while (!(TIM5->SR & TIM_SR_UIF) && (uint32_t)(TIM2->CNT - start) <= 2u * SCAN_PERIOD_US) {
+    nucleo_link_poll();
   }
   TIM5->SR = ~TIM_SR_UIF; /* rc_w0: zero clears the flag, ones leave the others */
 }
