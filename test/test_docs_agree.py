@@ -167,6 +167,25 @@ def test_the_kernel_is_built_as_the_docs_say():
     assert named >= 2
 
 
+def test_the_kernel_header_names_every_shift_method():
+    # The header's account of a scan and its enum name the methods the binding registers.
+    from skin_driver.core.estimation.scan.kernel import METHODS
+    header = (ROOT / 'skin_kernel' / 'include' / 'skin_kernel' / 'skin_kernel.h').read_text()
+    enum = re.search(r'enum \{ (SK_CENTROID[^}]*)\}', header).group(1)
+    named = dict(re.findall(r'SK_(\w+) = (\d+)', enum))
+    assert {name.lower(): int(value) for name, value in named.items()} == METHODS
+    account = ' '.join(header.split('*/')[0].split())
+    listed = re.search(r'the layer shift of each contact \(([^)]*)\)', account).group(1)
+    assert set(re.findall(r'\w+', listed)) - {'or'} == set(METHODS)
+
+
+def test_the_docs_count_the_rendered_presses_as_the_calibration_does():
+    from skin_driver.core.estimation.calibration.rendered import RENDERED_PRESSES
+    text = ' '.join((ROOT / 'docs' / 'estimation.md').read_text().split())
+    counts = re.findall(r'renders (\d[\d ]*\d) (?:more )?presses', text)
+    assert counts and {int(c.replace(' ', '')) for c in counts} == {RENDERED_PRESSES}
+
+
 def _exists(path, base):
     """Return whether a path a document names exists (a skin_msgs type: its definition)."""
     kind = re.fullmatch(r'skin_msgs/(?:(msg|srv|action)/)?(\w+)', path)
