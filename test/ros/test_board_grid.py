@@ -6,14 +6,18 @@ from pipeline import call, pipeline, scene
 import pytest
 from rclpy.lifecycle import TransitionCallbackReturn
 from rclpy.parameter import Parameter
+from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 from rosutil import spin_until
 from skin_driver.ros.conversions import status_values
+from skin_msgs.msg import SkinInfo
 
 pytestmark = pytest.mark.ros
 
 WAIT_S = 30.0
 # Nothing set: every value is the board's.
 THE_BOARDS = {'rows': 0, 'cols': 0, 'pitch': 0.0}
+LATCHED = QoSProfile(depth=1, durability=DurabilityPolicy.TRANSIENT_LOCAL,
+                     reliability=ReliabilityPolicy.RELIABLE)
 
 
 def link(probe):
@@ -49,6 +53,12 @@ def test_an_unset_grid_and_pitch_are_the_boards(tmp_path, fused):
         said = "8x10 taxels at 4.000 mm pitch; all the board's word"
         assert spin_until(executor, lambda: link(probe)[2].get('grid') == said, WAIT_S)
         assert link(probe)[0] == DiagnosticStatus.OK
+        # The skin's description says the board's grid and pitch too.
+        described = []
+        probe.node.create_subscription(SkinInfo, '/skin_info', described.append, LATCHED)
+        assert spin_until(executor, lambda: any(m.board_uid for m in described), WAIT_S)
+        info = [m for m in described if m.board_uid][-1]
+        assert (info.rows, info.cols) == (8, 10) and info.pitch == pytest.approx(0.004)
 
 
 def test_a_set_pitch_the_board_contradicts_stops_the_driver_naming_both(tmp_path, capfd):
