@@ -106,7 +106,8 @@ def test_a_version_1_board_needs_its_pitch_set(tmp_path):
             "scans held for the board's word", '0')) > 0, WAIT_S)
         level, message, values = link(probe)
         assert level == DiagnosticStatus.WARN
-        assert "waiting for the board's pitch" in message and "set the 'pitch' parameter" in message
+        assert "waiting for the board's pitch" in message
+        assert "set the 'pitch' parameter" in message
         assert values['grid'] == "16x16 taxels at the board's pitch; all the board's word"
         assert probe.frames == []
     with pipeline(tmp_path, scene([]), driver={**THE_BOARDS, 'pitch': 0.005},
