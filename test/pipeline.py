@@ -13,12 +13,12 @@ FAST_DRIVER = {'reconnect_min': 0.05, 'reconnect_max': 0.2, 'stall_timeout': 0.3
 FAST_DIRECTION = {'diagnostics_period': 0.2}
 
 
-def scene(presses, rows=16, cols=16, **model):
+def scene(presses, rows=16, cols=16, pitch_m=0.005, **model):
     """Return a one-shot scene of the given presses on the seed's 16 x 16, 5 mm skin."""
     # A scene needs a press; one far in the future leaves the skin idle for the whole test.
     presses = presses or [{'time_s': 1000.0}]
     return scene_from_dict({
-        'name': 'test', 'model': dict(rows=rows, cols=cols, pitch_m=0.005, **model),
+        'name': 'test', 'model': dict(rows=rows, cols=cols, pitch_m=pitch_m, **model),
         'defaults': {'x_m': 0.0375, 'y_m': 0.0375, 'force_n': 10.0, 'radius_m': 0.004,
                      'ramp_s': 0.3, 'duration_s': 1.0, 'alpha_deg': 0.0, 'beta_deg': 0.0},
         'presses': presses}, name='test')

@@ -18,6 +18,8 @@ case $fw in
   1) ;;
   *) exit "$fw" ;;
 esac
+# The kernel's C unit tests under the sanitizers (cmocka, which the firmware's set-up installs).
+bash tools/test-kernel.sh
 # A bound on the whole run (SKIN_TEST_WALL_S, 0 for none), several times what it takes: a
 # process stuck where no test's timeout reaches it (between two tests, say) fails the run in
 # time to read why, not at CI's own limit. Past the bound every Python process of the run prints

@@ -26,12 +26,19 @@ configure reads are refused with the reason while the driver is configured (deac
 set, configure, activate), never accepted and silently ignored. A link lost while the node shuts
 down (Ctrl-C stops the simulated board too) is not reported as a fault.
 
+The grid and pitch are the board's word (core.protocol.grid): the grid from its frames, the
+pitch from its board information frame; scans that arrive before the board has said its pitch
+are counted, not published. The rows, cols and pitch parameters (0: the board's) override it; a
+board that contradicts one that is set stops the scans' use: the error, naming both, is logged,
+on /diagnostics (ERROR) and the driver deactivates itself and refuses to activate until it is
+configured afresh (cleanup, set the parameter, configure, activate).
+
 Fused (parameter fused, read at start-up): the process also runs the skin_direction node (same
 parameters, services, topics and diagnostics as the separate direction node) and estimates every
 scan on the serial reader thread right after decoding it, before the frame is published: no
-executor and no SkinFrame round trip between the last byte and the contacts. Configure checks
-the estimator (calibration, pitch) for the configured grid and pitch, so the reader's first scan
-is estimated.
+executor and no SkinFrame round trip between the last byte and the contacts. With grid and
+pitch set, configure checks the estimator (calibration, pitch) for them, so the reader's first
+scan is estimated; from the board's word, the first scans ask the executor to check it.
 
 Each message is stamped with the host time at which its last byte was read. The board's own clock
 travels in SkinFrame.device_time_us: it is not synchronised with the host, but its differences are
@@ -46,7 +53,8 @@ from rcl_interfaces.msg import SetParametersResult
 import rclpy
 from rclpy.lifecycle import Node, State, TransitionCallbackReturn
 from sensor_msgs.msg import Image
-from skin_driver.core.protocol.health import LinkHealth
+from skin_driver.core.protocol.grid import SkinGrid
+from skin_driver.core.protocol.health import ERROR, LinkHealth, WARN
 from skin_driver.core.protocol.link import (CONNECTED, default_port, DISCONNECTED, SerialLink,
                                             STOPPED)
 from skin_driver.core.protocol.realtime import StageCpu
@@ -66,6 +74,8 @@ START_UP_PARAMETERS = ('autostart', 'fused', 'use_sim_time')
 # Ctrl-C reaches a simulated board as well as the driver: a port lost within this long before the
 # context shuts down belongs to the shutdown, not to a fault.
 SHUTDOWN_GRACE_S = 0.25
+# The smallest pitch the driver takes (a set pitch below it is a slip of the unit).
+MIN_PITCH_M = 0.0001
 # The reader thread's stages whose CPU per scan /diagnostics reports (deliver: the rest).
 READER_STAGES = ('read', 'decode', 'estimation', 'frame', 'images', 'deliver')
 
@@ -84,6 +94,12 @@ class SkinDriverNode(Node):
         self._state_detail = ''
         self._burst = self._cpu_reading = None  # the reader's, made at configure
         self._health = None
+        self._grid = None  # the SkinGrid of the configuration
+        self._ready = False  # the grid and pitch are known and nothing contradicts them
+        self._held = 0  # scans not used while the board's word was awaited
+        # The reader thread's way to have the executor deactivate a driver whose board
+        # contradicts its parameters.
+        self._refused = self.create_guard_condition(self._deactivate_refused)
         self._report_lock = threading.Lock()
         self._shutting_down = threading.Event()
         self.context.on_shutdown(self._shutting_down.set)
@@ -117,10 +133,13 @@ class SkinDriverNode(Node):
                 '($XDG_RUNTIME_DIR/skin_driver/<namespace>/skin0), where the simulator links')
         declare(self, 'baud', 921600, 'Serial baud rate (USB CDC and ptys ignore it).',
                 low=1200, high=12000000)
-        declare(self, 'rows', 16, 'Taxel rows the board must send (along y).', low=1, high=128)
-        declare(self, 'cols', 16, 'Taxel columns the board must send (along x).', low=1, high=128)
-        declare(self, 'pitch', 0.005, 'Distance between taxel centres, metres.',
-                low=0.0001, high=0.1)
+        declare(self, 'rows', 0, 'Taxel rows the board must send (along y); 0: what the board '
+                'sends.', low=0, high=128)
+        declare(self, 'cols', 0, 'Taxel columns the board must send (along x); 0: what the '
+                'board sends.', low=0, high=128)
+        declare(self, 'pitch', 0.0, 'Distance between taxel centres, metres (at least '
+                f'{MIN_PITCH_M}); 0: what the board says in its information frame (a version-1 '
+                'board says none: set it).', low=0.0, high=0.1)
         declare(self, 'frame_id', '',
                 'TF frame of the skin patch in every header; empty: from the namespace '
                 '(<namespace>_skin_link, skin_link in the namespace skin or none).')
@@ -178,11 +197,16 @@ class SkinDriverNode(Node):
     def on_configure(self, state: State) -> TransitionCallbackReturn:
         """Check the parameters and create publishers."""
         problem = _backoff_problem(self._p('reconnect_min'), self._p('reconnect_max'))
+        if 0 < self._p('pitch') < MIN_PITCH_M:
+            problem = f"'pitch' ({self._p('pitch')} m) must be 0 or at least {MIN_PITCH_M} m"
         if problem:
             self.get_logger().error(f'parameter {problem}')
             return TransitionCallbackReturn.FAILURE
         self._frame_id = self._p('frame_id').strip() or default_frame_id(self.get_namespace())
-        self._pitch = float(self._p('pitch'))
+        self._grid = SkinGrid(self._p('rows'), self._p('cols'), self._p('pitch'))
+        self._pitch = self._grid.pitch_m or 0.0
+        self._ready = self._grid.ready
+        self._held = 0
         self._serialized = conversions.SerializedMessages(self._frame_id)
         self._pubs['frame'] = self.create_lifecycle_publisher(SkinFrame, 'frame', qos.stream(),
                                                               **qos.overridable())
@@ -193,7 +217,7 @@ class SkinDriverNode(Node):
             self._images = LatestOnly(self._publish_images, 'skin-images', self._images_failed)
         self._listened = Listened(self._pubs)
         self._board_pub = self.create_publisher(String, 'board_info', qos.latched())
-        decoder = FrameDecoder(expected_shape=(self._p('rows'), self._p('cols')))
+        decoder = FrameDecoder(expected_shape=self._grid.shape)
         self._link = SerialLink(
             self._port(), self._p('baud'), decoder, self._publish_frames, self._on_link_state,
             read_timeout_s=self._p('read_timeout'), stall_timeout_s=self._p('stall_timeout'),
@@ -205,19 +229,23 @@ class SkinDriverNode(Node):
         self._burst = diagnostics.PeriodMax()
         self._cpu_reading = diagnostics.TakenByOwner(self._link.cpu.take,
                                                      dict.fromkeys(READER_STAGES, 0.0))
-        if self.estimation is not None:
+        if self.estimation is not None and self._ready:
             # Fused: the estimator is checked for this skin before the reader hands it a scan.
-            self.estimation.prepare(self._p('rows'), self._p('cols'), self._pitch)
-        self._health = LinkHealth((self._p('rows'), self._p('cols')), self._pitch)
+            self.estimation.prepare(self._grid.rows, self._grid.cols, self._pitch)
+        # A set pitch the board contradicts is the grid's refusal, not the link's warning.
+        self._health = LinkHealth(self._grid.shape)
         self.destroy_timer(self._diag_timer)
         self._diag_timer = self.create_timer(self._p('diagnostics_period'), self._report)
         self._lifecycle = 'inactive'
-        self.get_logger().info(f'configured for {self._port()} '
-                               f"({self._p('rows')}x{self._p('cols')} taxels)")
+        self.get_logger().info(f'configured for {self._port()} ({self._grid_text()})')
         return TransitionCallbackReturn.SUCCESS
 
     def on_activate(self, state: State) -> TransitionCallbackReturn:
         """Open the port (retrying in the background until the device is there)."""
+        if self._grid.refusal:
+            self.get_logger().error(f'not activated: {self._grid.refusal}; cleanup, set the '
+                                    'parameter, configure')
+            return TransitionCallbackReturn.FAILURE
         result = super().on_activate(state)
         self._lifecycle = 'active'
         self._link.start()
@@ -265,6 +293,8 @@ class SkinDriverNode(Node):
 
     def _release(self) -> None:
         self._lifecycle = 'unconfigured'
+        self._grid = None
+        self._ready = False
         if self._link is not None:
             self._link.stop()
             self._link = None
@@ -283,7 +313,7 @@ class SkinDriverNode(Node):
         header = conversions.make_header(self._now(), self._frame_id)
         listened = self._listened(receive_monotonic)
         cpu = self._link.cpu
-        for frame in frames:
+        for frame in frames if self._ready else self._usable(frames):
             if self.estimation is not None:
                 # Contacts first: they are what a controller waits for.
                 self.estimation.process(header, frame.seq, frame.device_time_us, self._pitch,
@@ -293,12 +323,48 @@ class SkinDriverNode(Node):
             if listened['frame']:
                 self._pubs['frame'].publish(self._frame_message(header, frame))
                 cpu.mark('frame')
-        if self._images is not None and (listened['top'] or listened['bottom']):
+        if self._images is not None and self._ready and (listened['top'] or listened['bottom']):
             self._images.offer((header, frames[-1], listened))
             cpu.mark('images')
         self._rate.add(len(frames))
         self._burst.see(len(frames))
         self._cpu_reading.serve()
+
+    def _usable(self, frames) -> list:
+        """Return the frames to use while the grid is not ready (reader thread): none, or all."""
+        grid = self._grid
+        if not grid.refusal and grid.see_frame(*frames[0].top.shape):
+            self._refuse()
+        if grid.ready:
+            self._adopt()
+            return frames
+        self._held += len(frames)
+        return []
+
+    def _adopt(self) -> None:
+        """Read scans from now on at the grid and pitch now known (reader thread)."""
+        self._pitch = self._grid.pitch_m
+        self._ready = True
+        self.get_logger().info(f'scans read as {self._grid_text()}')
+
+    def _refuse(self) -> None:
+        """Stop using scans: the board contradicts a parameter (reader thread)."""
+        self._ready = False
+        self.get_logger().error(f'scans not used: {self._grid.refusal}; the driver deactivates')
+        self._refused.trigger()
+        self._report()
+
+    def _deactivate_refused(self) -> None:
+        if self._lifecycle == 'active' and self._grid is not None and self._grid.refusal:
+            self.trigger_deactivate()
+
+    def _grid_text(self) -> str:
+        grid = self._grid
+        rows, cols = grid.rows or '?', grid.cols or '?'
+        pitch = f'{1000 * grid.pitch_m:.3f} mm' if grid.pitch_m else "the board's"
+        source = ', '.join(name for name in ('rows', 'cols', 'pitch') if grid.set[name])
+        said = f'set: {source}' if source else "all the board's word"
+        return f'{rows}x{cols} taxels at {pitch} pitch; {said}'
 
     def _frame_message(self, header, frame):
         """Return a scan's SkinFrame as CDR bytes, or as a message where those are not rmw's."""
@@ -326,9 +392,15 @@ class SkinDriverNode(Node):
         self.get_logger().warning(f'raw image not published: {err}', throttle_duration_sec=5.0)
 
     def _on_board_info(self, info) -> None:
-        """Pass on who the board says it is (link thread, once per new identity)."""
+        """Pass on who the board says it is and take its grid (link thread, once per identity)."""
         self.get_logger().info(f'the board says it is {info.describe()}')
         self._board_pub.publish(String(data=info.text))
+        grid = self._grid
+        refused = grid.refusal
+        if grid.hear_board(info) and not refused:
+            self._refuse()
+        elif not self._ready and grid.ready:
+            self._adopt()
 
     def _on_link_state(self, state: str, detail: str) -> None:
         self._state_detail = detail
@@ -351,6 +423,12 @@ class SkinDriverNode(Node):
                 return
             if self._lifecycle == 'active':
                 self._report_link()
+            elif self._grid is not None and self._grid.refusal:
+                self._diag.publish([diagnostics.make_status(
+                    f'{self.get_fully_qualified_name()}: skin link', self._port(),
+                    diagnostics.ERROR, f'{self._lifecycle}: {self._grid.refusal}',
+                    {'port': self._port(), 'lifecycle state': self._lifecycle,
+                     **self._grid_values()})])
             else:
                 self._diag.publish([diagnostics.make_status(
                     f'{self.get_fully_qualified_name()}: skin link', self._port(),
@@ -366,10 +444,18 @@ class SkinDriverNode(Node):
         values = {'port': self._port(), 'frame rate [Hz]': rate,
                   'largest burst [frames]': burst,
                   'reader scheduling': self._link.scheduling.policy,
-                  **cpu, **health.values}
+                  **cpu, **health.values, **self._grid_values()}
+        level, message = health.level, health.message
+        problem = self._grid.refusal or self._grid.waiting_for()
+        if problem:
+            level = max(level, ERROR if self._grid.refusal else WARN)
+            message = f'{message}; {problem}'
         self._diag.publish([diagnostics.make_status(
-            f'{self.get_fully_qualified_name()}: skin link', self._port(), health.level,
-            health.message, values)])
+            f'{self.get_fully_qualified_name()}: skin link', self._port(), level,
+            message, values)])
+
+    def _grid_values(self) -> dict:
+        return {'grid': self._grid_text(), "scans held for the board's word": self._held}
 
 
 def _backoff_problem(low, high) -> str:

@@ -11,8 +11,8 @@ What keeps work a lower rate would do off the per-scan path of the driver and th
   frames, the benchmark's subscriber (its two subscriptions on one thread: no GIL hand-over).
   rclpy's executor rebuilds its wait set from every entity of its nodes on each wake-up, a cost
   paid per scan that grows with the node's services, actions and timers; this thread waits on
-  its subscriptions and a stop signal alone, and the executor keeps parameters, services and
-  timers.
+  its subscriptions and a stop signal alone (through :mod:`skin_driver.ros.wait_set`, rclpy's
+  private wait set: why, there), and the executor keeps parameters, services and timers.
 """
 
 import contextlib
@@ -23,9 +23,8 @@ from rclpy.callback_groups import CallbackGroup
 from rclpy.event_handler import SubscriptionEventCallbacks
 from rclpy.exceptions import InvalidHandle
 from rclpy.guard_condition import GuardCondition
-# The wait set of rclpy's C extension, the one its executors wait on; rclpy has no public one.
-from rclpy.impl.implementation_singleton import rclpy_implementation as _rclpy
 from skin_driver.core.protocol.realtime import name_this_thread
+from skin_driver.ros.wait_set import RCLError, WaitSet
 
 REFRESH_S = 0.1
 # How often a waiting TakenOnThread looks whether its context is still up (a shutdown wakes it
@@ -175,8 +174,7 @@ class TakenOnThread:
         wake, context = self._wake, self._context
         try:
             with context.handle:
-                wait_set = _rclpy.WaitSet(len(self._subscriptions), 1, 0, 0, 0, 0,
-                                          context.handle)
+                wait_set = WaitSet(len(self._subscriptions), 1, 0, 0, 0, 0, context.handle)
             while not self._stopped and context.ok():
                 with contextlib.ExitStack() as handles:
                     for sub, _ in self._subscriptions:
@@ -191,7 +189,7 @@ class TakenOnThread:
                         self._take_all(sub, callback)
         except InvalidHandle:  # the node was destroyed under the thread: nothing left to take
             pass
-        except _rclpy.RCLError:
+        except RCLError:
             if context.ok():
                 raise
             # The context was shut down under the thread (Ctrl-C before or during a wait).

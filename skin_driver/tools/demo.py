@@ -33,8 +33,8 @@ from skin_driver.ros import conversions
 from skin_driver.tools.evaluate.scoring import summarise
 from skin_driver.tools.evaluate.tables import format_table
 from skin_driver.tools.harness import (
-    BoardProcess, call_service, ros_args, ros_session, send_goal, spawn, spin_until, start_nodes,
-    start_sim, stop, wait_for, write_params, write_scene)
+    BoardProcess, call_service, grid_params, ros_args, ros_session, send_goal, spawn, spin_until,
+    start_nodes, start_sim, stop, wait_for, write_params, write_scene)
 from skin_driver.tools.probe import Probe
 from skin_msgs.action import Calibrate, CalibrateCompliance, CalibrateForce
 from skin_msgs.msg import SkinFrame, TactileContactArray
@@ -274,7 +274,8 @@ def run(args, workdir: str) -> int:
     port = os.path.join(workdir, 'skin0')
     ns = '/skin_demo'
     log = open(os.path.join(workdir, 'nodes.log'), 'w')
-    params = write_params(workdir, driver={'reconnect_max': 0.2, 'publish_images': False},
+    params = write_params(workdir, driver={'reconnect_max': 0.2, 'publish_images': False,
+                                           **grid_params(scene)},
                           direction={'method': args.method})
     procs = list(start_nodes(args.fused, ros_args(ns, params), log).values())
     try:

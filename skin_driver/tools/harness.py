@@ -76,6 +76,17 @@ def stop(procs: Iterable[subprocess.Popen], timeout_s: float = 5.0) -> None:
             proc.wait()
 
 
+def grid_params(scene) -> dict:
+    """
+    Return the driver's rows, cols and pitch of a scene's skin, set rather than the board's word.
+
+    The simulated board says them too, but a driver that connects after the board started may
+    hold a second of scans until its next information frame; the tools count every scan.
+    """
+    model = scene.model
+    return {'rows': model.rows, 'cols': model.cols, 'pitch': model.pitch_m}
+
+
 def write_params(workdir: str, driver: dict = None, direction: dict = None,
                  name: str = 'params.yaml') -> str:
     """
@@ -287,8 +298,7 @@ def in_process(workdir: str, scene, rate_hz: float = 200.0, driver: dict = None,
     link = os.path.join(workdir, 'skin0')
     sim = SimulatedSkin(scene, rate_hz=rate_hz, link_path=link, seed=seed, loop=loop,
                         identity=identity)
-    driver_params = {'port': link, 'rows': scene.model.rows, 'cols': scene.model.cols,
-                     **(driver or {})}
+    driver_params = {'port': link, **grid_params(scene), **(driver or {})}
     direction_params = {'calibration_file': os.path.join(workdir, 'calibration.yaml'),
                         **(direction or {})}
     context = rclpy.Context()

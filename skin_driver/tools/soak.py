@@ -40,7 +40,7 @@ from rclpy.node import Node
 from skin_driver.core.sim.board import SimulatedSkin
 from skin_driver.ros.conversions import skin_frame_layers, status_values
 from skin_driver.tools.harness import (
-    ros_args, ros_session, start_nodes, stop, wait_for, write_params)
+    grid_params, ros_args, ros_session, start_nodes, stop, wait_for, write_params)
 from skin_driver.tools.probe import Probe
 from skin_msgs.msg import SkinFrame
 
@@ -188,7 +188,7 @@ def run(args, workdir: str) -> dict:
     log = open(os.path.join(workdir, 'nodes.log'), 'w')
     sim = SimulatedSkin(args.scene, rate_hz=args.rate, link_path=os.path.join(workdir, 'skin0'),
                         seed=args.seed, loop=True, truth_capacity=max(10_000, int(args.rate * 20)))
-    params = write_params(workdir)
+    params = write_params(workdir, driver=grid_params(sim.scene))
     procs = start_nodes(args.fused, ros_args(ns, params, 'error'), log)
     try:
         with ros_session() as executor:

@@ -191,8 +191,9 @@ int sk_new(const sk_settings *settings, unsigned long settings_size, const doubl
   size_t shift_scratch = 8 * ((size_t)line + 1);
   if (k->method == SK_POC) {
     shift_scratch += (size_t)sk_poc_scratch(rows, cols);
-  } else if (k->method == SK_TAXEL_FIT) {
-    /* the window's censored taxels and a 2-D fit's work (censored_fit.c: fit_censored) */
+  } else if (k->method == SK_TAXEL_FIT || k->method == SK_MODEL_FIT) {
+    /* the window's censored taxels and a 2-D fit's work (censored_fit.c: fit_censored);
+     * model_fit starts from taxel_fit's shift, so it needs the same */
     shift_scratch += 10 * (size_t)n + 4 * ((size_t)line + 1);
   }
   /* a saturated imprint's fill-in: its marked counts (2 windows), then sk_imprint_force's 3 */

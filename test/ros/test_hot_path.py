@@ -1,9 +1,13 @@
 """Subscriber counts asked at a low rate, and work for viewers kept off the reader's thread."""
 
 import contextlib
+import importlib
+import sys
 import threading
 import time
 
+import pytest
+from rclpy.impl import implementation_singleton
 from skin_driver.ros.hot_path import LatestOnly, Listened, REFRESH_S
 
 
@@ -155,3 +159,13 @@ def test_a_callback_failing_because_ctrl_c_shut_the_context_is_not_reported():
             time.sleep(0.01)
     assert calls == [1]
     assert errors == []
+
+
+def test_an_rclpy_without_its_private_wait_set_is_named_on_import(monkeypatch):
+    # The one private use of rclpy (skin_driver.ros.wait_set) fails on import, saying what the
+    # rclpy in use lacks, rather than deep inside a thread at the first wait.
+    monkeypatch.delattr(implementation_singleton.rclpy_implementation, 'WaitSet')
+    monkeypatch.delitem(sys.modules, 'skin_driver.ros.wait_set', raising=False)
+    with pytest.raises(ImportError, match=r"needs the wait set of rclpy's C extension .*"
+                                          r'rclpy_implementation\.WaitSet'):
+        importlib.import_module('skin_driver.ros.wait_set')

@@ -39,9 +39,9 @@ class Health:
 class LinkHealth:
     """Assess a link against its counters at the previous assessment."""
 
-    def __init__(self, expected_shape: tuple, pitch_m: float = 0.0):
+    def __init__(self, expected_shape: tuple = None, pitch_m: float = 0.0):
         """
-        Assess a link that must deliver frames of ``expected_shape`` (rows, cols).
+        Assess a link that must deliver frames of ``expected_shape`` (rows, cols; None: any).
 
         ``pitch_m`` (> 0) is the pitch the driver is configured with, compared with the one the
         board states; 0 compares none.
@@ -103,7 +103,7 @@ class LinkHealth:
         if info is None:
             return []
         problems = []
-        rows, cols = decoder.last_shape or self._expected
+        rows, cols = decoder.last_shape or self._expected or (info.rows, info.cols)
         if (info.rows, info.cols) != (rows, cols):
             problems.append(f'board {info.board} says its grid is {info.rows}x{info.cols}, its '
                             f'frames are {rows}x{cols}' if decoder.last_shape else

@@ -28,13 +28,14 @@ from rclpy.qos import qos_profile_sensor_data
 from skin_driver.core.estimation.shift.methods import DEFAULT_METHOD
 from skin_driver.core.protocol.wire import encode_frame, FrameDecoder
 from skin_driver.core.sim.physics import Press, render, SkinModel
+from skin_driver.core.sim.scene import load_scene
 from skin_driver.ros import conversions
 from skin_driver.ros.direction_node import DirectionNode
 from skin_driver.ros.estimation_host import EstimationHost
 from skin_driver.ros.spin import freeze_heap
 from skin_driver.tools.harness import (
-    overrides, ros_args, ros_session, spawn, spin_for, start_nodes, start_sim, stop, wait_for,
-    write_params)
+    grid_params, overrides, ros_args, ros_session, spawn, spin_for, start_nodes, start_sim, stop,
+    wait_for, write_params)
 from skin_driver.tools.probe import Probe
 from skin_msgs.msg import SkinFrame, TactileContact, TactileContactArray
 from std_srvs.srv import Trigger
@@ -204,7 +205,8 @@ def end_to_end(rates, seconds, warmup, workdir, layouts=LAYOUTS, profile=False, 
     """
     port = os.path.join(workdir, 'skin0')
     params = write_params(workdir, driver={'reconnect_min': 0.02, 'reconnect_max': 0.1,
-                                           'realtime_priority': priority},
+                                           'realtime_priority': priority,
+                                           **grid_params(load_scene(SCENE))},
                           direction={'method': method} if method else {},
                           name=f'bench_params_{priority}.yaml')
     node_log = open(os.path.join(workdir, 'nodes.log'), 'a')

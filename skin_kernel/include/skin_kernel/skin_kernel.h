@@ -4,8 +4,8 @@
  * One call per scan (sk_scan) turns the raw counts of both layers into contacts: conditioning
  * (tare, line-leak removal, threshold, dead-taxel fill, counts to force), contacts (components,
  * peak split, bottom-load mixture, windows), a saturated imprint's force filled in from its rim,
- * the layer shift of each contact (taxel_fit, poc or centroid), its uncertainty and the contact
- * figures. It is the one implementation of the per-scan estimate; skin_driver binds it
+ * the layer shift of each contact (centroid, taxel_fit, poc or model_fit), its uncertainty and
+ * the contact figures. It is the one implementation of the per-scan estimate; skin_driver binds it
  * (skin_driver/core/estimation/scan/kernel.py) and its tests hold it to behaviour and to golden
  * outputs. The conditioning alone (sk_condition, sk_force) is what a calibration reads its
  * presses from, so that it never conditions a scan a second way.
@@ -32,7 +32,8 @@ extern "C" {
  */
 #define SK_ABI_VERSION 14
 
-/* Shift methods. */
+/* Shift methods: centroid, taxel_fit, poc, and model_fit (taxel_fit's shift refitted by the
+ * calibration's taxel model, sk_settings.model; taxel_fit's own without one). */
 enum { SK_CENTROID = 0, SK_TAXEL_FIT = 1, SK_POC = 2, SK_MODEL_FIT = 3, SK_NMETHODS };
 
 /* A skin's forward model of the taxels (taxelmodel.TaxelModel), SI units; pitch_m 0: none. */

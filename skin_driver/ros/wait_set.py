@@ -1,0 +1,22 @@
+"""
+The one use of rclpy's private API in skin_driver: the wait set of rclpy's C extension.
+
+Jazzy's rclpy has no public wait set; its executors and ``rclpy.wait_for_message`` wait on this
+one. :class:`skin_driver.ros.hot_path.TakenOnThread` waits on its subscriptions and a guard
+condition alone: the public way to serve subscriptions on a thread of their own, an executor
+spinning a node that holds only them, costs several times the CPU per message (docs/rclpy.md
+gives the measurement, tools/take_cost.py makes it). On an rclpy without it, importing this
+module raises ImportError saying what is missing.
+"""
+
+try:
+    from rclpy.impl.implementation_singleton import rclpy_implementation as _rclpy
+    WaitSet = _rclpy.WaitSet
+    RCLError = _rclpy.RCLError
+except (ImportError, AttributeError) as err:
+    raise ImportError(
+        "skin_driver needs the wait set of rclpy's C extension "
+        '(rclpy.impl.implementation_singleton.rclpy_implementation.WaitSet and RCLError, as '
+        f"in ROS 2 Jazzy's rclpy), which this rclpy does not have: {err}") from err
+
+__all__ = ['WaitSet', 'RCLError']
