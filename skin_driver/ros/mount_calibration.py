@@ -12,8 +12,8 @@ failed or cancelled calibration changes nothing; each is logged, as is a rejecte
 
 The mount in force goes on /tf_static (latched) whenever it changes, and at every start
 (:meth:`show`): the calibration file's, or, when the file has none, the one the parameters
-``parent_frame`` and ``mount_x`` .. ``mount_yaw`` give (read at start-up; the launch arguments
-of the same names). Which wins when both are there is core robot/mount.py's rule, warned once.
+``parent_frame`` and ``mount_x`` .. ``mount_yaw`` give (the launch arguments of the same names;
+a change at run time is shown at once). Which wins when both are there is core robot/mount.py's rule, warned once.
 """
 
 import math
@@ -47,11 +47,16 @@ def declare_given_mount(node) -> tuple:
     """Declare the mount given by parameters on ``node``; return (parent, xyz, rpy)."""
     parent = declare(node, 'parent_frame', '',
                      "Link the skin is mounted on, with the pose mount_x .. mount_yaw; '': none. "
-                     'A mount from ~/calibrate_mount in the calibration file wins (warned).',
-                     read_only=True)
+                     'A mount from ~/calibrate_mount in the calibration file wins (warned).')
     pose = [declare(node, f'mount_{name}', 0.0, f'Mount pose on parent_frame: {what}.',
-                    low=-limit, high=limit, read_only=True) for name, what, limit in GIVEN_POSE]
+                    low=-limit, high=limit) for name, what, limit in GIVEN_POSE]
     return parent, tuple(pose[:3]), tuple(pose[3:])
+
+
+def given_mount(node) -> tuple:
+    """Return (parent, xyz, rpy) of the mount the parameters give now."""
+    pose = tuple(node.get_parameter(f'mount_{name}').value for name, _, _ in GIVEN_POSE)
+    return node.get_parameter('parent_frame').value, pose[:3], pose[3:]
 
 
 class _Running:
@@ -81,7 +86,9 @@ class MountCalibration:
         self._showing = threading.Lock()
         self._shown = None  # (mount, child frame) last put on /tf_static
         self._warned = ''
+        self._last = None  # (calibration, where) last shown: shown again when the given changes
         self.in_force = None  # the core robot.mount.Mount in force, None: none
+        node.add_post_set_parameters_callback(self._on_parameters)
         declare(node, 'mount.parent_frame', 'base_link',
                 'Link the skin is mounted on: ~/calibrate_mount gives its pose there.',
                 non_empty=True)
@@ -235,8 +242,9 @@ class MountCalibration:
         ``calibration`` is the one in force, read from the file ``where``. Any thread: the
         host calls it when a calibration is put in force and when the skin's frame is known.
         """
-        mount, warning = mount_in_force(calibration.mount, *self._given, where=where)
         with self._showing:
+            self._last = (calibration, where)
+            mount, warning = mount_in_force(calibration.mount, *self._given, where=where)
             self.in_force = mount
             if warning and warning != self._warned:
                 self._node.get_logger().warning(f'mount: {warning}')
@@ -248,6 +256,13 @@ class MountCalibration:
             if self._publish_tf(mount):
                 self._node.get_logger().info(f'{shown[1]} mounted on {mount.describe()} '
                                              f'(from the {mount.source}), on /tf_static')
+
+    def _on_parameters(self, params) -> None:
+        names = {'parent_frame'} | {f'mount_{name}' for name, _, _ in GIVEN_POSE}
+        if names & {p.name for p in params}:
+            self._given = given_mount(self._node)
+            if self._last is not None:
+                self.show(*self._last)
 
     def _publish_tf(self, mount) -> bool:
         """Put the mount on /tf_static (latched) where tf2_msgs loads; return whether it did."""

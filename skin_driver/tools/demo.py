@@ -107,10 +107,16 @@ class DemoMonitor:
         self._last_draw = 0.0
 
     def _on_board_info(self, msg: String) -> None:
+        # Who answered, in its own words: the board information frame, via the driver. Said
+        # when it comes (about a second in), holding nothing up: the scene plays on.
         try:
-            self.board = BoardInfo.parse(msg.data)
+            info = BoardInfo.parse(msg.data)
         except ValueError as err:
             self.status = f'board_info not understood: {err}'
+            return
+        if info != self.board:
+            print(f'board answered: {info.describe()}', flush=True)
+        self.board = info
 
     def truth(self, t: float):
         """Return the press at full force at scene time t, or None."""
@@ -315,10 +321,6 @@ def run(args, workdir: str) -> int:
                 else:
                     board = start_sim(executor, scene_path, port, args.rate, log)
                 procs.append(board.process)
-                # Who answered, in its own words: the board information frame, via the driver.
-                wait_for(executor, lambda: monitor.board is not None, 20.0,
-                         'the board to say who it is (board_info)', procs)
-                print(f'board answered: {monitor.board.describe()}')
                 # Tare needs its scans in the direction node, which sees them after the driver.
                 wait_for(executor, lambda: monitor.estimates >= 30, 20.0,
                          'contacts from the direction node', procs)

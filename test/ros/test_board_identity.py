@@ -82,9 +82,10 @@ def test_another_boards_calibration_is_refused_and_the_board_is_reported(tmp_pat
         assert direction.host.estimator.calibration.x_p_m == 2e-4
         assert direction.host.calibration.warning == ''
         assert 'bound to no board' in direction.host.calibration.binding
-        assert spin_until(executor, lambda: 'bound to no board' in estimation(probe)[0].get(
-            'calibration board', ''))
-        assert estimation(probe)[1] == DiagnosticStatus.OK
+        assert spin_until(executor, lambda: estimation(probe)[0].get(
+            'calibration file') == unbound)
+        assert 'bound to no board' in estimation(probe)[0]['calibration board']
+        assert estimation(probe)[1] == DiagnosticStatus.OK, estimation(probe)[2]
 
         # A calibration made now is bound to this board, in the file in force.
         answer = call(executor, direction, Trigger, '/skin_direction/reset_calibration',
@@ -95,7 +96,7 @@ def test_another_boards_calibration_is_refused_and_the_board_is_reported(tmp_pat
         assert direction.host.estimator.calibration == made_here
         assert spin_until(executor, lambda: estimation(probe)[0].get(
             'calibration board') == f'bound to board sim uid {SIM_UID}')
-        assert estimation(probe)[1] == DiagnosticStatus.OK
+        assert estimation(probe)[1] == DiagnosticStatus.OK, estimation(probe)[2]
 
         # A file from another board set at run time is refused by the set, with the reason:
         # the calibration in force stays, and so does the file it came from.

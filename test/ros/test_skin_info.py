@@ -4,6 +4,7 @@ import math
 
 from pipeline import pipeline, scene
 import pytest
+from rclpy.parameter import Parameter
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 from rosutil import spin_until
 from skin_driver.core.estimation.calibration.calibration import Calibration, SkinMount
@@ -77,8 +78,14 @@ def test_after_a_restart_the_files_mount_wins_and_every_part_is_listed_with_its_
 def test_a_mount_given_by_parameters_is_the_one_in_force_without_a_calibrated_one(tmp_path):
     with pipeline(tmp_path, scene([]), rate_hz=100.0,
                   direction={'parent_frame': 'left_forearm_link', 'mount_z': 0.05,
-                             'mount_pitch': 1.5}) as (_, _, _, probe, executor):
+                             'mount_pitch': 1.5}) as (_, _, direction, probe, executor):
         info = _described(executor, probe)
-    assert (info.parent_frame, info.mount_source) == ('left_forearm_link', 'parameters')
-    assert info.mount_pose.position.z == pytest.approx(0.05)
-    assert info.mount_pose.orientation.y == pytest.approx(math.sin(0.75))
+        assert (info.parent_frame, info.mount_source) == ('left_forearm_link', 'parameters')
+        assert info.mount_pose.position.z == pytest.approx(0.05)
+        assert info.mount_pose.orientation.y == pytest.approx(math.sin(0.75))
+        # Set at run time, the given mount is the one in force at once.
+        assert direction.set_parameters([Parameter('mount_z', value=0.07)])[0].successful
+        heard = []
+        probe.node.create_subscription(SkinInfo, '/skin_info', heard.append, LATCHED)
+        assert spin_until(executor, lambda: heard and heard[-1].mount_pose.position.z == 0.07)
+        assert heard[-1].parent_frame == 'left_forearm_link'
