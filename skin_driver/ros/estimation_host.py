@@ -99,10 +99,12 @@ class EstimationHost:
         self._skin = default_frame_id(node.get_namespace())
         self.calibration = CalibrationServices(node, lambda: self._live.estimator,
                                                self.put_calibration)
-        self.mount = MountCalibration(node, lambda: self._skin, self._skin_grid, self._put_mount)
+        self.mount = MountCalibration(node, lambda: self._skin, self._skin_grid, self._put_mount,
+                                      self.calibration.file_problem)
         # The file's mount goes on /tf_static at every start, before any scan.
         self._show_mount()
-        self.creep = CreepCalibration(node, lambda: self._live.estimator, self._put_creep)
+        self.creep = CreepCalibration(node, lambda: self._live.estimator, self._put_creep,
+                                      self.calibration.file_problem)
         # The scans a tare averages: filled and resized by the estimating thread alone.
         self._recent = RecentScans(self._p('tare.frames'))
         self._recent_size = self._recent_wanted = self._p('tare.frames')

@@ -71,9 +71,15 @@ class _Running:
 class MountCalibration:
     """Offer ~/calibrate_mount on ``node`` for the skin whose frame is ``frame_id()``."""
 
-    def __init__(self, node, frame_id, skin_shape, put_mount):
-        """Declare the parameters, create the action; skin_shape() is (rows, cols, pitch)."""
+    def __init__(self, node, frame_id, skin_shape, put_mount, file_problem=lambda: ''):
+        """
+        Declare the parameters, create the action; skin_shape() is (rows, cols, pitch).
+
+        file_problem() says why nothing may be written (a refused file): the goal then ends at
+        once, before any touch is awaited.
+        """
         self._node = node
+        self._file_problem = file_problem
         self._frame_id = frame_id
         self._skin_shape = skin_shape
         self._put_mount = put_mount
@@ -154,7 +160,7 @@ class MountCalibration:
         if not points and not self._param('mount.tool_topic'):
             return ('no points in the goal and no mount.tool_topic to read the tool tip from; '
                     'give the touch points, or name the tool tip topic')
-        return ''
+        return self._file_problem()
 
     async def _execute(self, goal_handle):
         try:

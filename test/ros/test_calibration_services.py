@@ -4,7 +4,7 @@ import math
 
 from action_msgs.msg import GoalStatus
 from diagnostic_msgs.msg import DiagnosticStatus
-from geometry_msgs.msg import WrenchStamped
+from geometry_msgs.msg import Point, WrenchStamped
 import numpy as np
 from pipeline import call, overrides, pipeline, scene, send_goal
 import pytest
@@ -18,7 +18,8 @@ from skin_driver.core.sim.board import SIM_UID
 from skin_driver.ros.calibration_services import default_calibration_file
 from skin_driver.ros.conversions import status_values
 from skin_driver.ros.direction_node import DirectionNode
-from skin_msgs.action import CalibrateCompliance, CalibrateForce, CalibrateGains
+from skin_msgs.action import (CalibrateCompliance, CalibrateCreep, CalibrateForce,
+                              CalibrateGains, CalibrateMount)
 from std_srvs.srv import Trigger
 
 pytestmark = pytest.mark.ros
@@ -209,6 +210,17 @@ def test_a_corrupt_file_given_at_start_up_is_never_written(tmp_path):
                                       timeout_s=10.0)
             assert status == GoalStatus.STATUS_ABORTED
             assert f'{path} is not written' in force.message
+            # So are the mount and the creep, whose results the same file would keep.
+            for action, name, goal in (
+                    (CalibrateMount, 'calibrate_mount', CalibrateMount.Goal(
+                        points=[Point(x=0.01 * i, y=0.02 * (i % 2)) for i in range(6)],
+                        timeout=60.0)),
+                    (CalibrateCreep, 'calibrate_creep', CalibrateCreep.Goal(hold=5.0,
+                                                                            timeout=60.0))):
+                status, result = send_goal(executor, node, action, f'/skin_direction/{name}',
+                                           goal, timeout_s=10.0)
+                assert status == GoalStatus.STATUS_ABORTED
+                assert f'refused: {path} is not written' in result.message, name
         finally:
             node.destroy_node()
     assert path.read_bytes() == before
