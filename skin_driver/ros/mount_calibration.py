@@ -13,7 +13,8 @@ failed or cancelled calibration changes nothing; each is logged, as is a rejecte
 The mount in force goes on /tf_static (latched) whenever it changes, and at every start
 (:meth:`show`): the calibration file's, or, when the file has none, the one the parameters
 ``parent_frame`` and ``mount_x`` .. ``mount_yaw`` give (the launch arguments of the same names;
-a change at run time is shown at once). Which wins when both are there is core robot/mount.py's rule, warned once.
+a change at run time is shown at once). Which wins when both are there is core robot/mount.py's
+rule, warned once.
 """
 
 import math
