@@ -360,6 +360,8 @@ class CalibrationServices:
                       'default)')
         else:
             reason = refusal(path, skin)
+            if 'calibration_file' not in given and refusal(path, self._skin):
+                reason = ''  # refused already under the old name: the name is not the cause
             reason = f'calibration file refused: {reason}' if reason else ''
         if not reason:
             return SetParametersResult(successful=True)

@@ -108,6 +108,19 @@ def test_another_boards_calibration_is_refused_and_the_board_is_reported(tmp_pat
             f'this skin is on board sim uid {SIM_UID}')
         assert direction.get_parameter('calibration_file').value == unbound
         assert direction.host.estimator.calibration == made_here
+
+        # So is a skin name under which the file in force would be another skin's.
+        assert direction.set_parameters([Parameter('calibration.skin_id',
+                                                   value='left')])[0].successful
+        assert call(executor, direction, Trigger, '/skin_direction/reset_calibration',
+                    Trigger.Request()).success
+        named = Calibration.load_yaml(unbound)
+        assert named.skin.board_id == 'left'
+        result = direction.set_parameters([Parameter('calibration.skin_id', value='right')])[0]
+        assert not result.successful
+        assert result.reason.startswith(f'calibration file refused: {unbound}: made for ')
+        assert direction.get_parameter('calibration.skin_id').value == 'left'
+        assert direction.host.estimator.calibration == named
     assert (tmp_path / 'calibration.yaml').read_bytes() == nucleo_bytes
 
 
