@@ -9,6 +9,9 @@ Bring up the skin: serial driver and direction node, optionally the simulated sk
         mount_z:=0.05 mount_pitch:=1.5708                      # mounted on a robot link
 
 When the simulated skin exits (a bad scene, a port it cannot link), the launch stops with it.
+The mount (parent_frame, mount_*) goes to skin_direction, which puts the mount in force on
+/tf_static: a mount from ~/calibrate_mount in the calibration file wins over these arguments,
+with a warning naming both (docs/robot.md, "What lasts where").
 """
 
 import os
@@ -25,7 +28,6 @@ from launch_ros.parameter_descriptions import ParameterValue
 from launch_ros.substitutions import FindPackagePrefix, FindPackageShare
 from skin_driver.core.protocol.link import default_port
 from skin_driver.ros import rviz_config
-from skin_driver.ros.frames import default_frame_id
 
 MOUNT_POSE = (('x', 'm'), ('y', 'm'), ('z', 'm'), ('roll', 'rad'), ('pitch', 'rad'),
               ('yaw', 'rad'))
@@ -48,18 +50,12 @@ def _rviz(context):
                  output='screen')]
 
 
-def _mount(context):
+def _given_mount() -> dict:
     # Without a parent link the skin's frame stands alone (rviz shows it as its fixed frame).
-    parent = LaunchConfiguration('parent_frame').perform(context)
-    if not parent:
-        return []
-    namespace = LaunchConfiguration('namespace').perform(context)
-    frame = LaunchConfiguration('frame_id').perform(context) or default_frame_id(namespace)
-    pose = {name: float(LaunchConfiguration(f'mount_{name}').perform(context))
-            for name, _ in MOUNT_POSE}
-    return [Node(package='skin_driver', executable='mount_tf', name='skin_mount_tf',
-                 namespace=namespace, output='screen',
-                 parameters=[{'parent_frame': parent, 'frame_id': frame, **pose}])]
+    # skin_direction publishes it, so that it and a calibrated mount never both go on /tf_static.
+    return {'parent_frame': ParameterValue(LaunchConfiguration('parent_frame'), value_type=str),
+            **{f'mount_{name}': ParameterValue(LaunchConfiguration(f'mount_{name}'),
+                                               value_type=float) for name, _ in MOUNT_POSE}}
 
 
 class _Port(Substitution):
@@ -127,7 +123,8 @@ def generate_launch_description():
         DeclareLaunchArgument('parent_frame', default_value='',
                               description='Link the skin is mounted on: publishes the mount pose '
                                           '(mount_x, _y, _z, _roll, _pitch, _yaw) on '
-                                          '/tf_static; empty: no transform.'),
+                                          '/tf_static; empty: no transform. A mount from '
+                                          '~/calibrate_mount in the calibration file wins.'),
     ] + [DeclareLaunchArgument(f'mount_{name}', default_value='0.0',
                                description=f'Mount pose on parent_frame: {name} ({unit}).')
          for name, unit in MOUNT_POSE]
@@ -144,16 +141,17 @@ def generate_launch_description():
                                       LaunchConfiguration('realtime_priority'), value_type=int),
                                   # as a string even when empty (empty YAML would be null)
                                   'frame_id': ParameterValue(LaunchConfiguration('frame_id'),
-                                                             value_type=str)}],
+                                                             value_type=str),
+                                  **_given_mount()}],
         output='screen')
     # Fused, the driver process runs the skin_direction node itself (same name, parameters from
     # the same section of params_file, same services and topics).
     direction = Node(
         package='skin_driver', executable='direction', name='skin_direction',
-        namespace=namespace, parameters=[params_file], output='screen',
+        namespace=namespace, parameters=[params_file, _given_mount()], output='screen',
         condition=UnlessCondition(fused))
     return LaunchDescription(arguments + [
         OpaqueFunction(function=_require_rviz2, condition=with_rviz),
-        simulator, driver, direction, OpaqueFunction(function=_mount),
+        simulator, driver, direction,
         RegisterEventHandler(OnProcessExit(target_action=simulator, on_exit=_simulator_exited)),
         OpaqueFunction(function=_rviz, condition=with_rviz)])

@@ -31,10 +31,13 @@ timeout, a cancel or a failed write leaves the calibration in force (and is logg
 A calibration file belongs to one skin (grid, pitch, ``calibration.skin_id``) and, when made
 while the board said who it is, to that board (its unique ID): one made for another skin or
 board is refused when the frames show the skin or the board says who it is (:meth:`set_board`),
-with a WARN in the log and in the diagnostics, and the defaults are put in force; a file set at
-run time for another skin or board is refused and the calibration in force stays. A file bound
-to no board loads with a note; a file bound to a board loads with a WARN on a board that does
-not say who it is (a version-1 stream).
+with a WARN in the log and in the diagnostics, and the defaults are put in force. A refused file
+(another skin's or board's, or unreadable) is never written: a calibration or a reset is then
+refused, naming the file and the way out (core calfile.py). A file set at run time that is
+refused (another skin's or board's, unreadable, or absent) is refused by the parameter set
+itself, with the reason, and the calibration in force stays. Every write keeps the file it
+replaces as ``<file>.bak``. A file bound to no board loads with a note; a file bound to a board
+loads with a WARN on a board that does not say who it is (a version-1 stream).
 """
 
 from dataclasses import replace
@@ -48,6 +51,8 @@ from rcl_interfaces.msg import SetParametersResult
 from rclpy.action import ActionServer, CancelResponse, GoalResponse
 from rclpy.callback_groups import MutuallyExclusiveCallbackGroup
 from rclpy.task import Future
+from skin_driver.core.estimation.calibration.calfile import (backup_of, CalibrationFile,
+                                                             refusal)
 from skin_driver.core.estimation.calibration.calibration import (Calibration, CalibrationMismatch,
                                                                  PARTS, SkinIdentity)
 from skin_driver.core.estimation.calibration.session import CalibrationRefused, CalibrationSession
@@ -82,7 +87,8 @@ def declare_calibration_parameters(node) -> None:
     declare(node, 'calibration_file', '',
             'YAML file of the calibration, loaded at start-up and written by the calibration '
             'actions; empty: ~/.ros/skin_driver/calibration/<node namespace and name>.yaml. Set '
-            'at run time, it must name an existing file.')
+            "at run time, it must name an existing file of this skin's. A refused file is never "
+            'written.')
     declare(node, 'calibration.skin_id', '',
             'Name of this skin, stored with its calibration: a file made under another name is '
             'refused. Empty: grid and pitch only (and the board uid, when the board says who '
@@ -190,7 +196,7 @@ class CalibrationServices:
         self._binding_warning = ''
         self._first_frame_s = 0.0  # time.monotonic() of the first frame's check
         self._board_awaited = False  # a bound calibration waits for a silent board to speak
-        self.loaded_from = ''
+        self._file = CalibrationFile('')
         self.load()
         self._follow_wrench_topic()
         for action, name, kind, goal_args, answer in (
@@ -218,8 +224,13 @@ class CalibrationServices:
     # ---- file --------------------------------------------------------------------------------
     @property
     def path(self) -> str:
-        """Return the calibration file in use."""
+        """Return the calibration file the parameter names."""
         return self._path_of(self._node.get_parameter('calibration_file').value)
+
+    @property
+    def loaded_from(self) -> str:
+        """Return the calibration file in force: the one read, and the only one written."""
+        return self._file.path
 
     def _path_of(self, given) -> str:
         if not str(given).strip():
@@ -231,6 +242,7 @@ class CalibrationServices:
         path = self.path
         cal = Calibration()
         self.warning = ''
+        refused = ''
         if not os.path.exists(path):
             self.note = f'no calibration file at {path} yet: uncalibrated'
             if str(self._node.get_parameter('calibration_file').value).strip():
@@ -241,16 +253,20 @@ class CalibrationServices:
                 cal = Calibration.load_yaml(path, self._skin)
                 self.note = f'calibration from {path}: {cal.describe()}'
             except CalibrationMismatch as err:
-                # Another skin's or board's file: the calibration in force stays.
+                # Another skin's or board's file: the calibration in force stays, and that
+                # file is never written.
                 self.warning = f'calibration file refused: {err}{KEEP}'
                 self.note = self.warning
                 self._node.get_logger().warning(self.warning)
+                self._file = CalibrationFile(path, str(err))
                 return
             except (OSError, ValueError) as err:
-                self._node.get_logger().error(f'ignoring calibration file {path}: {err}')
+                self._node.get_logger().error(f'ignoring calibration file {path}: {err}; it is '
+                                              'never written')
                 self.warning = f'calibration file {path} unreadable: uncalibrated'
                 self.note = self.warning
-        self.loaded_from = path
+                refused = str(err)
+        self._file = CalibrationFile(path, refused)
         self._put_calibration(cal)
         self._bind(cal)
 
@@ -299,8 +315,8 @@ class CalibrationServices:
         cal = self._get_estimator().calibration
         problem = cal.check_skin(skin)
         if problem:
-            self._refuse(f'{self.loaded_from}: {problem}; calibrate this skin or reset the '
-                         'calibration')
+            self._file = CalibrationFile(self._file.path, problem)
+            self._refuse(self._file.problem())
             cal = Calibration()
             self._put_calibration(cal)
         self._bind(cal)
@@ -331,15 +347,28 @@ class CalibrationServices:
             cal.skin is not None and cal.skin.board_uid) else 'bound to no board')
 
     def _check_parameters(self, params) -> SetParametersResult:
-        for p in params:
-            if p.name == 'calibration_file' and str(p.value).strip():
-                path = self._path_of(p.value)
-                if not os.path.isfile(path):
-                    reason = (f'no calibration file at {path}; name an existing file (or '
-                              'empty for the default); the calibration in force stays')
-                    self._node.get_logger().warning(f'calibration_file refused: {reason}')
-                    return SetParametersResult(successful=False, reason=reason)
-        return SetParametersResult(successful=True)
+        """Refuse a file (or skin name) under which the file would not be this skin's."""
+        given = {p.name: p.value for p in params}
+        if not {'calibration_file', 'calibration.skin_id'} & set(given):
+            return SetParametersResult(successful=True)
+        path = self._path_of(given.get('calibration_file', self._param('calibration_file')))
+        skin = self._skin
+        if skin is not None and 'calibration.skin_id' in given:
+            skin = replace(skin, board_id=str(given['calibration.skin_id']))
+        if str(given.get('calibration_file', '')).strip() and not os.path.isfile(path):
+            reason = (f'no calibration file at {path}; name an existing file (or empty for the '
+                      'default)')
+        else:
+            reason = refusal(path, skin)
+            if 'calibration_file' not in given and refusal(path, self._skin):
+                reason = ''  # refused already under the old name: the name is not the cause
+            reason = f'calibration file refused: {reason}' if reason else ''
+        if not reason:
+            return SetParametersResult(successful=True)
+        reason += '; the calibration in force stays'
+        name = 'calibration_file' if 'calibration_file' in given else 'calibration.skin_id'
+        self._node.get_logger().warning(f'{name} refused: {reason}')
+        return SetParametersResult(successful=False, reason=reason)
 
     def _on_parameters(self, params) -> None:
         names = {p.name for p in params}
@@ -506,6 +535,8 @@ class CalibrationServices:
         result.success = False
         try:
             problem, args = goal_args(goal_handle.request)
+            # A file that would not be written: said before any press is awaited.
+            problem = problem or self._file.problem()
             if problem:
                 raise CalibrationRefused(problem)
             session = CalibrationSession(
@@ -540,18 +571,15 @@ class CalibrationServices:
             self._node.get_logger().warning(f'calibration ({kind}): {result.message}')
             goal_handle.abort()
             return result
-        path = self.path
         try:
             outcome = await self._off_the_executor(session.finish)
-            # The node's own state: its folder (by default under ROS_HOME) is made as needed.
-            outcome.calibration.save_yaml(path, make_parents=True)
+            path = self._file.save(outcome.calibration)
         except (CalibrationRefused, OSError, ValueError) as err:
             result.message = f'{err}{KEEP}'
             self._node.get_logger().warning(f'calibration ({kind}): {result.message}')
             goal_handle.abort()
             return result
         self._put_calibration(outcome.calibration)
-        self.loaded_from = path
         self.warning = ''
         self._bind(outcome.calibration)
         self.note = f'calibration from {path}: {outcome.calibration.describe()}'
@@ -566,17 +594,20 @@ class CalibrationServices:
         goal_handle.succeed()
         return result
 
+    def file_problem(self) -> str:
+        """Return why no calibration may be written to the file in force ('' when it may)."""
+        return self._file.problem()
+
     def write_and_put(self, calibration) -> str:
         """
         Write ``calibration`` to the file, then put it in force; return the file's path.
 
-        For a part another action makes (the mount): raises OSError or ValueError when the file
-        cannot be written, and then nothing changes.
+        For a part another action makes (the mount, the creep): raises OSError or ValueError
+        (FileRefused for a refused file) when the file cannot be written, and then nothing
+        changes.
         """
-        path = self.path
-        calibration.save_yaml(path, make_parents=True)
+        path = self._file.save(calibration)
         self._put_calibration(calibration)
-        self.loaded_from = path
         self.note = f'calibration from {path}: {calibration.describe()}'
         return path
 
@@ -589,20 +620,21 @@ class CalibrationServices:
                                 'running; cancel it first' + KEEP)
             self._node.get_logger().warning(response.message)
             return response
-        path = self.path
         defaults = Calibration(skin=self._skin)
+        kept = os.path.isfile(self._file.path)
         try:
-            defaults.save_yaml(path, make_parents=True)
+            path = self._file.save(defaults)
         except (OSError, ValueError) as err:
             response.success = False
             response.message = f'reset refused: {err}{KEEP}'
             self._node.get_logger().warning(response.message)
             return response
         self._put_calibration(defaults)
-        self.loaded_from, self.warning = path, ''
+        self.warning = ''
         self._bind(defaults)
         self.note = f'calibration reset to the defaults in {path}'
         response.success = True
-        response.message = self.note
+        response.message = self.note + (f' (the previous one is kept as {backup_of(path)})'
+                                        if kept else '')
         self._node.get_logger().info(self.note)
         return response

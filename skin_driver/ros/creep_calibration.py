@@ -47,9 +47,15 @@ class _Running:
 class CreepCalibration:
     """Offer ~/calibrate_creep on ``node``."""
 
-    def __init__(self, node, get_estimator, put_creep):
-        """Create the action; put_creep(fit) stores a fit and returns where it was written."""
+    def __init__(self, node, get_estimator, put_creep, file_problem=lambda: ''):
+        """
+        Create the action; put_creep(fit) stores a fit and returns where it was written.
+
+        file_problem() says why nothing may be written (a refused file): the goal then ends at
+        once, before the load is awaited.
+        """
         self._node = node
+        self._file_problem = file_problem
         self._get_estimator = get_estimator
         self._put_creep = put_creep
         self._running = None
@@ -136,7 +142,7 @@ class CreepCalibration:
     async def _serve(self, goal_handle, result) -> tuple:
         """Run the goal into ``result``; return (its message, how a failure ends it)."""
         goal = goal_handle.request
-        problem = self._problem(goal)
+        problem = self._problem(goal) or self._file_problem()
         if problem:
             return f'refused: {problem}{NOTHING}', goal_handle.abort
         estimator = self._get_estimator()

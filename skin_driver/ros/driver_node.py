@@ -52,6 +52,7 @@ from builtin_interfaces.msg import Time
 from rcl_interfaces.msg import SetParametersResult
 import rclpy
 from rclpy.lifecycle import Node, State, TransitionCallbackReturn
+from rclpy.parameter import Parameter
 from sensor_msgs.msg import Image
 from skin_driver.core.protocol.grid import SkinGrid
 from skin_driver.core.protocol.health import ERROR, LinkHealth, WARN
@@ -63,6 +64,7 @@ from skin_driver.ros import conversions, diagnostics, qos
 from skin_driver.ros.direction_node import DirectionNode
 from skin_driver.ros.frames import default_frame_id
 from skin_driver.ros.hot_path import LatestOnly, Listened
+from skin_driver.ros.mount_calibration import declare_given_mount, GIVEN_POSE
 from skin_driver.ros.params import accept_whole_numbers, declare
 from skin_driver.ros.spin import create_or_exit, spin_nodes
 from skin_msgs.msg import SkinFrame
@@ -478,10 +480,17 @@ def main(args=None):
 
     def create():
         node = SkinDriverNode()
+        if not node.fused:
+            return node, None
+        # The mount the launch gives the driver is the fused skin_direction's to publish.
+        parent, xyz, rpy = declare_given_mount(node)
+        given = [Parameter('parent_frame', value=parent)] + [
+            Parameter(f'mount_{name}', value=v)
+            for (name, _, _), v in zip(GIVEN_POSE, xyz + rpy)]
         # launch_ros names a node with a process-wide rule (-r __node:=skin_driver); a rule of
         # the node's own takes precedence and keeps this one skin_direction.
-        return node, fuse(node, cli_args=[
-            '--ros-args', '-r', '__node:=skin_direction']) if node.fused else None
+        return node, fuse(node, cli_args=['--ros-args', '-r', '__node:=skin_direction'],
+                          parameter_overrides=given)
     node, direction = create_or_exit(create, 'skin_driver')
 
     def autostart():

@@ -34,12 +34,12 @@ import time
 from typing import NamedTuple, Optional, Tuple
 
 import cv2
-from geometry_msgs.msg import WrenchStamped
+from geometry_msgs.msg import Pose, Quaternion, WrenchStamped
 import numpy as np
 from rcl_interfaces.msg import SetParametersResult
 from rclpy.event_handler import PublisherEventCallbacks
 from sensor_msgs.msg import Image
-from skin_driver.core.estimation.calibration.calibration import PARTS, SkinMount, utc_now
+from skin_driver.core.estimation.calibration.calibration import SkinMount
 from skin_driver.core.estimation.calibration.tare import RecentScans
 from skin_driver.core.estimation.scan.drift import drift_status
 from skin_driver.core.estimation.scan.heatmap import (colour_map, display_scale, grey_levels,
@@ -96,10 +96,16 @@ class EstimationHost:
         self._lock = threading.Lock()  # serialises changes of the estimator, never the hot path
         self._live = Live(ContactEstimator(self._config(EstimatorConfig().pitch_m)), None, 0)
         # The estimator holds the calibration; the services put every new one in force here.
+        self.mount = None  # until made: the file's calibration is put in force first
+        self._skin = default_frame_id(node.get_namespace())
         self.calibration = CalibrationServices(node, lambda: self._live.estimator,
                                                self.put_calibration)
-        self.mount = MountCalibration(node, lambda: self._skin, self._skin_grid, self._put_mount)
-        self.creep = CreepCalibration(node, lambda: self._live.estimator, self._put_creep)
+        self.mount = MountCalibration(node, lambda: self._skin, self._skin_grid, self._put_mount,
+                                      self.calibration.file_problem)
+        # The file's mount goes on /tf_static at every start, before any scan.
+        self._show_mount()
+        self.creep = CreepCalibration(node, lambda: self._live.estimator, self._put_creep,
+                                      self.calibration.file_problem)
         # The scans a tare averages: filled and resized by the estimating thread alone.
         self._recent = RecentScans(self._p('tare.frames'))
         self._recent_size = self._recent_wanted = self._p('tare.frames')
@@ -124,9 +130,8 @@ class EstimationHost:
         self._asked_skin = None
         self._pitch_seen = (None, None)  # (a scan's pitch, its frame_pitch), the hot path's
         self._skin_check = node.create_guard_condition(self._check_skin)
-        # The skin it estimates, for /diagnostics: the frame its scans carry (until the first
-        # scan, the frame its namespace gives).
-        self._skin = default_frame_id(node.get_namespace())
+        # The skin it estimates, for /diagnostics and the mount: the frame its scans carry
+        # (until the first scan, the frame its namespace gives; set above).
         self._writer = conversions.ContactArrayWriter()
         self._serialized = None
         self._rebuilders = []
@@ -297,22 +302,29 @@ class EstimationHost:
 
     def _put_mount(self, parent: str, fit) -> str:
         """Store a mount found from touches with the calibration; return where it was written."""
-        calibration = self._live.estimator.calibration
-        mount = SkinMount(parent, fit.translation_m, fit.rpy_rad, fit.rms_residual_m,
-                          len(fit.residuals_m), utc_now())
-        path = self.calibration.write_and_put(replace(calibration, mount=mount))
-        return f'; written to {path}'
+        return self._put_part(mount=SkinMount(parent, fit.translation_m, fit.rpy_rad,
+                                              fit.rms_residual_m, len(fit.residuals_m)))
 
     def _put_creep(self, fit) -> str:
         """Store a creep fitted from a held load with the calibration; return where."""
-        calibration = self._live.estimator.calibration
-        path = self.calibration.write_and_put(replace(calibration, creep=replace(
-            fit, made_utc=utc_now())))
+        return self._put_part(creep=fit)
+
+    def _put_part(self, **part) -> str:
+        """Store one part, stamped now (in the made map and its own time alike); say where."""
+        calibration = self._live.estimator.calibration.updated(**part)
+        name, value = next(iter(part.items()))
+        path = self.calibration.write_and_put(replace(calibration, **{
+            name: replace(value, made_utc=calibration.made(name))}))
         return f'; written to {path}'
 
     def put_calibration(self, calibration) -> None:
-        """Put ``calibration`` in force (with its force curves and gains)."""
+        """Put ``calibration`` in force (with its force curves, gains and mount)."""
         self._swap(lambda estimator: estimator.with_calibration(calibration))
+        self._show_mount()
+
+    def _show_mount(self) -> None:
+        if self.mount is not None:
+            self.mount.show(self._live.estimator.calibration, self.calibration.loaded_from)
 
     def prepare(self, rows: int, cols: int, pitch_m: float) -> None:
         """
@@ -548,11 +560,12 @@ class EstimationHost:
     # ---- diagnostics ------------------------------------------------------------------------
     def _describe_skin(self) -> None:
         """Publish what the skin is on skin_info (latched) when any of it changed."""
+        self._show_mount()  # the scans' frame, once known
         live = self._live
         if live.skin is None:
             return
         info = skin_info(self._skin, live.skin, live.estimator, self.calibration.board,
-                         self._p('layer_gap'))
+                         self._p('layer_gap'), self.mount.in_force)
         if info != self._described:
             self._described = info
             self._pub_info.publish(info)
@@ -597,11 +610,11 @@ class EstimationHost:
 
 
 def skin_info(frame_id: str, skin: tuple, estimator: ContactEstimator, board,
-              layer_gap_m: float) -> SkinInfo:
+              layer_gap_m: float, mount=None) -> SkinInfo:
     """Return what a tool needs to know of the skin ``estimator`` serves, as a SkinInfo."""
     rows, cols, pitch_m = skin
     cal = estimator.calibration
-    parts = [part for part in PARTS if cal.made(part)] + (['mount'] if cal.mount else [])
+    parts = cal.parts_in_force()
     return SkinInfo(
         header=Header(frame_id=frame_id), rows=int(rows), cols=int(cols), pitch=float(pitch_m),
         layer_gap=float(layer_gap_m),
@@ -610,5 +623,9 @@ def skin_info(frame_id: str, skin: tuple, estimator: ContactEstimator, board,
         board_name=board.board if board is not None else '',
         board_uid=board.uid if board is not None else '',
         firmware_version=board.fw if board is not None else '',
-        calibration_made=cal.made_utc, calibration_parts=parts,
-        parent_frame=cal.mount.parent_frame if cal.mount else '')
+        calibration_made=cal.made_utc, calibration_parts=[part for part, _ in parts],
+        calibration_parts_made=[made for _, made in parts],
+        parent_frame=mount.parent_frame if mount else '',
+        mount_pose=conversions.mount_pose(mount.xyz_m, mount.rpy_rad) if mount else Pose(
+            orientation=Quaternion(w=1.0)),
+        mount_source=mount.source if mount else '')

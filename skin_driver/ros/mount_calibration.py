@@ -6,9 +6,15 @@ The mount action: the skin's pose on its parent link from touches, the ROS side 
 points known in ``mount.parent_frame``, given in the goal or read per touch from the tool tip
 topic ``mount.tool_topic`` (geometry_msgs/PointStamped or PoseStamped, in the parent frame:
 tf2_ros has no wheel, so no transform is looked up). The node calls :meth:`feed` with every
-scan's contacts. On success the pose is published on /tf_static, handed to ``put_mount`` (which
-stores it with the calibration) and returned with its residuals and a xacro line. A refused,
+scan's contacts. On success the pose is handed to ``put_mount`` (which stores it with the
+calibration and puts it in force) and returned with its residuals and a xacro line. A refused,
 failed or cancelled calibration changes nothing; each is logged, as is a rejected goal.
+
+The mount in force goes on /tf_static (latched) whenever it changes, and at every start
+(:meth:`show`): the calibration file's, or, when the file has none, the one the parameters
+``parent_frame`` and ``mount_x`` .. ``mount_yaw`` give (the launch arguments of the same names;
+a change at run time is shown at once). Which wins when both are there is core robot/mount.py's
+rule, warned once.
 """
 
 import math
@@ -21,6 +27,7 @@ from rclpy.callback_groups import MutuallyExclusiveCallbackGroup
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 from skin_driver.core.estimation.calibration.mount import (MAX_RESIDUAL_M, MountRefused,
                                                            MountSession, urdf_snippet)
+from skin_driver.core.robot.mount import mount_in_force
 from skin_driver.ros import conversions, qos
 from skin_driver.ros.calibration_services import goal_outcome
 from skin_driver.ros.params import declare
@@ -31,6 +38,26 @@ MAX_TOUCHES = 100
 NOTHING = '; nothing changed'
 # A tool tip position older than this when a scan arrives is not that scan's.
 MAX_TIP_AGE_S = 0.5
+GIVEN_POSE = (('x', 'x in metres', 100.0), ('y', 'y in metres', 100.0),
+              ('z', 'z in metres', 100.0), ('roll', 'roll about x in radians', 2 * math.pi),
+              ('pitch', 'pitch about y in radians', 2 * math.pi),
+              ('yaw', 'yaw about z in radians', 2 * math.pi))
+
+
+def declare_given_mount(node) -> tuple:
+    """Declare the mount given by parameters on ``node``; return (parent, xyz, rpy)."""
+    parent = declare(node, 'parent_frame', '',
+                     "Link the skin is mounted on, with the pose mount_x .. mount_yaw; '': none. "
+                     'A mount from ~/calibrate_mount in the calibration file wins (warned).')
+    pose = [declare(node, f'mount_{name}', 0.0, f'Mount pose on parent_frame: {what}.',
+                    low=-limit, high=limit) for name, what, limit in GIVEN_POSE]
+    return parent, tuple(pose[:3]), tuple(pose[3:])
+
+
+def given_mount(node) -> tuple:
+    """Return (parent, xyz, rpy) of the mount the parameters give now."""
+    pose = tuple(node.get_parameter(f'mount_{name}').value for name, _, _ in GIVEN_POSE)
+    return node.get_parameter('parent_frame').value, pose[:3], pose[3:]
 
 
 class _Running:
@@ -45,9 +72,15 @@ class _Running:
 class MountCalibration:
     """Offer ~/calibrate_mount on ``node`` for the skin whose frame is ``frame_id()``."""
 
-    def __init__(self, node, frame_id, skin_shape, put_mount):
-        """Declare the parameters, create the action; skin_shape() is (rows, cols, pitch)."""
+    def __init__(self, node, frame_id, skin_shape, put_mount, file_problem=lambda: ''):
+        """
+        Declare the parameters, create the action; skin_shape() is (rows, cols, pitch).
+
+        file_problem() says why nothing may be written (a refused file): the goal then ends at
+        once, before any touch is awaited.
+        """
         self._node = node
+        self._file_problem = file_problem
         self._frame_id = frame_id
         self._skin_shape = skin_shape
         self._put_mount = put_mount
@@ -56,6 +89,13 @@ class MountCalibration:
         self._tip = None
         self._tip_sub = None
         self._tf_pub = None
+        self._given = declare_given_mount(node)
+        self._showing = threading.Lock()
+        self._shown = None  # (mount, child frame) last put on /tf_static
+        self._warned = ''
+        self._last = None  # (calibration, where) last shown: shown again when the given changes
+        self.in_force = None  # the core robot.mount.Mount in force, None: none
+        node.add_post_set_parameters_callback(self._on_parameters)
         declare(node, 'mount.parent_frame', 'base_link',
                 'Link the skin is mounted on: ~/calibrate_mount gives its pose there.',
                 non_empty=True)
@@ -121,7 +161,7 @@ class MountCalibration:
         if not points and not self._param('mount.tool_topic'):
             return ('no points in the goal and no mount.tool_topic to read the tool tip from; '
                     'give the touch points, or name the tool tip topic')
-        return ''
+        return self._file_problem()
 
     async def _execute(self, goal_handle):
         try:
@@ -165,10 +205,10 @@ class MountCalibration:
             fit = session.finish()
             rows, cols, pitch = self._skin_shape()
             urdf = urdf_snippet(fit, result.parent_frame, self._frame_id(), rows, cols, pitch)
+            # Stored and put in force: :meth:`show` puts it on /tf_static.
             written = self._put_mount(result.parent_frame, fit)
         except (MountRefused, OSError, ValueError) as err:
             return self._end(goal_handle, result, f'refused: {err}{NOTHING}', goal_handle.abort)
-        self._publish_tf(result.parent_frame, fit)
         x, y, z = fit.translation_m
         qx, qy, qz, qw = fit.quaternion_xyzw
         result.pose = Pose(position=Point(x=x, y=y, z=z),
@@ -202,8 +242,37 @@ class MountCalibration:
         self._tip_sub = self._node.create_subscription(kind, topic, self._on_tip, qos.stream(),
                                                        **qos.overridable())
 
-    def _publish_tf(self, parent: str, fit) -> None:
-        """Put the mount on /tf_static (latched), where tf2_msgs is installed and loads."""
+    def show(self, calibration, where: str) -> None:
+        """
+        Put the mount in force on /tf_static when it or the skin's frame changed.
+
+        ``calibration`` is the one in force, read from the file ``where``. Any thread: the
+        host calls it when a calibration is put in force and when the skin's frame is known.
+        """
+        with self._showing:
+            self._last = (calibration, where)
+            mount, warning = mount_in_force(calibration.mount, *self._given, where=where)
+            self.in_force = mount
+            if warning and warning != self._warned:
+                self._node.get_logger().warning(f'mount: {warning}')
+            self._warned = warning
+            shown = (mount, self._frame_id())
+            if mount is None or shown == self._shown:
+                return
+            self._shown = shown
+            if self._publish_tf(mount):
+                self._node.get_logger().info(f'{shown[1]} mounted on {mount.describe()} '
+                                             f'(from the {mount.source}), on /tf_static')
+
+    def _on_parameters(self, params) -> None:
+        names = {'parent_frame'} | {f'mount_{name}' for name, _, _ in GIVEN_POSE}
+        if names & {p.name for p in params}:
+            self._given = given_mount(self._node)
+            if self._last is not None:
+                self.show(*self._last)
+
+    def _publish_tf(self, mount) -> bool:
+        """Put the mount on /tf_static (latched) where tf2_msgs loads; return whether it did."""
         try:
             from tf2_msgs.msg import TFMessage
             if self._tf_pub is None:
@@ -213,9 +282,11 @@ class MountCalibration:
         except Exception as err:  # noqa: B902 - ImportError, or its type support not loading
             # The mount is found and stored all the same: the result and the file carry it.
             self._node.get_logger().warning(
-                f'mount calibration: the mount is not on /tf_static (tf2_msgs: {err}); it is in '
-                'the result and the calibration file')
-            return
-        transform = conversions.mount_transform(self._node.get_clock().now().to_msg(), parent,
-                                                self._frame_id(), fit.translation_m, fit.rpy_rad)
+                f'mount: not on /tf_static (tf2_msgs: {err}); a calibrated mount is in the '
+                'calibration file and skin_info')
+            return False
+        transform = conversions.mount_transform(self._node.get_clock().now().to_msg(),
+                                                mount.parent_frame, self._frame_id(),
+                                                mount.xyz_m, mount.rpy_rad)
         self._tf_pub.publish(TFMessage(transforms=[transform]))
+        return True

@@ -24,12 +24,13 @@ import numpy as np
 from rclpy.action import ActionClient
 from rclpy.executors import ExternalShutdownException
 from rclpy.node import Node
+from skin_driver.core.common.boardinfo import BoardInfo
 from skin_driver.core.estimation.calibration.calibration import Calibration
 from skin_driver.core.estimation.scan.heatmap import text_map, top_down
 from skin_driver.core.estimation.scan.pipeline import ContactEstimator, EstimatorConfig
 from skin_driver.core.estimation.shift.methods import DEFAULT_METHOD, REFERENCES
 from skin_driver.core.sim.scene import find_scene, scene_from_dict
-from skin_driver.ros import conversions
+from skin_driver.ros import conversions, qos
 from skin_driver.tools.evaluate.scoring import summarise
 from skin_driver.tools.evaluate.tables import format_table
 from skin_driver.tools.harness import (
@@ -38,8 +39,14 @@ from skin_driver.tools.harness import (
 from skin_driver.tools.probe import Probe
 from skin_msgs.action import Calibrate, CalibrateCompliance, CalibrateForce
 from skin_msgs.msg import SkinFrame, TactileContactArray
+from std_msgs.msg import String
 from std_srvs.srv import Trigger
 import yaml
+
+
+BOARDS = {'sim': 'board: the simulated skin (skin_driver sim) on a pseudo-terminal',
+          'qemu': 'board: the skin firmware on an emulated STM32 board in QEMU (the image is '
+                  'built on first use), on a pseudo-terminal'}
 
 
 def demo_scene(repeats: int, pace: float = 1.0) -> dict:
@@ -89,6 +96,8 @@ class DemoMonitor:
         self.forces = []
         self.status = 'waiting for the skin'
         self.probe = Probe(node, on_frame=self._on_frame, on_contacts=self._on_contacts)
+        self.board = None  # the BoardInfo the driver heard, once it has
+        node.create_subscription(String, 'board_info', self._on_board_info, qos.latched())
         self.tare = node.create_client(Trigger, 'skin_direction/tare')
         self.calibrate = ActionClient(node, Calibrate, 'skin_direction/calibrate')
         self.calibrate_force = ActionClient(node, CalibrateForce,
@@ -96,6 +105,18 @@ class DemoMonitor:
         self.calibrate_compliance = ActionClient(node, CalibrateCompliance,
                                                  'skin_direction/calibrate_compliance')
         self._last_draw = 0.0
+
+    def _on_board_info(self, msg: String) -> None:
+        # Who answered, in its own words: the board information frame, via the driver. Said
+        # when it comes (about a second in), holding nothing up: the scene plays on.
+        try:
+            info = BoardInfo.parse(msg.data)
+        except ValueError as err:
+            self.status = f'board_info not understood: {err}'
+            return
+        if info != self.board:
+            print(f'board answered: {info.describe()}', flush=True)
+        self.board = info
 
     def truth(self, t: float):
         """Return the press at full force at scene time t, or None."""
@@ -214,15 +235,24 @@ def _step(executor, monitor, client, request, status: str, label: str = None):
     return response
 
 
+def offset_step(scene, timeout: float) -> tuple:
+    """Return the offset goal and what the demo says of it, its count the goal's own."""
+    normal = len(scene.labelled('offset'))
+    # One spare: the first normal press may have begun before the goal is taken.
+    wanted = normal - 1
+    return (Calibrate.Goal(presses=wanted, timeout=timeout),
+            f'calibrating (x_p, y_p) from {wanted} normal presses (the scene makes {normal}: '
+            'one spare)')
+
+
 def calibrate(executor, monitor, path: str) -> None:
     """Calibrate the offset, the force curve and the compliance through the actions."""
     scene = monitor.scene
     timeout = 60.0
-    normal = len(scene.labelled('offset'))
-    offset = _step(executor, monitor, monitor.calibrate,
-                   Calibrate.Goal(presses=normal - 1, timeout=timeout),
-                   f'calibrating (x_p, y_p): the scene makes {normal} normal presses')
-    print(f'calibrated (x_p {offset.x_p * 1e3:.2f} mm, y_p {offset.y_p * 1e3:.2f} mm)')
+    goal, status = offset_step(scene, timeout)
+    offset = _step(executor, monitor, monitor.calibrate, goal, status)
+    print(f'calibrated (x_p {offset.x_p * 1e3:.2f} mm, y_p {offset.y_p * 1e3:.2f} mm) from '
+          f'{offset.presses_used} normal presses')
     forces = [p.force_n for p in scene.labelled('force')]
     force = _step(executor, monitor, monitor.calibrate_force,
                   CalibrateForce.Goal(forces=forces, timeout=timeout),
@@ -286,6 +316,7 @@ def run(args, workdir: str) -> int:
             try:
                 wait_for(executor, monitor.tare.service_is_ready, 20.0, 'the direction node',
                          procs)
+                print(BOARDS[args.board])
                 if args.board == 'qemu':
                     board = start_firmware_board(executor, scene_path, scene.duration_s, port,
                                                  args.rate, log)

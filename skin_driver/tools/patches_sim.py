@@ -6,7 +6,8 @@ patches_sim``): every patch of the scene (:mod:`skin_driver.core.sim.patch_scene
 that renders the scene's presses in that patch's frame, linked where the driver in the patch's
 namespace looks by default (``$XDG_RUNTIME_DIR/skin_driver/<patch>/skin0``) or, with
 ``--link-dir DIR``, at ``DIR/<patch>/skin0``. Stdout has one ``SKIN_PORT <patch> <path>`` line
-per patch; human messages go to stderr.
+per patch; human messages go to stderr. Each board has its own unique ID, made from its
+patch's name (the same at every run).
 """
 
 import argparse
@@ -16,7 +17,7 @@ import sys
 
 from skin_driver.core.common.atomic import check_writable
 from skin_driver.core.protocol.link import default_port
-from skin_driver.core.sim.board import SimulatedSkin
+from skin_driver.core.sim.board import sim_board_info, SimulatedSkin
 from skin_driver.core.sim.patch_scene import bundled_patch_scene_names, load_patch_scene
 from skin_driver.tools.sim import announce_epoch, stop_on_signal
 
@@ -64,10 +65,14 @@ def main(argv=None) -> int:
             path = link_path(patch, args.link_dir)
             os.makedirs(os.path.dirname(path), exist_ok=True)
             check_writable(path)
-            # Each board its own noise: two patches never read the same noise.
-            boards.append((patch, SimulatedSkin(scene.view(patch), rate_hz=args.rate,
-                                                link_path=path, seed=args.seed + 7 * i,
-                                                loop=args.loop)))
+            # Each board its own noise and its own uid (from the patch's name: the same at
+            # every run), as boards of several patches have.
+            view = scene.view(patch)
+            model = view.model
+            identity = sim_board_info(model.rows, model.cols, model.pitch_m, args.rate, patch)
+            boards.append((patch, SimulatedSkin(view, rate_hz=args.rate, link_path=path,
+                                                seed=args.seed + 7 * i, loop=args.loop,
+                                                identity=identity)))
         for patch, board in boards:
             print(f'SKIN_PORT {patch} {board.start()}', flush=True)
     except (ValueError, OSError) as err:
@@ -80,6 +85,9 @@ def main(argv=None) -> int:
     print(f'patches_sim: scene {scene.name!r} ({scene.duration_s:.1f} s'
           f'{", looped" if args.loop else ""}), patches {", ".join(scene.patch_names)} at '
           f'{args.rate:g} Hz; Ctrl-C stops', file=sys.stderr)
+    for patch, board in boards:
+        print(f'patches_sim: {patch}: board {board.identity.board} uid {board.identity.uid}',
+              file=sys.stderr)
     try:
         done.wait(args.duration)
     finally:

@@ -67,25 +67,13 @@ def test_another_boards_calibration_is_refused_and_the_board_is_reported(tmp_pat
                 f'{SIM_UID}') in message
         assert direction.host.estimator.calibration == Calibration()
 
-        # A calibration made now is bound to this board.
+        # The nucleo's file is never written (issue #47: reset wrote the defaults into it).
+        nucleo_bytes = (tmp_path / 'calibration.yaml').read_bytes()
         answer = call(executor, direction, Trigger, '/skin_direction/reset_calibration',
                       Trigger.Request())
-        assert answer.success
-        made_here = Calibration.load_yaml(tmp_path / 'calibration.yaml')
-        assert made_here.skin == ON_SIM
-        assert direction.host.estimator.calibration == made_here
-        assert spin_until(executor, lambda: estimation(probe)[0].get(
-            'calibration board') == f'bound to board sim uid {SIM_UID}')
-        assert estimation(probe)[1] == DiagnosticStatus.OK
-
-        # A file from another board set at run time is refused: the calibration in force stays.
-        other = save(tmp_path / 'nucleo.yaml', 3e-4, ON_NUCLEO)
-        assert direction.set_parameters([Parameter('calibration_file', value=other)])[0].successful
-        assert direction.host.estimator.calibration == made_here
-        warning = direction.host.calibration.warning
-        assert f'calibration file refused: {other}: made on board nucleo-f446re' in warning
-        assert f'board sim uid {SIM_UID}' in warning and 'stays in force' in warning
-        assert spin_until(executor, lambda: estimation(probe)[1] == DiagnosticStatus.WARN)
+        assert not answer.success
+        assert f"{tmp_path / 'calibration.yaml'} is not written" in answer.message
+        assert (tmp_path / 'calibration.yaml').read_bytes() == nucleo_bytes
 
         # A file bound to no board loads, with a note.
         unbound = save(tmp_path / 'old.yaml', 2e-4, SkinIdentity(16, 16, 0.005))
@@ -94,9 +82,46 @@ def test_another_boards_calibration_is_refused_and_the_board_is_reported(tmp_pat
         assert direction.host.estimator.calibration.x_p_m == 2e-4
         assert direction.host.calibration.warning == ''
         assert 'bound to no board' in direction.host.calibration.binding
-        assert spin_until(executor, lambda: 'bound to no board' in estimation(probe)[0].get(
-            'calibration board', ''))
-        assert estimation(probe)[1] == DiagnosticStatus.OK
+        assert spin_until(executor, lambda: estimation(probe)[0].get(
+            'calibration file') == unbound)
+        assert 'bound to no board' in estimation(probe)[0]['calibration board']
+        assert estimation(probe)[1] == DiagnosticStatus.OK, estimation(probe)[2]
+
+        # A calibration made now is bound to this board, in the file in force.
+        answer = call(executor, direction, Trigger, '/skin_direction/reset_calibration',
+                      Trigger.Request())
+        assert answer.success and f'in {unbound} (' in answer.message
+        made_here = Calibration.load_yaml(unbound)
+        assert made_here.skin == ON_SIM
+        assert direction.host.estimator.calibration == made_here
+        assert spin_until(executor, lambda: estimation(probe)[0].get(
+            'calibration board') == f'bound to board sim uid {SIM_UID}')
+        assert estimation(probe)[1] == DiagnosticStatus.OK, estimation(probe)[2]
+
+        # A file from another board set at run time is refused by the set, with the reason:
+        # the calibration in force stays, and so does the file it came from.
+        other = save(tmp_path / 'nucleo.yaml', 3e-4, ON_NUCLEO)
+        result = direction.set_parameters([Parameter('calibration_file', value=other)])[0]
+        assert not result.successful
+        assert result.reason.startswith(
+            f'calibration file refused: {other}: made on board nucleo-f446re uid {NUCLEO_UID}; '
+            f'this skin is on board sim uid {SIM_UID}')
+        assert direction.get_parameter('calibration_file').value == unbound
+        assert direction.host.estimator.calibration == made_here
+
+        # So is a skin name under which the file in force would be another skin's.
+        assert direction.set_parameters([Parameter('calibration.skin_id',
+                                                   value='left')])[0].successful
+        assert call(executor, direction, Trigger, '/skin_direction/reset_calibration',
+                    Trigger.Request()).success
+        named = Calibration.load_yaml(unbound)
+        assert named.skin.board_id == 'left'
+        result = direction.set_parameters([Parameter('calibration.skin_id', value='right')])[0]
+        assert not result.successful
+        assert result.reason.startswith(f'calibration file refused: {unbound}: made for ')
+        assert direction.get_parameter('calibration.skin_id').value == 'left'
+        assert direction.host.estimator.calibration == named
+    assert (tmp_path / 'calibration.yaml').read_bytes() == nucleo_bytes
 
 
 def test_a_version_1_board_is_anonymous_and_a_bound_file_loads_with_a_warning(tmp_path):

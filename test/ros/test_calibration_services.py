@@ -4,7 +4,7 @@ import math
 
 from action_msgs.msg import GoalStatus
 from diagnostic_msgs.msg import DiagnosticStatus
-from geometry_msgs.msg import WrenchStamped
+from geometry_msgs.msg import Point, WrenchStamped
 import numpy as np
 from pipeline import call, overrides, pipeline, scene, send_goal
 import pytest
@@ -18,7 +18,8 @@ from skin_driver.core.sim.board import SIM_UID
 from skin_driver.ros.calibration_services import default_calibration_file
 from skin_driver.ros.conversions import status_values
 from skin_driver.ros.direction_node import DirectionNode
-from skin_msgs.action import CalibrateCompliance, CalibrateForce, CalibrateGains
+from skin_msgs.action import (CalibrateCompliance, CalibrateCreep, CalibrateForce,
+                              CalibrateGains, CalibrateMount)
 from std_srvs.srv import Trigger
 
 pytestmark = pytest.mark.ros
@@ -31,6 +32,7 @@ TILTED = [(6.0, 30.0, 0.0), (8.0, 20.0, 90.0), (5.0, 40.0, 200.0), (7.0, 25.0, 3
 CURVE = ForceCurve((0.0, 1000.0, 3000.0), (0.0, 1.0, 9.0))
 FORCE = '/skin_direction/calibrate_force'
 COMPLIANCE = '/skin_direction/calibrate_compliance'
+RESET = '/skin_direction/reset_calibration'
 
 
 def latest_status(probe):
@@ -164,11 +166,65 @@ def test_a_second_goal_is_rejected_and_a_cancel_changes_nothing(node_with_calibr
 def test_reset_puts_the_defaults_in_force_and_in_the_file(node_with_calibration):
     node, executor, path, previous = node_with_calibration
     assert node.host.estimator.calibration == previous
-    answer = call(executor, node, Trigger, '/skin_direction/reset_calibration',
-                  Trigger.Request())
-    assert answer.success and 'defaults' in answer.message
+    before = path.read_bytes()
+    answer = call(executor, node, Trigger, RESET, Trigger.Request())
+    # It says which file it wrote, and where the previous one is kept.
+    assert answer.success and answer.message == (
+        f'calibration reset to the defaults in {path} (the previous one is kept as {path}.bak)')
     assert node.host.estimator.calibration == Calibration()
     assert Calibration.load_yaml(path) == Calibration()
+    assert (path.parent / 'calibration.yaml.bak').read_bytes() == before
+
+
+def test_a_corrupt_calibration_file_is_refused_when_set(node_with_calibration):
+    node, _, path, previous = node_with_calibration
+    corrupt = path.parent / 'corrupt.yaml'
+    corrupt.write_text('format: skin_driver/calibration\nx_p_m: [unclosed\n')
+    result = node.set_parameters([Parameter('calibration_file', value=str(corrupt))])[0]
+    assert not result.successful
+    assert result.reason.startswith(f'calibration file refused: {corrupt}: not valid YAML')
+    assert result.reason.endswith('; the calibration in force stays')
+    assert node.get_parameter('calibration_file').value == str(path)
+    assert node.host.estimator.calibration == previous
+
+
+def test_a_corrupt_file_given_at_start_up_is_never_written(tmp_path):
+    path = tmp_path / 'calibration.yaml'
+    path.write_text('format: skin_driver/calibration\nx_p_m: [unclosed\n')
+    before = path.read_bytes()
+    with ros_context() as (context, executor):
+        node = DirectionNode(context=context, parameter_overrides=overrides(
+            {'calibration_file': str(path)}))
+        executor.add_node(node)
+        try:
+            assert node.host.estimator.calibration == Calibration()
+            answer = call(executor, node, Trigger, RESET, Trigger.Request())
+            assert not answer.success
+            assert answer.message.startswith(f'reset refused: {path} is not written: it was '
+                                             'refused (')
+            assert 'calibration_file (a new path is made by the first calibration)' in \
+                answer.message
+            # A calibration is refused before any press is awaited (a minute's timeout).
+            status, force = send_goal(executor, node, CalibrateForce, FORCE,
+                                      CalibrateForce.Goal(forces=FORCES, timeout=60.0),
+                                      timeout_s=10.0)
+            assert status == GoalStatus.STATUS_ABORTED
+            assert f'{path} is not written' in force.message
+            # So are the mount and the creep, whose results the same file would keep.
+            for action, name, goal in (
+                    (CalibrateMount, 'calibrate_mount', CalibrateMount.Goal(
+                        points=[Point(x=0.01 * i, y=0.02 * (i % 2)) for i in range(6)],
+                        timeout=60.0)),
+                    (CalibrateCreep, 'calibrate_creep', CalibrateCreep.Goal(hold=5.0,
+                                                                            timeout=60.0))):
+                status, result = send_goal(executor, node, action, f'/skin_direction/{name}',
+                                           goal, timeout_s=10.0)
+                assert status == GoalStatus.STATUS_ABORTED
+                assert f'refused: {path} is not written' in result.message, name
+        finally:
+            node.destroy_node()
+    assert path.read_bytes() == before
+    assert not (tmp_path / 'calibration.yaml.bak').exists()
 
 
 def test_a_calibration_file_that_does_not_exist_is_refused_when_set(node_with_calibration):
@@ -179,17 +235,31 @@ def test_a_calibration_file_that_does_not_exist_is_refused_when_set(node_with_ca
     assert node.host.estimator.calibration == previous
 
 
-def test_a_calibration_made_for_another_skin_is_refused_and_the_diagnostics_warn(tmp_path):
+def test_a_calibration_made_for_another_skin_is_refused_never_written_and_the_diagnostics_warn(
+        tmp_path):
     path = tmp_path / 'calibration.yaml'
-    Calibration(x_p_m=4e-4, presses=8, skin=SkinIdentity(64, 64, 0.00125)).save_yaml(path)
+    other_grid = SkinIdentity(64, 64, 0.00125)
+    Calibration(x_p_m=4e-4, presses=8, skin=other_grid).save_yaml(path)
+    before = path.read_bytes()
+    another = tmp_path / 'another.yaml'
+    Calibration(x_p_m=3e-4, presses=8, skin=other_grid).save_yaml(another)
     with pipeline(tmp_path, scene([])) as (sim, _, direction, probe, executor):
         assert spin_until(executor, lambda: 'made for 64 x 64' in latest_status(probe)[2])
         values, level, message = latest_status(probe)
         assert level == DiagnosticStatus.WARN
         assert 'this skin is 16 x 16 taxels at 5.000 mm pitch' in message
         assert direction.host.estimator.calibration == Calibration()
-    # The file is left as it was: it may be the right one for the other skin.
-    assert Calibration.load_yaml(path).x_p_m == 4e-4
+        # Reset does not write the other skin's file: it says why and how to go on.
+        answer = call(executor, direction, Trigger, RESET, Trigger.Request())
+        assert not answer.success and f'{path} is not written' in answer.message
+        # Another grid's file set at run time is refused by the set itself, with the reason.
+        result = direction.set_parameters([Parameter('calibration_file', value=str(another))])[0]
+        assert not result.successful
+        assert result.reason.startswith(f'calibration file refused: {another}: made for 64 x 64')
+        assert direction.get_parameter('calibration_file').value == str(path)
+    # The file is left as it was, byte for byte: it may be the right one for the other skin.
+    assert path.read_bytes() == before
+    assert not (tmp_path / 'calibration.yaml.bak').exists()
 
 
 def test_the_wrench_topic_takes_a_best_effort_publisher(node_with_calibration):

@@ -20,7 +20,7 @@ def pressed(probe):
 
 
 def test_a_16_by_16_file_on_a_12_by_12_skin_is_refused_and_contacts_flow(tmp_path):
-    """Issue #37: after the refusal every frame was dropped, and reset_calibration did not help."""
+    """Issue #37: after the refusal every frame was dropped; #47: reset wrote the other's file."""
     path = tmp_path / 'calibration.yaml'
     Calibration(x_p_m=4e-4, presses=8, gains=(np.full((16, 16), 1.2), np.full((16, 16), 0.8)),
                 skin=SkinIdentity(16, 16, 0.005)).save_yaml(path)
@@ -29,9 +29,13 @@ def test_a_16_by_16_file_on_a_12_by_12_skin_is_refused_and_contacts_flow(tmp_pat
         assert spin_until(executor, lambda: pressed(probe) >= 5, 20.0), \
             'no contacts on the 12 x 12 skin after the refusal'
         assert direction.host.estimator.calibration.gains is None
+        # The other grid's file is not this skin's: reset does not write it (issue #47), and
+        # the defaults it would put in force already are.
+        before = path.read_bytes()
         answer = call(executor, direction, Trigger, '/skin_direction/reset_calibration',
                       Trigger.Request())
-        assert answer.success, answer.message
+        assert not answer.success and f'{path} is not written' in answer.message
         seen = pressed(probe)
         assert spin_until(executor, lambda: pressed(probe) >= seen + 3, 20.0), \
             'no contacts after reset_calibration'
+    assert path.read_bytes() == before

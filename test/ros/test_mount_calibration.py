@@ -64,6 +64,8 @@ def test_six_touches_give_the_mount_in_the_result_and_the_calibration_file(tmp_p
     assert [f.touches_done for f in feedback] == [1, 2, 3, 4, 5, 6]
     stored = Calibration.load_yaml(tmp_path / 'calibration.yaml')
     assert stored.mount.parent_frame == 'base_link' and stored.mount.touches == 6
+    # Stamped like every part (issue #47: the file's made map had no mount).
+    assert stored.made('mount') == stored.mount.made_utc != ''
     assert np.allclose(stored.mount.xyz_m, (p.x, p.y, p.z))
 
 

@@ -12,6 +12,7 @@ from rclpy.lifecycle import TransitionCallbackReturn
 from rosutil import ros_context, spin_until
 from skin_driver.core.estimation.calibration import calibration as calib
 from skin_driver.core.sim.board import SimulatedSkin
+from skin_driver.ros import qos
 from skin_driver.ros.conversions import status_values
 from skin_driver.ros.direction_node import DirectionNode
 from skin_driver.ros.driver_node import SkinDriverNode
@@ -19,7 +20,9 @@ from skin_driver.ros.params import ParameterError
 from skin_driver.tools.harness import spawn, stop
 from skin_driver.tools.probe import Probe
 from skin_msgs.action import Calibrate
+from skin_msgs.msg import SkinInfo
 from std_srvs.srv import Trigger
+import yaml
 
 pytestmark = pytest.mark.ros
 
@@ -211,12 +214,17 @@ def test_fused_driver_process_offers_the_direction_nodes_topics_services_and_dia
     link = str(tmp_path / 'skin0')
     ns = f'/fused_{os.getpid()}'
     log = open(tmp_path / 'driver.log', 'w')
+    given = tmp_path / 'mount.yaml'
+    given.write_text(yaml.safe_dump({'/**/skin_driver': {'ros__parameters': {
+        'parent_frame': 'left_forearm_link', 'mount_z': 0.05}}}))
     # Named as launch_ros names it: a rule for every node of the process.
     driver = spawn(['-m', 'skin_driver.ros.driver_node', '--ros-args', '-r', f'__ns:={ns}',
                     '-r', '__node:=skin_driver',
                     '-p', 'fused:=true', '-p', f'port:={link}', '-p', 'reconnect_max:=0.1',
                     '-p', 'skin_direction:diagnostics_period:=0.2',
-                    '-p', f'skin_direction:calibration_file:={tmp_path / "cal.yaml"}'], log)
+                    '-p', f'skin_direction:calibration_file:={tmp_path / "cal.yaml"}',
+                    # The mount the launch gives the driver alone: its skin_direction publishes it.
+                    '--params-file', str(given)], log)
     # Looped: a driver process that starts slowly on a loaded machine still sees the press.
     sim = SimulatedSkin(scene([{'time_s': 0.5, 'duration_s': 0.6, 'ramp_s': 0.1}]), rate_hz=200.0,
                         link_path=link, seed=1, loop=True)
@@ -225,6 +233,8 @@ def test_fused_driver_process_offers_the_direction_nodes_topics_services_and_dia
             node = rclpy.create_node('probe', namespace=ns, context=context)
             executor.add_node(node)
             probe = Probe(node, keep_messages=True)
+            described = []
+            node.create_subscription(SkinInfo, 'skin_info', described.append, qos.latched())
             sim.start()
             assert spin_until(executor, lambda: sum(1 for m in probe.contacts if m.contacts) >= 20,
                               20.0), log_text(tmp_path)
@@ -239,6 +249,10 @@ def test_fused_driver_process_offers_the_direction_nodes_topics_services_and_dia
                 result.message
             sequences = [m.sequence for m in probe.contacts]
             assert sequences == sorted(sequences) and all(sim.truth(s) for s in sequences[-5:])
+            assert spin_until(executor, lambda: described, 10.0)
+            assert (described[-1].parent_frame, described[-1].mount_source) == (
+                'left_forearm_link', 'parameters')
+            assert described[-1].mount_pose.position.z == 0.05
             node.destroy_node()
     finally:
         sim.stop()

@@ -7,8 +7,9 @@ import sys
 import uuid
 
 import pytest
+from skin_driver.core.sim.board import SIM_UID
 from skin_driver.core.sim.scene import scene_from_dict
-from skin_driver.tools.demo import demo_scene
+from skin_driver.tools.demo import demo_scene, offset_step
 
 pytestmark = pytest.mark.ros
 
@@ -34,7 +35,13 @@ def test_demo_calibrates_and_prints_table_1_next_to_the_papers():
         capture_output=True, text=True, timeout=180, env=env)
     assert result.returncode == 0, result.stdout[-2000:] + result.stderr[-2000:]
     out = result.stdout
-    assert 'calibrated (x_p' in out
+    # Which board runs, and who answered, in the board's own words (issue #47).
+    assert 'board: the simulated skin (skin_driver sim) on a pseudo-terminal' in out
+    assert f'board answered: sim uid {SIM_UID}, fw ' in out
+    # The count it says is the count it asked for and used (it said 6 and counted 5).
+    used = int(out.split('calibrated (x_p')[1].split(' from ')[1].split()[0])
+    assert used == offset_step(scene_from_dict(demo_scene(repeats=1, pace=0.6), name='demo'),
+                               60.0)[0].presses
     table = out[out.index('Table 1'):]
     for beta in ('0.0', '45.0', '90.0', '135.0', '180.0', '225.0', '270.0', '315.0'):
         assert f'\n{beta:>10}' in table
@@ -70,3 +77,13 @@ def test_demo_pace_scales_the_scene_after_the_lead_in():
         assert b.time_s - lead_in == pytest.approx((a.time_s - lead_in) / 2)
         assert b.duration_s == pytest.approx(a.duration_s / 2)
     assert [p.label for p in slow.presses] == [p.label for p in fast.presses]
+
+
+def test_the_offset_step_says_the_count_it_asks_for():
+    """Issue #47: the demo said "6 normal presses" while the goal counted 5."""
+    scene = scene_from_dict(demo_scene(repeats=1), name='demo')
+    goal, status = offset_step(scene, 60.0)
+    normal = len(scene.labelled('offset'))
+    assert goal.presses == normal - 1 and goal.timeout == 60.0
+    assert status == (f'calibrating (x_p, y_p) from {goal.presses} normal presses (the scene '
+                      f'makes {normal}: one spare)')

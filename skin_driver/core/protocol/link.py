@@ -56,6 +56,19 @@ def default_port(namespace: str = '') -> str:
     return os.path.join(base, 'skin_driver', name, 'skin0')
 
 
+def port_problem(port: str) -> str:
+    """
+    Return why ``port`` cannot be a serial port ('' when it may be one).
+
+    pyserial opens a regular file and then fails to configure it with 'Inappropriate ioctl for
+    device', which names neither the file nor what is wrong with it.
+    """
+    if '://' not in port and os.path.isfile(port):
+        return (f"{port} is a regular file, not a serial port or pty; name the board's device "
+                '(e.g. /dev/ttyACM0) or the link the simulated skin makes')
+    return ''
+
+
 @dataclass
 class LinkStats:
     """What the link has seen since it was created."""
@@ -118,6 +131,9 @@ class SerialLink:
         self._resumed = False
 
     def _default_open(self) -> serial.SerialBase:
+        problem = port_problem(self.port)
+        if problem:
+            raise ValueError(problem)
         return serial.serial_for_url(self.port, baudrate=self.baud, timeout=self._read_timeout)
 
     @property

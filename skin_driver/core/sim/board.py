@@ -28,6 +28,7 @@ from __future__ import annotations
 
 from collections import deque
 from dataclasses import dataclass
+import hashlib
 import math
 import os
 import threading
@@ -57,9 +58,23 @@ INFO_PERIOD_US = 1_000_000
 SIM = 'sim'
 
 
-def sim_board_info(rows: int, cols: int, pitch_m: float, rate_hz: float) -> BoardInfo:
-    """Return the identity the simulated board gives for this grid, pitch and scan rate."""
-    return BoardInfo('sim', SIM_UID, SIM_FIRMWARE, rows, cols, pitch_m,
+def sim_uid(name: str = '') -> str:
+    """
+    Return the unique ID of the simulated board called ``name`` ('': SIM_UID).
+
+    'SIM' in ASCII, then 18 hex digits of the name's SHA-256: the same board gets the same uid
+    at every run (its calibration file stays bound to it), two boards of several patches never
+    share one.
+    """
+    if not name:
+        return SIM_UID
+    return SIM_UID[:6] + hashlib.sha256(name.encode('utf-8')).hexdigest()[:18]
+
+
+def sim_board_info(rows: int, cols: int, pitch_m: float, rate_hz: float,
+                   name: str = '') -> BoardInfo:
+    """Return the identity the simulated board ``name`` gives for this grid, pitch and rate."""
+    return BoardInfo('sim', sim_uid(name), SIM_FIRMWARE, rows, cols, pitch_m,
                      max(1, int(round(rate_hz))))
 
 

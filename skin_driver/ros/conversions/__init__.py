@@ -14,7 +14,7 @@ from .messages import (
     fill_force_result,
     fill_gains_result, fill_offset_result, frame_pitch, grid_markers, heatmap_markers,
     make_header,
-    mount_transform, rgb_to_image, skin_frame_layers, skin_frame_to_msg, status_values,
+    mount_pose, mount_transform, rgb_to_image, skin_frame_layers, skin_frame_to_msg, status_values,
     wrench_stamped)
 
 __all__ = [
@@ -23,7 +23,7 @@ __all__ = [
     'fill_direction_result', 'fill_force_result', 'fill_gains_result', 'fill_offset_result',
     'frame_pitch', 'grid_markers',
     'GridMarkers', 'heatmap_markers', 'make_header',
-    'mount_transform', 'read_contacts_head', 'read_skin_frame', 'rgb_to_image',
+    'mount_pose', 'mount_transform', 'read_contacts_head', 'read_skin_frame', 'rgb_to_image',
     'SerializedMessages',
     'skin_frame_layers', 'skin_frame_to_msg', 'skin_frames_read_back', 'status_values',
     'wrench_stamped']

@@ -7,7 +7,7 @@ from typing import Iterable, Sequence, Tuple
 
 from builtin_interfaces.msg import Time
 from diagnostic_msgs.msg import DiagnosticStatus
-from geometry_msgs.msg import (Point, Quaternion, Transform, TransformStamped, Vector3,
+from geometry_msgs.msg import (Point, Pose, Quaternion, Transform, TransformStamped, Vector3,
                                Wrench, WrenchStamped)
 import numpy as np
 from sensor_msgs.msg import Image
@@ -207,6 +207,13 @@ def mount_transform(stamp: Time, parent: str, child: str, xyz: Sequence[float],
     return TransformStamped(header=Header(stamp=stamp, frame_id=parent), child_frame_id=child,
                             transform=Transform(translation=Vector3(x=x, y=y, z=z),
                                                 rotation=rotation))
+
+
+def mount_pose(xyz: Sequence[float], rpy: Sequence[float]) -> Pose:
+    """Return the mount ``xyz``, fixed-axis ``rpy`` as a Pose (as mount_transform places it)."""
+    t = mount_transform(Time(), '', '', xyz, rpy).transform
+    return Pose(position=Point(x=t.translation.x, y=t.translation.y, z=t.translation.z),
+                orientation=t.rotation)
 
 
 def heatmap_markers(header: Header, force_map: np.ndarray, pitch_m: float, contacts: Iterable,

@@ -7,9 +7,13 @@ import pytest
 from skin_driver.core.estimation.calibration.calibration import calibrate_from_shifts, Calibration
 from skin_driver.core.estimation.calibration.calibration import (CalibrationMismatch,
                                                                  compliance_from_presses)
-from skin_driver.core.estimation.calibration.calibration import SkinIdentity
+from skin_driver.core.estimation.calibration.calibration import SkinIdentity, SkinMount
+from skin_driver.core.estimation.calibration.creep import CreepFit
+from skin_driver.core.estimation.calibration.direction import DirectionCorrection
 from skin_driver.core.estimation.model.forcecurve import ForceCurve
 from skin_driver.core.estimation.model.taxelmodel import TaxelModel
+from skin_driver.core.estimation.scan.kernel import DIRECTION_FEATURES
+import yaml
 
 MODEL = TaxelModel(pitch_m=0.005, fill_factor=0.88, cover_spread_m=0.001, layer_spread_m=0.002,
                    film_scale=0.67, film_exponent=0.53, film_ceiling=3.3, film_activation_n=0.01,
@@ -148,3 +152,32 @@ def test_an_update_stamps_only_the_parts_it_changes():
     cal = Calibration(part_utc=('a', 'b', 'c', 'd')).updated(compliance_m_per_n=1e-3)
     assert cal.part_utc[:2] == ('a', 'b') and cal.part_utc[3] == 'd'
     assert cal.made('compliance') == cal.made_utc != 'c'
+
+
+def test_every_part_is_stamped_and_listed_with_its_date_direction_creep_and_mount_too(tmp_path):
+    """Issue #47: after direction, creep and mount calibrations only [offset, force] showed."""
+    direction = DirectionCorrection(True, 10.0, (0.0,) * DIRECTION_FEATURES,
+                                    (0.0,) * DIRECTION_FEATURES, 12, 4, 9.0, 5.0)
+    mount = SkinMount('base_link', (0.1, 0.0, 0.05), (0.0, 0.0, 0.0), 0.001, 6)
+    cal = Calibration(x_p_m=1e-4, presses=8, part_utc=('2026-11-20T01:00:00Z',))
+    cal = cal.updated(direction=direction).updated(creep=CreepFit(0.02, 0.5))
+    cal = cal.updated(mount=mount)
+    parts = dict(cal.parts_in_force())
+    assert list(parts) == ['offset', 'direction', 'creep', 'mount']
+    assert parts['offset'] == '2026-11-20T01:00:00Z'
+    assert all(parts[p] for p in ('direction', 'creep', 'mount'))
+    path = tmp_path / 'cal.yaml'
+    cal.save_yaml(path)
+    made = yaml.safe_load(path.read_text())['made']
+    assert list(made) == ['offset', 'force', 'compliance', 'gains', 'direction', 'creep', 'mount']
+    assert made['mount'] == parts['mount'] and made['creep'] == parts['creep']
+    assert Calibration.load_yaml(path) == cal
+
+
+def test_a_part_in_a_file_that_gives_no_time_for_it_is_listed_with_its_own_or_none():
+    mount = SkinMount('base_link', (0.1, 0.0, 0.05), (0.0, 0.0, 0.0), 0.001, 6,
+                      '2026-11-21T00:00:00Z')
+    # As an older file reads: the mount's own time, the compliance's unknown.
+    cal = Calibration(compliance_m_per_n=1e-3, mount=mount)
+    assert cal.parts_in_force() == (('compliance', ''), ('mount', ''))
+    assert Calibration().parts_in_force() == ()

@@ -33,7 +33,7 @@ def test_a_file_from_another_board_is_refused_naming_both(tmp_path):
         Calibration.load_yaml(path, ON_QEMU)
     assert str(err.value) == (
         f'{path}: made on board nucleo-f446re uid {NUCLEO_UID}; this skin is on board qemu uid '
-        f'{QEMU_UID}; calibrate this skin or reset the calibration')
+        f'{QEMU_UID}; this skin needs a calibration file of its own')
 
 
 def test_the_uid_decides_over_a_board_name_or_a_user_name(tmp_path):

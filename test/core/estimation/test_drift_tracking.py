@@ -130,7 +130,7 @@ def test_direction_and_location_do_not_move_over_an_hours_hold():
 
 def test_the_diagnostics_show_the_tare_and_the_drift_and_warn_when_a_taxel_drifts_apart():
     values, warning = drift_status(ContactEstimator())
-    assert values['tare'] == 'none (the assumed baseline)' and warning == ''
+    assert values['tare'] == 'no tare yet (the assumed baseline)' and warning == ''
     assert values['creep correction'] == 'default: 2.50 % per decade, settles in 1 s'
     calibrated = ContactEstimator(calibration=Calibration(creep=CreepFit(0.04, 2.0)))
     assert drift_status(calibrated)[0]['creep correction'].startswith(
@@ -146,3 +146,15 @@ def test_the_diagnostics_show_the_tare_and_the_drift_and_warn_when_a_taxel_drift
     # the harsh skin's taxels drift by their own factors: some far from their layer's mean
     assert 'more than the touch threshold (40)' in warning and 'tare the unloaded skin' in warning
     assert 'largest' in values['drift since the tare, bottom [counts]']
+
+
+def test_without_a_tare_the_drift_is_named_since_the_start_never_since_the_tare():
+    """Issue #47: with no tare done, /diagnostics said "drift since the tare +18.6 counts"."""
+    scene = idle_scene(family_skin('harsh'), duration_s=600.0, step_s=20.0)
+    estimator = ContactEstimator()
+    for f in scene.frames:
+        estimator.process(f.top, f.bottom, f.time_s)
+    values, _ = drift_status(estimator)
+    assert values['tare'] == 'no tare yet (the assumed baseline)'
+    assert 'drift since the start (no tare yet), top [counts]' in values
+    assert not any('since the tare' in key or key.startswith('tare offset') for key in values)

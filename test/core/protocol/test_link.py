@@ -129,3 +129,25 @@ def test_the_link_hands_over_each_new_identity_once_before_its_frames():
     assert [info for _, info in infos] == [first, second]
     assert infos[0][0] == 0  # before the first frame
     assert events[infos[1][0] + 1] == ('frames', 6)  # before the first frame it came with
+
+
+def test_a_port_that_is_a_regular_file_is_refused_naming_the_file(tmp_path):
+    """Issue #47: it gave "Could not configure port: (25, 'Inappropriate ioctl for device')"."""
+    port = tmp_path / 'skin0'
+    port.write_bytes(b'not a device')
+    details = []
+    refused = threading.Event()
+
+    def on_state(state, detail):
+        details.append(detail)
+        refused.set()
+    link = SerialLink(str(port), 921600, FrameDecoder(expected_shape=(16, 16)),
+                      lambda frames, now: None, on_state)
+    link.start()
+    try:
+        assert refused.wait(WAIT_S), 'the link never said why it cannot open the port'
+    finally:
+        link.stop()
+    assert details[0] == (f'cannot open {port}: {port} is a regular file, not a serial port or '
+                          "pty; name the board's device (e.g. /dev/ttyACM0) or the link the "
+                          'simulated skin makes')

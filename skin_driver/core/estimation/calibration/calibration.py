@@ -24,7 +24,7 @@ gains needs.
 
 A calibration knows its skin (:class:`SkinIdentity`: grid, pitch, the name the user gives it
 and, when the board said who it is, the board's unique ID and name) and when each part was made
-(offset, force, compliance, gains). Loaded for another skin, it is refused
+(offset, force, compliance, gains, direction, creep, mount). Loaded for another skin, it is refused
 (:class:`CalibrationMismatch`): applying a calibration to the wrong skin gives wrong forces and
 directions without a word. A calibration made on one board is refused on a board with another
 unique ID; one bound to no board (made before boards said who they are, or on a version-1
@@ -64,7 +64,10 @@ PARTS = {'offset': ('x_p_m', 'y_p_m', 'std_x_m', 'std_y_m', 'presses', 'zero_slo
                     'zero_ref_n'),
          'force': ('force_curves', 'force_presses', 'taxel_model', 'leak_share'),
          'compliance': ('compliance_m_per_n', 'compliance_presses'),
-         'gains': ('gains',)}
+         'gains': ('gains',),
+         'direction': ('direction',),
+         'creep': ('creep',),
+         'mount': ('mount',)}
 # Pitches that differ by less than this share are the same.
 _PITCH_TOLERANCE = 1e-6
 _FIELDS = ('x_p_m', 'y_p_m', 'std_x_m', 'std_y_m', 'presses', 'compliance_m_per_n')
@@ -237,7 +240,7 @@ class Calibration:
     compliance_presses: int = 0
     made_utc: str = ''
     skin: SkinIdentity = None
-    part_utc: tuple = ('', '', '', '')
+    part_utc: tuple = ('',) * len(PARTS)
     zero_slope_m_per_n: tuple = (0.0, 0.0)
     zero_ref_n: float = 0.0
     taxel_model: TaxelModel = None
@@ -267,10 +270,11 @@ class Calibration:
             raise ValueError(f'made_utc must be a string, got {self.made_utc!r}')
         if self.skin is not None and not isinstance(self.skin, SkinIdentity):
             raise ValueError(f'skin must be a SkinIdentity, got {self.skin!r}')
-        stamps = self.part_utc
-        if len(stamps) != len(PARTS) or not all(isinstance(t, str) for t in stamps):
-            raise ValueError(f'part_utc must be {len(PARTS)} strings ({", ".join(PARTS)})')
-        object.__setattr__(self, 'part_utc', tuple(self.part_utc))
+        stamps = tuple(self.part_utc)
+        if len(stamps) > len(PARTS) or not all(isinstance(t, str) for t in stamps):
+            raise ValueError(f'part_utc must be up to {len(PARTS)} strings ({", ".join(PARTS)})')
+        # Fewer stamps (the four parts before direction, creep and mount had one): unknown.
+        object.__setattr__(self, 'part_utc', stamps + ('',) * (len(PARTS) - len(stamps)))
         object.__setattr__(self, 'force_curves', _curves(self.force_curves))
         object.__setattr__(self, 'gains', _gains(self.gains))
         if self.taxel_model is not None and not isinstance(self.taxel_model, TaxelModel):
@@ -304,6 +308,18 @@ class Calibration:
     def made(self, part: str) -> str:
         """Return when ``part`` (one of PARTS) was made, '' when never or unknown."""
         return self.part_utc[list(PARTS).index(part)]
+
+    def parts_in_force(self) -> tuple:
+        """
+        Return (part, made) of every part calibrated, in the order of PARTS.
+
+        A part is in force when it was stamped or any of its fields differs from the default;
+        ``made`` is '' when its time is unknown (a file older than its stamp).
+        """
+        default = Calibration()
+        return tuple((part, self.made(part)) for part, fields in PARTS.items()
+                     if self.made(part) or any(getattr(self, f) != getattr(default, f)
+                                               for f in fields))
 
     def check_skin(self, skin: SkinIdentity) -> str:
         """Return why this calibration does not belong to ``skin`` ('' when it may)."""
@@ -460,12 +476,17 @@ class Calibration:
             if doc.get('creep') is not None:
                 values['creep'] = CreepFit.from_dict(doc['creep'])
             cal = cls(**values)
+            # Files written before the made map named them: the part's own time, if any.
+            own = {'mount': cal.mount, 'creep': cal.creep}
+            cal = replace(cal, part_utc=tuple(
+                t or getattr(own.get(part), 'made_utc', '') or ''
+                for part, t in zip(PARTS, cal.part_utc)))
         except (KeyError, TypeError, ValueError) as exc:
             raise ValueError(f'{path}: {exc}') from None
         problem = cal.check_skin(skin) if skin is not None else ''
         if problem:
-            raise CalibrationMismatch(f'{path}: {problem}; calibrate this skin or reset the '
-                                      'calibration')
+            raise CalibrationMismatch(f'{path}: {problem}; this skin needs a calibration file '
+                                      'of its own')
         return cal
 
 

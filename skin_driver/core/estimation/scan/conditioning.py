@@ -113,6 +113,11 @@ class Conditioning:
         """Return the map shape this conditioning is set up for, or None."""
         return self._shape
 
+    @property
+    def tared(self) -> bool:
+        """Return whether a tare set the baselines (False: the assumed baseline)."""
+        return self._tared
+
     def copy(self, config: ConditioningConfig = None) -> 'Conditioning':
         """
         Return an independent copy, optionally under another ``config``.
