@@ -89,6 +89,7 @@ class Chip:
         self.watchdog_at = None
         self._polls = {}
         self._mux = None
+        self._column_cache = {}
         self._fault_ns = int(self.faults.from_s * 1e9)
         self.uc = Uc(UC_ARCH_ARM, UC_MODE_THUMB | UC_MODE_MCLASS)
         self.uc.ctl_set_cpu_model(UC_CPU_ARM_CORTEX_M4)
@@ -103,7 +104,6 @@ class Chip:
         self.uc.mem_write(UID_ADDR, bytes(uid))
         self.uc.mem_write(FLASH_SIZE_ADDR, struct.pack('<H', FLASH[1] // 1024))
         self._blocks = {}
-        self._gates = {}
         self._make_devices()
         for page in sorted({key << 10 & ~0xFFF for key in self._blocks}):
             self.uc.mmio_map(page, 0x1000, self._read, page, self._write, page)
@@ -134,11 +134,9 @@ class Chip:
         table += [(0x4002_0000 + 0x400 * p, g, (ahb1, p)) for p, g in enumerate(self.gpio)]
         self._blocks.clear()
         for base, dev, gate in table:
-            self._blocks[base >> 10] = (dev, base)
-            if gate:
-                self._gates[id(dev)] = gate
+            self._blocks[base >> 10] = (dev, base, gate)
         for k in range(4):
-            self._blocks[(0xE000_E000 >> 10) + k] = (self.scb, 0xE000_E000)
+            self._blocks[(0xE000_E000 >> 10) + k] = (self.scb, 0xE000_E000, None)
 
     def _reset_cpu(self) -> None:
         sp, pc = struct.unpack('<II', self.uc.mem_read(FLASH[0], 8))
@@ -159,8 +157,7 @@ class Chip:
         if entry is None:
             self.error(f'access to {addr:#010x}: no peripheral is modelled there')
             return None, 0
-        dev, base = entry
-        gate = self._gates.get(id(dev))
+        dev, base, gate = entry
         if gate and not self.rcc.regs[gate[0]] >> gate[1] & 1:
             self.error(f'{type(dev).__name__} at {base:#x} accessed with its clock off '
                        f'(RCC register {gate[0]:#x} bit {gate[1]}): reads 0, writes ignored')
@@ -178,39 +175,37 @@ class Chip:
         word = off & ~3
         value = dev.read(word)
         if word in dev.polled:
-            key = addr & ~3
-            prev = self._polls.get(key)
+            prev = self._polls.get(addr)
             if prev is not None and prev[0] == self.writes and prev[1] == value:
                 self._skip(dev, word, prev[2])
                 value = dev.read(word)
-                self._polls[key] = (self.writes, value,
-                                    prev[2] if value == prev[1] else self.now)
+                self._polls[addr] = (self.writes, value,
+                                     prev[2] if value == prev[1] else self.now)
             else:
-                self._polls[key] = (self.writes, value, self.now)
+                self._polls[addr] = (self.writes, value, self.now)
         if size < 4:
             value = (value >> (8 * (off & 3))) & ((1 << (8 * size)) - 1)
         return value & 0xFFFF_FFFF
 
     def _write(self, uc, offset, size, value, page):
-        addr = page + offset
         self.now += self.access_ns
         self.writes += 1
-        dev, off = self._device(addr)
+        dev, off = self._device(page + offset)
         if dev is None:
             return
-        word = off & ~3
         if size < 4:
             shift = 8 * (off & 3)
             mask = ((1 << (8 * size)) - 1) << shift
-            value = (dev.read(word) & ~mask) | ((value << shift) & mask)
-        dev.write(word, value & 0xFFFF_FFFF)
+            off &= ~3
+            value = (dev.read(off) & ~mask) | ((value << shift) & mask)
+        dev.write(off, value & 0xFFFF_FFFF)
 
     def _skip(self, dev, word: int, since: int) -> None:
         """A poll: move device time to when the register changes, or by an idle step."""
         at = dev.next_change(word)
         if at is None:
             at = self.now + self.idle_ns
-        if word in getattr(dev, 'counters', ()):
+        if word in dev.counters:
             at = max(at, self.now + (self.now - since) // 8)
         self.advance_to(at)
 
@@ -282,21 +277,24 @@ class Chip:
         t = self.now - (self.time_origin or 0)
         return int(t * self.scan_rate_hz // 1_000_000_000) % len(self.scans[0])
 
-    def sample(self, seqs) -> list:
-        """Return the counts of a triple conversion, ADC1, ADC2, ADC3 per rank (DMA mode 1)."""
+    def sample(self, channels) -> list:
+        """Return the counts of the channels (ADC1, ADC2, ADC3 per rank) of the selected row."""
         where = self.selected_row()
-        counts = []
         if where is None:
-            return [0] * (3 * len(seqs[0]))
+            return [0] * len(channels)
         layer, row = where
         values = self.scans[layer][self.scan_index()][row]
-        column = self.wiring.channel_column
-        for chans in zip(*seqs):
-            for ch in chans:
-                col = column.get(ch)
-                counts.append(0 if col is None else int(values[col]))
         self.stats['rows_sampled'] += 1
-        return counts
+        # An input no column is wired to reads 0 (the last entry of the padded row).
+        return np.append(values, 0)[self._columns(tuple(channels))].tolist()
+
+    def _columns(self, channels: tuple):
+        cols = self._column_cache.get(channels)
+        if cols is None:
+            column = self.wiring.channel_column
+            cols = np.array([column.get(ch, self.wiring.cols) for ch in channels])
+            self._column_cache[channels] = cols
+        return cols
 
     def dma_enabled(self, dma, s: int) -> None:
         """A stream was enabled: the USART's stream starts sending at once."""

@@ -70,6 +70,7 @@ class Rcc:
     """Reset and clock control (RM0390 6.3), with PWR (5.4) and FLASH (3.8) as its partners."""
 
     polled = frozenset({0x00, 0x08})
+    counters = frozenset()
 
     def __init__(self, chip):
         """Reset state (RM0390 6.3: RCC_CR 0x0000_0083, RCC_PLLCFGR 0x2400_3010)."""
@@ -222,6 +223,7 @@ class Pwr:
     """Power controller: voltage scale and over-drive (RM0390 5.1.4, 5.4)."""
 
     polled = frozenset({0x04})
+    counters = frozenset()
 
     def __init__(self, chip):
         """Reset state: PWR_CR VOS = scale 1 (0x0000_C000), PWR_CSR VOSRDY once powered."""
@@ -272,6 +274,7 @@ class Flash:
     """Flash interface: FLASH_ACR's latency, read back at once (RM0390 3.4.1, 3.8.1)."""
 
     polled = frozenset({0x00})
+    counters = frozenset()
 
     def __init__(self, chip):
         """Reset state: no wait states, caches off."""

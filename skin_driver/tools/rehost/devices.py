@@ -22,7 +22,7 @@ def _ceil_div(a: int, b: int) -> int:
 class Gpio:
     """A GPIO port (RM0390 7.4): mode, output data, set/reset; pins read back as driven."""
 
-    polled = frozenset()
+    polled = counters = frozenset()
     RESET = {0: (0xA800_0000, 0x0C00_0000, 0x6400_0000), 1: (0x0000_0280, 0x0000_00C0,
                                                              0x0000_0100)}
 
@@ -92,28 +92,27 @@ class Timer:
         self.base_cnt = 0
         self.wraps = 0
         self.hz = 0
+        self.div = NS
         self.other = {}
-
-    def _div(self) -> int:
-        return (self.psc_active + 1) * NS
 
     def _total(self) -> int:
         if not self.cr1 & 1 or not self.hz:
             return self.base_cnt
-        return self.base_cnt + (self.chip.now - self.base_t) * self.hz // self._div()
+        return self.base_cnt + (self.chip.now - self.base_t) * self.hz // self.div
 
     def _sync(self) -> int:
         total = self._total()
-        wraps = total // (self.arr + 1)
-        if wraps > self.wraps:
-            self.wraps = wraps
+        period = self.arr + 1
+        if total >= (self.wraps + 1) * period:
+            self.wraps = total // period
             self.sr |= 1
             self.psc_active = self.psc     # the preload takes effect at the update event
-        return total % (self.arr + 1)
+        return total % period
 
     def _rebase(self, cnt: int) -> None:
         self.base_cnt, self.base_t, self.wraps = cnt, self.chip.now, 0
         self.hz = int(self.chip.rcc.tree.timer_hz(1))
+        self.div = (self.psc_active + 1) * NS
 
     def read(self, off: int) -> int:
         """Read CR1, SR, CNT, PSC, ARR (others as written)."""
@@ -134,14 +133,13 @@ class Timer:
         """Return when CNT ticks next, or when the next overflow sets UIF."""
         if not self.cr1 & 1 or not self.hz:
             return None
-        ticks = (self.chip.now - self.base_t) * self.hz // self._div()
         if off == 0x24:
-            target = ticks + 1
+            target = (self.chip.now - self.base_t) * self.hz // self.div + 1
         else:
             if self.sr & 1:
                 return None
             target = (self.wraps + 1) * (self.arr + 1) - self.base_cnt
-        return self.base_t + _ceil_div(target * self._div(), self.hz)
+        return self.base_t + _ceil_div(target * self.div, self.hz)
 
     def write(self, off: int, value: int) -> None:
         """Write a register: start/stop, UG, rc_w0 SR, CNT, PSC, ARR."""
@@ -190,6 +188,7 @@ class Adc:
     """
 
     polled = frozenset({0x000, 0x100, 0x200})
+    counters = frozenset()
     CDR = 0x4001_2308
     CYCLES = (3, 15, 28, 56, 84, 112, 144, 480)   # SMPx codes (13.13.4, 13.13.5)
 
@@ -200,6 +199,7 @@ class Adc:
         self.ccr = 0
         self.on_at = [None, None, None]
         self.cdr = 0
+        self.plan = None            # the checked conversion set-up, until a register changes
 
     def clock_hz(self) -> float:
         """Return ADCCLK: PCLK2 / (2, 4, 6, 8) by ADC_CCR ADCPRE (13.13.16)."""
@@ -224,6 +224,8 @@ class Adc:
         """Write a register; ADC1's SWSTART starts the triple conversion."""
         adc, reg = off >> 8, off & 0xFF
         chip = self.chip
+        if reg != 0x00:
+            self.plan = None
         if adc == 3:
             if reg == 0x04:
                 self.ccr = value
@@ -266,23 +268,25 @@ class Adc:
         smpr = r[0x10] if ch < 10 else r[0x0C]
         return self.CYCLES[(smpr >> (3 * (ch % 10))) & 7]
 
-    def _start(self) -> None:
+    def _plan(self):
+        """Check the set-up against the manual; return (sequences, rank time) or None."""
         chip = self.chip
         if self.ccr & 0x1F != 0b10110:
             chip.error(f'ADC_CCR MULTI {self.ccr & 0x1F:#07b}: only triple regular simultaneous '
                        'mode (10110) is modelled')
-            return
+            return None
+        if self.ccr & 0xC000 != 0x4000:
+            chip.error('ADC_CCR DMA is not mode 1: only DMA mode 1 is modelled')
+            return None
         for i in range(3):
             if not self.regs[i][8] & 1:
                 chip.error(f'ADC{i + 1} started with ADON clear')
-                return
-            if chip.now - self.on_at[i] < 3_000:
-                chip.error(f'ADC{i + 1} started before tSTAB (3 us) after ADON')
+                return None
         seqs = [self._sequence(i) for i in range(3)]
         if len({len(s) for s in seqs}) != 1:
             chip.error(f'sequences of unequal length {[len(s) for s in seqs]} in simultaneous '
                        'mode (RM0390 13.9)')
-            return
+            return None
         cycles = set()
         for rank, chans in enumerate(zip(*seqs)):
             if len(set(chans)) != 3:
@@ -292,20 +296,30 @@ class Adc:
         if len(cycles) != 1:
             chip.error(f'unequal sampling times {sorted(cycles)} break the lock step')
         rank_ns = (max(cycles) + 12) * NS / self.clock_hz()
-        counts = chip.sample(seqs)
-        times = [chip.now + int((k // 3 + 1) * rank_ns) for k in range(len(counts))]
+        order = [ch for chans in zip(*seqs) for ch in chans]     # ADC1, ADC2, ADC3 per rank
+        return order, rank_ns
+
+    def _start(self) -> None:
+        chip = self.chip
+        if self.plan is None:
+            self.plan = self._plan() or ()
+        if not self.plan:
+            return
+        order, rank_ns = self.plan
+        for i in range(3):
+            if chip.now - self.on_at[i] < 3_000:
+                chip.error(f'ADC{i + 1} started before tSTAB (3 us) after ADON')
+        counts = chip.sample(order)
+        now = chip.now
+        times = [now + int((k // 3 + 1) * rank_ns) for k in range(len(counts))]
         for i in range(3):
             self.regs[i][0] |= 0x12                   # STRT, EOC
             self.regs[i][0x4C] = counts[len(counts) - 3 + i]
-        if self.ccr & 0xC000 != 0x4000:
-            chip.error('ADC_CCR DMA is not mode 1: only DMA mode 1 is modelled')
-            return
-        if any(r[0] & 0x20 for r in self.regs):
+        if self.regs[0][0] & 0x20 or self.regs[1][0] & 0x20 or self.regs[2][0] & 0x20:
             return                                    # OVR stops the requests until cleared
         done = chip.dma2.peripheral_request(0, 0, counts, times, self.CDR, 2)
-        overrun = chip.faults_active() and chip.faults.adc_overrun_row is not None and \
-            chip.selected_row() == tuple(chip.faults.adc_overrun_row)
-        if overrun:
+        if chip.faults.adc_overrun_row is not None and chip.faults_active() and \
+                chip.selected_row() == tuple(chip.faults.adc_overrun_row):
             done = min(done, 3)
             chip.stats['adc_overruns'] += 1
         if done < len(counts):
@@ -323,6 +337,7 @@ class Dma:
     """
 
     polled = frozenset({0x00, 0x04})
+    counters = frozenset()
     SHIFT = (0, 6, 16, 22)
     TCIF, HTIF, TEIF = 0x20, 0x10, 0x08
 
@@ -451,6 +466,7 @@ class Usart:
     """
 
     polled = frozenset({0x00})
+    counters = frozenset()
     DR = 0x4001_1004
 
     def __init__(self, chip):
@@ -554,7 +570,7 @@ def _crc_table() -> list:
 class Crc:
     """The CRC calculation unit (RM0390 4.3, 4.4): CRC-32 0x04C11DB7, MSB first, 32-bit words."""
 
-    polled = frozenset()
+    polled = counters = frozenset()
     TABLE = _crc_table()
 
     def __init__(self, chip):
@@ -592,6 +608,7 @@ class Iwdg:
     """
 
     polled = frozenset({0x0C})
+    counters = frozenset()
 
     def __init__(self, chip):
         """Reset state: stopped, PR 0, RLR 0xFFF, locked."""
@@ -634,6 +651,7 @@ class SystemControl:
     """
 
     polled = frozenset({0x010})
+    counters = frozenset()
     CPUID = 0x410F_C241
 
     def __init__(self, chip):
