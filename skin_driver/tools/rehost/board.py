@@ -165,12 +165,12 @@ def _parser() -> argparse.ArgumentParser:
                     'with a simulator scene on its ADCs, its USART on a pty.')
     parser.add_argument('--scene', default='seed', help='bundled scene or scene YAML (seed)')
     parser.add_argument('--scans', type=int, default=None,
-                        help='scans the skin plays, looped (default: one pass of the scene at '
-                             'the firmware\'s scan rate)')
+                        help="scans the skin plays, looped (default: one pass of the scene at "
+                             "the firmware's scan rate)")
     parser.add_argument('--link', default=None, help='make this path a symlink to the port')
     parser.add_argument('--seed', type=int, default=0, help='noise seed (0)')
-    parser.add_argument('--image', default=None, help='ELF to run (default: build the Nucleo '
-                                                       'image)')
+    parser.add_argument('--image', default=None,
+                        help='ELF to run (default: build the Nucleo image)')
     parser.add_argument('--fast', action='store_true',
                         help='run as fast as the emulation goes, waiting for the reader')
     faults = parser.add_argument_group('fault injection (docs/firmware.md)')

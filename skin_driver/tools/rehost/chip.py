@@ -45,8 +45,10 @@ class ChipError(RuntimeError):
 @dataclass
 class Faults:
     """
-    Fault switches of the models (all off by default); each takes effect from device time
-    ``from_s`` on, except ``hse_absent``, which is the board's state from power-on.
+    Fault switches of the models, all off by default.
+
+    Each takes effect from device time ``from_s`` on, except ``hse_absent``, which is the
+    board's state from power-on.
     """
 
     tx_dma_stuck: bool = False        # DMA2 Stream 7 never serves USART1: no byte, no TCIF7
@@ -201,7 +203,7 @@ class Chip:
         dev.write(off, value & 0xFFFF_FFFF)
 
     def _skip(self, dev, word: int, since: int) -> None:
-        """A poll: move device time to when the register changes, or by an idle step."""
+        """Move device time past a poll: to when the register changes, or by an idle step."""
         at = dev.next_change(word)
         if at is None:
             at = self.now + self.idle_ns
@@ -259,7 +261,7 @@ class Chip:
         on = [layer for layer in (0, 1) if levels[layer] == active]
         if len(on) != 1:
             if len(on) == 2:
-                self.error('both layers\' muxes enabled at once: two rows on the columns')
+                self.error("both layers' muxes enabled at once: two rows on the columns")
             return None
         bits = [self._level(p) for p in w.addr_pins]
         if None in bits:
@@ -297,7 +299,7 @@ class Chip:
         return cols
 
     def dma_enabled(self, dma, s: int) -> None:
-        """A stream was enabled: the USART's stream starts sending at once."""
+        """Start what an enabled stream serves: the USART's stream sends at once."""
         if dma is self.dma2 and s == 7:
             self.usart1.dma_transmit(dma, s)
 
@@ -311,7 +313,7 @@ class Chip:
         self.uc.emu_stop()          # let the board pass them on
 
     def watchdog_set(self, at: int) -> None:
-        """The IWDG resets the chip at device time at unless reloaded before."""
+        """Note that the IWDG resets the chip at device time at unless reloaded before."""
         self.watchdog_at = at
 
     def request_reset(self, csr_flag: int) -> None:

@@ -81,7 +81,7 @@ class Rcc:
         self.tree = ClockTree()
 
     def reset(self, csr_flags: int) -> None:
-        """A system reset: registers to their reset values, the reset cause flags kept."""
+        """Reset the registers to their reset values, keeping the reset cause flags."""
         csr = self.regs[0x74] | csr_flags
         self.__init__(self.chip)
         self.regs[0x74] = csr
@@ -123,8 +123,11 @@ class Rcc:
             old = self.regs[0]
             keep = old & (HSIRDY | HSERDY | PLLRDY)
             self.regs[0] = (value & ~(HSIRDY | HSERDY | PLLRDY | 0x2A00_0000)) | keep
-            if value & HSEON and not old & HSEON and not chip.faults.hse_absent:
-                self.ready_at[HSERDY] = chip.now + HSE_BYPASS_NS
+            if value & HSEON and not old & HSEON:
+                if chip.faults.hse_absent:
+                    chip.stats['hse_refused'] += 1
+                else:
+                    self.ready_at[HSERDY] = chip.now + HSE_BYPASS_NS
             if not value & HSEON:
                 self.regs[0] &= ~HSERDY
                 self.ready_at.pop(HSERDY, None)
@@ -289,7 +292,7 @@ class Flash:
         return self.acr
 
     def next_change(self, off: int):
-        """The latency is in effect at once: nothing pending."""
+        """Return None: the latency is in effect at once."""
         return None
 
     def write(self, off: int, value: int) -> None:

@@ -217,15 +217,16 @@ class Adc:
         return sum((self.regs[i][0] & 0x3F) << (8 * i) for i in range(3))
 
     def next_change(self, off: int):
-        """The flags change only when the firmware starts a conversion: nothing pending."""
+        """Return None: the flags change only when the firmware starts a conversion."""
         return None
 
     def write(self, off: int, value: int) -> None:
         """Write a register; ADC1's SWSTART starts the triple conversion."""
         adc, reg = off >> 8, off & 0xFF
         chip = self.chip
-        if reg != 0x00:
-            self.plan = None
+        if reg != 0x00 and (reg != 0x08 or adc == 3 or
+                            (value & ~(1 << 30)) != self.regs[adc][8]):
+            self.plan = None            # a start alone keeps the checked set-up
         if adc == 3:
             if reg == 0x04:
                 self.ccr = value
@@ -324,6 +325,7 @@ class Adc:
             chip.stats['adc_overruns'] += 1
         if done < len(counts):
             self.regs[0][0] |= 0x20                   # ADC1 OVR: the data was not read in time
+            chip.stats['adc_ovr_set'] += 1
             chip.dma2.cancel(0, done)
 
 
@@ -435,7 +437,7 @@ class Dma:
         return n
 
     def cancel(self, s: int, done: int) -> None:
-        """A peripheral stopped asking after done items: the stream waits, no flag sets."""
+        """Stop serving a peripheral that stopped asking: the stream waits, no flag sets."""
         self.pending.pop(s, None)
 
     def memory_to_peripheral(self, s: int, channel: int, par: int):
@@ -459,7 +461,9 @@ class Dma:
 
 class Usart:
     """
-    USART1 transmitting (RM0390 25.3.2, 25.3.4, 25.6): the baud rate from BRR and PCLK2,
+    USART1 transmitting (RM0390 25.3.2, 25.3.4, 25.6).
+
+    The baud rate from BRR and PCLK2,
     a byte's time on the line (start, 8 or 9 data bits, stop bits), TXE and TC, and the
     transmit DMA (DMA2 Stream 7 channel 4, 25.3.13: TCIF when the DMA has written the last
     byte). Reception is not modelled.
@@ -584,7 +588,7 @@ class Crc:
         return {0x00: self.crc, 0x04: self.idr}.get(off, 0)
 
     def next_change(self, off: int):
-        """The unit holds the bus until a word is done: nothing pending."""
+        """Return None: the unit holds the bus until a word is done."""
         return None
 
     def write(self, off: int, value: int) -> None:
@@ -602,7 +606,9 @@ class Crc:
 
 class Iwdg:
     """
-    The independent watchdog (RM0390 20.3, 20.4): started by 0xCCCC, reloaded by 0xAAAA, PR and
+    The independent watchdog (RM0390 20.3, 20.4).
+
+    Started by 0xCCCC, reloaded by 0xAAAA, PR and
     RLR written after 0x5555; counting down from RLR at LSI (32 kHz) / (4 << PR); at zero it
     resets the chip (RCC_CSR IWDGRSTF).
     """
@@ -645,7 +651,9 @@ class Iwdg:
 
 class SystemControl:
     """
-    The Cortex-M4's system control space at 0xE000E000 (ARM v7-M ARM B3.2): CPACR, VTOR, AIRCR
+    The Cortex-M4's system control space at 0xE000E000 (ARM v7-M ARM B3.2).
+
+    CPACR, VTOR, AIRCR
     (a SYSRESETREQ resets the chip), CPUID; SysTick and the NVIC are stored, and an interrupt
     enable is reported: unicorn delivers no interrupts here.
     """
@@ -666,7 +674,7 @@ class SystemControl:
         return self.regs.get(off, 0)
 
     def next_change(self, off: int):
-        """SysTick is not counted."""
+        """Return None: SysTick is not counted."""
         return None
 
     def write(self, off: int, value: int) -> None:

@@ -47,8 +47,9 @@ def load_wiring(path) -> Wiring:
     rows = int(_define(text, 'SKIN_BOARD_ROWS'))
     cols = int(_define(text, 'SKIN_BOARD_COLS'))
     columns = _pairs(_define(text, r'SKIN_BOARD_COLUMNS\(X\)'))
-    layers = tuple({ch: row for row, ch in _pairs(_define(text, rf'SKIN_BOARD_ROW_CHANNELS_{n}\(X\)'))}
-                   for n in ('TOP', 'BOTTOM'))
+    layers = tuple(
+        {ch: row for row, ch in _pairs(_define(text, rf'SKIN_BOARD_ROW_CHANNELS_{n}\(X\)'))}
+        for n in ('TOP', 'BOTTOM'))
     return Wiring(
         rows=rows, cols=cols, channel_column={ch: col for col, ch in columns},
         channel_row=layers,
