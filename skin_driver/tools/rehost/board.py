@@ -98,12 +98,13 @@ class RehostBoard:
 
     def _run(self) -> None:
         try:
-            self.chip.run(on_slice=self._slice, stop=self._stop.is_set)
+            self.chip.sink = self._send
+            self.chip.run(stop=self._stop.is_set)
         except BaseException as err:  # noqa: B902 - reported by running() and stop()
             self.failure = err
 
-    def _slice(self) -> None:
-        self._write(self.chip.take_tx())
+    def _send(self, data: bytes) -> None:
+        self._write(data)
         with contextlib.suppress(OSError):
             os.read(self._master, 65536)       # what the host sends: no receiver is modelled
         if self.realtime:
@@ -133,7 +134,7 @@ class RehostBoard:
         """Stop the chip, close the pty and remove the link."""
         self._stop.set()
         if self._thread is not None:
-            self.chip.uc.emu_stop()
+            self.chip.halt()
             self._thread.join(timeout_s)
         for fd in (self._master, self._slave):
             if fd is not None:

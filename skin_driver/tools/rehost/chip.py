@@ -8,6 +8,11 @@ between, is a poll: device time jumps at once to when that register changes next
 completion, a timer's overflow, a ready flag), or for a counter to its next tick, growing by an
 eighth of the time the poll has lasted (so a long wait on a counter takes few reads). Only the
 peripheral pages are hooked (unicorn's MMIO regions), so code and RAM run at JIT speed.
+
+The CPU is stopped only from inside a peripheral access (device time reached, a reset, the
+wall-time bound, a stop request), and unicorn then restarts the instruction that made the
+access when it runs on: the chip answers that replay as before, without a second effect (a
+second ADC start, a CRC word fed twice). Bytes leave through ``sink`` from inside the access.
 """
 
 from __future__ import annotations
@@ -34,7 +39,7 @@ DEFAULT_UID = bytes.fromhex('3900_1e00_0b51_3834_3939_3134'.replace('_', ''))
 
 ACCESS_CYCLES = 12      # CPU cycles counted per peripheral access (the code around it)
 IDLE_POLL_CYCLES = 10   # a poll of a flag nothing will change: one loop iteration
-SLICE_US = 200_000      # the longest the CPU runs before the board gets control back
+CHECK_EVERY = 1024      # accesses between two looks at the wall clock and the stop request
 MAX_ERRORS = 50
 
 
@@ -85,10 +90,17 @@ class Chip:
         self.errors: list = []
         self.stats = Counter()
         self.tx = bytearray()
+        self.sink = None            # called with the bytes USART1 sends; else they gather in tx
         self.time_origin = None
         self.stop_at = float('inf')
+        self._halting = False
+        self._replay = None
+        self._accesses = 0
+        self._deadline = None
+        self._stop = None
         self.reset_pending = 0
         self.watchdog_at = None
+        self._replay = None
         self._polls = {}
         self._mux = None
         self._column_cache = {}
@@ -168,9 +180,17 @@ class Chip:
 
     def _read(self, uc, offset, size, page):
         addr = page + offset
+        replay = self._replay
+        if replay is not None:
+            self._replay = None
+            if replay[0] == addr:
+                return replay[1]
         self.now += self.access_ns
-        if self.now >= self.stop_at:
-            uc.emu_stop()
+        value = self._read_device(addr, size)
+        self._accessed(uc, addr, value)
+        return value
+
+    def _read_device(self, addr: int, size: int) -> int:
         dev, off = self._device(addr)
         if dev is None:
             return 0
@@ -190,17 +210,37 @@ class Chip:
         return value & 0xFFFF_FFFF
 
     def _write(self, uc, offset, size, value, page):
+        addr = page + offset
+        replay = self._replay
+        if replay is not None:
+            self._replay = None
+            if replay[0] == addr:
+                return
         self.now += self.access_ns
         self.writes += 1
-        dev, off = self._device(page + offset)
-        if dev is None:
-            return
-        if size < 4:
-            shift = 8 * (off & 3)
-            mask = ((1 << (8 * size)) - 1) << shift
-            off &= ~3
-            value = (dev.read(off) & ~mask) | ((value << shift) & mask)
-        dev.write(off, value & 0xFFFF_FFFF)
+        dev, off = self._device(addr)
+        if dev is not None:
+            if size < 4:
+                shift = 8 * (off & 3)
+                mask = ((1 << (8 * size)) - 1) << shift
+                off &= ~3
+                value = (dev.read(off) & ~mask) | ((value << shift) & mask)
+            dev.write(off, value & 0xFFFF_FFFF)
+        self._accessed(uc, addr, None)
+
+    def _accessed(self, uc, addr: int, value) -> None:
+        """End an access: stop the CPU if asked, remembering the access for its replay."""
+        self._accesses += 1
+        if self.now >= self.stop_at:
+            self._halting = True
+        if not self._accesses % CHECK_EVERY and (
+                (self._stop is not None and self._stop()) or
+                (self._deadline is not None and time.monotonic() >= self._deadline)):
+            self._halting = True
+        if self._halting:
+            self._halting = False
+            self._replay = (addr, value)
+            uc.emu_stop()
 
     def _skip(self, dev, word: int, since: int) -> None:
         """Move device time past a poll: to when the register changes, or by an idle step."""
@@ -219,7 +259,7 @@ class Chip:
             self.watchdog_at = None
             self.request_reset(clock.CSR_IWDG)
         if self.now >= self.stop_at:
-            self.uc.emu_stop()
+            self._halting = True
 
     # ---- what the devices ask of the chip -----------------------------------------------
 
@@ -308,9 +348,11 @@ class Chip:
         if self.faults.host_not_reading and self.faults_active():
             self.stats['bytes_dropped'] += len(data)
             return
-        self.tx += data
         self.stats['bytes_sent'] += len(data)
-        self.uc.emu_stop()          # let the board pass them on
+        if self.sink is not None:
+            self.sink(data)
+        else:
+            self.tx += data
 
     def watchdog_set(self, at: int) -> None:
         """Note that the IWDG resets the chip at device time at unless reloaded before."""
@@ -319,7 +361,7 @@ class Chip:
     def request_reset(self, csr_flag: int) -> None:
         """Reset the chip once the CPU stops (a watchdog or a software reset)."""
         self.reset_pending |= csr_flag
-        self.uc.emu_stop()
+        self._halting = True
 
     def _system_reset(self) -> None:
         # RM0390 6.1.2: a system reset sets the registers to their reset values except the
@@ -327,6 +369,7 @@ class Chip:
         csr = self.rcc.regs[0x74] | self.reset_pending
         self.reset_pending = 0
         self.watchdog_at = None
+        self._replay = None
         self._polls.clear()
         self._mux = None
         self._make_devices()
@@ -337,31 +380,30 @@ class Chip:
 
     # ---- running --------------------------------------------------------------------------
 
-    def run(self, until_s: float | None = None, wall_s: float | None = None, on_slice=None,
+    def run(self, until_s: float | None = None, wall_s: float | None = None,
             stop=None) -> None:
-        """
-        Run until device time until_s, wall time wall_s has passed, or stop() is true.
-
-        on_slice() is called each time the CPU hands back control (at least each SLICE_US of
-        wall time, and whenever bytes leave the USART).
-        """
-        deadline = None if wall_s is None else time.monotonic() + wall_s
+        """Run until device time until_s, wall time wall_s has passed, or stop() is true."""
+        self._deadline = None if wall_s is None else time.monotonic() + wall_s
+        self._stop = stop
         self.stop_at = float('inf') if until_s is None else int(until_s * 1e9)
         while True:
             try:
-                self.uc.emu_start(self.pc | 1, 0xFFFF_FFFF, timeout=SLICE_US)
+                self.uc.emu_start(self.pc | 1, 0xFFFF_FFFF)
             except UcError as err:
                 pc = self.uc.reg_read(UC_ARM_REG_PC)
                 raise ChipError(f'the CPU stopped at pc {pc:#x}: {err}') from err
             self.pc = self.uc.reg_read(UC_ARM_REG_PC)
             if self.reset_pending:
                 self._system_reset()
-            if on_slice is not None:
-                on_slice()
+                continue
             if self.now >= self.stop_at or (stop is not None and stop()):
                 return
-            if deadline is not None and time.monotonic() >= deadline:
+            if self._deadline is not None and time.monotonic() >= self._deadline:
                 return
+
+    def halt(self) -> None:
+        """Stop the CPU for good from another thread (a replayed access is not guarded)."""
+        self.uc.emu_stop()
 
     def take_tx(self) -> bytes:
         """Return and forget the bytes sent since the last call."""
