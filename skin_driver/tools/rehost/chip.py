@@ -39,7 +39,7 @@ DEFAULT_UID = bytes.fromhex('3900_1e00_0b51_3834_3939_3134'.replace('_', ''))
 
 ACCESS_CYCLES = 12      # CPU cycles counted per peripheral access (the code around it)
 IDLE_POLL_CYCLES = 10   # a poll of a flag nothing will change: one loop iteration
-CHECK_EVERY = 1024      # accesses between two looks at the wall clock and the stop request
+CHECK_MASK = 1023       # every 1024 accesses, a look at the wall clock and the stop request
 MAX_ERRORS = 50
 
 
@@ -166,74 +166,81 @@ class Chip:
 
     # ---- the bus ----------------------------------------------------------------------------
 
-    def _device(self, addr: int):
-        entry = self._blocks.get(addr >> 10)
+    def _refused(self, addr: int, entry) -> None:
+        """Report an access to no peripheral, or to one whose clock is off."""
         if entry is None:
             self.error(f'access to {addr:#010x}: no peripheral is modelled there')
-            return None, 0
+            return
         dev, base, gate = entry
-        if gate and not self.rcc.regs[gate[0]] >> gate[1] & 1:
-            self.error(f'{type(dev).__name__} at {base:#x} accessed with its clock off '
-                       f'(RCC register {gate[0]:#x} bit {gate[1]}): reads 0, writes ignored')
-            return None, 0
-        return dev, addr - base
+        self.error(f'{type(dev).__name__} at {base:#x} accessed with its clock off '
+                   f'(RCC register {gate[0]:#x} bit {gate[1]}): reads 0, writes ignored')
+
+    # The two callbacks below are the hot path (about 1 200 calls a scan): kept flat.
 
     def _read(self, uc, offset, size, page):
         addr = page + offset
-        replay = self._replay
-        if replay is not None:
-            self._replay = None
+        if self._replay is not None:
+            replay, self._replay = self._replay, None
             if replay[0] == addr:
                 return replay[1]
         self.now += self.access_ns
-        value = self._read_device(addr, size)
-        self._accessed(uc, addr, value)
+        entry = self._blocks.get(addr >> 10)
+        gate = entry and entry[2]
+        if entry is None or (gate and not self.rcc.regs[gate[0]] >> gate[1] & 1):
+            self._refused(addr, entry)
+            value = 0
+        else:
+            dev = entry[0]
+            off = addr - entry[1]
+            word = off & ~3
+            value = dev.read(word)
+            if word in dev.polled:
+                prev = self._polls.get(addr)
+                if prev is not None and prev[0] == self.writes and prev[1] == value:
+                    self._skip(dev, word, prev[2])
+                    value = dev.read(word)
+                    self._polls[addr] = (self.writes, value,
+                                         prev[2] if value == prev[1] else self.now)
+                else:
+                    self._polls[addr] = (self.writes, value, self.now)
+            if size < 4:
+                value = (value >> (8 * (off & 3))) & ((1 << (8 * size)) - 1)
+            value &= 0xFFFF_FFFF
+        self._accesses += 1
+        if self._halting or self.now >= self.stop_at or not self._accesses & CHECK_MASK:
+            self._end(uc, addr, value)
         return value
-
-    def _read_device(self, addr: int, size: int) -> int:
-        dev, off = self._device(addr)
-        if dev is None:
-            return 0
-        word = off & ~3
-        value = dev.read(word)
-        if word in dev.polled:
-            prev = self._polls.get(addr)
-            if prev is not None and prev[0] == self.writes and prev[1] == value:
-                self._skip(dev, word, prev[2])
-                value = dev.read(word)
-                self._polls[addr] = (self.writes, value,
-                                     prev[2] if value == prev[1] else self.now)
-            else:
-                self._polls[addr] = (self.writes, value, self.now)
-        if size < 4:
-            value = (value >> (8 * (off & 3))) & ((1 << (8 * size)) - 1)
-        return value & 0xFFFF_FFFF
 
     def _write(self, uc, offset, size, value, page):
         addr = page + offset
-        replay = self._replay
-        if replay is not None:
-            self._replay = None
+        if self._replay is not None:
+            replay, self._replay = self._replay, None
             if replay[0] == addr:
                 return
         self.now += self.access_ns
         self.writes += 1
-        dev, off = self._device(addr)
-        if dev is not None:
+        entry = self._blocks.get(addr >> 10)
+        gate = entry and entry[2]
+        if entry is None or (gate and not self.rcc.regs[gate[0]] >> gate[1] & 1):
+            self._refused(addr, entry)
+        else:
+            dev = entry[0]
+            off = addr - entry[1]
             if size < 4:
                 shift = 8 * (off & 3)
                 mask = ((1 << (8 * size)) - 1) << shift
                 off &= ~3
                 value = (dev.read(off) & ~mask) | ((value << shift) & mask)
             dev.write(off, value & 0xFFFF_FFFF)
-        self._accessed(uc, addr, None)
-
-    def _accessed(self, uc, addr: int, value) -> None:
-        """End an access: stop the CPU if asked, remembering the access for its replay."""
         self._accesses += 1
+        if self._halting or self.now >= self.stop_at or not self._accesses & CHECK_MASK:
+            self._end(uc, addr, None)
+
+    def _end(self, uc, addr: int, value) -> None:
+        """Stop the CPU after this access if asked, remembering the access for its replay."""
         if self.now >= self.stop_at:
             self._halting = True
-        if not self._accesses % CHECK_EVERY and (
+        if not self._accesses & CHECK_MASK and (
                 (self._stop is not None and self._stop()) or
                 (self._deadline is not None and time.monotonic() >= self._deadline)):
             self._halting = True
