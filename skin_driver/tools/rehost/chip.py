@@ -24,6 +24,7 @@ import time
 
 import numpy as np
 from unicorn import Uc, UC_ARCH_ARM, UC_MODE_MCLASS, UC_MODE_THUMB, UC_PROT_READ, UcError
+from unicorn.unicorn_py3 import unicorn as binding
 from unicorn.arm_const import UC_ARM_REG_MSP, UC_ARM_REG_PC, UC_ARM_REG_SP, UC_CPU_ARM_CORTEX_M4
 
 from . import clock, devices
@@ -98,6 +99,7 @@ class Chip:
         self._accesses = 0
         self._deadline = None
         self._stop = None
+        self.failure = None         # an exception in an access callback, raised by run()
         self.reset_pending = 0
         self.watchdog_at = None
         self._replay = None
@@ -119,8 +121,7 @@ class Chip:
         self.uc.mem_write(FLASH_SIZE_ADDR, struct.pack('<H', FLASH[1] // 1024))
         self._blocks = {}
         self._make_devices()
-        for page in sorted({key << 10 & ~0xFFF for key in self._blocks}):
-            self.uc.mmio_map(page, 0x1000, self._read, page, self._write, page)
+        self._map_peripherals()
         self.rcc.regs[0x74] = clock.CSR_POWER_ON
         self.set_cpu_clock(clock.HSI_HZ)
         self._reset_cpu()
@@ -151,6 +152,40 @@ class Chip:
             self._blocks[base >> 10] = (dev, base, gate)
         for k in range(4):
             self._blocks[(0xE000_E000 >> 10) + k] = (self.scb, 0xE000_E000, None)
+
+    def _map_peripherals(self) -> None:
+        """Hook the peripheral pages, straight through ctypes where the binding allows."""
+        pages = sorted({key << 10 & ~0xFFF for key in self._blocks})
+        lib, handle = getattr(binding, 'uclib', None), getattr(self.uc, '_uch', None)
+        read_type = getattr(binding, 'MMIO_READ_CFUNC', None)
+        write_type = getattr(binding, 'MMIO_WRITE_CFUNC', None)
+        if None in (lib, handle, read_type, write_type):
+            for page in pages:
+                self.uc.mmio_map(page, 0x1000, self._read, page, self._write, page)
+            return
+        # The binding's own callbacks add two Python frames to each of ~1 200 accesses a
+        # scan; these call the chip directly and stop the CPU on an exception as it does.
+        def read(_handle, offset, size, page):
+            try:
+                return self._read(self.uc, offset, size, page)
+            except BaseException as err:  # noqa: B902 - re-raised by run()
+                self.failure = self.failure or err
+                self.uc.emu_stop()
+                return 0
+
+        def write(_handle, offset, size, value, page):
+            try:
+                self._write(self.uc, offset, size, value, page)
+            except BaseException as err:  # noqa: B902 - re-raised by run()
+                self.failure = self.failure or err
+                self.uc.emu_stop()
+
+        self._callbacks = (read_type(read), write_type(write))
+        for page in pages:
+            status = lib.uc_mmio_map(handle, page, 0x1000, self._callbacks[0], page,
+                                     self._callbacks[1], page)
+            if status:
+                raise UcError(status)
 
     def _reset_cpu(self) -> None:
         sp, pc = struct.unpack('<II', self.uc.mem_read(FLASH[0], 8))
@@ -400,6 +435,9 @@ class Chip:
                 pc = self.uc.reg_read(UC_ARM_REG_PC)
                 raise ChipError(f'the CPU stopped at pc {pc:#x}: {err}') from err
             self.pc = self.uc.reg_read(UC_ARM_REG_PC)
+            if self.failure is not None:
+                failure, self.failure = self.failure, None
+                raise failure
             if self.reset_pending:
                 self._system_reset()
                 continue
