@@ -106,7 +106,10 @@ class Timer:
         if total >= (self.wraps + 1) * period:
             self.wraps = total // period
             self.sr |= 1
-            self.psc_active = self.psc     # the preload takes effect at the update event
+            if self.psc != self.psc_active:
+                # The preload takes effect at the update event (from now, a tick's error).
+                self.psc_active = self.psc
+                self._rebase(total % period)
         return total % period
 
     def _rebase(self, cnt: int) -> None:
