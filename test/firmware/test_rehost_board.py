@@ -131,6 +131,24 @@ def test_the_clock_tree_is_the_one_the_firmware_means(nucleo_image):
     assert report['violations'] == [] and chip.errors == []
 
 
+def test_a_pll_multiplier_of_200_breaks_the_datasheets_limits(nucleo_image):
+    # nucleo_clock_init's `orr.w r3, r3, #0x2d00` (PLLN 180 << 6) patched to #0x3200 (PLLN
+    # 200, the same Thumb-2 rotation): VCO 400 MHz, SYSCLK 200 MHz with 5 wait states.
+    image = ElfImage.load(nucleo_image)
+    text = image.segments[0].data
+    orr = bytes.fromhex('43f43453')
+    assert text.count(orr) == 1
+    data = bytearray(image.data)
+    at = image.file_offset(image.segments[0].paddr + text.index(orr)) + 2
+    data[at] = 0x48
+    top, bottom = _press(0, 0)
+    chip = Chip(ElfImage(bytes(data)), WIRING, top, bottom, RATE)
+    chip.run(until_s=0.002, wall_s=60)
+    report = chip.clock_report()
+    assert (report['vco_mhz'], report['sysclk_mhz']) == pytest.approx((400.0, 200.0))
+    assert sorted(v.split()[0] for v in report['violations']) == ['5', 'APB1', 'APB2', 'HCLK']
+
+
 def test_two_columns_swapped_in_the_pin_table_move_a_taxel(nucleo_image):
     image = ElfImage.load(nucleo_image)
     # The image's own copy of SKIN_BOARD_COLUMNS (column -> ADC channel), columns 0 and 3
