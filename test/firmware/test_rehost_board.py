@@ -13,6 +13,7 @@ import struct
 import time
 
 import numpy as np
+from port_reader import Collector, TapDecoder
 import pytest
 
 from skin_driver.core.estimation.scan.pipeline import ContactEstimator
@@ -25,8 +26,6 @@ from skin_driver.tools.rehost.board import PINS, RehostBoard
 from skin_driver.tools.rehost.chip import Chip, Faults
 from skin_driver.tools.rehost.elf import ElfImage
 from skin_driver.tools.rehost.wiring import load_wiring
-
-from port_reader import Collector, TapDecoder
 
 SCANS = int(os.environ.get('SKIN_REHOST_SCANS', '1000'))
 GRID = (16, 16)
