@@ -229,3 +229,18 @@ def test_stopping_and_running_on_anywhere_changes_no_byte(nucleo_image):
         sent.append(bytes(out))
     assert len(sent[0]) > 4 * frame_size(*GRID)
     assert sent[1] == sent[0]
+
+
+def test_the_independent_watchdog_resets_the_chip_when_not_reloaded(nucleo_image):
+    # The firmware does not start the IWDG: a debugger does (RM0390 20.3: 0xCCCC starts it,
+    # reset after (RLR + 1) * 4 << PR LSI periods, 512 ms at PR 0, RLR 0xFFF).
+    chip = _chip(nucleo_image)
+    frames, _ = _frames(chip, 0.05)
+    assert chip.debug_read(0x4002_3874) & clock.CSR_IWDG == 0
+    chip.debug_write(0x4000_3000, 0xCCCC)
+    later, decoder = _frames(chip, 0.6)
+    assert chip.stats['resets'] == 1
+    assert chip.debug_read(0x4002_3874) & clock.CSR_IWDG
+    # The board starts over: its frames count from 0 again after the reset.
+    seqs = [f.seq for f in later]
+    assert 0 in seqs[1:] and seqs.index(0) > 0

@@ -451,6 +451,17 @@ class Chip:
         """Stop the CPU for good from another thread (a replayed access is not guarded)."""
         self.uc.emu_stop()
 
+    def debug_write(self, addr: int, value: int) -> None:
+        """Write a peripheral register as a debugger would (SWD), between two runs."""
+        self._write(self.uc, addr & 0xFFF, 4, value, addr & ~0xFFF)
+        self._replay = None
+
+    def debug_read(self, addr: int) -> int:
+        """Read a peripheral register as a debugger would (SWD), between two runs."""
+        value = self._read(self.uc, addr & 0xFFF, 4, addr & ~0xFFF)
+        self._replay = None
+        return value
+
     def take_tx(self) -> bytes:
         """Return and forget the bytes sent since the last call."""
         data = bytes(self.tx)
