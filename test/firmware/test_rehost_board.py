@@ -9,12 +9,16 @@ scans of the long run (1 000; ``make soak-rehost`` runs 10 000).
 """
 
 import os
+import signal
 import struct
+import subprocess
+import sys
 import time
 
 import numpy as np
 from port_reader import Collector, TapDecoder
 import pytest
+import serial
 
 from skin_driver.core.estimation.scan.pipeline import ContactEstimator
 from skin_driver.core.protocol.link import CONNECTED, SerialLink
@@ -244,3 +248,30 @@ def test_the_independent_watchdog_resets_the_chip_when_not_reloaded(nucleo_image
     # The board starts over: its frames count from 0 again after the reset.
     seqs = [f.seq for f in later]
     assert 0 in seqs[1:] and seqs.index(0) > 0
+
+
+def test_command_line_board_streams_on_its_link_and_stops_on_sigint(nucleo_image, tmp_path):
+    link = tmp_path / 'skin0'
+    proc = subprocess.Popen(
+        [sys.executable, '-m', 'skin_driver.tools.rehost', '--scene', 'seed', '--scans', '50',
+         '--link', str(link), '--image', str(nucleo_image)],
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        assert proc.stdout.readline().split() == ['SKIN_PORT', str(link)]
+        decoder = FrameDecoder(expected_shape=GRID)
+        port = serial.serial_for_url(str(link), timeout=0.2)
+        frames = []
+        try:
+            while len(frames) < 20 and proc.poll() is None:
+                frames += decoder.feed(port.read(4096))
+        finally:
+            port.close()
+        assert len(frames) >= 20
+        proc.send_signal(signal.SIGINT)
+        assert proc.wait(20) == 0
+        assert 'SKIN_EPOCH' in proc.stderr.read()
+        assert not link.exists()
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.wait()
