@@ -10,6 +10,7 @@ check means.
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 
 import numpy as np
@@ -63,14 +64,18 @@ def bring_up(port: str, seconds: float = 60.0, press_seconds: float = 2.0, settl
             'link': link_quality(before, after, idle),
             'clock': analysis.clock_ppm(*zip(*clock)) if len(clock) >= 3 else None,
             'noise': {}, 'faults': {}, 'presses': [], 'orientation': None, 'ghosting': [],
+            'stopped': None,
         }
         for name, stack in zip(('top', 'bottom'), _layers(idle)):
             found['noise'][name] = analysis.noise(stack)
             found['faults'][name] = analysis.faults(stack)
         if presses:
-            _orientation(reader, found, press_seconds, ask)
-            reader = _sweep(reader, found, press_seconds, settle, ask)
-        found['decoder'] = reader.counters()
+            try:
+                _orientation(reader, found, press_seconds, ask)
+                reader = _sweep(reader, found, press_seconds, settle, ask)
+            except RuntimeError as err:
+                # What the idle window found is kept: the report says where it stopped.
+                found['stopped'] = str(err)
     finally:
         reader.stop()
     return found
@@ -138,11 +143,20 @@ def main(argv=None, ask=ask_stdin) -> int:
     try:
         if args.seconds <= 0 or args.press_seconds <= 0:
             raise ValueError('--seconds and --press-seconds must be positive')
+        if any(us < 0 for us in args.settle):
+            raise ValueError('--settle times must be 0 or more microseconds')
+        if os.path.exists(args.out) and not os.path.isdir(args.out):
+            raise ValueError(f'--out {args.out} is a file; give a directory')
+        os.makedirs(args.out, exist_ok=True)     # before the board is read, not after
         found = bring_up(args.port, args.seconds, args.press_seconds, tuple(args.settle),
                          not args.no_presses, ask, args.baud)
         path = write_report(args.out, found)
     except (ValueError, RuntimeError, OSError) as err:
         print(f'bringup: error: {err}', file=sys.stderr)
         return 2
+    if found['stopped']:
+        print(f'bringup: stopped early ({found["stopped"]}); what was found is in {path}',
+              file=sys.stderr)
+        return 1
     print(f'bringup: report in {path}')
     return 0

@@ -83,7 +83,7 @@ def summary(found: dict) -> dict:
                   for k, s in found['noise'].items()},
         'faults': {k: vars(v) for k, v in found['faults'].items()},
         'orientation': found['orientation'],
-        'ghosting': found['ghosting'],
+        'ghosting': found['ghosting'], 'stopped': found['stopped'],
     }
 
 
@@ -92,7 +92,10 @@ def markdown(s: dict, images: dict) -> str:
     link, clock = s['link'], s['clock']
     lines = ['# Board bring-up report', '',
              f'Port `{s["port"]}`, board: `{s["board"] or "no information frame received"}`, '
-             f'grid {s["shape"][0]} x {s["shape"][1]}.', '', '## Link', '',
+             f'grid {s["shape"][0]} x {s["shape"][1]}.', '',
+             *([f'**Stopped early**: {s["stopped"]}; the checks before it are complete.', '']
+               if s['stopped'] else []),
+             '## Link', '',
              f'{link["frames"]} frames in {link["host_s"]:.1f} s of host time '
              f'({link["frames_per_s"]:.1f} frames/s, {link["bytes_per_s"]:.0f} bytes/s; '
              f'{link["frames_per_device_s"]:.1f} frames per device second). Loss: '
