@@ -57,8 +57,7 @@ class PtyBoard:
         self.thread.join(5)
 
 
-def test_a_board_silent_after_the_idle_window_still_gets_its_report(tmp_path, monkeypatch,
-                                                                     capsys):
+def test_a_board_silent_after_the_idle_window_keeps_its_report(tmp_path, monkeypatch, capsys):
     # Nothing arrives once the board is silent: a short bound ends the wait for it.
     monkeypatch.setattr(reader, 'QUIET_S', 0.5)
     out = tmp_path / 'report'
@@ -95,8 +94,7 @@ def test_without_presses_nothing_is_asked(tmp_path):
     (['--settle', '10', '-1'], '--settle times must be 0 or more'),
     (['--out', 'FILE'], 'is a file; give a directory'),
 ])
-def test_bad_options_are_refused_in_one_line_before_the_port_is_read(tmp_path, capsys, argv,
-                                                                      expected):
+def test_bad_options_are_refused_before_the_port_is_read(tmp_path, capsys, argv, expected):
     (tmp_path / 'file').write_text('keep me\n')
     argv = ['--port', str(tmp_path / 'no-such-port'), '--out', str(tmp_path / 'out')] + [
         str(tmp_path / 'file') if a == 'FILE' else a for a in argv]
