@@ -22,7 +22,6 @@ class TapDecoder(FrameDecoder):
         return super().feed(data)
 
 
-
 class Collector:
     """A link's on_frames callback keeping the frames; enough is set once count arrived."""
 

@@ -15,6 +15,7 @@ import subprocess
 import sys
 import time
 
+from port_reader import Collector, TapDecoder
 import pytest
 import serial
 
@@ -23,8 +24,6 @@ from skin_driver.core.protocol.link import CONNECTED, SerialLink
 from skin_driver.core.protocol.wire import frame_size, FrameDecoder, header_crc
 from skin_driver.core.sim.scene import load_scene
 from skin_driver.tools import firmware_board
-
-from port_reader import Collector, TapDecoder
 
 SCANS = 10_000
 # What the board is told: faster than QEMU emulates it, so it scans back to back.

@@ -9,11 +9,16 @@ scans of the long run (1 000; ``make soak-rehost`` runs 10 000).
 """
 
 import os
+import signal
 import struct
+import subprocess
+import sys
 import time
 
 import numpy as np
+from port_reader import Collector, TapDecoder
 import pytest
+import serial
 
 from skin_driver.core.estimation.scan.pipeline import ContactEstimator
 from skin_driver.core.protocol.link import CONNECTED, SerialLink
@@ -25,8 +30,6 @@ from skin_driver.tools.rehost.board import PINS, RehostBoard
 from skin_driver.tools.rehost.chip import Chip, Faults
 from skin_driver.tools.rehost.elf import ElfImage
 from skin_driver.tools.rehost.wiring import load_wiring
-
-from port_reader import Collector, TapDecoder
 
 SCANS = int(os.environ.get('SKIN_REHOST_SCANS', '1000'))
 GRID = (16, 16)
@@ -230,3 +233,45 @@ def test_stopping_and_running_on_anywhere_changes_no_byte(nucleo_image):
         sent.append(bytes(out))
     assert len(sent[0]) > 4 * frame_size(*GRID)
     assert sent[1] == sent[0]
+
+
+def test_the_independent_watchdog_resets_the_chip_when_not_reloaded(nucleo_image):
+    # The firmware does not start the IWDG: a debugger does (RM0390 20.3: 0xCCCC starts it,
+    # reset after (RLR + 1) * 4 << PR LSI periods, 512 ms at PR 0, RLR 0xFFF).
+    chip = _chip(nucleo_image)
+    frames, _ = _frames(chip, 0.05)
+    assert chip.debug_read(0x4002_3874) & clock.CSR_IWDG == 0
+    chip.debug_write(0x4000_3000, 0xCCCC)
+    later, decoder = _frames(chip, 0.6)
+    assert chip.stats['resets'] == 1
+    assert chip.debug_read(0x4002_3874) & clock.CSR_IWDG
+    # The board starts over: its frames count from 0 again after the reset.
+    seqs = [f.seq for f in later]
+    assert 0 in seqs[1:] and seqs.index(0) > 0
+
+
+def test_command_line_board_streams_on_its_link_and_stops_on_sigint(nucleo_image, tmp_path):
+    link = tmp_path / 'skin0'
+    proc = subprocess.Popen(
+        [sys.executable, '-m', 'skin_driver.tools.rehost', '--scene', 'seed', '--scans', '50',
+         '--link', str(link), '--image', str(nucleo_image)],
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        assert proc.stdout.readline().split() == ['SKIN_PORT', str(link)]
+        decoder = FrameDecoder(expected_shape=GRID)
+        port = serial.serial_for_url(str(link), timeout=0.2)
+        frames = []
+        try:
+            while len(frames) < 20 and proc.poll() is None:
+                frames += decoder.feed(port.read(4096))
+        finally:
+            port.close()
+        assert len(frames) >= 20
+        proc.send_signal(signal.SIGINT)
+        assert proc.wait(20) == 0
+        assert 'SKIN_EPOCH' in proc.stderr.read()
+        assert not link.exists()
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.wait()

@@ -166,7 +166,7 @@ def _parser() -> argparse.ArgumentParser:
                     'with a simulator scene on its ADCs, its USART on a pty.')
     parser.add_argument('--scene', default='seed', help='bundled scene or scene YAML (seed)')
     parser.add_argument('--scans', type=int, default=None,
-                        help="scans the skin plays, looped (default: one pass of the scene at "
+                        help='scans the skin plays, looped (default: one pass of the scene at '
                              "the firmware's scan rate)")
     parser.add_argument('--link', default=None, help='make this path a symlink to the port')
     parser.add_argument('--seed', type=int, default=0, help='noise seed (0)')

@@ -24,8 +24,8 @@ import time
 
 import numpy as np
 from unicorn import Uc, UC_ARCH_ARM, UC_MODE_MCLASS, UC_MODE_THUMB, UC_PROT_READ, UcError
-from unicorn.unicorn_py3 import unicorn as binding
 from unicorn.arm_const import UC_ARM_REG_MSP, UC_ARM_REG_PC, UC_ARM_REG_SP, UC_CPU_ARM_CORTEX_M4
+from unicorn.unicorn_py3 import unicorn as binding
 
 from . import clock, devices
 from .elf import ElfImage
@@ -154,7 +154,7 @@ class Chip:
             self._blocks[(0xE000_E000 >> 10) + k] = (self.scb, 0xE000_E000, None)
 
     def _map_peripherals(self) -> None:
-        """Hook the peripheral pages, straight through ctypes where the binding allows."""
+        """Map the peripheral pages to the models, straight through ctypes where possible."""
         pages = sorted({key << 10 & ~0xFFF for key in self._blocks})
         lib, handle = getattr(binding, 'uclib', None), getattr(self.uc, '_uch', None)
         read_type = getattr(binding, 'MMIO_READ_CFUNC', None)
@@ -165,6 +165,7 @@ class Chip:
             return
         # The binding's own callbacks add two Python frames to each of ~1 200 accesses a
         # scan; these call the chip directly and stop the CPU on an exception as it does.
+
         def read(_handle, offset, size, page):
             try:
                 return self._read(self.uc, offset, size, page)
@@ -449,6 +450,17 @@ class Chip:
     def halt(self) -> None:
         """Stop the CPU for good from another thread (a replayed access is not guarded)."""
         self.uc.emu_stop()
+
+    def debug_write(self, addr: int, value: int) -> None:
+        """Write a peripheral register as a debugger would (SWD), between two runs."""
+        self._write(self.uc, addr & 0xFFF, 4, value, addr & ~0xFFF)
+        self._replay = None
+
+    def debug_read(self, addr: int) -> int:
+        """Read a peripheral register as a debugger would (SWD), between two runs."""
+        value = self._read(self.uc, addr & 0xFFF, 4, addr & ~0xFFF)
+        self._replay = None
+        return value
 
     def take_tx(self) -> bytes:
         """Return and forget the bytes sent since the last call."""
