@@ -79,6 +79,7 @@ def test_bringup_finds_the_boards_identity_faults_and_orientation(nucleo_image, 
     assert sum(len(v) for v in s['faults']['bottom'].values()) == 0
     o = s['orientation']
     assert (o['transpose'], o['flip_rows'], o['flip_cols']) == (False, False, True)
+    assert o['layers_agree'] is True
     # The models have no ghosting against settle time: both builds show the same spread.
     sweep = s['ghosting']
     assert [g['settle_us'] for g in sweep] == [10, 5]

@@ -109,3 +109,12 @@ def test_the_clock_fit_finds_a_board_50_ppm_fast_through_jitter():
 def test_the_clock_fit_needs_a_span():
     with pytest.raises(ValueError):
         analysis.clock_ppm([1, 2], [0.0, 1.0])
+
+
+def test_a_rise_within_the_noise_is_no_press():
+    idle = analysis.noise(_idle())
+    pressed = _idle(frames=10, seed=2)
+    with pytest.raises(ValueError, match='no press seen'):
+        analysis.press_peak(idle, pressed)
+    pressed[:, 6, 1] += 200
+    assert analysis.press_peak(idle, pressed)[:2] == (6, 1)

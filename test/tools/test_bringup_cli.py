@@ -7,6 +7,7 @@ The board here is a thread writing frames (and its information frame once a seco
 time) with blocking writes, so it runs only as fast as the command reads: no timing is assumed.
 """
 
+import io
 import json
 import os
 import threading
@@ -109,3 +110,25 @@ def test_a_port_that_sends_nothing_is_named(tmp_path, monkeypatch, capsys):
     port = str(tmp_path / 'no-such-port')
     assert cli.main(['--port', port, '--out', str(tmp_path / 'out')]) == 2
     assert f'no frame from {port}' in capsys.readouterr().err
+
+
+def test_prompts_answered_on_stdin_with_no_press_find_none(tmp_path, monkeypatch, capsys):
+    monkeypatch.setattr('sys.stdin', io.StringIO('\n' * 3))
+    with PtyBoard() as board:
+        status = cli.main(['--port', board.port, '--out', str(tmp_path), '--seconds', '0.5',
+                           '--press-seconds', '0.2'])
+    assert status == 0
+    prompts = [line for line in capsys.readouterr().out.splitlines() if '[' in line]
+    assert [p.split('[')[1].split(']')[0] for p in prompts] == ['origin', 'x_end', 'middle']
+    s = json.loads((tmp_path / 'summary.json').read_text())
+    assert s['orientation']['text'].startswith('undetermined: no press seen')
+    assert s['ghosting'][0]['error'].startswith('no press seen')
+
+
+def test_stdin_ending_before_an_answer_stops_with_the_idle_report(tmp_path, monkeypatch):
+    monkeypatch.setattr('sys.stdin', io.StringIO(''))
+    with PtyBoard() as board:
+        status = cli.main(['--port', board.port, '--out', str(tmp_path), '--seconds', '0.5'])
+    assert status == 1
+    s = json.loads((tmp_path / 'summary.json').read_text())
+    assert s['stopped'] == "stdin ended before the 'origin' prompt was answered"

@@ -24,8 +24,11 @@ import numpy as np
 FULL_SCALE = 4095
 STUCK_MARGIN = 40
 SHORT_FRACTION = 0.25
+# A press must rise this many times the idle noise (or counts, if quieter) to be one.
+PRESS_SIGMAS = 10
 
-__all__ = ['Faults', 'clock_ppm', 'faults', 'ghost_fraction', 'noise', 'orientation', 'peak']
+__all__ = ['Faults', 'clock_ppm', 'faults', 'ghost_fraction', 'noise', 'orientation', 'peak',
+           'press_peak']
 
 
 def clock_ppm(device_us, host_s) -> dict:
@@ -121,6 +124,16 @@ def peak(idle_mean, pressed) -> tuple:
     rise = np.asarray(pressed, float).mean(axis=0) - np.asarray(idle_mean, float)
     r, c = np.unravel_index(np.argmax(rise), rise.shape)
     return int(r), int(c), float(rise[r, c])
+
+
+def press_peak(idle: dict, pressed) -> tuple:
+    """Return peak() of pressed frames over a noise() result; ValueError when nothing rose."""
+    r, c, rise = peak(idle['mean'], pressed)
+    floor = PRESS_SIGMAS * max(idle['std_median'], 1.0)
+    if rise < floor:
+        raise ValueError(f'no press seen: the largest rise, {rise:.0f} counts at ({r}, {c}), '
+                         f'is under {floor:.0f}')
+    return r, c, rise
 
 
 def _corner(r: int, c: int, shape: tuple) -> tuple:

@@ -82,19 +82,23 @@ def bring_up(port: str, seconds: float = 60.0, press_seconds: float = 2.0, settl
 
 
 def _orientation(reader, found, press_seconds, ask) -> None:
-    idle_mean = found['noise']['top']['mean']
-    peaks = {}
+    layers = {}
     for step in ('origin', 'x_end'):
         ask(step, PROMPTS[step])
         frames = _pressed(reader, press_seconds)
         found['presses'].append((step, frames))
-        peaks[step] = analysis.peak(idle_mean, _layers(frames)[0])
-    found['peaks'] = peaks
-    try:
-        found['orientation'] = analysis.orientation(peaks['origin'], peaks['x_end'],
-                                                    found['shape'])
-    except ValueError as err:
-        found['orientation'] = {'ok': False, 'text': f'undetermined: {err}'}
+        layers[step] = _layers(frames)
+    result = {}
+    for i, name in enumerate(('top', 'bottom')):
+        try:
+            peaks = [analysis.press_peak(found['noise'][name], layers[step][i])
+                     for step in ('origin', 'x_end')]
+            result[name] = analysis.orientation(*peaks, found['shape'])
+        except ValueError as err:
+            result[name] = {'ok': False, 'text': f'undetermined: {err}'}
+    # The top layer's is the finding; a bottom layer wired otherwise is a finding too.
+    found['orientation'] = {**result['top'], 'bottom': result['bottom']['text'],
+                            'layers_agree': result['top'] == result['bottom']}
 
 
 def _sweep(reader, found, press_seconds, settle, ask):
@@ -110,6 +114,7 @@ def _sweep(reader, found, press_seconds, settle, ask):
         frames = _pressed(reader, press_seconds)
         found['presses'].append((f'middle {us}', frames))
         try:
+            analysis.press_peak(found['noise']['top'], _layers(frames)[0])
             ghost = analysis.ghost_fraction(idle_mean, _layers(frames)[0])
         except ValueError as err:
             ghost = {'error': str(err)}

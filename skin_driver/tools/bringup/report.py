@@ -121,7 +121,9 @@ def markdown(s: dict, images: dict) -> str:
     orientation = s['orientation']
     lines += ['', '## Orientation', '',
               ('Not checked (--no-presses).' if orientation is None else
-               f'Two corner presses: {orientation["text"]}.')]
+               f'Two corner presses: {orientation["text"]}.' + (
+                   '' if orientation['layers_agree'] else
+                   f' The bottom layer differs: {orientation["bottom"]}.'))]
     if 'presses' in images:
         lines += ['', f'![presses]({images["presses"]})']
     lines += ['', '## Settle time and ghosting', '',
