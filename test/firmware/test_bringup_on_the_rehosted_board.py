@@ -17,6 +17,7 @@ from skin_driver.core.estimation.data.dataset import load_dataset
 from skin_driver.core.sim import physics
 from skin_driver.core.sim.scene import load_scene
 from skin_driver.tools.bringup.cli import main
+from skin_driver.tools.evaluate import cli as evaluate
 from skin_driver.tools.rehost.board import RehostBoard
 
 SCANS = 40           # each scene loops over this many scans (half a second at 80 scans/s)
@@ -92,3 +93,4 @@ def test_bringup_finds_the_boards_identity_faults_and_orientation(nucleo_image, 
     data = load_dataset(out / 'dataset.npz')
     assert data.tare_top.shape[1:] == (16, 16) and len(data.tare_top) >= 2 * 80 * 0.9
     assert data.frames > 0 and data.board_info == s['board']
+    assert evaluate.main([str(out / 'dataset.npz')]) == 0     # the evaluator scores it
