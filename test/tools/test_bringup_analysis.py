@@ -96,14 +96,28 @@ def test_the_ghost_is_the_next_rows_share_of_the_press():
     assert got['ghost'] == pytest.approx(0.05)
 
 
-def test_the_clock_fit_finds_a_board_50_ppm_fast_through_jitter():
+def _arrivals(late_s):
+    """Return (device_us, host_s) of a board 50 ppm fast read with these delays."""
+    host = np.linspace(0, 60, late_s.size) + 100.0
+    return (host - 100.0) * (1 + 50e-6) * 1e6 + 12345, host + late_s
+
+
+def test_the_clock_fit_finds_a_board_50_ppm_fast_through_late_reads():
     rng = np.random.default_rng(0)
-    host = np.linspace(0, 60, 600) + 100.0
-    device_us = (host - 100.0) * (1 + 50e-6) * 1e6 + 12345
-    late = np.abs(rng.normal(0, 0.002, host.size))   # reads land late, never early
-    got = analysis.clock_ppm(device_us, host + late)
-    assert got['ppm'] == pytest.approx(50, abs=10)
-    assert got['points'] == 600
+    got = analysis.clock_ppm(*_arrivals(rng.exponential(0.004, 600)))   # late, never early
+    assert got['ppm'] == pytest.approx(50, abs=5)
+    assert got['points'] == 600 and got['late_ms'] > 0
+
+
+def test_a_backlog_read_at_the_start_does_not_bend_the_clock():
+    # The first 100 frames queued before the port was opened and arrive together, 0.5 s late
+    # at first: a least-squares line through every read would find several thousand ppm.
+    rng = np.random.default_rng(1)
+    late = rng.exponential(0.002, 600)
+    late[:100] += np.linspace(0.5, 0.0, 100)
+    device_us, host = _arrivals(late)
+    assert abs(np.polyfit(host, device_us / 1e6, 1)[0] - 1) * 1e6 > 1000
+    assert analysis.clock_ppm(device_us, host)['ppm'] == pytest.approx(50, abs=5)
 
 
 def test_the_clock_fit_needs_a_span():

@@ -26,17 +26,22 @@ STUCK_MARGIN = 40
 SHORT_FRACTION = 0.25
 # A press must rise this many times the idle noise (or counts, if quieter) to be one.
 PRESS_SIGMAS = 10
+# Stretches of the clock window whose earliest arrivals the clock line goes through.
+CLOCK_PIECES = 10
 
 __all__ = ['Faults', 'clock_ppm', 'faults', 'ghost_fraction', 'noise', 'orientation', 'peak',
            'press_peak']
 
 
-def clock_ppm(device_us, host_s) -> dict:
+def clock_ppm(device_us, host_s, pieces: int = CLOCK_PIECES) -> dict:
     """
-    Return the board's clock against the host's: a least-squares line of device time on host time.
+    Return the board's clock against the host's from (device time, host receive time) pairs.
 
-    ``ppm`` is how much faster the board's clock runs (positive: it gains), ``jitter_ms`` the
-    standard deviation of the residuals (the host's read latency mostly).
+    A frame reaches the host late, never early (USB polling, the reader's scheduling, a backlog
+    queued before the port was read), so the line is fitted through the earliest arrival of each
+    of ``pieces`` stretches of the window, a lower envelope the delays do not bias. ``ppm`` is how
+    much faster the board's clock runs (positive: it gains); ``late_ms`` the median delay of
+    all reads above that line.
     """
     device = np.asarray(device_us, float) / 1e6
     host = np.asarray(host_s, float)
@@ -45,9 +50,19 @@ def clock_ppm(device_us, host_s) -> dict:
                          f'{device.size}')
     host = host - host[0]
     device = device - device[0]
-    slope, offset = np.polyfit(host, device, 1)
-    residual = device - (slope * host + offset)
-    return {'ppm': float((slope - 1.0) * 1e6), 'jitter_ms': float(residual.std() * 1e3),
+    late = host - device
+    chunks = np.array_split(np.arange(device.size), min(pieces, device.size))
+    earliest = np.array([chunk[np.argmin(late[chunk])] for chunk in chunks if chunk.size])
+    # The median of the pairwise slopes (Theil-Sen): a stretch that was all backlog, whose
+    # earliest read is still late, moves it little.
+    i, j = np.triu_indices(earliest.size, 1)
+    di, dj = earliest[i], earliest[j]
+    keep = host[dj] > host[di]
+    di, dj = di[keep], dj[keep]
+    slope = float(np.median((device[dj] - device[di]) / (host[dj] - host[di])))
+    offset = float(np.median(device[earliest] - slope * host[earliest]))
+    behind = (slope * host + offset - device) / slope
+    return {'ppm': float((slope - 1.0) * 1e6), 'late_ms': float(np.median(behind) * 1e3),
             'span_s': float(host[-1]), 'points': int(device.size)}
 
 

@@ -123,7 +123,9 @@ def _sweep(reader, found, press_seconds, settle, ask):
 
 
 def _parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(prog='bringup', description=__doc__.strip().split('\n')[0])
+    parser = argparse.ArgumentParser(
+        prog='bringup', description='Check a new board once: identity, clock, link, idle noise, '
+        'dead/stuck/shorted lines, orientation, settle time (docs/firmware.md).')
     parser.add_argument('--port', required=True, help="the board's serial port")
     parser.add_argument('--out', required=True, help='directory for the report')
     parser.add_argument('--seconds', type=float, default=60.0,

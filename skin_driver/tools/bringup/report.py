@@ -104,10 +104,10 @@ def markdown(s: dict, images: dict) -> str:
              f'{link["version_errors"]} version/flag errors, {link["bytes_discarded"]} bytes '
              'discarded.', '', '## Clock', '',
              (f"The board's clock runs {clock['ppm']:+.0f} ppm against the host's over "
-              f'{clock["span_s"]:.1f} s ({clock["points"]} reads; residual '
-              f"{clock['jitter_ms']:.2f} ms, mostly the host's read latency). A crystal is "
-              'within about ±50 ppm; far more means a wrong clock (or an emulated board '
-              'slower than real time).')
+              f'{clock["span_s"]:.1f} s ({clock["points"]} reads, fitted through the earliest; '
+              f'the median read is {clock["late_ms"]:.2f} ms later). A crystal is '
+              'within about ±50 ppm; far more means a wrong clock (an emulated '
+              'board falls behind and catches up: meaningless there).')
              if clock else 'Too few reads for a clock fit.', '', '## Idle noise', '']
     for layer, n in s['noise'].items():
         lines.append(f'- {layer}: mean {n["mean_counts"]:.1f} counts, std median '
