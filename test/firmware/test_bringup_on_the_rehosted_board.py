@@ -89,6 +89,7 @@ def test_bringup_finds_the_boards_identity_faults_and_orientation(nucleo_image, 
     assert [g['settle_us'] for g in sweep] == [10, 5]
     assert all((g['row'], g['col']) == (7, 8) for g in sweep)
     assert abs(sweep[0]['ghost'] - sweep[1]['ghost']) < 0.02
+    assert all(abs(g['carry']) < 0.02 for g in sweep)
 
     report = (out / 'report.md').read_text()
     for image in ('noise.png', 'presses.png', 'ghosting.png'):

@@ -93,7 +93,19 @@ def test_the_ghost_is_the_next_rows_share_of_the_press():
     pressed[:, 4, 2] += 50                       # carried over into the row scanned next
     got = analysis.ghost_fraction(idle, pressed)
     assert (got['row'], got['col']) == (3, 2)
-    assert got['ghost'] == pytest.approx(0.05)
+    assert got['ghost'] == pytest.approx(0.05) and got['carry'] == pytest.approx(0.05)
+
+
+def test_a_press_spreading_alike_both_ways_carries_nothing_over():
+    idle = np.full(SHAPE, 100.0)
+    pressed = np.tile(idle, (4, 1, 1))
+    pressed[:, 3, 2] += 1000
+    pressed[:, 2, 2] += 400                      # the press's own spread, both sides
+    pressed[:, 4, 2] += 430                      # and 30 counts carried into the next row
+    got = analysis.ghost_fraction(idle, pressed)
+    assert got['ghost'] == pytest.approx(0.43) and got['carry'] == pytest.approx(0.03)
+    pressed[:, 0, 2] += 5000                     # at the first row there is no row before
+    assert analysis.ghost_fraction(idle, pressed)['carry'] is None
 
 
 def _arrivals(late_s):

@@ -12,7 +12,8 @@ once here and in the report:
 - shorted: two rows (or columns) of live taxels that read alike, their mean absolute difference
   under SHORT_FRACTION of their noise (independent noise differs by about 1.13 sigma on average);
 - ghost: the counts a press puts on the rows beside it at its column, as a fraction of the
-  press's own (what a row sampled before its line has settled carries over).
+  press's own; carry: the row sampled next minus the row before (what a row sampled before its
+  line has settled carries over, the press's symmetric spread cancelled).
 """
 
 from __future__ import annotations
@@ -187,11 +188,20 @@ def orientation(origin: tuple, x_end: tuple, shape: tuple) -> dict:
 
 
 def ghost_fraction(idle_mean, pressed) -> dict:
-    """Return the press's peak and its ghost: rise on the rows beside it / its own rise."""
+    """
+    Return the press's peak, its ghost and its carry-over, as fractions of its rise.
+
+    ``ghost``: the larger rise of the two rows beside the press, at its column (the press's own
+    spread and any carry-over). ``carry``: the row sampled next (r + 1: scan.c samples rows in
+    order) minus the row before, the part a row settling too briefly adds, which a press that
+    spreads alike both ways cancels from; None at the first or last row.
+    """
     rise = np.asarray(pressed, float).mean(axis=0) - np.asarray(idle_mean, float)
     r, c, top = peak(idle_mean, pressed)
     if top <= 0:
         raise ValueError('no press: nothing rose above the idle mean')
     beside = [rise[i, c] for i in (r - 1, r + 1) if 0 <= i < rise.shape[0]]
+    inside = 0 < r < rise.shape[0] - 1
     return {'row': r, 'col': c, 'press_counts': top,
-            'ghost': float(max(beside) / top) if beside else 0.0}
+            'ghost': float(max(beside) / top) if beside else 0.0,
+            'carry': float((rise[r + 1, c] - rise[r - 1, c]) / top) if inside else None}

@@ -60,13 +60,17 @@ def _presses(out: str, found: dict) -> str:
 
 
 def _ghosting(out: str, found: dict) -> str:
-    points = [(g['settle_us'], g['ghost']) for g in found['ghosting']
-              if 'ghost' in g and not isinstance(g['settle_us'], str)]
+    points = sorted((g['settle_us'], g['ghost'], g['carry']) for g in found['ghosting']
+                    if 'ghost' in g and not isinstance(g['settle_us'], str))
     fig, ax = plt.subplots(figsize=(5, 3.5))
     if points:
-        ax.plot(*zip(*sorted(points)), 'o-')
+        us, ghost, carry = zip(*points)
+        ax.plot(us, ghost, 'o-', label='ghost (rows beside)')
+        if None not in carry:
+            ax.plot(us, carry, 's--', label='carry (next row - previous)')
+        ax.legend()
     ax.set_xlabel('settle time (us)')
-    ax.set_ylabel('ghost / press')
+    ax.set_ylabel('fraction of the press')
     ax.set_title('ghosting against settle time')
     return _png(out, 'ghosting.png', fig)
 
@@ -129,8 +133,9 @@ def markdown(s: dict, images: dict) -> str:
     lines += ['', '## Settle time and ghosting', '',
               'The firmware takes its settle time at build time only (SKIN_BOARD_SETTLE_US in '
               'skin_board_pins.h): each point is one build flashed. Ghost: the rise on the rows '
-              'beside a press at its column, as a fraction of the press; the shortest settle '
-              "whose ghost matches the longest's is enough.", '']
+              'beside a press at its column, as a fraction of the press; carry: the row sampled '
+              "next minus the row before (the press's own spread cancels). The shortest settle "
+              "whose carry matches the longest's is enough.", '']
     lines += [_ghost_line(g) for g in s['ghosting']]
     if not s['ghosting']:
         lines.append('Not checked (--no-presses).')
@@ -147,8 +152,9 @@ def _ghost_line(g: dict) -> str:
     head = f'- settle {us}: ' if isinstance(us, str) else f'- settle {us:g} us: '
     if 'ghost' not in g:
         return head + g['error']
+    carry = 'n/a (an edge row)' if g['carry'] is None else f'{g["carry"]:+.3f}'
     return head + (f'press at ({g["row"]}, {g["col"]}) rising {g["press_counts"]:.0f} counts, '
-                   f'ghost {g["ghost"]:.3f}')
+                   f'ghost {g["ghost"]:.3f}, carry {carry}')
 
 
 def _faults_text(faults: dict) -> list:
