@@ -112,7 +112,8 @@ def _sweep(reader, found, press_seconds, settle, ask):
             reader.window(0)
         ask('middle', PROMPTS['middle'].format(us=us))
         frames = _pressed(reader, press_seconds)
-        found['presses'].append((f'middle {us}', frames))
+        label = f'middle, {us}' if isinstance(us, str) else f'middle, {us:g} us'
+        found['presses'].append((label, frames))
         try:
             analysis.press_peak(found['noise']['top'], _layers(frames)[0])
             ghost = analysis.ghost_fraction(idle_mean, _layers(frames)[0])
