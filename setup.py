@@ -38,6 +38,7 @@ setup(
             'mount_tf = skin_driver.ros.frames:main',
             'patches = skin_driver.ros.patches_node:main',
             'patches_sim = skin_driver.tools.patches_sim:main',
+            'bringup = skin_driver.tools.bringup.cli:main',
         ],
     },
 )
