@@ -28,6 +28,7 @@ import time
 from typing import Callable, Iterable, List, Optional
 
 import rclpy
+from rclpy.action import ActionClient
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.parameter import Parameter
 import yaml
@@ -220,16 +221,37 @@ def wait_for(executor, condition: Callable[[], bool], timeout_s: float, what: st
         raise RuntimeError(f'gave up waiting for {what} after {timeout_s:.0f} s')
 
 
-# How long a service or action server may take to be discovered; waiting longer costs nothing
-# when it is up. An in-process action server is sometimes never discovered at all, however long
-# the wait (pytest.ini reruns such a test); this only covers a slow discovery on a loaded machine.
-READY_S = 30.0
+# How long a service or action server may take to be discovered: only a bound on a hung test,
+# as waiting longer costs nothing when it is up.
+READY_S = 60.0
+
+
+def wait_for_server(executor, client, ready_s: float = READY_S) -> None:
+    """
+    Spin until a service or action client sees its server; raise RuntimeError naming it if not.
+
+    The executor spins meanwhile, so that the nodes on it (an in-process server among them) go
+    on working; rclpy's own wait_for_service and wait_for_server spin nothing.
+    """
+    if isinstance(client, ActionClient):
+        name, ready, nodes = client._action_name, client.server_is_ready, [client._node]
+    else:
+        name, ready, nodes = client.srv_name, client.service_is_ready, executor.get_nodes()
+    if spin_until(executor, ready, ready_s, period_s=0.01):
+        return
+    seen = 'no node to ask'
+    if nodes:
+        # What the graph knows under that name tells an absent server from an undiscovered one.
+        prefix = nodes[0].resolve_service_name(name)
+        seen = sorted(n for n, _ in nodes[0].get_service_names_and_types()
+                      if n.startswith(prefix)) or 'none'
+    raise RuntimeError(f'{name} did not come up in {ready_s:.0f} s; the services the graph '
+                       f'shows under that name: {seen}')
 
 
 def call_service(executor, client, request, timeout_s: float, ready_s: float = READY_S):
     """Call a service and spin until it answers; raise RuntimeError when it does not."""
-    if not client.wait_for_service(timeout_sec=ready_s):
-        raise RuntimeError(f'service {client.srv_name} did not come up')
+    wait_for_server(executor, client, ready_s)
     future = client.call_async(request)
     if not spin_until(executor, future.done, timeout_s):
         raise RuntimeError(f'service {client.srv_name} did not answer in {timeout_s:.0f} s')
@@ -245,8 +267,7 @@ def send_goal(executor, client, goal, timeout_s: float, feedback=None,
     come up, answer or end in time.
     """
     what = type(goal).__name__.split('_')[0]
-    if not client.wait_for_server(timeout_sec=ready_s):
-        raise RuntimeError(f'action {what} did not come up')
+    wait_for_server(executor, client, ready_s)
     sent = client.send_goal_async(
         goal, feedback_callback=(lambda msg: feedback(msg.feedback)) if feedback else None)
     if not spin_until(executor, sent.done, ready_s):
@@ -269,14 +290,16 @@ def overrides(values: dict) -> list:
 @contextlib.contextmanager
 def in_process(workdir: str, scene, rate_hz: float = 200.0, driver: dict = None,
                direction: dict = None, loop: bool = False, fused: bool = False, seed: int = 1,
-               identity='sim'):
+               identity='sim', play: bool = True):
     """
     Yield (sim, driver node, direction node, probe, executor) on a fresh private context.
 
     The simulated board plays scene (a :class:`~skin_driver.core.sim.scene.Scene`) on a pty at
     ``workdir/skin0``; the driver is configured and activated. fused: the direction node takes
     its scans from the driver's reader thread, wired as the driver's own main wires it, instead
-    of from the frame topic. identity: what the board says it is (SimulatedSkin's). Everything is
+    of from the frame topic. identity: what the board says it is (SimulatedSkin's). play=False
+    leaves starting the board (``sim.start()``) to the caller, for a scene that must play only
+    once something else is under way; the driver finds the port when it appears. Everything is
     stopped and destroyed afterwards.
     """
     from skin_driver.core.sim.board import SimulatedSkin
@@ -303,7 +326,8 @@ def in_process(workdir: str, scene, rate_hz: float = 200.0, driver: dict = None,
         nodes = (direction_node, driver_node, probe_node)
         for node in nodes:
             executor.add_node(node)
-        sim.start()
+        if play:
+            sim.start()
         try:
             driver_node.trigger_configure()
             driver_node.trigger_activate()

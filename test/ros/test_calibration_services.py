@@ -11,7 +11,7 @@ import pytest
 from rclpy.action import ActionClient
 from rclpy.parameter import Parameter
 from rclpy.qos import qos_profile_sensor_data
-from rosutil import ros_context, spin_until
+from rosutil import ros_context, spin_until, wait_for_server
 from skin_driver.core.estimation.calibration.calibration import Calibration, SkinIdentity
 from skin_driver.core.estimation.model.forcecurve import ForceCurve
 from skin_driver.core.sim.board import SIM_UID
@@ -136,7 +136,7 @@ def test_a_second_goal_is_rejected_and_a_cancel_changes_nothing(node_with_calibr
     node, executor, path, previous = node_with_calibration
     text = path.read_text()
     first = ActionClient(node, CalibrateForce, FORCE)
-    assert first.wait_for_server(timeout_sec=5.0)
+    wait_for_server(executor, first)
     sent = first.send_goal_async(CalibrateForce.Goal(forces=FORCES, timeout=60.0))
     assert spin_until(executor, sent.done, 5.0) and sent.result().accepted
     # While the first waits for presses, another goal of any kind is turned away at once.
