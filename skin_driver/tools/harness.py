@@ -180,12 +180,32 @@ def write_scene(workdir: str, scene: dict, name: str = 'scene.yaml') -> str:
     return path
 
 
+# The environment variable rcl reads at init for how far a context discovers others.
+DISCOVERY_RANGE = 'ROS_AUTOMATIC_DISCOVERY_RANGE'
+
+
 # ---- spinning and waiting ----------------------------------------------------------------------
 
 @contextlib.contextmanager
-def ros_session(context=None):
-    """Yield a SingleThreadedExecutor on an initialised rclpy context; shut both down after."""
-    rclpy.init(context=context)
+def ros_session(context=None, alone: bool = False):
+    """
+    Yield a SingleThreadedExecutor on an initialised rclpy context; shut both down after.
+
+    alone: the context discovers no other (ROS_AUTOMATIC_DISCOVERY_RANGE=OFF, read at init);
+    its own nodes still talk to each other.
+    """
+    if alone:
+        before = os.environ.get(DISCOVERY_RANGE)
+        os.environ[DISCOVERY_RANGE] = 'OFF'
+        try:
+            rclpy.init(context=context)
+        finally:
+            if before is None:
+                del os.environ[DISCOVERY_RANGE]
+            else:
+                os.environ[DISCOVERY_RANGE] = before
+    else:
+        rclpy.init(context=context)
     executor = SingleThreadedExecutor(context=context)
     try:
         yield executor
@@ -315,7 +335,9 @@ def in_process(workdir: str, scene, rate_hz: float = 200.0, driver: dict = None,
     direction_params = {'calibration_file': os.path.join(workdir, 'calibration.yaml'),
                         **(direction or {})}
     context = rclpy.Context()
-    with ros_session(context) as executor:
+    # Every node of the pipeline is on this context: it needs no discovery, and sees no
+    # same-named server of another run that shares the domain on this machine.
+    with ros_session(context, alone=True) as executor:
         driver_node = SkinDriverNode(context=context, parameter_overrides=overrides(driver_params))
         direction_kwargs = {'context': context,
                             'parameter_overrides': overrides(direction_params)}

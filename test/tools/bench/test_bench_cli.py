@@ -88,8 +88,8 @@ def test_cpu_seconds_of_this_process_and_of_a_missing_one():
 
 # The benchmark pins itself to one core, which a busy machine shares: a bound on a hung test only.
 @pytest.mark.timeout(400)
-def test_family_only_prints_every_scene_and_the_worst_with_the_oracle(capsys, tmp_path,
-                                                                     monkeypatch):
+def test_family_only_prints_every_scene_and_the_worst_with_the_oracle(
+        capsys, tmp_path, monkeypatch):
     # The default, the seed's and the plain centroid show every line; all the methods took CPU
     # minutes on that core (model_fit's calibration learns each scene's taxel model in Python):
     # ten minutes and more on a busy machine, where the faulthandler ended the worker.
