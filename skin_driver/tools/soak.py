@@ -220,8 +220,8 @@ def _soak(args, executor, node, sim, procs) -> dict:
     # driver's publisher before the board plays (on a busy machine discovery lags the
     # diagnostics, and the first frames went unseen and were counted as never published).
     frames = [sub for sub in node.subscriptions if sub.topic_name.endswith('/frame')]
-    wait_for(executor, lambda: all(sub.get_publisher_count() > 0 for sub in frames), 30.0,
-             "the subscription to the driver's frames", procs.values())
+    wait_for(executor, lambda: frames and all(sub.get_publisher_count() > 0 for sub in frames),
+             30.0, "the subscription to the driver's frames", procs.values())
     sim.start()
     start = time.monotonic()
     next_fault, next_sample, next_print = start + FAULT_PERIOD_S, start, start + 30.0
