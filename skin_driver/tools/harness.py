@@ -261,12 +261,13 @@ def wait_for_server(executor, client, ready_s: float = READY_S) -> None:
         return
     seen = 'no node to ask'
     if nodes:
-        # What the graph knows under that name tells an absent server from an undiscovered one.
-        prefix = nodes[0].resolve_service_name(name)
-        seen = sorted(n for n, _ in nodes[0].get_service_names_and_types()
-                      if n.startswith(prefix)) or 'none'
-    raise RuntimeError(f'{name} did not come up in {ready_s:.0f} s; the services the graph '
-                       f'shows under that name: {seen}')
+        # The servers the graph knows under that name tell an absent server from one half
+        # discovered (or half gone): an action's three services should have one each.
+        node, prefix = nodes[0], nodes[0].resolve_service_name(name)
+        seen = {n: node.count_services(n) for n, _ in sorted(node.get_service_names_and_types())
+                if n == prefix or n.startswith(prefix + '/')} or 'none'
+    raise RuntimeError(f'{name} did not come up in {ready_s:.0f} s; servers per service in the '
+                       f'graph: {seen}')
 
 
 def call_service(executor, client, request, timeout_s: float, ready_s: float = READY_S):
