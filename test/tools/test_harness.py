@@ -76,11 +76,10 @@ def test_a_server_that_never_comes_up_is_an_error_naming_it_and_what_the_graph_s
         with pytest.raises(RuntimeError) as raised:
             harness.wait_for_server(executor, client, ready_s=1.0)
         # The client's own three services are in the graph, with no server.
-        assert str(raised.value) == (
-            "/nobody/calibrate_force did not come up in 1 s; servers per service in the graph: "
-            "{'/nobody/calibrate_force/_action/cancel_goal': 0, "
-            "'/nobody/calibrate_force/_action/get_result': 0, "
-            "'/nobody/calibrate_force/_action/send_goal': 0}")
+        action = '/nobody/calibrate_force/_action/'
+        servers = {f'{action}{name}': 0 for name in ('cancel_goal', 'get_result', 'send_goal')}
+        assert str(raised.value) == ('/nobody/calibrate_force did not come up in 1 s; servers '
+                                     f'per service in the graph: {servers}')
     finally:
         client.destroy()
         node.destroy_node()
