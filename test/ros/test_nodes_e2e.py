@@ -170,13 +170,16 @@ def test_calibrate_refuses_too_much_spread(tmp_path):
 
 @LAYOUTS
 def test_tare_refuses_while_loaded_and_records_an_unloaded_baseline(tmp_path, fused):
-    presses = [{'time_s': 0.0, 'duration_s': 1.2, 'ramp_s': 0.05}]
-    with pipeline(tmp_path, scene(presses), fused=fused) as (sim, _, direction, probe, executor):
+    presses = [{'time_s': 0.0, 'duration_s': 2.0, 'ramp_s': 0.05}]
+    with pipeline(tmp_path, scene(presses), fused=fused, play=False) as (
+            sim, _, direction, probe, executor):
+        # The press starts once everything is up: the refusal must come while it is held.
+        sim.start()
         assert spin_until(executor, lambda: sum(1 for m in probe.contacts if m.contacts) >= 25)
         loaded = call(executor, direction, Trigger, '/skin_direction/tare', Trigger.Request())
         assert not loaded.success and 'loaded' in loaded.message
         assert spin_until(executor, lambda: len(probe.contacts) > 30 and not any(
-            m.contacts for m in probe.contacts[-25:]), 5.0)
+            m.contacts for m in probe.contacts[-25:]), 20.0)
         unloaded = call(executor, direction, Trigger, '/skin_direction/tare', Trigger.Request())
         assert unloaded.success, unloaded.message
 
