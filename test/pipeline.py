@@ -44,10 +44,17 @@ def call(executor, node, srv_type, name, request, timeout_s=20.0):
         node.destroy_client(client)
 
 
-def send_goal(executor, node, action_type, name, goal, timeout_s=20.0, feedback=None):
-    """Send an action goal from a helper client: (status, result), (None, None) if rejected."""
+def send_goal(executor, node, action_type, name, goal, timeout_s=20.0, feedback=None,
+              on_accepted=None):
+    """
+    Send an action goal from a helper client: (status, result), (None, None) if rejected.
+
+    on_accepted: called once the goal is accepted; ``sim.start`` with ``pipeline(play=False)``
+    plays the scene's presses while the goal waits for them, however long the start took.
+    """
     client = ActionClient(node, action_type, name)
     try:
-        return harness.send_goal(executor, client, goal, timeout_s, feedback)
+        return harness.send_goal(executor, client, goal, timeout_s, feedback,
+                                 on_accepted=on_accepted)
     finally:
         client.destroy()

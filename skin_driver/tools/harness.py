@@ -280,12 +280,13 @@ def call_service(executor, client, request, timeout_s: float, ready_s: float = R
 
 
 def send_goal(executor, client, goal, timeout_s: float, feedback=None,
-              ready_s: float = READY_S):
+              ready_s: float = READY_S, on_accepted: Optional[Callable[[], None]] = None):
     """
     Send an action goal and spin until it ends: (status, result), or (None, None) if rejected.
 
-    ``feedback`` receives each feedback message. Raises RuntimeError when the server does not
-    come up, answer or end in time.
+    ``feedback`` receives each feedback message; ``on_accepted`` is called once the goal is
+    accepted (a test starts its board there, so that the presses come while the goal waits).
+    Raises RuntimeError when the server does not come up, answer or end in time.
     """
     what = type(goal).__name__.split('_')[0]
     wait_for_server(executor, client, ready_s)
@@ -295,6 +296,8 @@ def send_goal(executor, client, goal, timeout_s: float, feedback=None,
         raise RuntimeError(f'action {what} did not answer the goal in {ready_s:.0f} s')
     if not sent.result().accepted:
         return None, None
+    if on_accepted is not None:
+        on_accepted()
     done = sent.result().get_result_async()
     if not spin_until(executor, done.done, timeout_s):
         raise RuntimeError(f'action {what} did not end in {timeout_s:.0f} s')

@@ -113,9 +113,11 @@ def test_contacts_match_the_simulated_presses(tmp_path, fused):
 def test_calibrate_records_normal_presses_and_the_file_is_loaded_at_start_up(tmp_path, fused):
     offset = (0.001, -0.0005)
     the_scene = scene(NORMAL_PRESSES, misalignment_m=list(offset))
-    with pipeline(tmp_path, the_scene, fused=fused) as (sim, _, direction, probe, executor):
+    # The presses play once the goal waits for them, however long the start took.
+    with pipeline(tmp_path, the_scene, fused=fused, play=False) as (
+            sim, _, direction, probe, executor):
         result = send_goal(executor, direction, Calibrate, '/skin_direction/calibrate',
-                           Calibrate.Goal(presses=3, timeout=8.0))[1]
+                           Calibrate.Goal(presses=3, timeout=8.0), on_accepted=sim.start)[1]
         assert result.success, result.message
         assert result.presses_used == 3
         assert result.x_p == pytest.approx(offset[0], abs=0.0004)
@@ -147,9 +149,9 @@ def test_calibrate_times_out_without_presses_and_keeps_the_previous_calibration(
 
 def test_calibrate_ignores_tilted_presses(tmp_path):
     tilted = [{'time_s': 0.2 + 1.2 * i, 'alpha_deg': 45.0, 'beta_deg': 0.0} for i in range(3)]
-    with pipeline(tmp_path, scene(tilted)) as (sim, _, direction, probe, executor):
+    with pipeline(tmp_path, scene(tilted), play=False) as (sim, _, direction, probe, executor):
         result = send_goal(executor, direction, Calibrate, '/skin_direction/calibrate',
-                           Calibrate.Goal(presses=2, timeout=3.5))[1]
+                           Calibrate.Goal(presses=2, timeout=3.5), on_accepted=sim.start)[1]
     assert not result.success
     assert 'did not look normal' in result.message
     assert not (tmp_path / 'calibration.yaml').exists()
@@ -159,10 +161,10 @@ def test_calibrate_refuses_too_much_spread(tmp_path):
     # Normal presses at five spots a fraction of a taxel apart: their shifts differ by the
     # sampling of the imprints (tens of micrometres), far more than the 1 um accepted here.
     spots = [dict(p, x_m=0.03 + 0.0011 * i) for i, p in enumerate(NORMAL_PRESSES)]
-    with pipeline(tmp_path, scene(spots),
-                  direction={'calibration.max_std': 1e-6}) as (sim, _, direction, __, executor):
+    with pipeline(tmp_path, scene(spots), direction={'calibration.max_std': 1e-6},
+                  play=False) as (sim, _, direction, __, executor):
         result = send_goal(executor, direction, Calibrate, '/skin_direction/calibrate',
-                           Calibrate.Goal(presses=3, timeout=8.0))[1]
+                           Calibrate.Goal(presses=3, timeout=8.0), on_accepted=sim.start)[1]
     assert not result.success
     assert 'spread' in result.message and 'previous calibration' in result.message
     assert not (tmp_path / 'calibration.yaml').exists()
