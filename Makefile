@@ -2,13 +2,18 @@
 SHELL := /bin/bash
 RUN := tools/with-env.sh
 
-.PHONY: setup test demo bench soak soak-rehost lint clean firmware flash
+.PHONY: setup test stress demo bench soak soak-rehost lint clean firmware flash
 
 setup:
 	@bash tools/setup.sh
 
 test: setup
 	@bash tools/run-tests.sh $(ARGS)
+
+# The whole suite N times on a fresh clone, under a CPU load on every core (docs/reliability.md):
+# ARGS="--runs 5 --load 60", or --no-load.
+stress:
+	@bash tools/stress.sh $(ARGS)
 
 demo: setup
 	@$(RUN) python -m skin_driver.tools.demo $(ARGS)

@@ -1,9 +1,7 @@
 """Let tests import their shared helpers (rosutil, pipeline) and keep parallel workers apart."""
 
-import faulthandler
 import os
 import pathlib
-import signal
 import sys
 
 from hypothesis import settings
@@ -22,9 +20,3 @@ if _worker.startswith('gw'):
     _index = int(_worker[2:]) + 1
     _domain = _base + _index if _base + _index <= 101 else _base - _index
     os.environ['ROS_DOMAIN_ID'] = str(_domain)
-
-
-def pytest_configure(config):
-    """Print every thread's stack on SIGUSR1, which tools/run-tests.sh sends past its bound."""
-    # A stderr of its own, taken before a test's output capture moves descriptor 2 elsewhere.
-    faulthandler.register(signal.SIGUSR1, file=os.dup(2), all_threads=True)

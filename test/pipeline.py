@@ -26,12 +26,12 @@ def scene(presses, rows=16, cols=16, pitch_m=0.005, **model):
 
 @contextlib.contextmanager
 def pipeline(tmp_path, the_scene, rate_hz=200.0, driver=None, direction=None, loop=False,
-             fused=False, identity='sim'):
+             fused=False, identity='sim', play=True):
     """Yield (sim, driver node, direction node, probe, executor): harness.in_process."""
     with harness.in_process(str(tmp_path), the_scene, rate_hz,
                             {**FAST_DRIVER, **(driver or {})},
                             {**FAST_DIRECTION, **(direction or {})}, loop, fused,
-                            identity=identity) as started:
+                            identity=identity, play=play) as started:
         yield started
 
 
@@ -44,10 +44,17 @@ def call(executor, node, srv_type, name, request, timeout_s=20.0):
         node.destroy_client(client)
 
 
-def send_goal(executor, node, action_type, name, goal, timeout_s=20.0, feedback=None):
-    """Send an action goal from a helper client: (status, result), (None, None) if rejected."""
+def send_goal(executor, node, action_type, name, goal, timeout_s=20.0, feedback=None,
+              on_accepted=None):
+    """
+    Send an action goal from a helper client: (status, result), (None, None) if rejected.
+
+    on_accepted: called once the goal is accepted; ``sim.start`` with ``pipeline(play=False)``
+    plays the scene's presses while the goal waits for them, however long the start took.
+    """
     client = ActionClient(node, action_type, name)
     try:
-        return harness.send_goal(executor, client, goal, timeout_s, feedback)
+        return harness.send_goal(executor, client, goal, timeout_s, feedback,
+                                 on_accepted=on_accepted)
     finally:
         client.destroy()

@@ -3,7 +3,8 @@
 import contextlib
 
 import rclpy
-from skin_driver.tools.harness import ros_session, spin_until  # noqa: F401 - shared with tests
+from skin_driver.tools.harness import (  # noqa: F401 - shared with tests
+    ros_session, spin_until, wait_for_server)
 
 
 @contextlib.contextmanager

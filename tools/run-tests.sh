@@ -20,62 +20,12 @@ case $fw in
 esac
 # The kernel's C unit tests under the sanitizers (cmocka, which the firmware's set-up installs).
 bash tools/test-kernel.sh
-# A bound on the whole run (SKIN_TEST_WALL_S, 0 for none), several times what it takes: a
-# process stuck where no test's timeout reaches it (between two tests, say) fails the run in
-# time to read why, not at CI's own limit. Past the bound every Python process of the run prints
-# its threads' stacks (SIGUSR1, test/conftest.py), and then the run is stopped.
-wall="${SKIN_TEST_WALL_S:-1800}"
-descendants() {  # of $1, leaving out $2 and its own; from /proc, as procps may be missing
-  local stat line pid kid p
-  local -A parent=()
-  for stat in /proc/[0-9]*/stat; do
-    line=$(<"$stat") 2>/dev/null || continue
-    pid=${stat#/proc/}
-    # The fields after the command name, which may hold spaces: state, then the parent.
-    read -r _ parent[${pid%/stat}] _ <<<"${line##*) }"
-  done
-  local frontier=("$1") next
-  while [ "${#frontier[@]}" -gt 0 ]; do
-    next=()
-    for kid in "${!parent[@]}"; do
-      for p in "${frontier[@]}"; do
-        if [ "${parent[$kid]}" = "$p" ] && [ "$kid" != "$2" ]; then
-          echo "$kid"
-          next+=("$kid")
-        fi
-      done
-    done
-    frontier=("${next[@]}")
-  done
-}
-if [ "$wall" -gt 0 ]; then
-  (
-    sleep "$wall" </dev/null >/dev/null 2>&1
-    echo "run-tests: the suite ran past its ${wall} s bound (SKIN_TEST_WALL_S): the stacks" \
-         "of its Python processes follow, then it is stopped" >&2
-    me=$BASHPID
-    procs=$(descendants "$$" "$me")
-    for p in $procs; do
-      case "$(cat "/proc/$p/comm" 2>/dev/null || true)" in
-        python*) kill -USR1 "$p" 2>/dev/null || true ;;
-      esac
-    done
-    sleep 10
-    kill -TERM $procs 2>/dev/null || true
-    sleep 5
-    kill -KILL $procs 2>/dev/null || true
-  ) &
-  watchdog=$!
-  # However this script ends (Ctrl-C too), the watchdog and its sleep end with it.
-  stop_watchdog() {
-    local sleeping
-    sleeping=$(descendants "$watchdog" "")
-    kill "$watchdog" $sleeping 2>/dev/null || true
-  }
-  trap stop_watchdog EXIT
-fi
+# Every test is bounded by pytest itself (pytest.ini: pytest-timeout, and the faulthandler for a
+# hang in native code, which ends the worker with every thread's stack); SKIN_TEST_WALL_S (0 for
+# none) stops the run between two tests once past it.
 set +e
-tools/with-env.sh python -m pytest -n "${SKIN_TEST_WORKERS:-2}" "$@"
+tools/with-env.sh python -m pytest -n "${SKIN_TEST_WORKERS:-2}" \
+  --session-timeout "${SKIN_TEST_WALL_S:-1800}" "$@"
 rc=$?
 set -e
 if [ "$rc" -eq 5 ]; then

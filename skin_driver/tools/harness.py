@@ -28,6 +28,7 @@ import time
 from typing import Callable, Iterable, List, Optional
 
 import rclpy
+from rclpy.action import ActionClient
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.parameter import Parameter
 import yaml
@@ -190,12 +191,32 @@ def write_scene(workdir: str, scene: dict, name: str = 'scene.yaml') -> str:
     return path
 
 
+# The environment variable rcl reads at init for how far a context discovers others.
+DISCOVERY_RANGE = 'ROS_AUTOMATIC_DISCOVERY_RANGE'
+
+
 # ---- spinning and waiting ----------------------------------------------------------------------
 
 @contextlib.contextmanager
-def ros_session(context=None):
-    """Yield a SingleThreadedExecutor on an initialised rclpy context; shut both down after."""
-    rclpy.init(context=context)
+def ros_session(context=None, alone: bool = False):
+    """
+    Yield a SingleThreadedExecutor on an initialised rclpy context; shut both down after.
+
+    alone: the context discovers no other (ROS_AUTOMATIC_DISCOVERY_RANGE=OFF, read at init);
+    its own nodes still talk to each other.
+    """
+    if alone:
+        before = os.environ.get(DISCOVERY_RANGE)
+        os.environ[DISCOVERY_RANGE] = 'OFF'
+        try:
+            rclpy.init(context=context)
+        finally:
+            if before is None:
+                del os.environ[DISCOVERY_RANGE]
+            else:
+                os.environ[DISCOVERY_RANGE] = before
+    else:
+        rclpy.init(context=context)
     executor = SingleThreadedExecutor(context=context)
     try:
         yield executor
@@ -231,16 +252,38 @@ def wait_for(executor, condition: Callable[[], bool], timeout_s: float, what: st
         raise RuntimeError(f'gave up waiting for {what} after {timeout_s:.0f} s')
 
 
-# How long a service or action server may take to be discovered; waiting longer costs nothing
-# when it is up. An in-process action server is sometimes never discovered at all, however long
-# the wait (pytest.ini reruns such a test); this only covers a slow discovery on a loaded machine.
-READY_S = 30.0
+# How long a service or action server may take to be discovered: only a bound on a hung test,
+# as waiting longer costs nothing when it is up.
+READY_S = 60.0
+
+
+def wait_for_server(executor, client, ready_s: float = READY_S) -> None:
+    """
+    Spin until a service or action client sees its server; raise RuntimeError naming it if not.
+
+    The executor spins meanwhile, so that the nodes on it (an in-process server among them) go
+    on working; rclpy's own wait_for_service and wait_for_server spin nothing.
+    """
+    if isinstance(client, ActionClient):
+        name, ready, nodes = client._action_name, client.server_is_ready, [client._node]
+    else:
+        name, ready, nodes = client.srv_name, client.service_is_ready, executor.get_nodes()
+    if spin_until(executor, ready, ready_s, period_s=0.01):
+        return
+    seen = 'no node to ask'
+    if nodes:
+        # The servers the graph knows under that name tell an absent server from one half
+        # discovered (or half gone): an action's three services should have one each.
+        node, prefix = nodes[0], nodes[0].resolve_service_name(name)
+        seen = {n: node.count_services(n) for n, _ in sorted(node.get_service_names_and_types())
+                if n == prefix or n.startswith(prefix + '/')} or 'none'
+    raise RuntimeError(f'{name} did not come up in {ready_s:.0f} s; servers per service in the '
+                       f'graph: {seen}')
 
 
 def call_service(executor, client, request, timeout_s: float, ready_s: float = READY_S):
     """Call a service and spin until it answers; raise RuntimeError when it does not."""
-    if not client.wait_for_service(timeout_sec=ready_s):
-        raise RuntimeError(f'service {client.srv_name} did not come up')
+    wait_for_server(executor, client, ready_s)
     future = client.call_async(request)
     if not spin_until(executor, future.done, timeout_s):
         raise RuntimeError(f'service {client.srv_name} did not answer in {timeout_s:.0f} s')
@@ -248,22 +291,24 @@ def call_service(executor, client, request, timeout_s: float, ready_s: float = R
 
 
 def send_goal(executor, client, goal, timeout_s: float, feedback=None,
-              ready_s: float = READY_S):
+              ready_s: float = READY_S, on_accepted: Optional[Callable[[], None]] = None):
     """
     Send an action goal and spin until it ends: (status, result), or (None, None) if rejected.
 
-    ``feedback`` receives each feedback message. Raises RuntimeError when the server does not
-    come up, answer or end in time.
+    ``feedback`` receives each feedback message; ``on_accepted`` is called once the goal is
+    accepted (a test starts its board there, so that the presses come while the goal waits).
+    Raises RuntimeError when the server does not come up, answer or end in time.
     """
     what = type(goal).__name__.split('_')[0]
-    if not client.wait_for_server(timeout_sec=ready_s):
-        raise RuntimeError(f'action {what} did not come up')
+    wait_for_server(executor, client, ready_s)
     sent = client.send_goal_async(
         goal, feedback_callback=(lambda msg: feedback(msg.feedback)) if feedback else None)
     if not spin_until(executor, sent.done, ready_s):
         raise RuntimeError(f'action {what} did not answer the goal in {ready_s:.0f} s')
     if not sent.result().accepted:
         return None, None
+    if on_accepted is not None:
+        on_accepted()
     done = sent.result().get_result_async()
     if not spin_until(executor, done.done, timeout_s):
         raise RuntimeError(f'action {what} did not end in {timeout_s:.0f} s')
@@ -280,14 +325,16 @@ def overrides(values: dict) -> list:
 @contextlib.contextmanager
 def in_process(workdir: str, scene, rate_hz: float = 200.0, driver: dict = None,
                direction: dict = None, loop: bool = False, fused: bool = False, seed: int = 1,
-               identity='sim'):
+               identity='sim', play: bool = True):
     """
     Yield (sim, driver node, direction node, probe, executor) on a fresh private context.
 
     The simulated board plays scene (a :class:`~skin_driver.core.sim.scene.Scene`) on a pty at
     ``workdir/skin0``; the driver is configured and activated. fused: the direction node takes
     its scans from the driver's reader thread, wired as the driver's own main wires it, instead
-    of from the frame topic. identity: what the board says it is (SimulatedSkin's). Everything is
+    of from the frame topic. identity: what the board says it is (SimulatedSkin's). play=False
+    leaves starting the board (``sim.start()``) to the caller, for a scene that must play only
+    once something else is under way; the driver finds the port when it appears. Everything is
     stopped and destroyed afterwards.
     """
     from skin_driver.core.sim.board import SimulatedSkin
@@ -302,7 +349,9 @@ def in_process(workdir: str, scene, rate_hz: float = 200.0, driver: dict = None,
     direction_params = {'calibration_file': os.path.join(workdir, 'calibration.yaml'),
                         **(direction or {})}
     context = rclpy.Context()
-    with ros_session(context) as executor:
+    # Every node of the pipeline is on this context: it needs no discovery, and sees no
+    # same-named server of another run that shares the domain on this machine.
+    with ros_session(context, alone=True) as executor:
         driver_node = SkinDriverNode(context=context, parameter_overrides=overrides(driver_params))
         direction_kwargs = {'context': context,
                             'parameter_overrides': overrides(direction_params)}
@@ -313,7 +362,8 @@ def in_process(workdir: str, scene, rate_hz: float = 200.0, driver: dict = None,
         nodes = (direction_node, driver_node, probe_node)
         for node in nodes:
             executor.add_node(node)
-        sim.start()
+        if play:
+            sim.start()
         try:
             driver_node.trigger_configure()
             driver_node.trigger_activate()

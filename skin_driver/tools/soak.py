@@ -16,9 +16,10 @@ Frame accounting (all counts exact; "balance" lines must be 0):
   the port (pyserial empties the input buffer on open, so what the board sent into a freshly
   plugged pty before the driver opened it is gone: the first sequence number the driver
   publishes after each (re)plug, less the first one the board sent into that pty);
-* driver: the sequence numbers used from its first published frame on = frames published + its
-  'frames dropped' (sequence gaps within a connection plus frames lost while the device was
-  away, which includes the frames discarded at a reopen).
+* driver: the sequence numbers from its first published frame to its last = frames published +
+  its 'frames dropped' (sequence gaps within a connection plus frames lost while the device was
+  away, which includes the frames discarded at a reopen; frames lost after its last frame, it
+  cannot know of).
 
 ``python -m skin_driver.tools.soak --duration 300 --json soak.json``
 prints a summary and writes it.
@@ -81,6 +82,7 @@ class SoakMonitor:
         self.sim = sim
         self.received = 0
         self.first_seq = None
+        self.last_seq = None
         self.seqs_after_mark = []
         self.mismatched = 0
         self.unknown = 0
@@ -102,7 +104,10 @@ class SoakMonitor:
         self.last_frame_s = time.monotonic()
         if self.first_seq is None:
             self.first_seq = msg.sequence
-        if len(self.seqs_after_mark) < 1:
+        self.last_seq = msg.sequence
+        first_on_pty = self.sim.first_seq_since_plug
+        # A frame of the previous pty may still be on its way after a replug: not the first.
+        if not self.seqs_after_mark and first_on_pty is not None and msg.sequence >= first_on_pty:
             self.seqs_after_mark.append(msg.sequence)
         truth = self.sim.truth(msg.sequence)
         if truth is None:
@@ -211,6 +216,12 @@ def _soak(args, executor, node, sim, procs) -> dict:
     faults = FaultCycle(sim, args.seed)
     wait_for(executor, lambda: monitor.link is not None, 30.0, 'the driver to come up',
              procs.values())
+    # The frames are counted from the first one received: the subscription must see the
+    # driver's publisher before the board plays (on a busy machine discovery lags the
+    # diagnostics, and the first frames went unseen and were counted as never published).
+    frames = [sub for sub in node.subscriptions if sub.topic_name.endswith('/frame')]
+    wait_for(executor, lambda: frames and all(sub.get_publisher_count() > 0 for sub in frames),
+             30.0, "the subscription to the driver's frames", procs.values())
     sim.start()
     start = time.monotonic()
     next_fault, next_sample, next_print = start + FAULT_PERIOD_S, start, start + 30.0
@@ -253,6 +264,8 @@ def summarise(args, sim, monitor, faults, memory, alive) -> dict:
     dropped = int(link.get('frames dropped', 0))
     used = sim.next_seq
     first = monitor.first_seq or 0
+    # The driver learns of a frame lost only from a later one: its span ends at its last frame.
+    last = monitor.last_seq if monitor.last_seq is not None else first - 1
     discarded = first + faults.discarded_at_open
     lost_on_line = sim.frames_damaged + sim.frames_wrong_shape + sim.frames_unread + discarded
     report = {
@@ -284,7 +297,7 @@ def summarise(args, sim, monitor, faults, memory, alive) -> dict:
         'balance': {
             'device': used - (sim.frames_sent + sim.frames_dropped + sim.seq_skipped),
             'line': sim.frames_sent - (published + lost_on_line),
-            'driver': used - first - (published + dropped),
+            'driver': last + 1 - first - (published + dropped),
         },
         'memory': {name: {
             'start_mb': samples[0][1] if samples else float('nan'),

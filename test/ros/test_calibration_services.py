@@ -11,7 +11,7 @@ import pytest
 from rclpy.action import ActionClient
 from rclpy.parameter import Parameter
 from rclpy.qos import qos_profile_sensor_data
-from rosutil import ros_context, spin_until
+from rosutil import ros_context, spin_until, wait_for_server
 from skin_driver.core.estimation.calibration.calibration import Calibration, SkinIdentity
 from skin_driver.core.estimation.model.forcecurve import ForceCurve
 from skin_driver.core.sim.board import SIM_UID
@@ -138,16 +138,16 @@ def test_a_second_goal_is_rejected_and_a_cancel_changes_nothing(node_with_calibr
     node, executor, path, previous = node_with_calibration
     text = path.read_text()
     first = ActionClient(node, CalibrateForce, FORCE)
-    assert first.wait_for_server(timeout_sec=5.0)
+    wait_for_server(executor, first)
     sent = first.send_goal_async(CalibrateForce.Goal(forces=FORCES, timeout=60.0))
-    assert spin_until(executor, sent.done, 5.0) and sent.result().accepted
+    assert spin_until(executor, sent.done, 30.0) and sent.result().accepted
     # While the first waits for presses, another goal of any kind is turned away at once.
     status, result = send_goal(executor, node, CalibrateCompliance, COMPLIANCE,
                                CalibrateCompliance.Goal(forces=[5.0] * 3, alphas=[0.3] * 3))
     assert (status, result) == (None, None)
     done = sent.result().get_result_async()
     sent.result().cancel_goal_async()
-    assert spin_until(executor, done.done, 5.0)
+    assert spin_until(executor, done.done, 30.0)
     assert done.result().status == GoalStatus.STATUS_CANCELED
     assert done.result().result.message.startswith('cancelled with 0 of 8 presses')
     assert node.host.estimator.calibration == previous
@@ -268,7 +268,7 @@ def test_the_wrench_topic_takes_a_best_effort_publisher(node_with_calibration):
                                           value='/ft_sensor/wrench')])[0].successful
     sensor = node.create_publisher(WrenchStamped, '/ft_sensor/wrench', qos_profile_sensor_data)
     # A reliable subscription would not match a best-effort publisher.
-    assert spin_until(executor, lambda: sensor.get_subscription_count() == 1, 5.0)
+    assert spin_until(executor, lambda: sensor.get_subscription_count() == 1, 30.0)
     node.destroy_publisher(sensor)
 
 

@@ -6,7 +6,7 @@ from action_msgs.msg import GoalStatus
 from pipeline import pipeline, scene, send_goal
 import pytest
 from rclpy.action import ActionClient
-from rosutil import spin_until
+from rosutil import spin_until, wait_for_server
 from skin_driver.core.estimation.calibration.calibration import Calibration
 from skin_msgs.action import CalibrateDirection
 
@@ -19,17 +19,21 @@ PRESSES = [(0.02 + 0.012 * (k % 4), 0.025 + 0.012 * (k // 4), 30.0 + 5.0 * (k % 
 BAD = 5  # the goal gives this press an azimuth half a turn off: a press to leave out
 
 
+# After the last press the calibration learns the skin's model and renders presses through it:
+# tens of seconds of CPU, a minute and more on a busy machine. Only bounds on a hung test.
+@pytest.mark.timeout(400)
 def test_presses_of_known_azimuth_learn_the_direction_one_bad_press_left_out(tmp_path):
     presses = [{'time_s': 2.0 + 1.6 * k, 'x_m': x, 'y_m': y, 'force_n': 10.0, 'alpha_deg': a,
                 'beta_deg': b} for k, (x, y, a, b) in enumerate(PRESSES)]
     azimuths = [math.radians(b + (180.0 if k == BAD else 0.0))
                 for k, (_, _, _, b) in enumerate(PRESSES)]
     feedback = []
-    with pipeline(tmp_path, scene(presses), rate_hz=100.0) as (sim, _, direction, probe,
-                                                               executor):
+    with pipeline(tmp_path, scene(presses), rate_hz=100.0, play=False) as (
+            sim, _, direction, probe, executor):
         status, result = send_goal(executor, direction, CalibrateDirection, DIRECTION,
                                    CalibrateDirection.Goal(azimuths=azimuths, timeout=40.0),
-                                   timeout_s=50.0, feedback=feedback.append)
+                                   timeout_s=300.0, feedback=feedback.append,
+                                   on_accepted=sim.start)
         assert status == GoalStatus.STATUS_SUCCEEDED and result.success, result.message
         in_force = direction.host.estimator.calibration
     # Every press made is fed back; the one given the wrong azimuth is left out of the fit.
@@ -65,11 +69,11 @@ def _bad_goals_and_a_cancel(node, executor):
         assert 'previous calibration stays in force' in result.message
         assert not result.applied
     client = ActionClient(node, CalibrateDirection, DIRECTION)
-    assert client.wait_for_server(timeout_sec=5.0)
+    wait_for_server(executor, client)
     sent = client.send_goal_async(CalibrateDirection.Goal(azimuths=[0.5] * 12, timeout=60.0))
-    assert spin_until(executor, sent.done, 5.0) and sent.result().accepted
+    assert spin_until(executor, sent.done, 30.0) and sent.result().accepted
     done = sent.result().get_result_async()
     sent.result().cancel_goal_async()
-    assert spin_until(executor, done.done, 5.0)
+    assert spin_until(executor, done.done, 30.0)
     assert done.result().status == GoalStatus.STATUS_CANCELED
     client.destroy()

@@ -109,7 +109,8 @@ def test_burst_is_published_whole_and_in_order(tmp_path):
 
 
 def test_line_noise_is_a_warning_and_costs_only_the_damaged_frames(tmp_path):
-    with pipeline(tmp_path, scene([{'time_s': 0.1, 'duration_s': 3.0}]),
+    # The press is held for the whole test, however late the nodes come up.
+    with pipeline(tmp_path, scene([{'time_s': 0.1, 'duration_s': 1000.0}]),
                   rate_hz=200.0) as (sim, driver, _, probe, executor):
         more_frames(executor, probe, 20)
         sim.set_line_noise(0.3)

@@ -6,7 +6,10 @@ import subprocess
 
 import pytest
 import rclpy
+from rclpy.action import ActionClient
 from skin_driver.tools import harness
+from skin_msgs.action import CalibrateForce
+from std_srvs.srv import Trigger
 import yaml
 
 pytestmark = pytest.mark.ros
@@ -62,6 +65,39 @@ def test_waiting_returns_once_the_condition_holds(executor):
     # Raises when it gives up: returning is the success.
     harness.wait_for(executor, lambda: looks.append(1) or len(looks) >= 3, 60.0, 'three looks')
     assert len(looks) >= 3
+
+
+def test_a_server_that_never_comes_up_is_an_error_naming_it_and_what_the_graph_shows(
+        executor):
+    node = rclpy.create_node('asker', context=executor.context)
+    executor.add_node(node)
+    client = ActionClient(node, CalibrateForce, '/nobody/calibrate_force')
+    try:
+        with pytest.raises(RuntimeError) as raised:
+            harness.wait_for_server(executor, client, ready_s=1.0)
+        # The client's own three services are in the graph, with no server.
+        action = '/nobody/calibrate_force/_action/'
+        servers = {f'{action}{name}': 0 for name in ('cancel_goal', 'get_result', 'send_goal')}
+        assert str(raised.value) == ('/nobody/calibrate_force did not come up in 1 s; servers '
+                                     f'per service in the graph: {servers}')
+    finally:
+        client.destroy()
+        node.destroy_node()
+
+
+def test_a_server_on_the_same_executor_is_waited_for_while_it_spins(executor):
+    server_node = rclpy.create_node('server', context=executor.context)
+    node = rclpy.create_node('asker', context=executor.context)
+    server = server_node.create_service(Trigger, 'poke', lambda _, answer: answer)
+    for n in (server_node, node):
+        executor.add_node(n)
+    client = node.create_client(Trigger, '/poke')
+    try:
+        assert harness.call_service(executor, client, Trigger.Request(), 30.0) is not None
+    finally:
+        server_node.destroy_service(server)
+        for n in (server_node, node):
+            n.destroy_node()
 
 
 def test_stop_interrupts_then_kills_what_ignores_the_interrupt(tmp_path):

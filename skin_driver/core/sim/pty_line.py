@@ -13,8 +13,6 @@ from collections import deque
 import errno
 import fcntl
 import os
-import struct
-import termios
 import threading
 import time
 import tty
@@ -23,7 +21,6 @@ from .line import point_link, remove_link
 
 # Sent frames remembered to tell, at an unplug, which of them the reader had not read yet.
 SENT_HISTORY = 8192
-UNPLUG_SETTLE_S = 0.01
 
 
 class PtyLine:
@@ -168,12 +165,31 @@ class PtyLine:
 
     def _count_unread_locked(self) -> int:
         """Return how many sent intact frames have bytes the reader has not read yet."""
-        # Written bytes reach the slave's read queue (what FIONREAD counts) a moment later.
-        time.sleep(UNPLUG_SETTLE_S)
-        try:
-            raw = fcntl.ioctl(self._slave, termios.FIONREAD, b'\0\0\0\0')
-            unread = struct.unpack('i', raw)[0]
-        except OSError:
-            return 0
+        # What the reader has not read is read out here, so each byte is either the reader's
+        # or counted: the pty's input count (FIONREAD) would miss bytes still on their way to
+        # the slave (the kernel passes them on later, on a busy machine much later, and its
+        # count stops at 4 KB while nobody reads) and bytes the reader takes after the count but
+        # before the close.
+        unread = self._drain_locked()
         read_up_to = self._written_bytes - unread
         return sum(1 for end, intact in self._sent_ends if intact and end > read_up_to)
+
+    def _drain_locked(self) -> int:
+        """Read what is left for the reader on the slave; return how many bytes that was."""
+        try:
+            flags = fcntl.fcntl(self._slave, fcntl.F_GETFL)
+            # Only this end's own open file turns non-blocking, not the reader's.
+            fcntl.fcntl(self._slave, fcntl.F_SETFL, flags | os.O_NONBLOCK)
+        except OSError:
+            return 0
+        drained = 0
+        while True:
+            try:
+                # With nothing waiting, the kernel first passes on what is on its way, so the
+                # first refusal (EAGAIN) means nothing is left at all.
+                data = os.read(self._slave, 65536)
+            except OSError:
+                return drained
+            if not data:
+                return drained
+            drained += len(data)

@@ -74,7 +74,11 @@ def test_a_device_gives_every_waiting_byte_in_one_read_and_a_hangup_is_an_error(
         counts = np.ones((16, 16), np.uint16)
         burst = b''.join(encode_frame(i, i * 1000, counts, counts) for i in range(3))
         os.write(master, burst)
-        time.sleep(0.1)  # the pty passes the bytes on asynchronously
+        # The pty passes the bytes on asynchronously: wait until all of them are waiting.
+        deadline = time.monotonic() + WAIT_S
+        while port.in_waiting < len(burst):
+            assert time.monotonic() < deadline, 'the pty never passed the burst on'
+            time.sleep(0.005)
         assert read() == burst
         assert read() == b''  # nothing within the timeout
         os.close(master)

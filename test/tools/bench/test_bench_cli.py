@@ -6,6 +6,7 @@ import os
 import numpy as np
 import pytest
 from skin_driver.tools.bench import cli as bench, end_to_end as bench_ros, scoring
+from skin_driver.tools.bench.estimators import family_methods
 
 # matplotlib's tick labels go through a deprecated pyparsing API; not this project's concern.
 pytestmark = pytest.mark.filterwarnings('ignore::DeprecationWarning')
@@ -85,7 +86,15 @@ def test_cpu_seconds_of_this_process_and_of_a_missing_one():
     assert bench_ros.cpu_seconds(2 ** 22 + 12345) == 0.0
 
 
-def test_family_only_prints_every_scene_and_the_worst_with_the_oracle(capsys, tmp_path):
+# The benchmark pins itself to one core, which a busy machine shares: a bound on a hung test only.
+@pytest.mark.timeout(400)
+def test_family_only_prints_every_scene_and_the_worst_with_the_oracle(
+        capsys, tmp_path, monkeypatch):
+    # The default, the seed's and the plain centroid show every line; all the methods took CPU
+    # minutes on that core (model_fit's calibration learns each scene's taxel model in Python):
+    # ten minutes and more on a busy machine, where the faulthandler ended the worker.
+    monkeypatch.setattr(bench.bench_core, 'family_methods',
+                        lambda everything=True: family_methods(False))
     assert bench.main(['--family-only', 'default', '--family-size', '4',
                        '--out', str(tmp_path)]) == 0
     text = capsys.readouterr().out
