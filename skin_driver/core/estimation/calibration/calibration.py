@@ -384,7 +384,9 @@ class Calibration:
         out['force_presses'] = int(self.force_presses)
         out['compliance_presses'] = int(self.compliance_presses)
         out['made_utc'] = self.made_utc
-        out['made'] = dict(zip(PARTS, self.part_utc))
+        # Only the parts made: a part never calibrated names no key, so the file an older reader
+        # knows stays as it was (no creep, direction or mount key where there is none).
+        out['made'] = {part: t for part, t in zip(PARTS, self.part_utc) if t}
         # A board that said nothing leaves no empty keys: such a file reads as before.
         out['skin'] = None if self.skin is None else {
             k: v for k, v in asdict(self.skin).items() if v != '' or k == 'board_id'}
