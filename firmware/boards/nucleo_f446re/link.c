@@ -6,6 +6,7 @@
  */
 #include "nucleo.h"
 #include "skin_fw/board.h"
+#include "skin_fw/wait.h"
 
 #if SKIN_BOARD_LINK_USART == 1
 #define LINK_USART USART1
@@ -21,6 +22,11 @@
     RCC->APB2ENR |= RCC_APB2ENR_USART1EN;         \
     RCC->AHB1ENR |= RCC_AHB1ENR_DMA2EN;           \
   } while (0)
+#define LINK_RESET()                              \
+  do {                                            \
+    RCC->APB2RSTR |= RCC_APB2RSTR_USART1RST;      \
+    RCC->APB2RSTR &= ~RCC_APB2RSTR_USART1RST;     \
+  } while (0)
 #else
 #define LINK_USART USART2
 #define LINK_CLOCK_HZ NUCLEO_APB1_HZ
@@ -34,6 +40,11 @@
   do {                                            \
     RCC->APB1ENR |= RCC_APB1ENR_USART2EN;         \
     RCC->AHB1ENR |= RCC_AHB1ENR_DMA1EN;           \
+  } while (0)
+#define LINK_RESET()                              \
+  do {                                            \
+    RCC->APB1RSTR |= RCC_APB1RSTR_USART2RST;      \
+    RCC->APB1RSTR &= ~RCC_APB1RSTR_USART2RST;     \
   } while (0)
 #endif
 #define LINK_DMA_CHANNEL 4u /* USART1_TX on DMA2 Stream7 and USART2_TX on DMA1 Stream6 */
@@ -73,8 +84,7 @@ void nucleo_link_init(void) {
   LINK_USART->CR1 = USART_CR1_UE | USART_CR1_TE | (LINK_OVER8 ? USART_CR1_OVER8 : 0u);
 
   LINK_STREAM->CR = 0u;
-  for (uint32_t i = 0; (LINK_STREAM->CR & DMA_SxCR_EN) && i < 1000u; i++) {
-  }
+  (void)skin_wait_bits(&LINK_STREAM->CR, DMA_SxCR_EN, 0u, 1000u);
   LINK_STREAM->PAR = (uint32_t)&LINK_USART->DR;
   /* Memory to peripheral, bytes, memory increments, high priority (below the ADC's). */
   LINK_STREAM->CR = (LINK_DMA_CHANNEL << DMA_SxCR_CHSEL_Pos) | DMA_SxCR_PL_1 | DMA_SxCR_MINC |
@@ -107,4 +117,20 @@ bool board_link_idle(void) {
     }
   }
   return !busy;
+}
+
+bool board_link_abort(void) {
+  /* The core waited past the transfer's bound (skin_fw/scan.h). NDTR counts the bytes the DMA
+   * has not yet handed to the USART. */
+  const bool bytes_left = LINK_STREAM->NDTR != 0u && !(LINK_DMA->HISR & LINK_DONE);
+  LINK_STREAM->CR &= ~DMA_SxCR_EN;
+  (void)skin_wait_bits(&LINK_STREAM->CR, DMA_SxCR_EN, 0u, 1000u);
+  LINK_DMA->HIFCR = LINK_CLEAR;
+  if (bytes_left) {
+    /* Stalled: the USART and the stream start again from their reset state. */
+    LINK_RESET();
+    nucleo_link_init();
+  }
+  busy = 0;
+  return bytes_left;
 }
