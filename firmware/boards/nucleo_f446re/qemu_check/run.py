@@ -98,7 +98,7 @@ def expected(w: dict) -> dict:
     exp['link_cr3'] = 1 << 7  # DMAT
     exp['row_sampled'] = 0  # the row failed: nothing of it is taken as counts
     exp['row_after_slack'] = 0
-    exp['adc_timeouts'] = 1
+    exp['adc_timeouts'] = 2  # the row is tried twice
     exp['adc_overruns'] = 0
     exp['scan_tick_returned'] = 1
     exp['done'] = 1
@@ -191,8 +191,8 @@ def main() -> int:
         row_ranks = (w['cols'] + 2) // 3
         bound = 4 * -(-row_ranks * (w['sample'] + 12) * 1_000_000 // 22_500_000) + 10
         # QEMU runs its timers in real time, slower guest code makes the recovery look long.
-        check(f'a row that never converts ends, past its bound ({bound} us)',
-              got.get('row_took'), lambda v: v is not None and bound < v < 100_000)
+        check(f'a row that never converts ends, past twice its bound ({bound} us)',
+              got.get('row_took'), lambda v: v is not None and 2 * bound < v < 100_000)
 
         writes = re.findall(r'^(\w+): unimplemented device write \(size 4, offset (0x[0-9a-f]+), '
                             r'value (0x[0-9a-f]+)\)', log.read_text(), flags=re.M)
