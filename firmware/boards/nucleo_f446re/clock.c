@@ -13,6 +13,7 @@
  * records the fault and resets the board (fault.c).
  */
 #include "nucleo.h"
+#include "skin_fw/board.h"
 #include "skin_fw/fault.h"
 #include "skin_fw/wait.h"
 
@@ -22,8 +23,9 @@ volatile uint32_t nucleo_clock_source;
 #define HSI_HZ 16000000u
 /* HSE: the MCO is a clock signal, ready within a few of its cycles once present; the bound
  * lets an ST-LINK that starts after the MCU at power-up get its MCO going (ST's HAL allows
- * 100 ms for a crystal). */
-#define HSE_READY_US 50000u
+ * 100 ms for a crystal). A poll here takes about 13 cycles, not the 4 the bound counts, so the
+ * waits last up to about 3 times their bound: the watchdog is fed after each step. */
+#define HSE_READY_US 20000u
 /* PLL lock: the datasheet's tLOCK is at most 300 us at VCO 432 MHz (ST's HAL allows 2 ms). */
 #define PLL_READY_US 2000u
 /* Over-drive enable and switch: tens of microseconds in the datasheet; 10 ms each. */
@@ -78,7 +80,9 @@ void nucleo_clock_init(void) {
    * off, as the reference manual requires. */
   PWR->CR |= PWR_CR_VOS;
 
-  pll_start(hse_start());
+  const uint32_t source = hse_start();
+  board_watchdog_feed();
+  pll_start(source);
 
   /* Over-drive: needed above 168 MHz; enabled while still running from HSE/HSI. */
   PWR->CR |= PWR_CR_ODEN;
@@ -89,6 +93,7 @@ void nucleo_clock_init(void) {
   if (!wait_for(&PWR->CSR, PWR_CSR_ODSWRDY, PWR_CSR_ODSWRDY, OVERDRIVE_READY_US)) {
     nucleo_fault(NUCLEO_FAULT_OVERDRIVE);
   }
+  board_watchdog_feed();
 
   /* 5 wait states for 150..180 MHz at 2.7..3.6 V, before the clock rises; the read back is
    * how the reference manual says to check that the new latency is in effect. */
