@@ -7,6 +7,9 @@
  * 17..47 kHz, so 170..470 ms. The slowest healthy scan loop (pins_check.c checks it: two scan
  * periods of tick wait, two link bounds, the scan) stays under half the shortest; after a hang
  * the board resets within 470 ms and sends frames again within 1 s of device time.
+ *
+ * The watchdog keeps running while a debugger halts the core (the firmware leaves DBGMCU alone,
+ * a debug unit an emulator may not model): set DBG_IWDG_STOP from the debugger to halt it too.
  */
 #include "nucleo.h"
 #include "skin_fw/board.h"
@@ -22,8 +25,6 @@
 #define IWDG_UPDATE_US 10000u
 
 void nucleo_watchdog_init(void) {
-  /* Halted by a debugger, the board must not be reset under it. */
-  DBGMCU->APB1FZ |= DBGMCU_APB1_FZ_DBG_IWDG_STOP;
   IWDG->KR = IWDG_KEY_START; /* also starts the LSI */
   IWDG->KR = IWDG_KEY_ACCESS;
   IWDG->PR = IWDG_PRESCALER_32;
