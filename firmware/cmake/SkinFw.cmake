@@ -12,10 +12,12 @@ set(SKIN_FW_DIR "${CMAKE_CURRENT_LIST_DIR}/..")
 set(SKIN_FW_WARNINGS -Wall -Wextra -Werror -Wpedantic)
 set(SKIN_FW_CORE_SOURCES
     "${SKIN_FW_DIR}/core/src/crc.c"
+    "${SKIN_FW_DIR}/core/src/fault.c"
     "${SKIN_FW_DIR}/core/src/frame.c"
     "${SKIN_FW_DIR}/core/src/clock.c"
     "${SKIN_FW_DIR}/core/src/info.c"
-    "${SKIN_FW_DIR}/core/src/scan.c")
+    "${SKIN_FW_DIR}/core/src/scan.c"
+    "${SKIN_FW_DIR}/core/src/wait.c")
 set(SKIN_FW_RUN_SOURCE "${SKIN_FW_DIR}/core/src/run.c")
 set(SKIN_FW_VENDOR_INCLUDES
     "${SKIN_FW_DIR}/vendor/cmsis_core/Include"

@@ -27,11 +27,12 @@ void board_drive_row(uint8_t layer, uint8_t row) {
 }
 void board_release_rows(void) {}
 void board_delay_us(uint32_t us) { (void)us; }
-void board_sample_row(uint16_t *dst, uint8_t cols) {
+bool board_sample_row(uint16_t *dst, uint8_t cols) {
   memcpy(dst, counts + ((size_t)cur_layer * cur_rows + cur_row) * cur_cols, 2u * cols);
   for (int s = 0; s < SKIN_FW_ROW_SLACK; s++) {
     dst[cols + s] = 0xFFFFu;
   }
+  return true;
 }
 void board_wait_scan_tick(void) {}
 void board_link_send(const uint8_t *buf, uint32_t len) {
@@ -40,6 +41,9 @@ void board_link_send(const uint8_t *buf, uint32_t len) {
   }
 }
 bool board_link_idle(void) { return true; }
+bool board_link_abort(void) { return false; }
+void board_watchdog_feed(void) {}
+void board_status(skin_board_status_t *status) { (void)status; }
 
 static int read_exact(void *p, size_t n) { return fread(p, 1, n, stdin) == n; }
 

@@ -9,6 +9,7 @@
 
 #include "fake_board.h"
 #include "skin_fw/crc.h"
+#include "skin_fw/fault.h"
 #include "skin_fw/frame.h"
 #include "skin_fw/scan.h"
 
@@ -26,6 +27,7 @@ static int setup(void **state) {
   memset(buf0, 0xEE, sizeof buf0);
   memset(buf1, 0xEE, sizeof buf1);
   skin_scan_init(&scan, buf0, buf1, ROWS, COLS, SETTLE);
+  skin_link_init(0u);
   return 0;
 }
 
@@ -148,6 +150,87 @@ static void never_fills_the_buffer_the_link_is_sending(void **state) {
   }
 }
 
+static void a_failed_row_drops_its_scan_and_is_counted(void **state) {
+  (void)state;
+  /* Scan 1 (the second) fails on bottom row 2: nothing of it is sent, the scan stops there with
+   * the rows released, and the next frame carries the next scan under the next number. */
+  fake.fail_scan = 2u;
+  fake.fail_layer = 1u;
+  fake.fail_row = 2u;
+  uint32_t len = skin_scan_fill(&scan);
+  skin_scan_send(&scan, len);
+  const uint32_t before = fake.n_events;
+  assert_int_equal(skin_scan_fill(&scan), 0u);
+  /* Drives of the 4 top rows and bottom rows 0..2, each driven, settled, sampled; release. */
+  assert_int_equal(fake.n_events - before, 3u * (ROWS + 3u) + 1u);
+  assert_int_equal(fake.events[fake.n_events - 1].kind, EV_RELEASE);
+  len = skin_scan_fill(&scan);
+  skin_scan_send(&scan, len);
+  fake_drain();
+  assert_int_equal(fake.n_sent, 2);
+  assert_frame(fake.sent[0], fake.sent_len[0], 0, 0);
+  assert_frame(fake.sent[1], fake.sent_len[1], 2, 1);
+  assert_int_equal(skin_fault_get(SKIN_FAULT_FRAME_DROPPED), 1);
+  assert_int_equal(skin_fault_get(SKIN_FAULT_ADC_OVERRUN), 1);
+  assert_int_equal(skin_fault_get(SKIN_FAULT_LINK_TIMEOUT), 0);
+}
+
+static void the_link_bound_is_the_bytes_time_twice_plus_the_slack(void **state) {
+  (void)state;
+  /* A 16 x 16 frame (1048 bytes) at 921 600 baud, 10 bits a byte: 10 851 ns a byte, 11.37 ms
+   * on the line; bound 2 x 11 372 + 1000 us. */
+  skin_link_init(10851u);
+  assert_int_equal(skin_link_bound_us(1048u), 22744u + 1000u);
+  /* A link that blocks in its send has nothing to wait for but the slack. */
+  skin_link_init(0u);
+  assert_int_equal(skin_link_bound_us(1048u), SKIN_LINK_SLACK_US);
+}
+
+static void a_transfer_that_never_completes_is_aborted_past_its_bound(void **state) {
+  (void)state;
+  /* USART TX DMA that never completes and moves no byte: the next send waits for the bound of
+   * the one in progress, counts a link timeout, aborts it (bytes left: the link is reset) and
+   * goes on; once the link works again frames arrive intact. */
+  skin_link_init(1000u); /* 1 us a byte */
+  fake.poll_us = 1u;
+  fake.link_stalls = 1u;
+  uint32_t len = skin_scan_fill(&scan);
+  assert_int_equal(skin_scan_send(&scan, len), SKIN_LINK_DONE);
+  const uint32_t sent_at = fake.time_us32;
+  len = skin_scan_fill(&scan);
+  assert_int_equal(skin_scan_send(&scan, len), SKIN_LINK_STALLED);
+  /* Polled 1 us at a time until the bound was passed: bound + 1 us, not sooner. */
+  assert_int_equal(fake.time_us32 - sent_at, skin_link_bound_us(len) + 1u);
+  assert_int_equal(fake.aborts, 1);
+  assert_int_equal(fake.cut_sends, 1);
+  assert_int_equal(skin_fault_get(SKIN_FAULT_LINK_TIMEOUT), 1);
+  len = skin_scan_fill(&scan);
+  assert_int_equal(skin_scan_send(&scan, len), SKIN_LINK_DONE);
+  fake_drain();
+  /* The stalled transfer never reached the host whole; the two after it did, in order. */
+  assert_int_equal(fake.n_sent, 2);
+  assert_frame(fake.sent[0], fake.sent_len[0], 1, 1);
+  assert_frame(fake.sent[1], fake.sent_len[1], 2, 2);
+}
+
+static void a_completion_lost_after_the_last_byte_is_late_not_stalled(void **state) {
+  (void)state;
+  /* Every byte went, only the DMA's completion never came: counted as a link timeout, the
+   * frame is whole, the link is not reset. */
+  skin_link_init(1000u);
+  fake.poll_us = 1u;
+  fake.link_loses_completion = 1u;
+  uint32_t len = skin_scan_fill(&scan);
+  skin_scan_send(&scan, len);
+  len = skin_scan_fill(&scan);
+  assert_int_equal(skin_scan_send(&scan, len), SKIN_LINK_LATE);
+  fake_drain();
+  assert_int_equal(fake.cut_sends, 0);
+  assert_int_equal(fake.n_sent, 2);
+  assert_frame(fake.sent[0], fake.sent_len[0], 0, 0);
+  assert_int_equal(skin_fault_get(SKIN_FAULT_LINK_TIMEOUT), 1);
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test_setup(rows_are_driven_in_order_settled_sampled_then_released, setup),
@@ -156,6 +239,10 @@ int main(void) {
       cmocka_unit_test_setup(time_is_the_scan_start_extended_past_32_bits, setup),
       cmocka_unit_test_setup(seq_counts_up_and_wraps, setup),
       cmocka_unit_test_setup(never_fills_the_buffer_the_link_is_sending, setup),
+      cmocka_unit_test_setup(a_failed_row_drops_its_scan_and_is_counted, setup),
+      cmocka_unit_test_setup(the_link_bound_is_the_bytes_time_twice_plus_the_slack, setup),
+      cmocka_unit_test_setup(a_transfer_that_never_completes_is_aborted_past_its_bound, setup),
+      cmocka_unit_test_setup(a_completion_lost_after_the_last_byte_is_late_not_stalled, setup),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -39,6 +39,7 @@ import numpy as np
 from rcl_interfaces.msg import SetParametersResult
 from rclpy.event_handler import PublisherEventCallbacks
 from sensor_msgs.msg import Image
+from skin_driver.core.common.boardhealth import BoardHealth
 from skin_driver.core.estimation.calibration.calibration import SkinMount
 from skin_driver.core.estimation.calibration.tare import RecentScans
 from skin_driver.core.estimation.scan.drift import drift_status
@@ -615,6 +616,7 @@ def skin_info(frame_id: str, skin: tuple, estimator: ContactEstimator, board,
     rows, cols, pitch_m = skin
     cal = estimator.calibration
     parts = cal.parts_in_force()
+    health = BoardHealth.of(board)
     return SkinInfo(
         header=Header(frame_id=frame_id), rows=int(rows), cols=int(cols), pitch=float(pitch_m),
         layer_gap=float(layer_gap_m),
@@ -623,6 +625,8 @@ def skin_info(frame_id: str, skin: tuple, estimator: ContactEstimator, board,
         board_name=board.board if board is not None else '',
         board_uid=board.uid if board is not None else '',
         firmware_version=board.fw if board is not None else '',
+        board_reset_cause=health.values()['board reset cause'] if health is not None else '',
+        board_faults=health.named() if health is not None else [],
         calibration_made=cal.made_utc, calibration_parts=[part for part, _ in parts],
         calibration_parts_made=[made for _, made in parts],
         parent_frame=mount.parent_frame if mount else '',

@@ -13,12 +13,19 @@ has sent none. A board that says it has another grid than its frames, or another
 the driver is configured with, is a WARN for as long as it says so (the frames are still
 decoded: the board's word may be the wrong one); so are malformed info frames since the last
 assessment.
+
+The board's health, where its information frame carries it (core.common.boardhealth), is in
+the values by name: why it last reset, the fault before that reset, its clock, its fault
+counters. A reset by a watchdog or after a fault, and a board on its internal oscillator, are a
+WARN while the board says so; a counter that grew since the last assessment is a WARN that
+names it, so frames the board dropped (a row failed to sample) are told from line noise.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
 
+from skin_driver.core.common.boardhealth import BoardHealth, HEALTH_KEYS
 from skin_driver.core.protocol.link import CONNECTED, STALLED
 
 __all__ = ['OK', 'WARN', 'ERROR', 'Health', 'LinkHealth', 'NO_BOARD_IDENTITY', 'board_values']
@@ -49,6 +56,7 @@ class LinkHealth:
         self._expected = expected_shape
         self._pitch_m = pitch_m
         self._reported = {}
+        self._health = None  # the board's health at the previous assessment
 
     def assess(self, link, detail: str) -> Health:
         """Return the health of ``link`` (a SerialLink) now; ``detail`` is its last news."""
@@ -79,6 +87,10 @@ class LinkHealth:
             level = max(level, WARN)
             problems.append(f"{new['info']} malformed board information frames rejected")
         board_problems = self._board_problems(link.decoder)
+        health = BoardHealth.of(link.decoder.board_info)
+        if health is not None:
+            board_problems += health.problems(self._health)
+        self._health = health
         if board_problems:
             level = max(level, WARN)
             problems += board_problems
@@ -120,11 +132,13 @@ NO_BOARD_IDENTITY = 'no board identity (version-1 stream)'
 
 
 def board_values(info) -> dict:
-    """Return the board's identity (a BoardInfo or None) as diagnostic values."""
+    """Return the board's identity and health (a BoardInfo or None) as diagnostic values."""
     if info is None:
         return {'board': NO_BOARD_IDENTITY}
+    health = BoardHealth.of(info)
     return {'board': info.board, 'board uid': info.uid, 'board firmware': info.fw,
             'board grid': f'{info.rows}x{info.cols}',
             'board pitch [mm]': round(1000 * info.pitch_m, 3),
             'board scan rate [Hz]': info.rate_hz,
-            **{f'board {key}': value for key, value in info.extra}}
+            **(health.values() if health is not None else {}),
+            **{f'board {key}': value for key, value in info.extra if key not in HEALTH_KEYS}}
