@@ -269,15 +269,15 @@ def overrides(values: dict) -> list:
 @contextlib.contextmanager
 def in_process(workdir: str, scene, rate_hz: float = 200.0, driver: dict = None,
                direction: dict = None, loop: bool = False, fused: bool = False, seed: int = 1,
-               identity='sim'):
+               identity='sim', protocol: int = 2):
     """
     Yield (sim, driver node, direction node, probe, executor) on a fresh private context.
 
     The simulated board plays scene (a :class:`~skin_driver.core.sim.scene.Scene`) on a pty at
     ``workdir/skin0``; the driver is configured and activated. fused: the direction node takes
     its scans from the driver's reader thread, wired as the driver's own main wires it, instead
-    of from the frame topic. identity: what the board says it is (SimulatedSkin's). Everything is
-    stopped and destroyed afterwards.
+    of from the frame topic. identity: what the board says it is (SimulatedSkin's); protocol: the
+    version of its frames. Everything is stopped and destroyed afterwards.
     """
     from skin_driver.core.sim.board import SimulatedSkin
     from skin_driver.ros.direction_node import DirectionNode
@@ -286,7 +286,7 @@ def in_process(workdir: str, scene, rate_hz: float = 200.0, driver: dict = None,
 
     link = os.path.join(workdir, 'skin0')
     sim = SimulatedSkin(scene, rate_hz=rate_hz, link_path=link, seed=seed, loop=loop,
-                        identity=identity)
+                        identity=identity, protocol=protocol)
     driver_params = {'port': link, 'rows': scene.model.rows, 'cols': scene.model.cols,
                      **(driver or {})}
     direction_params = {'calibration_file': os.path.join(workdir, 'calibration.yaml'),
