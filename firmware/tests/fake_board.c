@@ -1,5 +1,7 @@
 #include "fake_board.h"
 
+#include "skin_fw/scan.h"
+
 #include <assert.h>
 #include <string.h>
 
@@ -63,6 +65,10 @@ void board_sample_row(uint16_t *dst, uint8_t cols) {
   record((fake_event_t){.kind = EV_SAMPLE, .value = cols, .ptr = dst});
   for (uint8_t c = 0; c < cols; c++) {
     dst[c] = fake_count(fake.scans - 1u, fake.driven_layer, fake.driven_row, c);
+  }
+  /* A row that fails (fail_row is row + 1 of fail_layer): said while sampling, as a board does. */
+  if (fake.fail_row && fake.driven_layer == fake.fail_layer && fake.driven_row + 1 == fake.fail_row) {
+    skin_scan_row_failed();
   }
   /* The slack the interface allows, with counts no frame may carry. */
   for (uint8_t s = 0; s < SKIN_FW_ROW_SLACK; s++) {

@@ -41,6 +41,7 @@ typedef struct {
   uint8_t driven_layer, driven_row;
   bool row_driven;
   uint32_t scans;            /* drives of layer 0 row 0 so far */
+  uint8_t fail_layer, fail_row; /* fail_row > 0: row fail_row - 1 of fail_layer fails */
   skin_board_info_t info;
 } fake_board_t;
 

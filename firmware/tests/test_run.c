@@ -15,7 +15,7 @@
 static int is_info(uint32_t i) { return fake.sent[i][0] == 0xA5 && fake.sent[i][1] == 0x69; }
 static int is_frame(uint32_t i) {
   return fake.sent[i][0] == 0xA5 && fake.sent[i][1] == 0x5A &&
-         fake.sent_len[i] == SKIN_FRAME_SIZE(SKIN_FW_ROWS, SKIN_FW_COLS);
+         fake.sent_len[i] == SKIN_FRAME_V2_SIZE(SKIN_FW_ROWS, SKIN_FW_COLS);
 }
 
 static int setup(void **state) {

@@ -11,7 +11,7 @@ _Static_assert(SKIN_BOARD_ROWS >= 1 && SKIN_BOARD_ROWS <= 16,
                "SKIN_BOARD_ROWS: 1..16 (a 16:1 mux per layer)");
 _Static_assert(SKIN_BOARD_COLS >= 3 && SKIN_BOARD_COLS <= 16,
                "SKIN_BOARD_COLS: 3..16 (one ADC input per column, three ADCs)");
-_Static_assert(SKIN_FRAME_SIZE(SKIN_BOARD_ROWS, SKIN_BOARD_COLS) <= 65535u,
+_Static_assert(SKIN_FRAME_V1_SIZE(SKIN_BOARD_ROWS, SKIN_BOARD_COLS) <= 65535u,
                "a frame must fit one DMA transfer (65535 bytes)");
 
 /* ---- Timing ---- */

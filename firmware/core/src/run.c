@@ -10,6 +10,12 @@ _Static_assert(SKIN_FW_ROWS >= 1 && SKIN_FW_ROWS <= 128, "SKIN_FW_ROWS must be 1
 _Static_assert(SKIN_FW_COLS >= 1 && SKIN_FW_COLS <= 128, "SKIN_FW_COLS must be 1..128");
 _Static_assert(SKIN_FW_PITCH_UM > 0, "SKIN_FW_PITCH_UM must be positive");
 
+/* The wire protocol version the board sends: a build option (cmake -DSKIN_FW_PROTOCOL=1). */
+#ifndef SKIN_FW_PROTOCOL
+#define SKIN_FW_PROTOCOL SKIN_FRAME_VERSION_DEFAULT
+#endif
+_Static_assert(SKIN_FW_PROTOCOL == 1 || SKIN_FW_PROTOCOL == 2, "SKIN_FW_PROTOCOL must be 1 or 2");
+
 #ifndef SKIN_FW_INFO_PERIOD_US
 #define SKIN_FW_INFO_PERIOD_US 1000000u
 #endif
@@ -27,6 +33,7 @@ void skin_fw_start(void) {
   info_len = skin_info_build(info_frame, &board, SKIN_FW_VERSION, SKIN_FW_ROWS, SKIN_FW_COLS,
                              SKIN_FW_PITCH_UM);
   skin_scan_init(&scan, frames[0], frames[1], SKIN_FW_ROWS, SKIN_FW_COLS, SKIN_FW_SETTLE_US);
+  scan.version = SKIN_FW_PROTOCOL;
   if (info_len) {
     skin_link_send_when_idle(info_frame, info_len);
   }

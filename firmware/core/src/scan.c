@@ -3,10 +3,19 @@
 #include "skin_fw/board.h"
 #include "skin_fw/frame.h"
 
+/* Set by the board (skin_scan_row_failed, skin_scan_fault), taken by the scan that follows. */
+static volatile bool row_failed;
+static volatile uint16_t pending_faults;
+
+void skin_scan_row_failed(void) { row_failed = true; }
+
+void skin_scan_fault(uint16_t bits) { pending_faults |= bits; }
+
 void skin_scan_init(skin_scan_t *s, uint32_t *buf0, uint32_t *buf1, uint8_t rows, uint8_t cols,
                     uint32_t settle_us) {
   s->buf[0] = (uint8_t *)buf0;
   s->buf[1] = (uint8_t *)buf1;
+  s->version = SKIN_FRAME_VERSION_DEFAULT;
   s->rows = rows;
   s->cols = cols;
   s->settle_us = settle_us;
@@ -18,7 +27,11 @@ void skin_scan_init(skin_scan_t *s, uint32_t *buf0, uint32_t *buf1, uint8_t rows
 
 uint32_t skin_scan_fill(skin_scan_t *s) {
   uint8_t *frame = s->buf[s->fill];
-  uint16_t *dst = skin_frame_counts(frame);
+  uint16_t *dst = skin_frame_counts(frame, s->version, s->rows);
+  const uint32_t map = SKIN_ROW_MAP_BYTES(s->rows);
+  for (uint32_t i = 0; i < 2u * map; i++) {
+    s->row_map[i] = 0xFFu; /* frame.c clears the spare bits */
+  }
   /* The protocol's time is the start of the scan. */
   const uint64_t now = skin_clock_extend(&s->clock, board_time_us32());
   for (uint8_t layer = 0; layer < 2u; layer++) {
@@ -27,13 +40,21 @@ uint32_t skin_scan_fill(skin_scan_t *s) {
       board_delay_us(s->settle_us);
       /* Rows in order: a row's slack lands on the next row's first counts before they are
        * sampled, and the last row's on the frame check before it is written. */
+      row_failed = false;
       board_sample_row(dst, s->cols);
+      if (row_failed) {
+        s->row_map[layer * map + row / 8u] &= (uint8_t)~(1u << (row % 8u));
+      }
       dst += s->cols;
     }
   }
   board_release_rows();
   s->last_time_us = now;
-  const uint32_t len = skin_frame_finish(frame, s->rows, s->cols, s->seq, now);
+  /* A fault raised by an interrupt between the read and the clear waits for the next frame. */
+  const uint16_t faults = pending_faults;
+  pending_faults &= (uint16_t)~faults;
+  const skin_frame_meta_t meta = {s->version, s->rows, s->cols, s->seq, now, faults, s->row_map};
+  const uint32_t len = skin_frame_finish(frame, &meta);
   s->seq++; /* wraps 2^32 - 1 -> 0 as the protocol says */
   return len;
 }
