@@ -13,6 +13,11 @@ has sent none. A board that says it has another grid than its frames, or another
 the driver is configured with, is a WARN for as long as it says so (the frames are still
 decoded: the board's word may be the wrong one); so are malformed info frames since the last
 assessment.
+
+The protocol version of the newest frame is in the values. A version-2 board's own word on a
+scan is too: rows it did not sample (held at their last valid counts, or the frame dropped as
+board-flagged when a row has none yet; core.protocol.hold) and its fault bits are a WARN for the
+assessment in which they arrived.
 """
 
 from __future__ import annotations
@@ -20,6 +25,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from skin_driver.core.protocol.link import CONNECTED, STALLED
+from skin_driver.core.protocol.packed import fault_names
 
 __all__ = ['OK', 'WARN', 'ERROR', 'Health', 'LinkHealth', 'NO_BOARD_IDENTITY', 'board_values']
 
@@ -55,8 +61,10 @@ class LinkHealth:
         stats, dec = link.stats, link.decoder.stats
         state = link.state
         dropped = dec.frames_missed + stats.frames_lost_reconnecting
+        hold = link.hold
         totals = {'frames': dec.frames, 'dropped': dropped, 'size': dec.size_errors,
-                  'corrupt': dec.crc_errors + dec.version_errors, 'info': dec.info_errors}
+                  'corrupt': dec.crc_errors + dec.version_errors, 'info': dec.info_errors,
+                  'flagged': dec.rows_flagged, 'faults': dec.fault_frames}
         new = {k: v - self._reported.get(k, 0) for k, v in totals.items()}
         self._reported = totals
         level = {CONNECTED: OK, STALLED: WARN}.get(state, ERROR)
@@ -78,6 +86,14 @@ class LinkHealth:
         if new['info']:
             level = max(level, WARN)
             problems.append(f"{new['info']} malformed board information frames rejected")
+        if new['flagged']:
+            level = max(level, WARN)
+            problems.append(f"{new['flagged']} frames with rows the board did not sample (held "
+                            'at their last valid counts)')
+        if new['faults']:
+            level = max(level, WARN)
+            names = ', '.join(fault_names(link.decoder.last_faults)) or 'none in the newest'
+            problems.append(f"{new['faults']} frames with board faults ({names})")
         board_problems = self._board_problems(link.decoder)
         if board_problems:
             level = max(level, WARN)
@@ -94,6 +110,13 @@ class LinkHealth:
             'last error': stats.last_error,
             **board_values(link.decoder.board_info),
             'board info frames': dec.info_frames, 'board info errors': dec.info_errors,
+            'protocol version': link.decoder.last_version or 'no frame yet',
+            'frames with board faults': dec.fault_frames,
+            'board fault bits (newest frame)': ', '.join(fault_names(link.decoder.last_faults))
+            or 'none',
+            'frames with rows not sampled': dec.rows_flagged,
+            'rows held at their last valid counts': hold.rows_held,
+            'frames dropped, board-flagged (a row never sampled yet)': hold.frames_flagged,
         }
         return Health(level, '; '.join([f'{state}: {detail}'] + problems), values)
 

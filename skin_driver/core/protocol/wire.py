@@ -298,6 +298,7 @@ class FrameDecoder:
         self.last_shape: tuple[int, int] | None = None
         # The protocol version of the newest frame accepted (None: none yet), for diagnostics.
         self.last_version: int | None = None
+        self.last_faults = 0  # the fault bits of the newest frame accepted (version 2)
         self._layouts: dict = {}  # (rows, cols) -> packed.body_layout, for version 2
         self.board_info: BoardInfo | None = None
         self._info_text = b''  # the text of board_info as sent: a repeat is not parsed again
@@ -437,6 +438,7 @@ class FrameDecoder:
             self._count_seq(seq, time_us)
             self.last_shape = (rows, cols)
             self.last_version = version
+            self.last_faults = faults
             if faults:
                 stats.fault_frames += 1
             if row_valid is not None:
