@@ -42,6 +42,17 @@ def body_layout(rows: int, cols: int) -> tuple:
     return at_map, at_counts, at_pad, (at_pad + 3) // 4 * 4 + CRC_SIZE
 
 
+@lru_cache(maxsize=256)
+def clean_body(rows: int, cols: int) -> tuple:
+    """
+    Return (layout, the bytes from the fault bits to the counts of a scan with no fault and
+    every row sampled, the padding's zero bytes): a clean frame is checked by two compares.
+    """
+    layout = body_layout(rows, cols)
+    at_map, at_counts, at_pad, size = layout
+    return layout, FAULTS.pack(0) + all_valid_map(rows), bytes(size - CRC_SIZE - at_pad)
+
+
 def fault_names(bits: int) -> list:
     """Return the names of the set fault bits, lowest first."""
     return [FAULT_NAMES.get(bit, f'bit {bit}') for bit in range(16) if bits >> bit & 1]
@@ -63,14 +74,15 @@ def unpack_counts(buf, offset: int, count: int) -> np.ndarray:
     Return ``count`` (even) counts packed at buf[offset:] as a new read-only uint16 array.
 
     Count 2k is the little-endian uint16 at byte 3k, low 12 bits; count 2k+1 the uint16 at byte
-    3k + 1, high 12 bits: two strided views, two ufuncs.
+    3k + 1, shifted right by 4: two strided views of the payload, two ufuncs, no per-count
+    Python.
     """
     pairs = count // 2
     even = np.ndarray((pairs,), dtype='<u2', buffer=buf, offset=offset, strides=(3,))
     odd = np.ndarray((pairs,), dtype='<u2', buffer=buf, offset=offset + 1, strides=(3,))
     out = np.empty((pairs, 2), dtype=np.uint16)
-    np.bitwise_and(even, 0x0FFF, out=out[:, 0], casting='unsafe')
-    np.right_shift(odd, 4, out=out[:, 1], casting='unsafe')
+    np.bitwise_and(even, 0x0FFF, out=out[:, 0])
+    np.right_shift(odd, 4, out=out[:, 1])
     out = out.reshape(count)
     out.flags.writeable = False
     return out

@@ -299,7 +299,6 @@ class FrameDecoder:
         # The protocol version of the newest frame accepted (None: none yet), for diagnostics.
         self.last_version: int | None = None
         self.last_faults = 0  # the fault bits of the newest frame accepted (version 2)
-        self._layouts: dict = {}  # (rows, cols) -> packed.body_layout, for version 2
         self.board_info: BoardInfo | None = None
         self._info_text = b''  # the text of board_info as sent: a repeat is not parsed again
 
@@ -411,10 +410,8 @@ class FrameDecoder:
             if version == 1:
                 size = HEADER_SIZE + 4 * n + CRC_SIZE
             else:
-                layout = self._layouts.get((rows, cols))
-                if layout is None:
-                    layout = self._layouts[(rows, cols)] = packed.body_layout(rows, cols)
-                size = layout[3]
+                clean = packed.clean_body(rows, cols)
+                size = clean[0][3]
             if end - pos < size:
                 break
             crc_at = pos + size - CRC_SIZE
@@ -427,7 +424,7 @@ class FrameDecoder:
             if version == 1:
                 body = self._body_v1(buf, pos, n, copy)
             else:
-                body = self._body_v2(buf, pos, rows, layout, flags)
+                body = self._body_v2(buf, pos, rows, clean, flags)
             if body is None:
                 stats.crc_errors += 1
                 stats.bytes_discarded += len(SYNC)
@@ -464,18 +461,23 @@ class FrameDecoder:
         return counts, 0, None
 
     @staticmethod
-    def _body_v2(buf, pos: int, rows: int, layout: tuple, flags: int):
+    def _body_v2(buf, pos: int, rows: int, clean: tuple, flags: int):
         """
         Return (counts, faults, row_valid or None) of the version-2 frame at pos whose checks
-        passed, None if its body disagrees with its flags or a spare bit is set.
+        passed, None if its body disagrees with its flags, or a spare or padding bit is set.
         """
-        at_map, at_counts, at_pad, size = layout
+        (at_map, at_counts, at_pad, size), clean_head, zeros = clean
+        if buf[pos + at_pad:pos + size - CRC_SIZE] != zeros:
+            return None
+        if not flags:  # the usual scan: no fault, every row sampled
+            if buf[pos + HEADER_SIZE:pos + at_counts] != clean_head:
+                return None
+            return packed.unpack_counts(buf, pos + at_counts, (at_pad - at_counts) * 2 // 3), 0, None
         (faults,) = packed.FAULTS.unpack_from(buf, pos + HEADER_SIZE)
         row_map = bytes(buf[pos + at_map:pos + at_counts])
-        all_valid = row_map == packed.all_valid_map(rows)
+        all_valid = row_map == clean_head[packed.FAULTS.size:]
         if (bool(flags & packed.FLAG_FAULT) != bool(faults)
-                or bool(flags & packed.FLAG_ROWS_INVALID) == all_valid
-                or any(buf[pos + at_pad:pos + size - CRC_SIZE])):
+                or bool(flags & packed.FLAG_ROWS_INVALID) == all_valid):
             return None
         row_valid = None
         if not all_valid:
