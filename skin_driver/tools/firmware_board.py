@@ -103,8 +103,9 @@ def build_frame_dump() -> Path:
 
 def build_image(protocol: int = 2) -> Path:
     """
-    Cross-build the emulated board's image sending protocol version ``protocol`` (2, or 1 in a
-    build tree of its own); return the ELF's path.
+    Cross-build the emulated board's image; return the ELF's path.
+
+    It sends protocol version ``protocol``: 2, or 1 (built in a build tree of its own).
     """
     if protocol not in (1, 2):
         raise ValueError(f'protocol must be 1 or 2, got {protocol!r}')

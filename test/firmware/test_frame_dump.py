@@ -1,6 +1,7 @@
 """
-The firmware core's frames are byte for byte wire.encode_frame's, for every grid and seq, in
-both protocol versions.
+The firmware core's frames are byte for byte wire.encode_frame's.
+
+For every grid and seq, in both protocol versions.
 """
 
 import struct
@@ -28,7 +29,8 @@ VERSIONS = pytest.mark.parametrize('version', [1, 2])
 def _dump(frame_dump, records, version=2) -> bytes:
     data = b''.join(RECORD.pack(r, c, s, t) + top.astype('<u2').tobytes()
                     + bottom.astype('<u2').tobytes() for r, c, s, t, top, bottom in records)
-    done = subprocess.run([str(frame_dump), str(version)], input=data, capture_output=True, timeout=60)
+    done = subprocess.run([str(frame_dump), str(version)], input=data, capture_output=True,
+                          timeout=60)
     assert done.returncode == 0, done.stderr.decode()
     return done.stdout
 

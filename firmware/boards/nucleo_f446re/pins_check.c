@@ -14,6 +14,16 @@ _Static_assert(SKIN_BOARD_COLS >= 3 && SKIN_BOARD_COLS <= 16,
 _Static_assert(SKIN_FRAME_V1_SIZE(SKIN_BOARD_ROWS, SKIN_BOARD_COLS) <= 65535u,
                "a frame must fit one DMA transfer (65535 bytes)");
 
+/* The frames and the information frame (at most 206 bytes a second) fit the line (10 bits a
+ * byte), so that a scan never waits for the link. */
+#if defined(SKIN_FW_PROTOCOL) && SKIN_FW_PROTOCOL == 1
+#define SKIN_BOARD_FRAME_BYTES SKIN_FRAME_V1_SIZE(SKIN_BOARD_ROWS, SKIN_BOARD_COLS)
+#else
+#define SKIN_BOARD_FRAME_BYTES SKIN_FRAME_V2_SIZE(SKIN_BOARD_ROWS, SKIN_BOARD_COLS)
+#endif
+_Static_assert(SKIN_BOARD_SCAN_RATE_HZ * SKIN_BOARD_FRAME_BYTES + 206u <= SKIN_BOARD_BAUD / 10u,
+               "SKIN_BOARD_SCAN_RATE_HZ: more frames a second than the link carries");
+
 /* ---- Timing ---- */
 _Static_assert(SKIN_BOARD_ADC_SAMPLE_CYCLES == 3 || SKIN_BOARD_ADC_SAMPLE_CYCLES == 15 ||
                    SKIN_BOARD_ADC_SAMPLE_CYCLES == 28 || SKIN_BOARD_ADC_SAMPLE_CYCLES == 56 ||

@@ -45,8 +45,10 @@ def body_layout(rows: int, cols: int) -> tuple:
 @lru_cache(maxsize=256)
 def clean_body(rows: int, cols: int) -> tuple:
     """
-    Return (layout, the bytes from the fault bits to the counts of a scan with no fault and
-    every row sampled, the padding's zero bytes): a clean frame is checked by two compares.
+    Return (layout, clean head, padding) of a version-2 frame of this grid.
+
+    The clean head is the bytes from the fault bits to the counts of a scan with no fault and
+    every row sampled, the padding its zero bytes: a clean frame is checked by two compares.
     """
     layout = body_layout(rows, cols)
     at_map, at_counts, at_pad, size = layout

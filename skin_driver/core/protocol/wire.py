@@ -463,8 +463,9 @@ class FrameDecoder:
     @staticmethod
     def _body_v2(buf, pos: int, rows: int, clean: tuple, flags: int):
         """
-        Return (counts, faults, row_valid or None) of the version-2 frame at pos whose checks
-        passed, None if its body disagrees with its flags, or a spare or padding bit is set.
+        Return (counts, faults, row_valid or None) of the checked version-2 frame at pos.
+
+        None if its body disagrees with its flags, or a spare or padding bit is set.
         """
         (at_map, at_counts, at_pad, size), clean_head, zeros = clean
         if buf[pos + at_pad:pos + size - CRC_SIZE] != zeros:
@@ -472,7 +473,8 @@ class FrameDecoder:
         if not flags:  # the usual scan: no fault, every row sampled
             if buf[pos + HEADER_SIZE:pos + at_counts] != clean_head:
                 return None
-            return packed.unpack_counts(buf, pos + at_counts, (at_pad - at_counts) * 2 // 3), 0, None
+            counts = packed.unpack_counts(buf, pos + at_counts, (at_pad - at_counts) * 2 // 3)
+            return counts, 0, None
         (faults,) = packed.FAULTS.unpack_from(buf, pos + HEADER_SIZE)
         row_map = bytes(buf[pos + at_map:pos + at_counts])
         all_valid = row_map == clean_head[packed.FAULTS.size:]

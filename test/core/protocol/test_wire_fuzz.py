@@ -284,8 +284,10 @@ def _corpus_cases():
 
 def fake_header_frame(seq):
     """
-    Return a 4 x 4 version-2 frame whose packed payload begins with a whole version-2 header
-    (valid header check) of a 16 x 16 frame: packed counts can hold any bytes.
+    Return a 4 x 4 version-2 frame whose payload holds a fake header.
+
+    The packed counts begin with a whole version-2 header (valid header check) of a 16 x 16
+    frame: packed counts can hold any bytes.
     """
     fake = reseal_header(SYNC + bytes([2, 0]) + bytes(12) + bytes([16, 16, 0, 0]))
     payload = fake + bytes(range(48 - len(fake)))
