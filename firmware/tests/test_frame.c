@@ -41,32 +41,32 @@ static uint32_t finish(uint32_t *buf, size_t words, uint8_t version, uint16_t fa
   return skin_frame_finish(frame, &meta);
 }
 
+/* The frame finished from `counts` with these fields is `expected`, byte for byte. */
+static void assert_finished(uint8_t version, uint16_t faults, const uint8_t *row_map,
+                            const uint8_t *expected, size_t size) {
+  uint32_t buf[SKIN_FRAME_BUFFER_WORDS(1, 2)];
+  const uint32_t len = finish(buf, SKIN_FRAME_BUFFER_WORDS(1, 2), version, faults, row_map);
+  assert_int_equal(len, size);
+  assert_memory_equal(buf, expected, size);
+}
+
 static void frame_bytes_are_the_protocols_v1(void **state) {
   (void)state;
-  uint32_t buf[SKIN_FRAME_BUFFER_WORDS(1, 2)];
   /* Version 1 has no fault bits and no row map: they are not sent. */
   const uint8_t map[] = {0x00, 0x00};
-  const uint32_t len = finish(buf, SKIN_FRAME_BUFFER_WORDS(1, 2), 1, 0x11, map);
-  assert_int_equal(len, sizeof expected_v1);
-  assert_memory_equal(buf, expected_v1, sizeof expected_v1);
+  assert_finished(1, 0x11, map, expected_v1, sizeof expected_v1);
 }
 
 static void frame_bytes_are_the_protocols_v2(void **state) {
   (void)state;
-  uint32_t buf[SKIN_FRAME_BUFFER_WORDS(1, 2)];
-  const uint32_t len = finish(buf, SKIN_FRAME_BUFFER_WORDS(1, 2), 2, 0, NULL);
-  assert_int_equal(len, sizeof expected_v2);
-  assert_memory_equal(buf, expected_v2, sizeof expected_v2);
+  assert_finished(2, 0, NULL, expected_v2, sizeof expected_v2);
 }
 
 static void v2_marks_an_invalid_row_and_the_fault_bits(void **state) {
   (void)state;
-  uint32_t buf[SKIN_FRAME_BUFFER_WORDS(1, 2)];
   /* Spare bits set in the map given are not sent; the row-failed bit follows the map. */
   const uint8_t map[] = {0xFF, 0xFE};
-  const uint32_t len = finish(buf, SKIN_FRAME_BUFFER_WORDS(1, 2), 2, 0x10, map);
-  assert_int_equal(len, sizeof expected_v2_flagged);
-  assert_memory_equal(buf, expected_v2_flagged, sizeof expected_v2_flagged);
+  assert_finished(2, 0x10, map, expected_v2_flagged, sizeof expected_v2_flagged);
 }
 
 static void v2_reports_a_sample_out_of_range_as_an_adc_fault(void **state) {
