@@ -56,4 +56,5 @@ def test_1_khz_loses_no_scan_between_the_pty_and_the_estimator(tmp_path, fused, 
         assert spin_until(executor, lambda: infos and infos[-1].protocol_version == want,
                           WAIT_S), [i.protocol_version for i in infos]
     print(f'\n{"fused" if fused else "split"} v{protocol}: {dec.frames} scans decoded, '
-          f'{missed} not sent by the board (it never blocks: queue full or lagging), {tally.left_for_newer} left for newer')
+          f'{missed} not sent by the board (it never blocks: queue full or lagging), '
+          f'{tally.left_for_newer} left for newer')

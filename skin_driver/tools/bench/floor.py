@@ -2,10 +2,11 @@
 The rclpy floor of the end-to-end benchmark: the least an rclpy process does per scan.
 
 It reads the port with one poll and one os.read, checks each frame's CRC-32, views its counts
-with np.frombuffer (protocol version 1) or unpacks them (version 2), estimates them with the estimator the nodes build from the same method, fills
-one reused TactileContactArray and publishes it on ``contacts``. No parameters, services,
-diagnostics, executor, resynchronisation counters or reconnects: the benchmark runs it beside the
-layouts, measured the same way, as the reference for the driver's CPU per scan.
+with np.frombuffer (protocol version 1) or unpacks them (version 2), estimates them with the
+estimator the nodes build from the same method, fills one reused TactileContactArray and
+publishes it on ``contacts``. No parameters, services, diagnostics, executor, resynchronisation
+counters or reconnects: the benchmark runs it beside the layouts, measured the same way, as the
+reference for the driver's CPU per scan.
 
     python -m skin_driver.tools.bench.floor PORT NAMESPACE METHOD ROWS COLS
 """
