@@ -147,18 +147,20 @@ class BoardProcess:
 
 def start_sim(executor, scene: str, port: str, rate_hz: float, log, loop: bool = False,
               prefix: Iterable[str] = (), timeout_s: float = 20.0,
-              replay: bool = False) -> BoardProcess:
+              replay: bool = False, protocol: int = 2) -> BoardProcess:
     """
     Start the simulated board playing scene on a pty linked at port; spin executor until it plays.
 
     With loop and replay the board renders one pass of the scene first and replays it.
+    protocol: the wire protocol version of its frames (2, or 1).
 
     Its epoch, the wall-clock instant of device time 0, turns a scan's device time into a host
     time.
     """
     board = BoardProcess(spawn(['-m', SIM, '--scene', scene, '--link', port, '--rate',
                                 str(rate_hz)] + (['--loop'] if loop else [])
-                               + (['--replay'] if replay else []), log,
+                               + (['--replay'] if replay else [])
+                               + ['--protocol', str(protocol)], log,
                                prefix=prefix, stdout=subprocess.DEVNULL,
                                stderr=subprocess.PIPE, text=True))
 
