@@ -199,13 +199,15 @@ def frame_with_counts(seq: int, device_time_us: int, rows: int, cols: int, count
     seq = _check_int('seq', seq, MAX_SEQ)
     device_time_us = _check_int('device_time_us', device_time_us, MAX_DEVICE_TIME_US)
     faults = _check_int('faults', faults, 0xFFFF)
-    row_map = packed.encode_row_map(row_valid, rows)
+    clean = packed.all_valid_map(rows)
+    # A board that sampled every row (nearly every scan) builds no map: the cached one is it.
+    row_map = clean if row_valid is None else packed.encode_row_map(row_valid, rows)
     if version == 1:
-        if faults or row_map != packed.all_valid_map(rows):
+        if faults or row_map != clean:
             raise ValueError('version 1 carries no fault bits and no invalid rows')
         flags, extra = 0, b''
     else:
-        flags = ((packed.FLAG_ROWS_INVALID if row_map != packed.all_valid_map(rows) else 0)
+        flags = ((packed.FLAG_ROWS_INVALID if row_map != clean else 0)
                  | (packed.FLAG_FAULT if faults else 0))
         extra = packed.FAULTS.pack(faults) + row_map
     body = bytearray(HEADER.pack(SYNC, version, flags, seq, device_time_us, rows, cols))
