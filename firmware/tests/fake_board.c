@@ -1,5 +1,7 @@
 #include "fake_board.h"
 
+#include "skin_fw/scan.h"
+
 #include <assert.h>
 #include <string.h>
 

@@ -5,7 +5,7 @@
  * Each record (little-endian): u8 rows, u8 cols, u32 seq, u64 device_time_us, then rows*cols
  * top counts and rows*cols bottom counts as u16. The grid is a run-time parameter here; the
  * boards fix theirs at compile time. The "board" below samples the record's counts and fills the
- * row slack with 0xFFFF, as a board may.
+ * row slack with 0xFFFF, as a board may. The protocol version is the argument: 1 or 2 (default 2).
  */
 #include <stdio.h>
 #include <stdlib.h>
@@ -55,7 +55,12 @@ static uint64_t le(const uint8_t *p, int bytes) {
   return v;
 }
 
-int main(void) {
+int main(int argc, char **argv) {
+  const uint8_t version = (argc > 1 && strcmp(argv[1], "1") == 0) ? 1u : 2u;
+  if (argc > 1 && strcmp(argv[1], "1") != 0 && strcmp(argv[1], "2") != 0) {
+    fprintf(stderr, "frame_dump: the protocol version must be 1 or 2\n");
+    return 1;
+  }
   static uint32_t buf[2][SKIN_FRAME_BUFFER_WORDS(255, 255)];
   counts = malloc(2u * 2u * 255u * 255u);
   if (!counts) {
@@ -80,6 +85,7 @@ int main(void) {
     skin_scan_t scan;
     now32 = (uint32_t)time;
     skin_scan_init(&scan, buf[0], buf[1], cur_rows, cur_cols, 0u);
+    scan.version = version;
     scan.seq = (uint32_t)le(head + 2, 4);
     scan.clock.high = (uint32_t)(time >> 32);
     skin_scan_send(&scan, skin_scan_fill(&scan));

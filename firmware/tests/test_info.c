@@ -86,15 +86,16 @@ static void health_follows_the_six_keys(void **state) {
   (void)state;
   skin_faults_clear();
   skin_fault_count(SKIN_FAULT_ADC_OVERRUN);
-  skin_fault_count(SKIN_FAULT_FRAME_DROPPED);
-  skin_fault_count(SKIN_FAULT_FRAME_DROPPED);
+  skin_fault_count(SKIN_FAULT_FRAME_FLAGGED);
+  skin_fault_count(SKIN_FAULT_FRAME_FLAGGED);
+  skin_fault_count(SKIN_FAULT_FRAME_DROPPED); /* version 1's: not sent by a version-2 board */
   uint8_t out[SKIN_INFO_MAX_SIZE];
   skin_board_info_t b = board("nucleo-f446re");
   const skin_board_status_t status = {.reset_cause = "iwdg", .fault = "busfault", .clock = "hsi"};
   const uint32_t len = skin_info_build(out, &b, &status, "0.1.0", 16, 16, 5000);
   assert_string_equal(text_of(out),
                       "board=nucleo-f446re;uid=0039001e3438510b34313939;fw=0.1.0;grid=16x16;"
-                      "pitch_um=5000;rate_hz=1000;reset=iwdg;fault=busfault;clock=hsi;drop=2;"
+                      "pitch_um=5000;rate_hz=1000;reset=iwdg;fault=busfault;clock=hsi;flagged=2;"
                       "adc_ovr=1;adc_to=0;link_to=0;hse_lost=0");
   assert_int_equal(len, 6u + out[3]);
   const uint16_t crc = skin_crc16(out, 4u + out[3]);
@@ -108,7 +109,7 @@ static void a_status_left_unknown_sends_only_the_counters(void **state) {
   skin_board_info_t b = board("q");
   const skin_board_status_t status = {0};
   skin_info_build(out, &b, &status, "0.1.0", 1, 1, 1);
-  assert_non_null(strstr(text_of(out), ";rate_hz=1000;drop=0;adc_ovr=0;"));
+  assert_non_null(strstr(text_of(out), ";rate_hz=1000;flagged=0;adc_ovr=0;"));
   assert_null(strstr(text_of(out), "reset="));
 }
 
@@ -127,7 +128,7 @@ static void the_nucleo_text_holds_every_counter_up_to_four_digits(void **state) 
   const skin_board_status_t status = {
       .reset_cause = "unknown", .fault = "usagefault", .clock = "hsi"};
   skin_info_build(out, &b, &status, "0.1.0", 16, 16, 5000);
-  assert_non_null(strstr(text_of(out), ";hse_lost=9999"));
+  assert_non_null(strstr(text_of(out), ";flagged=9999;adc_ovr=9999;adc_to=9999;link_to=9999;hse_lost=9999"));
   assert_true(out[3] <= SKIN_INFO_MAX_TEXT);
 }
 
@@ -139,19 +140,19 @@ static void a_field_that_does_not_fit_is_left_out_whole(void **state) {
   for (unsigned f = 0; f < SKIN_FAULTS; f++) {
     skin_fault_count((skin_fault_t)f);
   }
-  char name[101];
-  memset(name, 'n', 100);
-  name[100] = '\0';
+  char name[100];
+  memset(name, 'n', 99);
+  name[99] = '\0';
   uint8_t out[SKIN_INFO_MAX_SIZE];
   skin_board_info_t b = board(name);
   const skin_board_status_t status = {.reset_cause = "por", .clock = "hse"};
   const uint32_t len = skin_info_build(out, &b, &status, "0.1.0", 16, 16, 5000);
   assert_true(len > 0);
-  /* 182 bytes before the status: ";reset=por" fits (192), ";clock=hse" would not (202),
-   * ";drop=1" fits (199), and no other counter does. */
+  /* 181 bytes before the status: ";reset=por" fits (191), ";clock=hse", ";flagged=1" and
+   * ";adc_ovr=1" would not (201), ";adc_to=1" fits (200), and no other counter does. */
   const char *text = text_of(out);
-  assert_int_equal(strlen(text), 199);
-  assert_string_equal(text + 169, ";rate_hz=1000;reset=por;drop=1");
+  assert_int_equal(strlen(text), 200);
+  assert_string_equal(text + 168, ";rate_hz=1000;reset=por;adc_to=1");
 }
 
 int main(void) {

@@ -17,7 +17,7 @@
 static int is_info(uint32_t i) { return fake.sent[i][0] == 0xA5 && fake.sent[i][1] == 0x69; }
 static int is_frame(uint32_t i) {
   return fake.sent[i][0] == 0xA5 && fake.sent[i][1] == 0x5A &&
-         fake.sent_len[i] == SKIN_FRAME_SIZE(SKIN_FW_ROWS, SKIN_FW_COLS);
+         fake.sent_len[i] == SKIN_FRAME_V2_SIZE(SKIN_FW_ROWS, SKIN_FW_COLS);
 }
 
 static int setup(void **state) {
@@ -33,7 +33,7 @@ static void boot_sends_the_information_before_the_first_frame(void **state) {
   assert_int_equal(fake.n_sent, 1);
   assert_true(is_info(0));
   const char *text = "board=fake;uid=01112131415161718191a1b1;fw=1.2.3;grid=3x5;pitch_um=4500;"
-                     "rate_hz=1000;drop=0;adc_ovr=0;adc_to=0;link_to=0;hse_lost=0";
+                     "rate_hz=1000;flagged=0;adc_ovr=0;adc_to=0;link_to=0;hse_lost=0";
   assert_int_equal(fake.sent[0][3], strlen(text));
   assert_memory_equal(fake.sent[0] + 4, text, strlen(text));
   for (int i = 0; i < 3; i++) {
@@ -128,16 +128,23 @@ static uint32_t le32(const uint8_t *p) {
   return (uint32_t)p[0] | (uint32_t)p[1] << 8 | (uint32_t)p[2] << 16 | (uint32_t)p[3] << 24;
 }
 
-/* A frame the host accepts: both checks right and every count 12 bits. */
+/* Bottom row `row` of version-2 frame i is marked not sampled, and no other row is. */
+static bool only_marked(uint32_t i, int row) {
+  const uint8_t *f = fake.sent[i];
+  const uint8_t all = (uint8_t)((1u << SKIN_FW_ROWS) - 1u); /* the test grid has < 8 rows */
+  const uint8_t bottom = (uint8_t)(row < 0 ? all : all & ~(1u << row));
+  return f[22] == all && f[23] == bottom;
+}
+
+/* A frame the host accepts with every row valid: both checks right, the rows all sampled. */
 static void assert_valid_frame(uint32_t i) {
   const uint8_t *f = fake.sent[i];
   const uint32_t len = fake.sent_len[i];
   assert_true(is_frame(i));
   assert_int_equal(f[18] | f[19] << 8, skin_crc16(f, 18));
   assert_int_equal(le32(f + len - 4), skin_crc32(f, len - 4));
-  for (uint32_t k = 20; k < len - 4; k += 2) {
-    assert_true(f[k + 1] <= 0x0F);
-  }
+  assert_true(only_marked(i, -1));
+  assert_int_equal(f[3] & SKIN_FLAG_ROWS_INVALID, 0);
 }
 
 static uint32_t feeds_in(uint32_t steps) {
@@ -156,19 +163,25 @@ static void the_watchdog_is_fed_once_per_healthy_scan(void **state) {
   assert_int_equal(feeds_in(25), 25);
 }
 
-static void a_dropped_scan_still_feeds_the_watchdog(void **state) {
-  /* A row that failed was recovered by the board: the loop is healthy, the scan is not sent. */
+static void a_failed_row_still_feeds_the_watchdog(void **state) {
+  /* A row that failed was recovered by the board: the loop is healthy, the scan is sent with
+   * the row marked (version 2). */
   (void)state;
   fake.fail_scan = 3u;
   fake.fail_row = 1u;
+  fake.fail_layer = 1u;
   skin_fw_start();
   assert_int_equal(feeds_in(5), 5);
   fake_drain();
-  assert_int_equal(fake.n_sent, 1 + 4);
+  assert_int_equal(fake.n_sent, 1 + 5);
   for (uint32_t i = 1; i < fake.n_sent; i++) {
-    assert_valid_frame(i);
-    assert_int_equal(le32(fake.sent[i] + 4), i - 1); /* no number lost to the dropped scan */
+    assert_int_equal(le32(fake.sent[i] + 4), i - 1); /* every scan has its number */
+    if (i != 3) {
+      assert_valid_frame(i);
+    }
   }
+  assert_true(only_marked(3, 1));
+  assert_int_equal(fake.sent[3][3], SKIN_FLAG_ROWS_INVALID | SKIN_FLAG_FAULT);
 }
 
 static void a_stalled_link_starves_the_watchdog_until_it_recovers(void **state) {
@@ -190,9 +203,9 @@ static void a_stalled_link_starves_the_watchdog_until_it_recovers(void **state) 
   }
 }
 
-static void a_row_failing_on_every_scan_sends_no_frame_and_says_why(void **state) {
-  /* A row whose ADC overruns scan after scan: no frame is sent as counts, and the information
-   * frame, once a second, names the fault for the host. */
+static void a_row_failing_on_every_scan_is_marked_in_every_frame_and_counted(void **state) {
+  /* A row whose ADC overruns scan after scan: every frame marks it (never sent as counts), and
+   * the information frame, once a second, names the fault and counts the flagged frames. */
   (void)state;
   fake.time_step_us = 100000u;
   fake.fail_scan = 1u;
@@ -203,10 +216,35 @@ static void a_row_failing_on_every_scan_sends_no_frame_and_says_why(void **state
     skin_fw_step();
   }
   fake_drain();
-  assert_int_equal(fake.n_sent, 2); /* the information frames at boot and at 1 s */
-  assert_true(is_info(0) && is_info(1));
-  const char *want = ";drop=10;adc_ovr=10;adc_to=0;link_to=0;hse_lost=0";
-  assert_memory_equal(fake.sent[1] + 4 + fake.sent[1][3] - strlen(want), want, strlen(want));
+  assert_int_equal(fake.n_sent, 2 + 12); /* the information frames at boot and at 1 s */
+  uint32_t infos = 0;
+  for (uint32_t i = 0; i < fake.n_sent; i++) {
+    if (is_info(i)) {
+      infos++;
+      continue;
+    }
+    assert_true(only_marked(i, 0));
+    assert_int_equal(fake.sent[i][20] | fake.sent[i][21] << 8, SKIN_FAULT_ROW_FAILED);
+  }
+  assert_int_equal(infos, 2);
+  assert_true(is_info(0) && is_info(10));
+  const char *want = ";flagged=10;adc_ovr=10;adc_to=0;link_to=0;hse_lost=0";
+  assert_memory_equal(fake.sent[10] + 4 + fake.sent[10][3] - strlen(want), want, strlen(want));
+}
+
+static void the_fault_bits_restate_the_boards_clock_and_reset(void **state) {
+  /* clock=hsi and reset=iwdg in the information frame are bits 3 and 4 of every frame. */
+  (void)state;
+  fake.status = (skin_board_status_t){.reset_cause = "iwdg", .clock = "hsi"};
+  skin_fw_start();
+  skin_fw_step();
+  fake.status.clock = "hse";
+  skin_fw_step();
+  fake_drain();
+  assert_int_equal(fake.n_sent, 3);
+  assert_int_equal(fake.sent[1][20], SKIN_FAULT_CLOCK | SKIN_FAULT_WATCHDOG_RESET);
+  assert_int_equal(fake.sent[2][20], SKIN_FAULT_WATCHDOG_RESET);
+  assert_int_equal(fake.sent[2][3], SKIN_FLAG_FAULT);
 }
 
 static void the_information_frame_carries_the_board_status(void **state) {
@@ -216,7 +254,7 @@ static void the_information_frame_carries_the_board_status(void **state) {
   fake_drain();
   char text[256] = {0};
   memcpy(text, fake.sent[0] + 4, fake.sent[0][3]);
-  assert_non_null(strstr(text, ";rate_hz=1000;reset=iwdg;clock=hsi;drop=0;"));
+  assert_non_null(strstr(text, ";rate_hz=1000;reset=iwdg;clock=hsi;flagged=0;"));
 }
 
 int main(void) {
@@ -228,9 +266,11 @@ int main(void) {
                              setup),
       cmocka_unit_test_setup(after_a_stall_one_information_frame_not_a_burst, setup),
       cmocka_unit_test_setup(the_watchdog_is_fed_once_per_healthy_scan, setup),
-      cmocka_unit_test_setup(a_dropped_scan_still_feeds_the_watchdog, setup),
+      cmocka_unit_test_setup(a_failed_row_still_feeds_the_watchdog, setup),
       cmocka_unit_test_setup(a_stalled_link_starves_the_watchdog_until_it_recovers, setup),
-      cmocka_unit_test_setup(a_row_failing_on_every_scan_sends_no_frame_and_says_why, setup),
+      cmocka_unit_test_setup(a_row_failing_on_every_scan_is_marked_in_every_frame_and_counted,
+                             setup),
+      cmocka_unit_test_setup(the_fault_bits_restate_the_boards_clock_and_reset, setup),
       cmocka_unit_test_setup(the_information_frame_carries_the_board_status, setup),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);

@@ -319,6 +319,8 @@ class SkinDriverNode(Node):
         cpu = self._link.cpu
         for frame in frames if self._ready else self._usable(frames):
             if self.estimation is not None:
+                # What skin_info says of the link; a plain attribute, read by the report timer.
+                self.estimation.protocol_version = frame.version
                 # Contacts first: they are what a controller waits for.
                 self.estimation.process(header, frame.seq, frame.device_time_us, self._pitch,
                                         frame.top, frame.bottom)

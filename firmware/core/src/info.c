@@ -2,6 +2,11 @@
 
 #include "skin_fw/crc.h"
 #include "skin_fw/fault.h"
+#include "skin_fw/frame.h"
+
+/* The frames-with-a-failed-row counter of the other protocol version: always 0, not sent. */
+#define OTHER_VERSIONS_COUNTER \
+  (SKIN_FW_PROTOCOL == 1 ? SKIN_FAULT_FRAME_FLAGGED : SKIN_FAULT_FRAME_DROPPED)
 
 typedef struct {
   uint8_t *text;
@@ -71,7 +76,9 @@ static void put_status(text_t *t, const skin_board_status_t *status) {
     put_optional(t, "clock", status->clock, 0u);
   }
   for (unsigned f = 0; f < SKIN_FAULTS; f++) {
-    put_optional(t, skin_fault_key((skin_fault_t)f), NULL, skin_fault_get((skin_fault_t)f));
+    if (f != OTHER_VERSIONS_COUNTER) {
+      put_optional(t, skin_fault_key((skin_fault_t)f), NULL, skin_fault_get((skin_fault_t)f));
+    }
   }
 }
 

@@ -1,5 +1,7 @@
 #include "skin_fw/fw.h"
 
+#include <string.h>
+
 #include "skin_fw/board.h"
 #include "skin_fw/fault.h"
 #include "skin_fw/frame.h"
@@ -10,6 +12,8 @@
 _Static_assert(SKIN_FW_ROWS >= 1 && SKIN_FW_ROWS <= 128, "SKIN_FW_ROWS must be 1..128");
 _Static_assert(SKIN_FW_COLS >= 1 && SKIN_FW_COLS <= 128, "SKIN_FW_COLS must be 1..128");
 _Static_assert(SKIN_FW_PITCH_UM > 0, "SKIN_FW_PITCH_UM must be positive");
+
+_Static_assert(SKIN_FW_PROTOCOL == 1 || SKIN_FW_PROTOCOL == 2, "SKIN_FW_PROTOCOL must be 1 or 2");
 
 #ifndef SKIN_FW_INFO_PERIOD_US
 #define SKIN_FW_INFO_PERIOD_US 1000000u
@@ -32,6 +36,24 @@ static bool send_info(void) {
   return !len || skin_link_send_when_idle(info_frame, len) != SKIN_LINK_STALLED;
 }
 
+/*
+ * The fault bits that restate the board's state on every version-2 frame, so they agree with
+ * the information frame (docs/protocol.md, "Fault bits"): clock=hsi is SKIN_FAULT_CLOCK and
+ * reset=iwdg SKIN_FAULT_WATCHDOG_RESET.
+ */
+static uint16_t state_faults(void) {
+  skin_board_status_t status = {0};
+  board_status(&status);
+  uint16_t bits = 0u;
+  if (status.clock && strcmp(status.clock, "hsi") == 0) {
+    bits |= SKIN_FAULT_CLOCK;
+  }
+  if (status.reset_cause && strcmp(status.reset_cause, "iwdg") == 0) {
+    bits |= SKIN_FAULT_WATCHDOG_RESET;
+  }
+  return bits;
+}
+
 void skin_fw_start(void) {
   board = (skin_board_info_t){0};
   skin_faults_clear();
@@ -39,6 +61,7 @@ void skin_fw_start(void) {
   board_release_rows();
   skin_link_init(board.link_byte_ns);
   skin_scan_init(&scan, frames[0], frames[1], SKIN_FW_ROWS, SKIN_FW_COLS, SKIN_FW_SETTLE_US);
+  scan.version = SKIN_FW_PROTOCOL;
   send_info();
   next_info_us = skin_clock_extend(&scan.clock, board_time_us32()) + SKIN_FW_INFO_PERIOD_US;
   board_watchdog_feed();
@@ -46,9 +69,11 @@ void skin_fw_start(void) {
 
 void skin_fw_step(void) {
   board_wait_scan_tick();
+  skin_scan_fault(state_faults());
   const uint32_t len = skin_scan_fill(&scan);
   /* Healthy: the link took what it was given. A row that failed was recovered by the board
-     (the scan is dropped and counted, the loop goes on); a link that stalled was reset, and if
+     (version 2: marked in its frame; version 1: the scan dropped and counted; the loop goes
+     on); a link that stalled was reset, and if
      it stalls scan after scan the watchdog, no longer fed, resets the board. */
   bool healthy = true;
   if (scan.last_time_us >= next_info_us) {

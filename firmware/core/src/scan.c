@@ -4,10 +4,16 @@
 #include "skin_fw/fault.h"
 #include "skin_fw/frame.h"
 
+/* Set by the board (skin_scan_fault), taken by the scan that follows. */
+static volatile uint16_t pending_faults;
+
+void skin_scan_fault(uint16_t bits) { pending_faults |= bits; }
+
 void skin_scan_init(skin_scan_t *s, uint32_t *buf0, uint32_t *buf1, uint8_t rows, uint8_t cols,
                     uint32_t settle_us) {
   s->buf[0] = (uint8_t *)buf0;
   s->buf[1] = (uint8_t *)buf1;
+  s->version = SKIN_FRAME_VERSION_DEFAULT;
   s->rows = rows;
   s->cols = cols;
   s->settle_us = settle_us;
@@ -19,10 +25,15 @@ void skin_scan_init(skin_scan_t *s, uint32_t *buf0, uint32_t *buf1, uint8_t rows
 
 uint32_t skin_scan_fill(skin_scan_t *s) {
   uint8_t *frame = s->buf[s->fill];
-  uint16_t *dst = skin_frame_counts(frame);
+  uint16_t *dst = skin_frame_counts(frame, s->version, s->rows);
+  const uint32_t map = SKIN_ROW_MAP_BYTES(s->rows);
+  for (uint32_t i = 0; i < 2u * map; i++) {
+    s->row_map[i] = 0xFFu; /* frame.c clears the spare bits */
+  }
   /* The protocol's time is the start of the scan. */
   const uint64_t now = skin_clock_extend(&s->clock, board_time_us32());
   s->last_time_us = now;
+  bool flagged = false;
   for (uint8_t layer = 0; layer < 2u; layer++) {
     for (uint8_t row = 0; row < s->rows; row++) {
       board_drive_row(layer, row);
@@ -30,17 +41,33 @@ uint32_t skin_scan_fill(skin_scan_t *s) {
       /* Rows in order: a row's slack lands on the next row's first counts before they are
        * sampled, and the last row's on the frame check before it is written. */
       if (!board_sample_row(dst, s->cols)) {
-        /* A row without counts: nothing of this scan may be sent as counts (version 1 frames
-         * cannot mark a row), and the rest of it would only cost time. */
-        board_release_rows();
-        skin_fault_count(SKIN_FAULT_FRAME_DROPPED);
-        return 0u;
+        if (s->version == 1u) {
+          /* A row without counts: nothing of this scan may be sent as counts (version 1 frames
+           * cannot mark a row), and the rest of it would only cost time. */
+          board_release_rows();
+          skin_fault_count(SKIN_FAULT_FRAME_DROPPED);
+          return 0u;
+        }
+        /* Version 2 marks the row instead. Its counts are zeroed: whatever the failed
+         * conversion left there must not look like a sample out of range (SKIN_FAULT_ADC). */
+        s->row_map[layer * map + row / 8u] &= (uint8_t)~(1u << (row % 8u));
+        for (uint8_t c = 0; c < s->cols; c++) {
+          dst[c] = 0u;
+        }
+        flagged = true;
       }
       dst += s->cols;
     }
   }
   board_release_rows();
-  const uint32_t len = skin_frame_finish(frame, s->rows, s->cols, s->seq, now);
+  /* A fault raised by an interrupt between the read and the clear waits for the next frame. */
+  const uint16_t faults = pending_faults;
+  pending_faults &= (uint16_t)~faults;
+  const skin_frame_meta_t meta = {s->version, s->rows, s->cols, s->seq, now, faults, s->row_map};
+  const uint32_t len = skin_frame_finish(frame, &meta);
+  if (flagged) {
+    skin_fault_count(SKIN_FAULT_FRAME_FLAGGED); /* the frame's SKIN_FAULT_ROW_FAILED bit */
+  }
   s->seq++; /* wraps 2^32 - 1 -> 0 as the protocol says */
   return len;
 }

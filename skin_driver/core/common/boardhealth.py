@@ -3,8 +3,8 @@ What a board says of its health in its information frame, by name (docs/firmware
 
 The firmware appends to the six identity keys (core.common.boardinfo) why it last reset
 (``reset``), the fault that stopped it before that reset (``fault``), its clock's source
-(``clock``) and counters of the faults it recovered from since (``drop``, ``adc_ovr``,
-``adc_to``, ``link_to``, ``hse_lost``). A board that sends none of them (the simulator, an older
+(``clock``) and counters of the faults it recovered from since (``drop`` from a version-1 board
+or ``flagged`` from a version-2 one, ``adc_ovr``, ``adc_to``, ``link_to``, ``hse_lost``). A board that sends none of them (the simulator, an older
 firmware) has no health to show; a value this host does not know is shown as sent.
 """
 
@@ -33,6 +33,7 @@ CLOCKS = {'hse': 'external 8 MHz (the ST-LINK MCO)',
 # (key, name) of each fault counter, in the order the board sends them.
 COUNTERS = (
     ('drop', 'frames dropped by the board (a row failed to sample)'),
+    ('flagged', 'frames sent with a row the board failed to sample marked'),
     ('adc_ovr', 'ADC overruns'), ('adc_to', 'ADC timeouts'),
     ('link_to', 'link timeouts (a transfer to the host did not end)'),
     ('hse_lost', 'external clock failures'))

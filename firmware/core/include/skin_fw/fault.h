@@ -15,7 +15,10 @@ extern "C" {
 #endif
 
 typedef enum {
-  SKIN_FAULT_FRAME_DROPPED, /* "drop": a scan not sent because one of its rows failed */
+  /* Of the two, the information frame carries the one of the protocol version the board sends
+   * (SKIN_FW_PROTOCOL): the text has room for one only. */
+  SKIN_FAULT_FRAME_DROPPED, /* "drop": a version-1 scan not sent because one of its rows failed */
+  SKIN_FAULT_FRAME_FLAGGED, /* "flagged": a version-2 frame sent with a failed row marked */
   SKIN_FAULT_ADC_OVERRUN,   /* "adc_ovr": a row's conversion overran (a count was lost) */
   SKIN_FAULT_ADC_TIMEOUT,   /* "adc_to": a row's conversion or its DMA did not end in its bound */
   SKIN_FAULT_LINK_TIMEOUT,  /* "link_to": a transfer to the host did not end in its bound */

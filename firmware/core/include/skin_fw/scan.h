@@ -13,9 +13,14 @@
 extern "C" {
 #endif
 
+/* Row-map bytes of one layer for the largest grid a frame can carry (255 rows). */
+#define SKIN_SCAN_MAP_MAX 32u
+
 typedef struct {
   uint8_t *buf[2];   /* SKIN_FRAME_BUFFER_WORDS(rows, cols) words each, 4-byte aligned */
+  uint8_t version;   /* protocol version of the frames: SKIN_FRAME_VERSION_DEFAULT after init */
   uint8_t rows, cols;
+  uint8_t row_map[2u * SKIN_SCAN_MAP_MAX]; /* rows sampled in the newest scan (frame.h) */
   uint32_t settle_us;
   uint32_t seq;      /* of the next frame */
   uint8_t fill;      /* the buffer the next scan fills; the other may still be on the link */
@@ -29,11 +34,20 @@ void skin_scan_init(skin_scan_t *s, uint32_t *buf0, uint32_t *buf1, uint8_t rows
 /*
  * Scan both layers (drive, settle, sample each row; then release) into the free buffer and
  * finish its frame; return the frame's size. The frame is at s->buf[s->fill].
- * When a row fails (board_sample_row false) the scan stops there, the rows are released and 0
- * is returned: the frame is dropped, counted (SKIN_FAULT_FRAME_DROPPED), and takes no sequence
- * number, so the host's sequence gaps remain what the line lost.
+ * A row that fails (board_sample_row false; the board has counted why) is never sent as counts.
+ * Version 2: its bit in the row map is cleared, its counts are zeroed and the scan goes on; the
+ * frame carries the row-failed fault bit and is counted (SKIN_FAULT_FRAME_FLAGGED).
+ * Version 1 (no row map): the scan stops there, the rows are released and 0 is returned: the
+ * frame is dropped, counted (SKIN_FAULT_FRAME_DROPPED), and takes no sequence number, so the
+ * host's sequence gaps remain what the line lost.
  */
 uint32_t skin_scan_fill(skin_scan_t *s);
+
+/*
+ * For the board, at any time (an interrupt too): fault bits (SKIN_FAULT_* of frame.h) for the
+ * next version-2 frame, once. The core adds those it finds itself (frame.h).
+ */
+void skin_scan_fault(uint16_t bits);
 
 /* How the link's previous transfer ended when the link was wanted again. */
 typedef enum {
