@@ -398,7 +398,7 @@ class SkinDriverNode(Node):
         self.get_logger().warning(f'raw image not published: {err}', throttle_duration_sec=5.0)
 
     def _on_board_info(self, info) -> None:
-        """Pass on who the board says it is, its health and its grid (link thread, per new text)."""
+        """Pass on who the board is, its health and its grid (link thread, once per new text)."""
         if self._board_said is None or info.identity != self._board_said.identity:
             self.get_logger().info(f'the board says it is {info.describe()}')
         self._board_said = info

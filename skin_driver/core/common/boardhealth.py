@@ -4,8 +4,9 @@ What a board says of its health in its information frame, by name (docs/firmware
 The firmware appends to the six identity keys (core.common.boardinfo) why it last reset
 (``reset``), the fault that stopped it before that reset (``fault``), its clock's source
 (``clock``) and counters of the faults it recovered from since (``drop`` from a version-1 board
-or ``flagged`` from a version-2 one, ``adc_ovr``, ``adc_to``, ``link_to``, ``hse_lost``). A board that sends none of them (the simulator, an older
-firmware) has no health to show; a value this host does not know is shown as sent.
+or ``flagged`` from a version-2 one, ``adc_ovr``, ``adc_to``, ``link_to``, ``hse_lost``). A
+board that sends none of them (the simulator, an older firmware) has no health to show; a value
+this host does not know is shown as sent.
 """
 
 from __future__ import annotations

@@ -6,19 +6,25 @@ import numpy as np
 import pytest
 from skin_driver.core.common.boardhealth import BoardHealth
 from skin_driver.core.protocol.health import LinkHealth, OK, WARN
+from skin_driver.core.protocol.hold import RowHold
 from skin_driver.core.protocol.link import CONNECTED, LinkStats
 from skin_driver.core.protocol.wire import BoardInfo, encode_frame, encode_info, FrameDecoder
 
-# The Nucleo's text as the firmware builds it (firmware/core/src/info.c).
+# The Nucleo's text as the firmware builds it (firmware/core/src/info.c), built for protocol
+# version 1 (-DSKIN_FW_PROTOCOL=1: it counts dropped scans, 'drop'); V2_HEALTHY is the default
+# image's (it counts frames sent with a row marked, 'flagged').
 IDENTITY = ('board=nucleo-f446re;uid=0039001e3438510b34313939;fw=0.1.0;grid=16x16;'
             'pitch_um=5000;rate_hz=80')
 HEALTHY = f'{IDENTITY};reset=por;clock=hse;drop=0;adc_ovr=0;adc_to=0;link_to=0;hse_lost=0'
+V2_HEALTHY = (f"{IDENTITY.replace('rate_hz=80', 'rate_hz=100')};reset=por;clock=hse;flagged=0;"
+              'adc_ovr=0;adc_to=0;link_to=0;hse_lost=0')
 
 
 def link_after(stream, decoder=None):
     decoder = decoder or FrameDecoder(expected_shape=(16, 16))
-    decoder.feed(stream)
-    return SimpleNamespace(stats=LinkStats(), decoder=decoder, state=CONNECTED)
+    hold = RowHold()
+    hold.apply(decoder.feed(stream))
+    return SimpleNamespace(stats=LinkStats(), decoder=decoder, state=CONNECTED, hold=hold)
 
 
 def frames(first=0, count=2):
@@ -57,6 +63,27 @@ def test_frames_the_board_dropped_are_told_from_line_noise():
     # Once reported, the same counts are no news.
     again = checker.assess(link_after(encode_info(text) + frames(4, 2), decoder), 'ok')
     assert again.level == OK
+
+
+def test_frames_a_version_2_board_flagged_are_named_with_its_fault_bits():
+    # A row overran on three scans: the board sent them with the row marked (fault bit 0) and
+    # counted them; the host names both the frames' word and the board's counters.
+    counts = np.zeros((16, 16), np.uint16)
+    valid = np.ones((2, 16), bool)
+    valid[0, 5] = False
+    clean = b''.join(encode_frame(s, 10000 * s, counts, counts, 2) for s in range(2))
+    flagged = b''.join(encode_frame(s, 10000 * s, counts, counts, 2, faults=1, row_valid=valid)
+                       for s in range(2, 5))
+    text = V2_HEALTHY.replace('flagged=0;adc_ovr=0', 'flagged=3;adc_ovr=6')
+    checker = LinkHealth((16, 16), 0.005)
+    decoder = FrameDecoder(expected_shape=(16, 16))
+    assert checker.assess(link_after(encode_info(V2_HEALTHY) + clean, decoder), 'ok').level == OK
+    health = checker.assess(link_after(encode_info(text) + flagged, decoder), 'ok')
+    assert health.level == WARN
+    assert '3 frames sent with a row the board failed to sample marked' in health.message
+    assert '6 ADC overruns' in health.message and '(row failed)' in health.message
+    assert health.values['board frames sent with a row the board failed to sample marked'] == '3'
+    assert 'line noise' not in health.message and health.values['sequence gaps'] == 0
 
 
 @pytest.mark.parametrize('sent, named, value', [
