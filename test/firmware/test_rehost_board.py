@@ -35,6 +35,7 @@ SCANS = int(os.environ.get('SKIN_REHOST_SCANS', '1000'))
 GRID = (16, 16)
 WIRING = load_wiring(PINS)
 RATE = WIRING.scan_rate_hz
+FRAME = frame_size(*GRID, 2)  # the image sends protocol version 2 (its default)
 
 
 def _frames(chip, seconds):
@@ -231,7 +232,7 @@ def test_a_host_not_reading_gets_no_byte(nucleo_image):
     chip = _chip(nucleo_image, host_not_reading=True)
     frames, _ = _frames(chip, 0.05)
     assert frames == [] and chip.stats['bytes_sent'] == 0
-    assert chip.stats['bytes_dropped'] >= 2 * frame_size(*GRID)
+    assert chip.stats['bytes_dropped'] >= 2 * FRAME
 
 
 def test_a_stuck_mux_shows_one_row_everywhere(nucleo_image):
@@ -257,23 +258,28 @@ def test_stopping_and_running_on_anywhere_changes_no_byte(nucleo_image):
             chip.run(until_s=until, wall_s=60)
         assert chip.errors == []
         sent.append(bytes(out))
-    assert len(sent[0]) > 4 * frame_size(*GRID)
+    assert len(sent[0]) > 4 * FRAME
     assert sent[1] == sent[0]
 
 
-def test_the_independent_watchdog_resets_the_chip_when_not_reloaded(nucleo_image):
-    # The firmware does not start the IWDG: a debugger does (RM0390 20.3: 0xCCCC starts it,
-    # reset after (RLR + 1) * 4 << PR LSI periods, 512 ms at PR 0, RLR 0xFFF).
+def test_the_firmware_feeds_its_watchdog_and_a_starved_one_resets_the_board(nucleo_image):
+    # The firmware starts the IWDG at boot and reloads it once per healthy scan loop: 0.6 s of
+    # device time, longer than its longest timeout (470 ms), pass without a reset.
     chip = _chip(nucleo_image)
-    frames, _ = _frames(chip, 0.05)
+    frames, _ = _frames(chip, 0.6)
+    assert chip.iwdg.expires_at is not None and chip.stats['resets'] == 0
     assert chip.debug_read(0x4002_3874) & clock.CSR_IWDG == 0
-    chip.debug_write(0x4000_3000, 0xCCCC)
-    later, decoder = _frames(chip, 0.6)
-    assert chip.stats['resets'] == 1
-    assert chip.debug_read(0x4002_3874) & clock.CSR_IWDG
-    # The board starts over: its frames count from 0 again after the reset.
+    # A debugger shortens the timeout to 2 x 4 LSI periods (RM0390 20.3: 0x5555 unlocks PR and
+    # RLR), far below a scan loop: the chip resets by its watchdog, the board starts over (its
+    # frames count from 0 again), names the cause, and restates it in every frame's fault bits.
+    for offset, value in ((0x00, 0x5555), (0x04, 0), (0x08, 1), (0x00, 0xAAAA)):
+        chip.debug_write(0x4000_3000 + offset, value)
+    later, decoder = _frames(chip, 0.3)
+    assert chip.stats['resets'] >= 1  # RCC_CSR's IWDGRSTF: read and cleared by the firmware
     seqs = [f.seq for f in later]
-    assert 0 in seqs[1:] and seqs.index(0) > 0
+    assert seqs and seqs[0] == 0 and seqs == list(range(len(seqs)))
+    assert dict(decoder.board_info.extra)['reset'] == 'iwdg'
+    assert all(f.faults & 1 << 4 for f in later)  # bit 4: the last reset was the watchdog's
 
 
 def test_command_line_board_streams_on_its_link_and_stops_on_sigint(nucleo_image, tmp_path):
