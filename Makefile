@@ -2,7 +2,7 @@
 SHELL := /bin/bash
 RUN := tools/with-env.sh
 
-.PHONY: setup test demo bench soak lint clean firmware flash
+.PHONY: setup test demo bench soak soak-rehost lint clean firmware flash
 
 setup:
 	@bash tools/setup.sh
@@ -27,6 +27,11 @@ bench: setup
 
 soak: setup
 	@$(RUN) python -m skin_driver.tools.soak $(ARGS)
+
+# The unmodified Nucleo image on the rehosted chip: 10 000 scans through the driver (docs/firmware.md).
+soak-rehost: setup
+	@SKIN_REHOST_SCANS=10000 $(RUN) python -m pytest -q -n 0 -s --timeout 1800 \
+		test/firmware/test_rehost_board.py -k thousand
 
 lint: setup
 	@$(RUN) python -m pytest -q -m linter

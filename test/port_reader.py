@@ -1,5 +1,6 @@
 """A test's view of a simulated board's port: pyserial and the frame decoder, reopening on loss."""
 
+import threading
 import time
 
 import serial
@@ -7,6 +8,32 @@ from skin_driver.core.protocol.wire import FrameDecoder
 
 # Generous deadlines only bound a hung test; no assertion depends on how fast anything runs.
 DEADLINE_S = 10.0
+
+
+class TapDecoder(FrameDecoder):
+    """The driver's decoder, keeping a copy of every byte it is fed."""
+
+    def __init__(self, **kwargs):
+        super().__init__(**kwargs)
+        self.raw = bytearray()
+
+    def feed(self, data):
+        self.raw += data
+        return super().feed(data)
+
+
+class Collector:
+    """A link's on_frames callback keeping the frames; enough is set once count arrived."""
+
+    def __init__(self, count):
+        self.count = count
+        self.frames = []
+        self.enough = threading.Event()
+
+    def __call__(self, frames, _now):
+        self.frames.extend(frames)
+        if len(self.frames) >= self.count:
+            self.enough.set()
 
 
 class Reader:

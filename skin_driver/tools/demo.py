@@ -251,9 +251,14 @@ def start_firmware_board(executor, scene_path: str, duration_s: float, port: str
     skin after it, into the scans the board reads; spin executor until it plays.
     """
     scans = round((duration_s + 5.0) * rate_hz)
-    board = BoardProcess(spawn(['-m', 'skin_driver.tools.firmware_board', '--scene', scene_path,
-                                '--link', port, '--rate', str(rate_hz), '--scans', str(scans)],
-                               log, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
+    return _board_started(executor, ['-m', 'skin_driver.tools.firmware_board', '--scene',
+                                     scene_path, '--link', port, '--rate', str(rate_hz),
+                                     '--scans', str(scans)], log, 'the emulated board')
+
+
+def _board_started(executor, argv: list, log, what: str) -> BoardProcess:
+    """Spawn a board tool; spin executor until it says its epoch (RuntimeError if it stops)."""
+    board = BoardProcess(spawn(argv, log, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
                                text=True))
 
     def started() -> bool:
@@ -261,8 +266,24 @@ def start_firmware_board(executor, scene_path: str, duration_s: float, port: str
 
     if not spin_until(executor, started, 180.0, period_s=0.05) or board.epoch is None:
         board.stop()
-        raise RuntimeError(f'the emulated board did not start: {"".join(board.lines)}')
+        raise RuntimeError(f'{what} did not start: {"".join(board.lines)}')
     return board
+
+
+def start_rehost_board(executor, scene_path: str, duration_s: float, port: str,
+                       log) -> BoardProcess:
+    """
+    Start the unmodified Nucleo image on the rehosted chip playing the scene, linked at port.
+
+    It builds the image on first use; the skin plays the scene, then a few seconds unloaded, at
+    the firmware's own scan rate.
+    """
+    from skin_driver.tools.rehost.board import PINS
+    from skin_driver.tools.rehost.wiring import load_wiring
+    scans = round((duration_s + 5.0) * load_wiring(PINS).scan_rate_hz)
+    return _board_started(executor, ['-m', 'skin_driver.tools.rehost', '--scene', scene_path,
+                                     '--link', port, '--scans', str(scans)], log,
+                          'the rehosted board')
 
 
 def run(args, workdir: str) -> int:
@@ -287,6 +308,8 @@ def run(args, workdir: str) -> int:
                 if args.board == 'qemu':
                     board = start_firmware_board(executor, scene_path, scene.duration_s, port,
                                                  args.rate, log)
+                elif args.board == 'rehost':
+                    board = start_rehost_board(executor, scene_path, scene.duration_s, port, log)
                 else:
                     board = start_sim(executor, scene_path, port, args.rate, log)
                 procs.append(board.process)
@@ -332,10 +355,12 @@ def main(argv=None) -> int:
                         help='time scale of the presses (0.5: twice as fast), 0.3 to 3')
     parser.add_argument('--fused', action='store_true',
                         help='estimate in the driver process (fused) instead of a direction node')
-    parser.add_argument('--board', choices=('sim', 'qemu'), default='sim',
+    parser.add_argument('--board', choices=('sim', 'qemu', 'rehost'), default='sim',
                         help='the skin: the simulator (sim) or the firmware on an emulated STM32 '
-                             'fed with the same scene (qemu; needs the ARM toolchain and QEMU, '
-                             'see tools/setup-firmware.sh)')
+                             'fed with the same scene (qemu: the core on QEMU, needs the ARM '
+                             'toolchain and QEMU, see tools/setup-firmware.sh; rehost: the '
+                             'unmodified Nucleo image on modelled STM32F446 peripherals, needs '
+                             'the ARM toolchain)')
     parser.add_argument('--plain', dest='live', action='store_false',
                         help='print status lines instead of redrawing the terminal')
     parser.set_defaults(live=sys.stdout.isatty())

@@ -26,6 +26,14 @@ def frame_dump():
 
 
 @pytest.fixture(scope='session')
+def nucleo_image():
+    """Return the path of the Nucleo-F446RE image, built as ``make firmware`` builds it."""
+    _need(qemu=False)
+    from skin_driver.tools.rehost.board import build_nucleo_image
+    return build_nucleo_image()
+
+
+@pytest.fixture(scope='session')
 def qemu_image():
     """Return the path of the emulated board's firmware image."""
     _need(qemu=True)

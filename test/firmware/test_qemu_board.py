@@ -13,9 +13,9 @@ import signal
 import struct
 import subprocess
 import sys
-import threading
 import time
 
+from port_reader import Collector, TapDecoder
 import pytest
 import serial
 
@@ -33,18 +33,6 @@ FRAME = frame_size(*firmware_board.QEMU_GRID)
 INFO_TEXT = re.compile(rb'board=qemu-netduinoplus2;uid=0{24};fw=\d+\.\d+\.\d+;grid=16x16;'
                        rb'pitch_um=5000;rate_hz=1000;reset=unknown;drop=0;adc_ovr=0;adc_to=0;'
                        rb'link_to=0;hse_lost=0')
-
-
-class TapDecoder(FrameDecoder):
-    """The driver's decoder, keeping a copy of every byte it is fed."""
-
-    def __init__(self, **kwargs):
-        super().__init__(**kwargs)
-        self.raw = bytearray()
-
-    def feed(self, data):
-        self.raw += data
-        return super().feed(data)
 
 
 def _split_stream(raw: bytes, start: int):
@@ -75,20 +63,15 @@ def test_ten_thousand_scans_through_the_driver(qemu_image, tmp_path):
     top, bottom = firmware_board.render_scans(scene, SCANS, SCANS / scene.duration_s)
     firmware_board.write_scans(tmp_path / firmware_board.SCAN_FILE, top, bottom, RATE_HZ)
     decoder = TapDecoder(expected_shape=firmware_board.QEMU_GRID)
-    received = []
-    enough = threading.Event()
-
-    def on_frames(frames, _now):
-        received.extend(frames)
-        if len(received) >= SCANS:
-            enough.set()
+    collector = Collector(SCANS)
+    received, enough = collector.frames, collector.enough
 
     board = firmware_board.QemuBoard(qemu_image, tmp_path, str(tmp_path / 'skin0'))
     port = board.start()
     states = []
     # A busy host may pause QEMU for a while: the link must wait rather than reopen the port
     # (QEMU drops what it writes to a pty nobody holds open).
-    link = SerialLink(port, 921600, decoder, on_frames,
+    link = SerialLink(port, 921600, decoder, collector,
                       on_state=lambda state, detail: states.append(state), stall_timeout_s=60.0)
     started = time.monotonic()
     try:

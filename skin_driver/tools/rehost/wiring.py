@@ -1,0 +1,60 @@
+"""The expander's wiring as skin_board_pins.h gives it: the physical side of the rehosted board."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+import re
+
+PORTS = 'ABCD'
+
+
+@dataclass(frozen=True)
+class Wiring:
+    """Which column is on which ADC channel and which row on which mux input, and the pins."""
+
+    rows: int
+    cols: int
+    channel_column: dict      # ADC channel -> column
+    channel_row: tuple        # per layer: mux input -> row
+    addr_pins: tuple          # S0..S3, pin ids (port * 16 + pin)
+    enable_pins: tuple        # top, bottom
+    enable_active_low: bool
+    baud: int
+    scan_rate_hz: int
+
+
+def _define(text: str, name: str) -> str:
+    match = re.search(rf'#define\s+{name}(?![A-Za-z0-9_])((?:[^\n]*\\\n)*[^\n]*)', text)
+    if match is None:
+        raise ValueError(f'skin_board_pins.h has no {name}')
+    body = re.sub(r'/\*.*?\*/', ' ', match.group(1).replace('\\\n', ' '), flags=re.S)
+    return body.strip()
+
+
+def _pin(text: str, name: str) -> int:
+    port, pin = re.fullmatch(r'SKIN_PIN\(([A-D]),\s*(\d+)\)', _define(text, name)).groups()
+    return PORTS.index(port) * 16 + int(pin)
+
+
+def _pairs(body: str) -> list:
+    return [(int(a), int(b)) for a, b in re.findall(r'X\((\d+),\s*(\d+)\)', body)]
+
+
+def load_wiring(path) -> Wiring:
+    """Parse the pin table at path (firmware/boards/nucleo_f446re/skin_board_pins.h)."""
+    text = Path(path).read_text()
+    rows = int(_define(text, 'SKIN_BOARD_ROWS'))
+    cols = int(_define(text, 'SKIN_BOARD_COLS'))
+    columns = _pairs(_define(text, r'SKIN_BOARD_COLUMNS\(X\)'))
+    layers = tuple(
+        {ch: row for row, ch in _pairs(_define(text, rf'SKIN_BOARD_ROW_CHANNELS_{n}\(X\)'))}
+        for n in ('TOP', 'BOTTOM'))
+    return Wiring(
+        rows=rows, cols=cols, channel_column={ch: col for col, ch in columns},
+        channel_row=layers,
+        addr_pins=tuple(_pin(text, f'SKIN_BOARD_ROW_ADDR{i}') for i in range(4)),
+        enable_pins=(_pin(text, 'SKIN_BOARD_ROW_EN_TOP'), _pin(text, 'SKIN_BOARD_ROW_EN_BOTTOM')),
+        enable_active_low=_define(text, 'SKIN_BOARD_ROW_EN_ACTIVE_LOW') == '1',
+        baud=int(_define(text, 'SKIN_BOARD_BAUD')),
+        scan_rate_hz=int(_define(text, 'SKIN_BOARD_SCAN_RATE_HZ')))
