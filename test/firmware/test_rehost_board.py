@@ -198,29 +198,6 @@ def test_an_adc_overrun_on_a_row_stops_its_dma_requests(nucleo_image):
     assert chip.stats['adc_ovr_set'] == chip.stats['adc_overruns']
 
 
-def test_a_row_that_overruns_is_marked_in_each_version_2_frame_and_counted(nucleo_image):
-    """Issues #44 and #45 together: the failed row is flagged, the frames still flow."""
-    chip = _chip(nucleo_image, adc_overrun_row=(0, 5))
-    frames, decoder = _frames(chip, 1.1)  # past the information frame at 1 s
-    assert chip.errors == [] and len(frames) > 50
-    assert (decoder.stats.crc_errors, decoder.stats.seq_gaps) == (0, 0)
-    assert [f.seq for f in frames] == list(range(frames[0].seq, frames[0].seq + len(frames)))
-    want_valid = np.ones((2, 16), bool)
-    want_valid[0, 5] = False
-    top, bottom = _press(5, 3)
-    for frame in frames:
-        assert frame.version == 2 and frame.faults & 1, f'seq {frame.seq}: row failed bit'
-        assert np.array_equal(frame.row_valid, want_valid), f'seq {frame.seq}'
-        # The other rows are the scan's; the marked one is never sent as counts (zeroed).
-        assert np.array_equal(np.delete(frame.top, 5, axis=0), np.delete(top[0], 5, axis=0))
-        assert (frame.top[5] == 0).all() and np.array_equal(frame.bottom, bottom[0])
-    health = dict(decoder.board_info.extra)
-    flagged = int(health['flagged'])
-    # Counted on the board as the frames sent so far with the bit; each tried twice, overrun.
-    assert 50 < flagged <= len(frames) and int(health['adc_ovr']) == 2 * flagged
-    assert 'drop' not in health
-
-
 def test_an_absent_hse_never_becomes_ready(nucleo_image):
     chip = _chip(nucleo_image, hse_absent=True)
     chip.run(until_s=0.5, wall_s=120)

@@ -2,11 +2,12 @@
 Faults injected into the rehosted Nucleo-F446RE (skin_driver/tools/rehost): none hangs the board.
 
 Each fault is switched on after the board runs cleanly, and off again where it would last for
-ever (a row that overruns on every scan cannot be sent in a version-1 frame at all). In each:
-every frame the host accepts is valid (the stream decoded afresh has no corrupt or malformed
-frame and every count is 12 bits), the board sends valid frames again within 1 s of device time,
-and the host names the fault from the board's information frame (docs/firmware.md, "Faults and
-their bounds").
+ever. In each: every frame the host accepts is valid (the stream decoded afresh has no corrupt
+or malformed frame, every count is 12 bits and every row the board marks as sampled is the
+skin's), the board sends valid frames again within 1 s of device time, and the host names the
+fault from the board's information frame (docs/firmware.md, "Faults and their bounds"). The
+image sends protocol version 2 (its default): a row it failed to sample is marked, not sent as
+counts.
 """
 
 import numpy as np
@@ -60,10 +61,15 @@ class Host:
         stats = again.stats
         assert (stats.crc_errors, stats.size_errors, stats.version_errors,
                 stats.info_errors) == (0, 0, 0, 0), stats
+        skin = np.full(GRID, 100)
+        skin[PRESSED] = 3000
         for _, frame in self.frames:
             assert frame.top.max() <= 4095 and frame.bottom.max() <= 4095
-            # The skin shows one press: a frame of another pattern would be a row misplaced.
-            assert np.unravel_index(np.argmax(frame.top), GRID) == PRESSED
+            # The skin shows one press: a row the board says it sampled with another pattern
+            # would be a row misplaced, or a failed one sent as counts.
+            valid = np.ones((2, GRID[0]), bool) if frame.row_valid is None else frame.row_valid
+            assert np.array_equal(frame.top[valid[0]], skin[valid[0]]), frame.seq
+            assert (frame.bottom[valid[1]] == 100).all(), frame.seq
 
 
 def _chip(nucleo_image, **faults):
@@ -98,23 +104,29 @@ def test_a_tx_dma_that_never_completes_again(nucleo_image):
 
 
 def test_an_adc_overrun_on_one_row(nucleo_image):
-    # Row 5 of the top layer overruns on every scan from 0.3 s: no frame is sent as counts (the
-    # scans are dropped, counted); the information frame names it; once the ADC is sound again
-    # frames come back.
+    # Row 5 of the top layer overruns on every scan from 0.3 s: every frame is still sent, with
+    # that row marked not sampled and the row-failed fault bit (never its counts), and counted
+    # as flagged; the information frame names it; once the ADC is sound the row is valid again.
     host = Host(_chip(nucleo_image, adc_overrun_row=(0, 5), from_s=FAULT_AT_S))
     host.run(1.4)
-    assert host.frames_after(FAULT_AT_S + 0.02) == []
+    marked = host.frames_after(FAULT_AT_S + 0.02)
+    assert len(marked) > 100  # 1.1 s at 100 scans/s: the scan rate kept
+    for frame in marked:
+        assert frame.faults & 1 and not frame.row_valid[0, 5], frame.seq
+        assert frame.row_valid.sum() == 2 * GRID[0] - 1 and (frame.top[5] == 0).all()
     health = host.health()
-    assert health.count('adc_ovr') >= 2 and health.count('drop') >= 1
+    assert health.count('flagged') >= 1 and health.count('adc_ovr') == 2 * health.count('flagged')
+    assert health.count('drop') is None  # a version-2 board counts what it flagged instead
     problems = health.problems(None)
-    assert any('frames dropped by the board' in p for p in problems)
+    assert any('frames sent with a row the board failed to sample marked' in p for p in problems)
     assert any('ADC overruns' in p for p in problems)
     healed_at = host.chip.now / 1e9
     host.chip.faults = Faults()
     host.run(1.2)
     _valid_again_within_one_second(host, healed_at)
+    assert all(f.row_valid is None for f in host.frames_after(healed_at + 0.02))
     host.assert_nothing_invalid()
-    # The frames dropped took no sequence number: no gap for the host to blame on the line.
+    # Every scan was sent under its number: no gap for the host to blame on the line.
     assert host.decoder.stats.seq_gaps == 0
 
 
