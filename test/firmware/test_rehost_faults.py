@@ -164,5 +164,8 @@ def test_a_hang_ends_in_a_watchdog_reset_and_frames_within_one_second(nucleo_ima
     # Past the frame that was on the line when the clock stopped (11.4 ms).
     _valid_again_within_one_second(host, hung_at + 0.02)
     host.assert_nothing_invalid()
+    # The board starts over: its frames count from 0 again after the reset.
+    seqs = [frame.seq for _, frame in host.frames]
+    assert 0 in seqs[1:]
     assert host.health().reset == 'iwdg'
     assert any('independent watchdog' in p for p in host.health().problems(None))
