@@ -176,5 +176,14 @@ def test_a_hang_ends_in_a_watchdog_reset_and_frames_within_one_second(nucleo_ima
     # Past the frame that was on the line when the clock stopped (11.4 ms).
     _valid_again_within_one_second(host, hung_at + 0.02)
     host.assert_nothing_invalid()
+    # The board starts over: its frames count from 0 again after the reset.
+    seqs = [frame.seq for _, frame in host.frames]
+    assert 0 in seqs[1:]
     assert host.health().reset == 'iwdg'
     assert any('independent watchdog' in p for p in host.health().problems(None))
+    # Every version-2 frame since says so too (fault bit 4, docs/protocol.md "Fault bits"); none
+    # before the hang did.
+    restarted = seqs.index(0, 1)
+    frames = [frame for _, frame in host.frames]
+    assert all(frame.faults & 1 << 4 for frame in frames[restarted:])
+    assert not any(frame.faults for frame in frames[:restarted])
