@@ -26,12 +26,12 @@ def scene(presses, rows=16, cols=16, pitch_m=0.005, **model):
 
 @contextlib.contextmanager
 def pipeline(tmp_path, the_scene, rate_hz=200.0, driver=None, direction=None, loop=False,
-             fused=False, identity='sim', play=True):
+             fused=False, identity='sim', play=True, protocol=2):
     """Yield (sim, driver node, direction node, probe, executor): harness.in_process."""
     with harness.in_process(str(tmp_path), the_scene, rate_hz,
                             {**FAST_DRIVER, **(driver or {})},
                             {**FAST_DIRECTION, **(direction or {})}, loop, fused,
-                            identity=identity, play=play) as started:
+                            identity=identity, play=play, protocol=protocol) as started:
         yield started
 
 

@@ -7,15 +7,21 @@
 # and with SKIN_FW_CRC32_HW when CRC32_HW is given), writes <target>.bin and <target>.map, and
 # fails the build when text+data exceeds FLASH_LIMIT or data+bss (the stack included, if the
 # linker script reserves it as a section) exceeds RAM_LIMIT.
+# -DSKIN_FW_PROTOCOL=1 builds every board to send protocol version 1 instead of 2.
 
 set(SKIN_FW_DIR "${CMAKE_CURRENT_LIST_DIR}/..")
+# The wire protocol version every board image sends (docs/protocol.md): 2, or 1 on request.
+set(SKIN_FW_PROTOCOL 2 CACHE STRING "wire protocol version of the boards' frames (1 or 2)")
+set_property(CACHE SKIN_FW_PROTOCOL PROPERTY STRINGS 1 2)
 set(SKIN_FW_WARNINGS -Wall -Wextra -Werror -Wpedantic)
 set(SKIN_FW_CORE_SOURCES
     "${SKIN_FW_DIR}/core/src/crc.c"
+    "${SKIN_FW_DIR}/core/src/fault.c"
     "${SKIN_FW_DIR}/core/src/frame.c"
     "${SKIN_FW_DIR}/core/src/clock.c"
     "${SKIN_FW_DIR}/core/src/info.c"
-    "${SKIN_FW_DIR}/core/src/scan.c")
+    "${SKIN_FW_DIR}/core/src/scan.c"
+    "${SKIN_FW_DIR}/core/src/wait.c")
 set(SKIN_FW_RUN_SOURCE "${SKIN_FW_DIR}/core/src/run.c")
 set(SKIN_FW_VENDOR_INCLUDES
     "${SKIN_FW_DIR}/vendor/cmsis_core/Include"
@@ -30,6 +36,7 @@ function(skin_fw_add_firmware target)
   # Vendor headers are not ours to keep warning-free.
   target_include_directories(${target} SYSTEM PRIVATE ${SKIN_FW_VENDOR_INCLUDES})
   target_compile_options(${target} PRIVATE ${SKIN_FW_WARNINGS} -Os -g)
+  target_compile_definitions(${target} PRIVATE SKIN_FW_PROTOCOL=${SKIN_FW_PROTOCOL})
   if(ARG_CRC32_HW)
     target_compile_definitions(${target} PRIVATE SKIN_FW_CRC32_HW)
   endif()

@@ -1,7 +1,11 @@
 #include "fake_board.h"
 
+#include "skin_fw/scan.h"
+
 #include <assert.h>
 #include <string.h>
+
+#include "skin_fw/fault.h"
 
 fake_board_t fake;
 
@@ -12,6 +16,7 @@ static void record(fake_event_t ev) {
 
 void fake_reset(void) {
   memset(&fake, 0, sizeof fake);
+  skin_faults_clear();
   fake.info.name = "fake";
   fake.info.scan_rate_hz = 1000u;
   fake.time_step_us = 1000u;
@@ -34,9 +39,15 @@ static void finish_send(void) {
   }
 }
 
+static bool link_never_completes(void) { return fake.in_flight_fault != 0; }
+
 void board_init(skin_board_info_t *info) { *info = fake.info; }
 
-uint32_t board_time_us32(void) { return fake.time_us32; }
+uint32_t board_time_us32(void) {
+  const uint32_t now = fake.time_us32;
+  fake.time_us32 += fake.read_us;
+  return now;
+}
 
 void board_drive_row(uint8_t layer, uint8_t row) {
   if (layer == 0 && row == 0) {
@@ -55,12 +66,27 @@ void board_release_rows(void) {
 
 void board_delay_us(uint32_t us) { record((fake_event_t){.kind = EV_DELAY, .value = us}); }
 
-void board_sample_row(uint16_t *dst, uint8_t cols) {
+static bool row_fails(void) {
+  const uint32_t scan = fake.scans; /* 1 + the scan in progress */
+  return fake.fail_scan && fake.driven_layer == fake.fail_layer &&
+         fake.driven_row == fake.fail_row &&
+         (scan == fake.fail_scan || (fake.fail_persists && scan > fake.fail_scan));
+}
+
+bool board_sample_row(uint16_t *dst, uint8_t cols) {
   if (fake.in_flight && (const uint8_t *)dst >= fake.in_flight &&
       (const uint8_t *)dst < fake.in_flight + fake.in_flight_len) {
     fake.samples_into_in_flight++;
   }
   record((fake_event_t){.kind = EV_SAMPLE, .value = cols, .ptr = dst});
+  if (row_fails()) {
+    /* What an overrun leaves in the row on a board: anything. */
+    for (uint8_t c = 0; c < cols + SKIN_FW_ROW_SLACK; c++) {
+      dst[c] = 0xFFFFu;
+    }
+    skin_fault_count(SKIN_FAULT_ADC_OVERRUN);
+    return false;
+  }
   for (uint8_t c = 0; c < cols; c++) {
     dst[c] = fake_count(fake.scans - 1u, fake.driven_layer, fake.driven_row, c);
   }
@@ -68,6 +94,7 @@ void board_sample_row(uint16_t *dst, uint8_t cols) {
   for (uint8_t s = 0; s < SKIN_FW_ROW_SLACK; s++) {
     dst[cols + s] = 0xFFFFu;
   }
+  return true;
 }
 
 void board_wait_scan_tick(void) {
@@ -76,26 +103,60 @@ void board_wait_scan_tick(void) {
 }
 
 void board_link_send(const uint8_t *buf, uint32_t len) {
-  if (fake.busy_left) {
+  if (fake.busy_left || fake.in_flight) {
     fake.sends_while_busy++;
   }
   record((fake_event_t){.kind = EV_SEND, .value = len, .ptr = buf});
   fake.in_flight = buf;
   fake.in_flight_len = len;
+  fake.in_flight_fault = 0;
+  if (fake.link_stalls) {
+    fake.link_stalls--;
+    fake.in_flight_fault = 1;
+  } else if (fake.link_loses_completion) {
+    fake.link_loses_completion--;
+    fake.in_flight_fault = 2;
+  }
   fake.busy_left = fake.busy_polls;
-  if (!fake.busy_left) {
+  if (!fake.busy_left && !link_never_completes()) {
     finish_send();
   }
 }
 
 bool board_link_idle(void) {
+  fake.time_us32 += fake.poll_us;
+  if (fake.in_flight && link_never_completes()) {
+    return false;
+  }
   if (fake.busy_left && --fake.busy_left == 0) {
     finish_send();
   }
   return fake.busy_left == 0;
 }
 
+bool board_link_abort(void) {
+  record((fake_event_t){.kind = EV_ABORT});
+  fake.aborts++;
+  const bool bytes_left = fake.in_flight && fake.in_flight_fault == 1;
+  fake.in_flight_fault = 0;
+  if (bytes_left) {
+    fake.cut_sends++;
+    fake.in_flight = NULL;
+  } else {
+    finish_send();
+  }
+  fake.busy_left = 0;
+  return bytes_left;
+}
+
+void board_watchdog_feed(void) {
+  fake.feeds++;
+  record((fake_event_t){.kind = EV_FEED});
+}
+
+void board_status(skin_board_status_t *status) { *status = fake.status; }
+
 void fake_drain(void) {
-  while (!board_link_idle()) {
+  while (!link_never_completes() && !board_link_idle()) {
   }
 }

@@ -1,7 +1,10 @@
 /*
  * A board for the host tests: it records every call of skin_fw/board.h, samples counts that say
  * where they came from, writes garbage into the row slack, and keeps its link busy for a number
- * of polls after each send, as a DMA link would.
+ * of polls after each send, as a DMA link would. Its faults, set by a test: a row that fails
+ * (as an ADC overrun, counted as the Nucleo counts it), a link whose transfer never completes
+ * (stalled with bytes left, or with every byte gone and only the completion lost); its clock
+ * advances by poll_us at every poll of the link, so a bounded wait can end.
  */
 #ifndef FAKE_BOARD_H
 #define FAKE_BOARD_H
@@ -11,7 +14,8 @@
 
 #include "skin_fw/board.h"
 
-enum fake_event_kind { EV_DRIVE, EV_DELAY, EV_SAMPLE, EV_RELEASE, EV_TICK, EV_SEND };
+enum fake_event_kind { EV_DRIVE, EV_DELAY, EV_SAMPLE, EV_RELEASE, EV_TICK, EV_SEND, EV_ABORT,
+                       EV_FEED };
 
 typedef struct {
   enum fake_event_kind kind;
@@ -42,6 +46,20 @@ typedef struct {
   bool row_driven;
   uint32_t scans;            /* drives of layer 0 row 0 so far */
   skin_board_info_t info;
+  skin_board_status_t status;
+  uint32_t poll_us;          /* device time each poll of board_link_idle takes */
+  uint32_t read_us;          /* device time each reading of board_time_us32 takes */
+  /* Faults. fail_scan: 1 + the scan (drives of row 0) whose row fail_layer/fail_row fails, and
+   * every scan after it while fail_persists; 0: none. */
+  uint32_t fail_scan;
+  uint8_t fail_layer, fail_row;
+  bool fail_persists;
+  uint32_t link_stalls;      /* so many next transfers never complete: no byte leaves */
+  uint32_t link_loses_completion; /* so many next transfers send every byte, never complete */
+  int in_flight_fault;       /* the transfer in flight: 0 fine, 1 stalls, 2 loses completion */
+  uint32_t aborts;           /* board_link_abort calls */
+  uint32_t cut_sends;        /* transfers aborted with bytes left (not in sent[]) */
+  uint32_t feeds;            /* board_watchdog_feed calls */
 } fake_board_t;
 
 extern fake_board_t fake;

@@ -5,7 +5,7 @@
  * Each record (little-endian): u8 rows, u8 cols, u32 seq, u64 device_time_us, then rows*cols
  * top counts and rows*cols bottom counts as u16. The grid is a run-time parameter here; the
  * boards fix theirs at compile time. The "board" below samples the record's counts and fills the
- * row slack with 0xFFFF, as a board may.
+ * row slack with 0xFFFF, as a board may. The protocol version is the argument: 1 or 2 (default 2).
  */
 #include <stdio.h>
 #include <stdlib.h>
@@ -27,11 +27,12 @@ void board_drive_row(uint8_t layer, uint8_t row) {
 }
 void board_release_rows(void) {}
 void board_delay_us(uint32_t us) { (void)us; }
-void board_sample_row(uint16_t *dst, uint8_t cols) {
+bool board_sample_row(uint16_t *dst, uint8_t cols) {
   memcpy(dst, counts + ((size_t)cur_layer * cur_rows + cur_row) * cur_cols, 2u * cols);
   for (int s = 0; s < SKIN_FW_ROW_SLACK; s++) {
     dst[cols + s] = 0xFFFFu;
   }
+  return true;
 }
 void board_wait_scan_tick(void) {}
 void board_link_send(const uint8_t *buf, uint32_t len) {
@@ -40,6 +41,9 @@ void board_link_send(const uint8_t *buf, uint32_t len) {
   }
 }
 bool board_link_idle(void) { return true; }
+bool board_link_abort(void) { return false; }
+void board_watchdog_feed(void) {}
+void board_status(skin_board_status_t *status) { (void)status; }
 
 static int read_exact(void *p, size_t n) { return fread(p, 1, n, stdin) == n; }
 
@@ -51,7 +55,12 @@ static uint64_t le(const uint8_t *p, int bytes) {
   return v;
 }
 
-int main(void) {
+int main(int argc, char **argv) {
+  const uint8_t version = (argc > 1 && strcmp(argv[1], "1") == 0) ? 1u : 2u;
+  if (argc > 1 && strcmp(argv[1], "1") != 0 && strcmp(argv[1], "2") != 0) {
+    fprintf(stderr, "frame_dump: the protocol version must be 1 or 2\n");
+    return 1;
+  }
   static uint32_t buf[2][SKIN_FRAME_BUFFER_WORDS(255, 255)];
   counts = malloc(2u * 2u * 255u * 255u);
   if (!counts) {
@@ -76,6 +85,7 @@ int main(void) {
     skin_scan_t scan;
     now32 = (uint32_t)time;
     skin_scan_init(&scan, buf[0], buf[1], cur_rows, cur_cols, 0u);
+    scan.version = version;
     scan.seq = (uint32_t)le(head + 2, 4);
     scan.clock.high = (uint32_t)(time >> 32);
     skin_scan_send(&scan, skin_scan_fill(&scan));

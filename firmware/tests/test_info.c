@@ -8,6 +8,7 @@
 #include <cmocka.h>
 
 #include "skin_fw/crc.h"
+#include "skin_fw/fault.h"
 #include "skin_fw/info.h"
 
 static skin_board_info_t board(const char *name) {
@@ -24,7 +25,7 @@ static void text_and_layout(void **state) {
   const char *text =
       "board=nucleo-f446re;uid=0039001e3438510b34313939;fw=0.1.0;grid=16x16;pitch_um=5000;"
       "rate_hz=1000";
-  const uint32_t len = skin_info_build(out, &b, "0.1.0", 16, 16, 5000);
+  const uint32_t len = skin_info_build(out, &b, NULL, "0.1.0", 16, 16, 5000);
   const uint32_t tlen = (uint32_t)strlen(text);
   assert_int_equal(len, 6 + tlen);
   assert_int_equal(out[0], 0xA5);
@@ -42,7 +43,7 @@ static void extreme_grid_and_rate(void **state) {
   uint8_t out[SKIN_INFO_MAX_SIZE];
   skin_board_info_t b = board("q");
   b.scan_rate_hz = 4294967295u;
-  const uint32_t len = skin_info_build(out, &b, "10.20.30", 128, 1, 0);
+  const uint32_t len = skin_info_build(out, &b, NULL, "10.20.30", 128, 1, 0);
   const char *tail = ";fw=10.20.30;grid=128x1;pitch_um=0;rate_hz=4294967295";
   assert_memory_equal(out + len - 2 - strlen(tail), tail, strlen(tail));
 }
@@ -51,7 +52,7 @@ static void name_cannot_break_the_fields(void **state) {
   (void)state;
   uint8_t out[SKIN_INFO_MAX_SIZE];
   skin_board_info_t b = board("a;b=c\n\x7f");
-  const uint32_t len = skin_info_build(out, &b, "0.1.0", 1, 1, 1);
+  const uint32_t len = skin_info_build(out, &b, NULL, "0.1.0", 1, 1, 1);
   assert_true(len > 0);
   assert_memory_equal(out + 4, "board=a_b_c__;uid=", 18);
   for (uint32_t i = 4; i < len - 2; i++) {
@@ -67,11 +68,91 @@ static void too_long_a_text_is_refused(void **state) {
   name[200] = '\0';
   skin_board_info_t b = board(name);
   memset(out, 0x55, sizeof out);
-  assert_int_equal(skin_info_build(out, &b, "0.1.0", 1, 1, 1), 0);
+  assert_int_equal(skin_info_build(out, &b, NULL, "0.1.0", 1, 1, 1), 0);
   /* Nothing written past the frame's largest size. */
   for (size_t i = SKIN_INFO_MAX_SIZE; i < sizeof out; i++) {
     assert_int_equal(out[i], 0x55);
   }
+}
+
+static const char *text_of(const uint8_t *out) {
+  static char text[SKIN_INFO_MAX_TEXT + 1];
+  memcpy(text, out + 4, out[3]);
+  text[out[3]] = '\0';
+  return text;
+}
+
+static void health_follows_the_six_keys(void **state) {
+  (void)state;
+  skin_faults_clear();
+  skin_fault_count(SKIN_FAULT_ADC_OVERRUN);
+  skin_fault_count(SKIN_FAULT_FRAME_FLAGGED);
+  skin_fault_count(SKIN_FAULT_FRAME_FLAGGED);
+  skin_fault_count(SKIN_FAULT_FRAME_DROPPED); /* version 1's: not sent by a version-2 board */
+  uint8_t out[SKIN_INFO_MAX_SIZE];
+  skin_board_info_t b = board("nucleo-f446re");
+  const skin_board_status_t status = {.reset_cause = "iwdg", .fault = "busfault", .clock = "hsi"};
+  const uint32_t len = skin_info_build(out, &b, &status, "0.1.0", 16, 16, 5000);
+  assert_string_equal(text_of(out),
+                      "board=nucleo-f446re;uid=0039001e3438510b34313939;fw=0.1.0;grid=16x16;"
+                      "pitch_um=5000;rate_hz=1000;reset=iwdg;fault=busfault;clock=hsi;flagged=2;"
+                      "adc_ovr=1;adc_to=0;link_to=0;hse_lost=0");
+  assert_int_equal(len, 6u + out[3]);
+  const uint16_t crc = skin_crc16(out, 4u + out[3]);
+  assert_int_equal(out[4 + out[3]] | out[5 + out[3]] << 8, crc);
+}
+
+static void a_status_left_unknown_sends_only_the_counters(void **state) {
+  (void)state;
+  skin_faults_clear();
+  uint8_t out[SKIN_INFO_MAX_SIZE];
+  skin_board_info_t b = board("q");
+  const skin_board_status_t status = {0};
+  skin_info_build(out, &b, &status, "0.1.0", 1, 1, 1);
+  assert_non_null(strstr(text_of(out), ";rate_hz=1000;flagged=0;adc_ovr=0;"));
+  assert_null(strstr(text_of(out), "reset="));
+}
+
+static void the_nucleo_text_holds_every_counter_up_to_four_digits(void **state) {
+  /* The longest status the Nucleo sends with every counter at 9999: all of it fits in 200. */
+  (void)state;
+  skin_faults_clear();
+  for (int i = 0; i < 9999; i++) {
+    for (unsigned f = 0; f < SKIN_FAULTS; f++) {
+      skin_fault_count((skin_fault_t)f);
+    }
+  }
+  uint8_t out[SKIN_INFO_MAX_SIZE];
+  skin_board_info_t b = board("nucleo-f446re");
+  b.scan_rate_hz = 80u;
+  const skin_board_status_t status = {
+      .reset_cause = "unknown", .fault = "usagefault", .clock = "hsi"};
+  skin_info_build(out, &b, &status, "0.1.0", 16, 16, 5000);
+  assert_non_null(strstr(text_of(out), ";flagged=9999;adc_ovr=9999;adc_to=9999;link_to=9999;hse_lost=9999"));
+  assert_true(out[3] <= SKIN_INFO_MAX_TEXT);
+}
+
+static void a_field_that_does_not_fit_is_left_out_whole(void **state) {
+  /* A long board name leaves room for some fields only: the text stays key=value throughout,
+   * the fields that fit are there in order, and no field is cut. */
+  (void)state;
+  skin_faults_clear();
+  for (unsigned f = 0; f < SKIN_FAULTS; f++) {
+    skin_fault_count((skin_fault_t)f);
+  }
+  char name[100];
+  memset(name, 'n', 99);
+  name[99] = '\0';
+  uint8_t out[SKIN_INFO_MAX_SIZE];
+  skin_board_info_t b = board(name);
+  const skin_board_status_t status = {.reset_cause = "por", .clock = "hse"};
+  const uint32_t len = skin_info_build(out, &b, &status, "0.1.0", 16, 16, 5000);
+  assert_true(len > 0);
+  /* 181 bytes before the status: ";reset=por" fits (191), ";clock=hse", ";flagged=1" and
+   * ";adc_ovr=1" would not (201), ";adc_to=1" fits (200), and no other counter does. */
+  const char *text = text_of(out);
+  assert_int_equal(strlen(text), 200);
+  assert_string_equal(text + 168, ";rate_hz=1000;reset=por;adc_to=1");
 }
 
 int main(void) {
@@ -80,6 +161,10 @@ int main(void) {
       cmocka_unit_test(extreme_grid_and_rate),
       cmocka_unit_test(name_cannot_break_the_fields),
       cmocka_unit_test(too_long_a_text_is_refused),
+      cmocka_unit_test(health_follows_the_six_keys),
+      cmocka_unit_test(a_status_left_unknown_sends_only_the_counters),
+      cmocka_unit_test(the_nucleo_text_holds_every_counter_up_to_four_digits),
+      cmocka_unit_test(a_field_that_does_not_fit_is_left_out_whole),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }

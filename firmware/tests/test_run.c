@@ -8,6 +8,8 @@
 #include <cmocka.h>
 
 #include "fake_board.h"
+#include "skin_fw/crc.h"
+#include "skin_fw/fault.h"
 #include "skin_fw/frame.h"
 #include "skin_fw/fw.h"
 #include "skin_fw_config.h"
@@ -15,7 +17,7 @@
 static int is_info(uint32_t i) { return fake.sent[i][0] == 0xA5 && fake.sent[i][1] == 0x69; }
 static int is_frame(uint32_t i) {
   return fake.sent[i][0] == 0xA5 && fake.sent[i][1] == 0x5A &&
-         fake.sent_len[i] == SKIN_FRAME_SIZE(SKIN_FW_ROWS, SKIN_FW_COLS);
+         fake.sent_len[i] == SKIN_FRAME_V2_SIZE(SKIN_FW_ROWS, SKIN_FW_COLS);
 }
 
 static int setup(void **state) {
@@ -31,7 +33,7 @@ static void boot_sends_the_information_before_the_first_frame(void **state) {
   assert_int_equal(fake.n_sent, 1);
   assert_true(is_info(0));
   const char *text = "board=fake;uid=01112131415161718191a1b1;fw=1.2.3;grid=3x5;pitch_um=4500;"
-                     "rate_hz=1000";
+                     "rate_hz=1000;flagged=0;adc_ovr=0;adc_to=0;link_to=0;hse_lost=0";
   assert_int_equal(fake.sent[0][3], strlen(text));
   assert_memory_equal(fake.sent[0] + 4, text, strlen(text));
   for (int i = 0; i < 3; i++) {
@@ -122,6 +124,139 @@ static void after_a_stall_one_information_frame_not_a_burst(void **state) {
   assert_int_equal(infos, 2); /* boot, then one after the stall; the next is due 1 s later */
 }
 
+static uint32_t le32(const uint8_t *p) {
+  return (uint32_t)p[0] | (uint32_t)p[1] << 8 | (uint32_t)p[2] << 16 | (uint32_t)p[3] << 24;
+}
+
+/* Bottom row `row` of version-2 frame i is marked not sampled, and no other row is. */
+static bool only_marked(uint32_t i, int row) {
+  const uint8_t *f = fake.sent[i];
+  const uint8_t all = (uint8_t)((1u << SKIN_FW_ROWS) - 1u); /* the test grid has < 8 rows */
+  const uint8_t bottom = (uint8_t)(row < 0 ? all : all & ~(1u << row));
+  return f[22] == all && f[23] == bottom;
+}
+
+/* A frame the host accepts with every row valid: both checks right, the rows all sampled. */
+static void assert_valid_frame(uint32_t i) {
+  const uint8_t *f = fake.sent[i];
+  const uint32_t len = fake.sent_len[i];
+  assert_true(is_frame(i));
+  assert_int_equal(f[18] | f[19] << 8, skin_crc16(f, 18));
+  assert_int_equal(le32(f + len - 4), skin_crc32(f, len - 4));
+  assert_true(only_marked(i, -1));
+  assert_int_equal(f[3] & SKIN_FLAG_ROWS_INVALID, 0);
+}
+
+static uint32_t feeds_in(uint32_t steps) {
+  const uint32_t before = fake.feeds;
+  for (uint32_t i = 0; i < steps; i++) {
+    skin_fw_step();
+  }
+  return fake.feeds - before;
+}
+
+static void the_watchdog_is_fed_once_per_healthy_scan(void **state) {
+  (void)state;
+  fake.busy_polls = 3;
+  skin_fw_start();
+  assert_int_equal(fake.feeds, 1); /* after the start-up */
+  assert_int_equal(feeds_in(25), 25);
+}
+
+static void a_failed_row_still_feeds_the_watchdog(void **state) {
+  /* A row that failed was recovered by the board: the loop is healthy, the scan is sent with
+   * the row marked (version 2). */
+  (void)state;
+  fake.fail_scan = 3u;
+  fake.fail_row = 1u;
+  fake.fail_layer = 1u;
+  skin_fw_start();
+  assert_int_equal(feeds_in(5), 5);
+  fake_drain();
+  assert_int_equal(fake.n_sent, 1 + 5);
+  for (uint32_t i = 1; i < fake.n_sent; i++) {
+    assert_int_equal(le32(fake.sent[i] + 4), i - 1); /* every scan has its number */
+    if (i != 3) {
+      assert_valid_frame(i);
+    }
+  }
+  assert_true(only_marked(3, 1));
+  assert_int_equal(fake.sent[3][3], SKIN_FLAG_ROWS_INVALID | SKIN_FLAG_FAULT);
+}
+
+static void a_stalled_link_starves_the_watchdog_until_it_recovers(void **state) {
+  /* Scan after scan the link stalls: no feed, so the IWDG resets the board if it persists;
+   * once a transfer completes again, feeding resumes. */
+  (void)state;
+  fake.info.link_byte_ns = 1000u;
+  fake.poll_us = 1u;
+  skin_fw_start();
+  fake.link_stalls = 4u; /* the next four transfers */
+  /* Step 1's frame stalls, found by step 2 ... step 4's by step 5, whose own frame is fine. */
+  assert_int_equal(feeds_in(1), 1);
+  assert_int_equal(feeds_in(4), 0);
+  assert_int_equal(feeds_in(3), 3);
+  assert_int_equal(skin_fault_get(SKIN_FAULT_LINK_TIMEOUT), 4);
+  fake_drain();
+  for (uint32_t i = 1; i < fake.n_sent; i++) {
+    assert_valid_frame(i);
+  }
+}
+
+static void a_row_failing_on_every_scan_is_marked_in_every_frame_and_counted(void **state) {
+  /* A row whose ADC overruns scan after scan: every frame marks it (never sent as counts), and
+   * the information frame, once a second, names the fault and counts the flagged frames. */
+  (void)state;
+  fake.time_step_us = 100000u;
+  fake.fail_scan = 1u;
+  fake.fail_layer = 1u;
+  fake.fail_persists = true;
+  skin_fw_start();
+  for (int i = 0; i < 12; i++) {
+    skin_fw_step();
+  }
+  fake_drain();
+  assert_int_equal(fake.n_sent, 2 + 12); /* the information frames at boot and at 1 s */
+  uint32_t infos = 0;
+  for (uint32_t i = 0; i < fake.n_sent; i++) {
+    if (is_info(i)) {
+      infos++;
+      continue;
+    }
+    assert_true(only_marked(i, 0));
+    assert_int_equal(fake.sent[i][20] | fake.sent[i][21] << 8, SKIN_FAULT_ROW_FAILED);
+  }
+  assert_int_equal(infos, 2);
+  assert_true(is_info(0) && is_info(10));
+  const char *want = ";flagged=10;adc_ovr=10;adc_to=0;link_to=0;hse_lost=0";
+  assert_memory_equal(fake.sent[10] + 4 + fake.sent[10][3] - strlen(want), want, strlen(want));
+}
+
+static void the_fault_bits_restate_the_boards_clock_and_reset(void **state) {
+  /* clock=hsi and reset=iwdg in the information frame are bits 3 and 4 of every frame. */
+  (void)state;
+  fake.status = (skin_board_status_t){.reset_cause = "iwdg", .clock = "hsi"};
+  skin_fw_start();
+  skin_fw_step();
+  fake.status.clock = "hse";
+  skin_fw_step();
+  fake_drain();
+  assert_int_equal(fake.n_sent, 3);
+  assert_int_equal(fake.sent[1][20], SKIN_FAULT_CLOCK | SKIN_FAULT_WATCHDOG_RESET);
+  assert_int_equal(fake.sent[2][20], SKIN_FAULT_WATCHDOG_RESET);
+  assert_int_equal(fake.sent[2][3], SKIN_FLAG_FAULT);
+}
+
+static void the_information_frame_carries_the_board_status(void **state) {
+  (void)state;
+  fake.status = (skin_board_status_t){.reset_cause = "iwdg", .clock = "hsi"};
+  skin_fw_start();
+  fake_drain();
+  char text[256] = {0};
+  memcpy(text, fake.sent[0] + 4, fake.sent[0][3]);
+  assert_non_null(strstr(text, ";rate_hz=1000;reset=iwdg;clock=hsi;flagged=0;"));
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test_setup(boot_sends_the_information_before_the_first_frame, setup),
@@ -130,6 +265,13 @@ int main(void) {
       cmocka_unit_test_setup(information_keeps_to_whole_seconds_when_scans_come_off_the_second,
                              setup),
       cmocka_unit_test_setup(after_a_stall_one_information_frame_not_a_burst, setup),
+      cmocka_unit_test_setup(the_watchdog_is_fed_once_per_healthy_scan, setup),
+      cmocka_unit_test_setup(a_failed_row_still_feeds_the_watchdog, setup),
+      cmocka_unit_test_setup(a_stalled_link_starves_the_watchdog_until_it_recovers, setup),
+      cmocka_unit_test_setup(a_row_failing_on_every_scan_is_marked_in_every_frame_and_counted,
+                             setup),
+      cmocka_unit_test_setup(the_fault_bits_restate_the_boards_clock_and_reset, setup),
+      cmocka_unit_test_setup(the_information_frame_carries_the_board_status, setup),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -204,6 +204,23 @@ static void slow_reader_keeps_the_frame(void **state) {
   assert_memory_equal(cdc.fifo, frame, sizeof frame);
 }
 
+/* The core's bound on the transfer ran out first (skin_fw/scan.h): the rest of the frame goes,
+ * counted, and the link says no byte was left stuck, so the core does not starve the watchdog
+ * over a host that stopped reading. */
+static void the_cores_abort_drops_the_rest_without_a_stall(void **state) {
+  (void)state;
+  cdc.room = 100;
+  board_link_send(frame, sizeof frame);
+  assert_false(board_link_idle());
+  assert_false(board_link_abort());
+  assert_true(board_link_idle());
+  assert_int_equal(usb_link_discarded, 1);
+  assert_int_equal(cdc.fifo_len, 100);
+  /* Nothing pending: an abort then has nothing to drop. */
+  assert_false(board_link_abort());
+  assert_int_equal(usb_link_discarded, 1);
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test_setup(frame_fits, setup),
@@ -215,6 +232,7 @@ int main(void) {
       cmocka_unit_test_setup(mount_closes_the_session, setup),
       cmocka_unit_test_setup(host_stopped_reading, setup),
       cmocka_unit_test_setup(slow_reader_keeps_the_frame, setup),
+      cmocka_unit_test_setup(the_cores_abort_drops_the_rest_without_a_stall, setup),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -304,9 +304,10 @@ class CalibrationServices:
         Once the frames have shown the skin, the calibration in force is checked against the
         board at once: one made on another board is refused and the defaults are put in force.
         """
-        if info == self._board:
+        same_board = self._board is not None and info.identity == self._board.identity
+        self._board = info  # its health too, for skin_info
+        if same_board:
             return
-        self._board = info
         if self._skin is not None:
             self._check(replace(self._skin, board_uid=info.uid, board_name=info.board))
 

@@ -8,7 +8,8 @@ walks to active on its own, as a plain node would.
 Publishes (sensor-data QoS): frame (skin_msgs/SkinFrame), top/image_raw and bottom/image_raw
 (sensor_msgs/Image, mono16, raw counts). Diagnostics on /diagnostics once a second. board_info
 (std_msgs/String, latched): the board's information text (docs/protocol.md) each time the
-board says who it is for the first time or differently; nothing from a version-1 board.
+board says who it is, or its health (fault counters), for the first time or differently;
+nothing from a version-1 board.
 
 The reader thread does only what each scan needs: read, decode, (fused) estimate and publish
 contacts, publish frame while someone subscribes to it. Raw images are built only while someone
@@ -219,6 +220,7 @@ class SkinDriverNode(Node):
             self._images = LatestOnly(self._publish_images, 'skin-images', self._images_failed)
         self._listened = Listened(self._pubs)
         self._board_pub = self.create_publisher(String, 'board_info', qos.latched())
+        self._board_said = None  # the BoardInfo last published
         decoder = FrameDecoder(expected_shape=self._grid.shape)
         self._link = SerialLink(
             self._port(), self._p('baud'), decoder, self._publish_frames, self._on_link_state,
@@ -317,6 +319,8 @@ class SkinDriverNode(Node):
         cpu = self._link.cpu
         for frame in frames if self._ready else self._usable(frames):
             if self.estimation is not None:
+                # What skin_info says of the link; a plain attribute, read by the report timer.
+                self.estimation.protocol_version = frame.version
                 # Contacts first: they are what a controller waits for.
                 self.estimation.process(header, frame.seq, frame.device_time_us, self._pitch,
                                         frame.top, frame.bottom)
@@ -394,8 +398,10 @@ class SkinDriverNode(Node):
         self.get_logger().warning(f'raw image not published: {err}', throttle_duration_sec=5.0)
 
     def _on_board_info(self, info) -> None:
-        """Pass on who the board says it is and take its grid (link thread, once per identity)."""
-        self.get_logger().info(f'the board says it is {info.describe()}')
+        """Pass on who the board is, its health and its grid (link thread, once per new text)."""
+        if self._board_said is None or info.identity != self._board_said.identity:
+            self.get_logger().info(f'the board says it is {info.describe()}')
+        self._board_said = info
         self._board_pub.publish(String(data=info.text))
         grid = self._grid
         refused = grid.refusal

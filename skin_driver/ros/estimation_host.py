@@ -39,6 +39,7 @@ import numpy as np
 from rcl_interfaces.msg import SetParametersResult
 from rclpy.event_handler import PublisherEventCallbacks
 from sensor_msgs.msg import Image
+from skin_driver.core.common.boardhealth import BoardHealth
 from skin_driver.core.estimation.calibration.calibration import SkinMount
 from skin_driver.core.estimation.calibration.tare import RecentScans
 from skin_driver.core.estimation.scan.drift import drift_status
@@ -147,6 +148,8 @@ class EstimationHost:
         # What the skin is, latched: a tool that finds the topic later still learns it.
         self._pub_info = node.create_publisher(SkinInfo, 'skin_info', qos.latched())
         self._described = None
+        # The protocol version of the frames fed (fused: set by the driver's reader); 0: unknown.
+        self.protocol_version = 0
         # The viz timer runs only while rviz's topics have subscribers: told by their matched
         # events (three entities) rather than woken at viz_rate to ask.
         self._viz_watchers = {}
@@ -565,7 +568,7 @@ class EstimationHost:
         if live.skin is None:
             return
         info = skin_info(self._skin, live.skin, live.estimator, self.calibration.board,
-                         self._p('layer_gap'), self.mount.in_force)
+                         self._p('layer_gap'), self.mount.in_force, self.protocol_version)
         if info != self._described:
             self._described = info
             self._pub_info.publish(info)
@@ -610,11 +613,12 @@ class EstimationHost:
 
 
 def skin_info(frame_id: str, skin: tuple, estimator: ContactEstimator, board,
-              layer_gap_m: float, mount=None) -> SkinInfo:
+              layer_gap_m: float, mount=None, protocol_version: int = 0) -> SkinInfo:
     """Return what a tool needs to know of the skin ``estimator`` serves, as a SkinInfo."""
     rows, cols, pitch_m = skin
     cal = estimator.calibration
     parts = cal.parts_in_force()
+    health = BoardHealth.of(board)
     return SkinInfo(
         header=Header(frame_id=frame_id), rows=int(rows), cols=int(cols), pitch=float(pitch_m),
         layer_gap=float(layer_gap_m),
@@ -623,6 +627,9 @@ def skin_info(frame_id: str, skin: tuple, estimator: ContactEstimator, board,
         board_name=board.board if board is not None else '',
         board_uid=board.uid if board is not None else '',
         firmware_version=board.fw if board is not None else '',
+        board_reset_cause=health.values()['board reset cause'] if health is not None else '',
+        board_faults=health.named() if health is not None else [],
+        protocol_version=int(protocol_version),
         calibration_made=cal.made_utc, calibration_parts=[part for part, _ in parts],
         calibration_parts_made=[made for _, made in parts],
         parent_frame=mount.parent_frame if mount else '',

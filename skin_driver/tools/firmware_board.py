@@ -101,11 +101,18 @@ def build_frame_dump() -> Path:
     return HOST_BUILD / 'tests' / 'frame_dump'
 
 
-def build_image() -> Path:
-    """Cross-build the emulated board's image; return the ELF's path."""
-    _cmake(ARM_BUILD, f'-DCMAKE_TOOLCHAIN_FILE={FIRMWARE_DIR / "cmake" / "arm-none-eabi.cmake"}',
-           '-DCMAKE_BUILD_TYPE=MinSizeRel', target='skin_qemu')
-    return ARM_BUILD / 'boards' / 'qemu_netduinoplus2' / 'skin_qemu.elf'
+def build_image(protocol: int = 2) -> Path:
+    """
+    Cross-build the emulated board's image; return the ELF's path.
+
+    It sends protocol version ``protocol``: 2, or 1 (built in a build tree of its own).
+    """
+    if protocol not in (1, 2):
+        raise ValueError(f'protocol must be 1 or 2, got {protocol!r}')
+    build = ARM_BUILD if protocol == 2 else BUILD_DIR / 'fw-arm-v1'
+    _cmake(build, f'-DCMAKE_TOOLCHAIN_FILE={FIRMWARE_DIR / "cmake" / "arm-none-eabi.cmake"}',
+           '-DCMAKE_BUILD_TYPE=MinSizeRel', f'-DSKIN_FW_PROTOCOL={protocol}', target='skin_qemu')
+    return build / 'boards' / 'qemu_netduinoplus2' / 'skin_qemu.elf'
 
 
 def render_scans(scene: Scene, count: int, rate_hz: float, seed: int = 0) -> tuple:
@@ -227,6 +234,8 @@ def _parser() -> argparse.ArgumentParser:
                         help='scans in the file the board loops (default: one pass of the scene)')
     parser.add_argument('--link', default=None, help='make this path a symlink to the port')
     parser.add_argument('--seed', type=int, default=0, help='noise seed (0)')
+    parser.add_argument('--protocol', type=int, choices=(1, 2), default=2,
+                        help='wire protocol version the image sends (2; 1 is built apart)')
     return parser
 
 
@@ -255,7 +264,7 @@ def main(argv=None) -> int:
             raise ValueError(f'the emulated board is built for {QEMU_GRID[0]}x{QEMU_GRID[1]}, '
                              f'the scene has {scene.model.rows}x{scene.model.cols}')
         count = args.scans or max(1, round(scene.duration_s * args.rate))
-        image = build_image()
+        image = build_image(args.protocol)
         top, bottom = render_scans(scene, count, args.rate, args.seed)
     except (ValueError, OSError, RuntimeError) as err:
         print(f'firmware_board: error: {err}', file=sys.stderr)

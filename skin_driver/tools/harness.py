@@ -159,18 +159,20 @@ class BoardProcess:
 
 def start_sim(executor, scene: str, port: str, rate_hz: float, log, loop: bool = False,
               prefix: Iterable[str] = (), timeout_s: float = 20.0,
-              replay: bool = False) -> BoardProcess:
+              replay: bool = False, protocol: int = 2) -> BoardProcess:
     """
     Start the simulated board playing scene on a pty linked at port; spin executor until it plays.
 
     With loop and replay the board renders one pass of the scene first and replays it.
+    protocol: the wire protocol version of its frames (2, or 1).
 
     Its epoch, the wall-clock instant of device time 0, turns a scan's device time into a host
     time.
     """
     board = BoardProcess(spawn(['-m', SIM, '--scene', scene, '--link', port, '--rate',
                                 str(rate_hz)] + (['--loop'] if loop else [])
-                               + (['--replay'] if replay else []), log,
+                               + (['--replay'] if replay else [])
+                               + ['--protocol', str(protocol)], log,
                                prefix=prefix, stdout=subprocess.DEVNULL,
                                stderr=subprocess.PIPE, text=True))
 
@@ -325,17 +327,17 @@ def overrides(values: dict) -> list:
 @contextlib.contextmanager
 def in_process(workdir: str, scene, rate_hz: float = 200.0, driver: dict = None,
                direction: dict = None, loop: bool = False, fused: bool = False, seed: int = 1,
-               identity='sim', play: bool = True):
+               identity='sim', play: bool = True, protocol: int = 2):
     """
     Yield (sim, driver node, direction node, probe, executor) on a fresh private context.
 
     The simulated board plays scene (a :class:`~skin_driver.core.sim.scene.Scene`) on a pty at
     ``workdir/skin0``; the driver is configured and activated. fused: the direction node takes
     its scans from the driver's reader thread, wired as the driver's own main wires it, instead
-    of from the frame topic. identity: what the board says it is (SimulatedSkin's). play=False
-    leaves starting the board (``sim.start()``) to the caller, for a scene that must play only
-    once something else is under way; the driver finds the port when it appears. Everything is
-    stopped and destroyed afterwards.
+    of from the frame topic. identity: what the board says it is (SimulatedSkin's); protocol: the
+    version of its frames. play=False leaves starting the board (``sim.start()``) to the caller,
+    for a scene that must play only once something else is under way; the driver finds the port
+    when it appears. Everything is stopped and destroyed afterwards.
     """
     from skin_driver.core.sim.board import SimulatedSkin
     from skin_driver.ros.direction_node import DirectionNode
@@ -344,7 +346,7 @@ def in_process(workdir: str, scene, rate_hz: float = 200.0, driver: dict = None,
 
     link = os.path.join(workdir, 'skin0')
     sim = SimulatedSkin(scene, rate_hz=rate_hz, link_path=link, seed=seed, loop=loop,
-                        identity=identity)
+                        identity=identity, protocol=protocol)
     driver_params = {'port': link, **grid_params(scene), **(driver or {})}
     direction_params = {'calibration_file': os.path.join(workdir, 'calibration.yaml'),
                         **(direction or {})}

@@ -45,6 +45,9 @@ def _parser() -> argparse.ArgumentParser:
                         help='with --loop: render one pass before starting and send those scans '
                              'again on every pass (next to no CPU per scan; a benchmark board)')
     parser.add_argument('--seed', type=int, default=0, help='noise seed, 0 or more (0)')
+    parser.add_argument('--protocol', type=int, choices=(1, 2), default=2,
+                        help='wire protocol version of the frames (2; 1: unpacked counts, '
+                             'docs/protocol.md)')
     parser.add_argument('--export', metavar='OUT.npz', default=None,
                         help='render the scene into a dataset file and exit, without a pty')
     parser.add_argument('--goals', action='store_true',
@@ -118,7 +121,8 @@ def main(argv=None) -> int:
             args.link = default_port()
             os.makedirs(os.path.dirname(args.link), exist_ok=True)
         skin = SimulatedSkin(scene, rate_hz=args.rate, link_path=args.link, seed=args.seed,
-                             loop=args.loop, replay=args.replay, identity=identity)
+                             loop=args.loop, replay=args.replay, identity=identity,
+                             protocol=args.protocol)
         port = skin.start()
     except (ValueError, OSError) as err:
         print(f'sim: error: {err}', file=sys.stderr)

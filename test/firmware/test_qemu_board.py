@@ -28,9 +28,13 @@ from skin_driver.tools import firmware_board
 SCANS = 10_000
 # What the board is told: faster than QEMU emulates it, so it scans back to back.
 RATE_HZ = 1000
-FRAME = frame_size(*firmware_board.QEMU_GRID)
+# The image speaks protocol version 2 unless built for version 1.
+FRAME = frame_size(*firmware_board.QEMU_GRID, 2)
+# The emulated board's health: QEMU stubs the RCC (no reset flags) and the IWDG; no fault. A
+# version-2 board counts the frames it sent with a row marked (flagged), not dropped ones.
 INFO_TEXT = re.compile(rb'board=qemu-netduinoplus2;uid=0{24};fw=\d+\.\d+\.\d+;grid=16x16;'
-                       rb'pitch_um=5000;rate_hz=1000')
+                       rb'pitch_um=5000;rate_hz=1000;reset=unknown;flagged=0;adc_ovr=0;adc_to=0;'
+                       rb'link_to=0;hse_lost=0')
 
 
 def _split_stream(raw: bytes, start: int):
@@ -94,7 +98,9 @@ def test_ten_thousand_scans_through_the_driver(qemu_image, tmp_path):
     # decoder accepts every information frame (the one at boot too, when it was read) and
     # discards only what came before the first whole frame of either kind.
     raw = bytes(decoder.raw)
-    start = raw.find(struct.pack('<BBBBI', 0xA5, 0x5A, 1, 0, first))
+    assert {f.version for f in frames} == {2}
+    assert stats.rows_flagged == stats.fault_frames == 0
+    start = raw.find(struct.pack('<BBBBI', 0xA5, 0x5A, 2, 0, first))
     assert start >= 0
     # From the first whole frame on, not one check fails: the stream itself, decoded afresh
     # (before it, the reader came in mid-frame, and a marker in a header or a CRC there is
@@ -161,11 +167,13 @@ def test_a_scan_file_of_another_grid_stops_the_board(qemu_image, tmp_path):
     assert 'has another grid than this firmware' in ''.join(board.lines)
 
 
-def test_command_line_board_streams_on_its_link_and_stops_with_qemu(qemu_image, tmp_path):
+@pytest.mark.parametrize('protocol', [2, 1])
+def test_command_line_board_streams_on_its_link_and_stops_with_qemu(qemu_image, tmp_path,
+                                                                    protocol):
     link = tmp_path / 'skin0'
     proc = subprocess.Popen(
         [sys.executable, '-m', 'skin_driver.tools.firmware_board', '--scene', 'seed',
-         '--rate', '200', '--scans', '50', '--link', str(link)],
+         '--rate', '200', '--scans', '50', '--link', str(link), '--protocol', str(protocol)],
         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     try:
         first = proc.stdout.readline().split()
@@ -181,6 +189,7 @@ def test_command_line_board_streams_on_its_link_and_stops_with_qemu(qemu_image, 
         finally:
             port.close()
         assert len(frames) >= 20
+        assert {f.version for f in frames} == {protocol}
         qemu = [int(p) for p in os.listdir('/proc') if p.isdigit()
                 and _parent(int(p)) == proc.pid]
         assert qemu, 'QEMU is not a child of the board process'

@@ -2,6 +2,7 @@
 
 import math
 
+from diagnostic_msgs.msg import DiagnosticArray
 from pipeline import pipeline, scene
 import pytest
 from rclpy.parameter import Parameter
@@ -11,6 +12,7 @@ from skin_driver.core.estimation.calibration.calibration import Calibration, Ski
 from skin_driver.core.estimation.calibration.creep import CreepFit
 from skin_driver.core.estimation.calibration.direction import DirectionCorrection
 from skin_driver.core.estimation.scan.kernel import DIRECTION_FEATURES
+from skin_driver.core.protocol.wire import BoardInfo
 from skin_msgs.msg import SkinInfo
 
 pytestmark = pytest.mark.ros
@@ -89,3 +91,29 @@ def test_a_mount_given_by_parameters_is_the_one_in_force_without_a_calibrated_on
         probe.node.create_subscription(SkinInfo, '/skin_info', heard.append, LATCHED)
         assert spin_until(executor, lambda: heard and heard[-1].mount_pose.position.z == 0.07)
         assert heard[-1].parent_frame == 'left_forearm_link'
+
+
+def test_the_board_health_is_shown_by_name_in_skin_info_and_on_diagnostics(tmp_path):
+    # A board that was reset by its watchdog and dropped three scans to ADC overruns.
+    board = BoardInfo.parse(
+        'board=nucleo-f446re;uid=0039001e3438510b34313939;fw=0.1.0;grid=16x16;pitch_um=5000;'
+        'rate_hz=100;reset=iwdg;clock=hse;drop=3;adc_ovr=3;adc_to=0;link_to=0;hse_lost=0')
+    with pipeline(tmp_path, scene([]), rate_hz=100.0, identity=board) as (
+            _, _, _, probe, executor):
+        infos, links = [], []
+        probe.node.create_subscription(SkinInfo, '/skin_info', infos.append, LATCHED)
+
+        def on_diagnostics(msg):
+            links.extend(s for s in msg.status if s.name.endswith('skin link') and any(
+                v.key == 'board reset cause' for v in s.values))
+        probe.node.create_subscription(DiagnosticArray, '/diagnostics', on_diagnostics, 10)
+        assert spin_until(executor, lambda: any(m.board_faults for m in infos) and links, 15.0)
+    info = [m for m in infos if m.board_faults][-1]
+    assert info.board_reset_cause == 'iwdg: independent watchdog (the firmware hung)'
+    assert 'ADC overruns: 3' in info.board_faults
+    assert 'frames dropped by the board (a row failed to sample): 3' in info.board_faults
+    values = {v.key: v.value for v in links[-1].values}
+    assert values['board reset cause'] == 'iwdg: independent watchdog (the firmware hung)'
+    assert values['board ADC overruns'] == '3'
+    assert links[-1].level == b'\x01'
+    assert 'the board was reset by its independent watchdog' in links[-1].message

@@ -7,6 +7,8 @@
  */
 #include "nucleo.h"
 #include "skin_fw/board.h"
+#include "skin_fw/fault.h"
+#include "skin_fw/wait.h"
 
 #define RANKS ((SKIN_BOARD_COLS + 2u) / 3u)
 #define CONVERSIONS (3u * RANKS)
@@ -19,16 +21,15 @@ _Static_assert(CONVERSIONS - SKIN_BOARD_COLS <= SKIN_FW_ROW_SLACK,
    (cycles) == 84 ? 4u : (cycles) == 112 ? 5u : (cycles) == 144 ? 6u : 7u)
 #define SMP SMP_CODE(SKIN_BOARD_ADC_SAMPLE_CYCLES)
 
-/* A rank: sampling plus 12 cycles of 12-bit conversion. The timeout allows four times a row's
- * conversions and the DMA's last transfer; it only ends a wait that something broke. */
+/* A rank: sampling plus 12 cycles of 12-bit conversion. The bound allows four times a row's
+ * conversions and 10 us for the DMA's last transfer and the microsecond clock's granularity
+ * (16 x 16 at 15 cycles: 6 ranks x 27 cycles = 7.2 us, bound 39 us); it only ends a wait that
+ * something broke. */
 #define RANK_CYCLES (SKIN_BOARD_ADC_SAMPLE_CYCLES + 12u)
 #define ROW_US ((RANKS * RANK_CYCLES * 1000000u + NUCLEO_ADC_HZ - 1u) / NUCLEO_ADC_HZ)
-#define TIMEOUT_US (4u * ROW_US + 10u)
+#define NUCLEO_ADC_ROW_BOUND_US (4u * ROW_US + 10u)
 
-/* A count the ADC cannot produce: the driver rejects a frame holding one (docs/protocol.md). */
-#define INVALID_COUNT 0xFFFFu
-
-volatile uint32_t nucleo_adc_timeouts;
+#define OVERRUNS (ADC_CSR_OVR1 | ADC_CSR_OVR2 | ADC_CSR_OVR3)
 
 #define COLUMN_TO_CHANNEL(c, ch) [c] = (ch),
 static const uint8_t column_channel[SKIN_BOARD_COLS] = {SKIN_BOARD_COLUMNS(COLUMN_TO_CHANNEL)};
@@ -75,8 +76,7 @@ void nucleo_adc_init(void) {
   board_delay_us(3u); /* tSTAB after ADON */
 
   DMA2_Stream0->CR = 0u;
-  for (uint32_t i = 0; (DMA2_Stream0->CR & DMA_SxCR_EN) && i < 1000u; i++) {
-  }
+  (void)skin_wait_bits(&DMA2_Stream0->CR, DMA_SxCR_EN, 0u, 1000u);
   DMA2_Stream0->PAR = (uint32_t)&ADC123_COMMON->CDR;
   /* Channel 0, peripheral to memory, half-words both sides, memory increments, very high
    * priority (a late read would overrun the ADC), direct mode (no FIFO). */
@@ -85,26 +85,34 @@ void nucleo_adc_init(void) {
   DMA2_Stream0->FCR = 0u;
 }
 
-static void recover(uint16_t *dst) {
-  /* An overrun stops the multi-ADC DMA requests: stop the stream, clear the ADCs' flags and
-   * re-arm the requests, then mark the row invalid rather than send stale counts. */
-  nucleo_adc_timeouts++;
+static void stop_stream(void) {
   DMA2_Stream0->CR &= ~DMA_SxCR_EN;
-  for (uint32_t i = 0; (DMA2_Stream0->CR & DMA_SxCR_EN) && i < 1000u; i++) {
-  }
+  /* The stream ends its current beat first: a few bus cycles. */
+  (void)skin_wait_bits(&DMA2_Stream0->CR, DMA_SxCR_EN, 0u, 1000u);
+}
+
+static void recover_overrun(void) {
+  /* An overrun stops the multi-ADC DMA requests (RM0390, "ADC overrun"): stop the stream,
+   * clear the ADCs' flags and re-arm the requests; the next row starts afresh. */
+  stop_stream();
   ADC1->SR = 0u;
   ADC2->SR = 0u;
   ADC3->SR = 0u;
   const uint32_t ccr = ADC123_COMMON->CCR;
   ADC123_COMMON->CCR = ccr & ~ADC_CCR_DMA;
   ADC123_COMMON->CCR = ccr;
-  for (uint32_t i = 0; i < CONVERSIONS; i++) {
-    dst[i] = INVALID_COUNT;
-  }
 }
 
-void board_sample_row(uint16_t *dst, uint8_t cols) {
-  (void)cols; /* the grid is fixed at compile time: cols == SKIN_BOARD_COLS */
+static void recover_timeout(void) {
+  /* A conversion or a transfer that never ended: reset the three ADCs and set them up again. */
+  stop_stream();
+  RCC->APB2RSTR |= RCC_APB2RSTR_ADCRST;
+  RCC->APB2RSTR &= ~RCC_APB2RSTR_ADCRST;
+  nucleo_adc_init();
+}
+
+/* One conversion of the row into dst: true when every count came. */
+static bool convert_row(uint16_t *dst) {
   DMA2->LIFCR = DMA_LIFCR_CTCIF0 | DMA_LIFCR_CHTIF0 | DMA_LIFCR_CTEIF0 | DMA_LIFCR_CDMEIF0 |
                 DMA_LIFCR_CFEIF0;
   DMA2_Stream0->M0AR = (uint32_t)dst;
@@ -112,15 +120,25 @@ void board_sample_row(uint16_t *dst, uint8_t cols) {
   DMA2_Stream0->CR |= DMA_SxCR_EN;
   ADC1->CR2 |= ADC_CR2_SWSTART; /* the master's start starts ADC2 and ADC3 with it */
 
-  const uint32_t start = board_time_us32();
-  for (;;) {
-    const uint32_t isr = DMA2->LISR;
-    if (isr & DMA_LISR_TCIF0) {
-      return;
-    }
-    if ((isr & DMA_LISR_TEIF0) || (uint32_t)(board_time_us32() - start) > TIMEOUT_US) {
-      break;
-    }
+  const skin_wait_t done =
+      skin_wait_flags(&DMA2->LISR, DMA_LISR_TCIF0, DMA_LISR_TEIF0, NUCLEO_ADC_ROW_BOUND_US);
+  /* A count lost to an overrun shifts the rest of the row: with one, none of it is taken. */
+  if (ADC123_COMMON->CSR & OVERRUNS) {
+    skin_fault_count(SKIN_FAULT_ADC_OVERRUN);
+    recover_overrun();
+    return false;
   }
-  recover(dst);
+  if (done != SKIN_WAIT_DONE) {
+    skin_fault_count(SKIN_FAULT_ADC_TIMEOUT);
+    recover_timeout();
+    return false;
+  }
+  return true;
+}
+
+bool board_sample_row(uint16_t *dst, uint8_t cols) {
+  (void)cols; /* the grid is fixed at compile time: cols == SKIN_BOARD_COLS */
+  /* Once more after a recovered failure: a passing overrun (the DMA held up on the bus) costs
+   * one row's time, not the scan; a row that fails twice is the scan's end. */
+  return convert_row(dst) || convert_row(dst);
 }

@@ -3,6 +3,10 @@
 #include "skin_fw/board.h"
 
 void board_init(skin_board_info_t *info) {
+  /* Why the board (re)started, before anything can change it; then the watchdog, so that even
+   * the start-up cannot hang. */
+  nucleo_reset_init();
+  nucleo_watchdog_init();
   /* The rows first, released: until then the mux enables float (pull them to "disabled" on the
    * expander), and the clock's bounded waits may take a while without the MCO. */
   nucleo_gpio_init();
@@ -20,4 +24,11 @@ void board_init(skin_board_info_t *info) {
     info->uid[i] = uid[i];
   }
   info->scan_rate_hz = SKIN_BOARD_SCAN_RATE_HZ;
+  info->link_byte_ns = NUCLEO_LINK_BYTE_NS;
+}
+
+void board_status(skin_board_status_t *status) {
+  status->reset_cause = nucleo_reset_cause_name();
+  status->fault = nucleo_fault_name(nucleo_fault_code);
+  status->clock = nucleo_clock_name();
 }

@@ -7,6 +7,7 @@
 
 #include <stdint.h>
 
+#include "reset.h"
 #include "skin_board_pins.h"
 #include "stm32f4xx.h"
 
@@ -17,6 +18,15 @@
 /* With an APB prescaler other than 1 the timers on that bus run at twice its clock. */
 #define NUCLEO_APB1_TIMER_HZ (2u * NUCLEO_APB1_HZ)
 #define NUCLEO_ADC_HZ (NUCLEO_APB2_HZ / 4u) /* ADCPRE /4: 22.5 MHz, under the 36 MHz maximum */
+
+/* Nanoseconds a byte takes on the line (8N1, 10 bits; the core bounds a transfer from it: twice
+ * the bytes' time, skin_fw/scan.h). The USART's rate is within 1 % of this (link.c). */
+#define NUCLEO_LINK_BYTE_NS ((uint32_t)((10000000000ull + SKIN_BOARD_BAUD - 1u) / SKIN_BOARD_BAUD))
+
+/* The independent watchdog's reload in ticks of LSI / 32: 250 ms at the LSI's nominal 32 kHz,
+ * 170..470 ms over its 17..47 kHz (watchdog.c). */
+#define NUCLEO_IWDG_RELOAD 250u
+#define NUCLEO_IWDG_SHORTEST_US (NUCLEO_IWDG_RELOAD * 32u * 1000u / 47u)
 
 /* Pin ids as SKIN_PIN() makes them: port * 16 + pin, ports A..D. */
 #define NUCLEO_BIT(id) (1ull << (id))
@@ -45,10 +55,6 @@
 #define NUCLEO_USED_PINS_OR (NUCLEO_CONTROL_PINS(|) SKIN_BOARD_COLUMNS(NUCLEO_COLUMN_OR))
 #define NUCLEO_USED_PINS_SUM (NUCLEO_CONTROL_PINS(+) SKIN_BOARD_COLUMNS(NUCLEO_COLUMN_ADD))
 
-/* LD2, the user LED, is on PA5 (through SB21): a fault blinks it when no column uses PA5. */
-#define NUCLEO_LED SKIN_PIN(A, 5)
-#define NUCLEO_LED_FREE ((NUCLEO_USED_PINS_OR & NUCLEO_BIT(NUCLEO_LED)) == 0u)
-
 /* GPIO helpers (gpio.c); id as SKIN_PIN() makes it. */
 GPIO_TypeDef *nucleo_gpio(uint32_t id);
 void nucleo_gpio_init(void);
@@ -60,25 +66,29 @@ static inline void nucleo_gpio_write(uint32_t id, int high) {
   nucleo_gpio(id)->BSRR = high ? bit : bit << 16;
 }
 
-/* Why the board stopped (nucleo_fault): readable with a debugger as nucleo_fault_code. */
-enum {
-  NUCLEO_FAULT_PLL = 1,       /* the PLL did not lock */
-  NUCLEO_FAULT_OVERDRIVE = 2, /* the regulator's over-drive did not come up */
-  NUCLEO_FAULT_FLASH = 3,     /* the flash did not take the wait states */
-  NUCLEO_FAULT_SWITCH = 4,    /* the system clock did not switch to the PLL */
-  NUCLEO_FAULT_EXCEPTION = 5, /* a fault exception (a stack overflow may lock the core up) */
-};
-extern volatile uint32_t nucleo_fault_code;
+/*
+ * Stop on a fault: record its code (reset.h) in RAM that survives the reset, release the rows,
+ * reset. The next start sends the reset cause and the fault in the information frame.
+ */
 void nucleo_fault(uint32_t code) __attribute__((noreturn));
+void nucleo_fault_at(uint32_t code, uint32_t pc) __attribute__((noreturn));
+/* Read (and clear) the reset flags and the fault record: first thing at boot. */
+void nucleo_reset_init(void);
+const char *nucleo_reset_cause_name(void);
+/* What the last reset left in the record (also for a debugger). */
+extern volatile uint32_t nucleo_fault_code;
+extern volatile uint32_t nucleo_fault_pc;
 
-/* The clock source nucleo_clock_init() ended up with. */
+/* The clock source nucleo_clock_init() ended up with; the NMI's fallback when the HSE fails. */
 enum { NUCLEO_CLOCK_HSE_BYPASS = 1, NUCLEO_CLOCK_HSI_FALLBACK = 2 };
 extern volatile uint32_t nucleo_clock_source;
+void nucleo_clock_hse_lost(void);
+const char *nucleo_clock_name(void);
 
-/* Counters a debugger can read: ADC rows that timed out, link transfers that failed. */
-extern volatile uint32_t nucleo_adc_timeouts;
+/* Link transfers that ended with a DMA error (a debugger reads it). */
 extern volatile uint32_t nucleo_link_errors;
 
+void nucleo_watchdog_init(void);
 void nucleo_clock_init(void);
 void nucleo_timers_init(void);
 void nucleo_rows_init(void);

@@ -11,8 +11,21 @@ _Static_assert(SKIN_BOARD_ROWS >= 1 && SKIN_BOARD_ROWS <= 16,
                "SKIN_BOARD_ROWS: 1..16 (a 16:1 mux per layer)");
 _Static_assert(SKIN_BOARD_COLS >= 3 && SKIN_BOARD_COLS <= 16,
                "SKIN_BOARD_COLS: 3..16 (one ADC input per column, three ADCs)");
-_Static_assert(SKIN_FRAME_SIZE(SKIN_BOARD_ROWS, SKIN_BOARD_COLS) <= 65535u,
+_Static_assert(SKIN_FRAME_V1_SIZE(SKIN_BOARD_ROWS, SKIN_BOARD_COLS) <= 65535u,
                "a frame must fit one DMA transfer (65535 bytes)");
+
+/* The frames and the information frame (at most 206 bytes a second) fit the USART's line (10
+ * bits a byte), so that a scan never waits for the link. Not the USB image's: its rate is set against
+ * USB's throughput (skin_board_pins.h, "Link over USB"). */
+#if SKIN_FW_PROTOCOL == 1
+#define SKIN_BOARD_FRAME_BYTES SKIN_FRAME_V1_SIZE(SKIN_BOARD_ROWS, SKIN_BOARD_COLS)
+#else
+#define SKIN_BOARD_FRAME_BYTES SKIN_FRAME_V2_SIZE(SKIN_BOARD_ROWS, SKIN_BOARD_COLS)
+#endif
+#ifndef SKIN_FW_LINK_USB
+_Static_assert(SKIN_BOARD_SCAN_RATE_HZ * SKIN_BOARD_FRAME_BYTES + 206u <= SKIN_BOARD_BAUD / 10u,
+               "SKIN_BOARD_SCAN_RATE_HZ: more frames a second than the link carries");
+#endif
 
 /* ---- Timing ---- */
 _Static_assert(SKIN_BOARD_ADC_SAMPLE_CYCLES == 3 || SKIN_BOARD_ADC_SAMPLE_CYCLES == 15 ||
@@ -103,3 +116,19 @@ _Static_assert(((0ull SKIN_BOARD_COLUMNS(NUCLEO_COLUMN_OR)) &
 _Static_assert((NUCLEO_USED_PINS_OR & RESERVED_PINS) == 0u,
                "a pin the Nucleo reserves (SWD PA13/PA14, USB PA11/PA12, button PC13, 32 kHz "
                "crystal PC14/PC15) or the LQFP64 lacks (PB11, port D but PD2) is used");
+
+/* ---- The watchdog against the slowest healthy scan loop ---- */
+/*
+ * One loop: the wait for the scan tick (bounded at two periods, timers.c), the scan, and the two
+ * link waits (the information frame's and the data frame's, each at most its bound: twice the
+ * bytes' time plus 1 ms, skin_fw/scan.h). It must stay within half the watchdog's shortest
+ * timeout (the LSI at its fastest), or a healthy board would be reset.
+ */
+#define CHECK_PERIOD_US (1000000u / SKIN_BOARD_SCAN_RATE_HZ)
+#define CHECK_LINK_US(bytes) (2u * (bytes) * (NUCLEO_LINK_BYTE_NS / 1000u + 1u) + 1000u)
+#define CHECK_LOOP_US                                                                    \
+  (2u * CHECK_PERIOD_US + 2000u +                                                        \
+   CHECK_LINK_US(SKIN_BOARD_FRAME_BYTES) + CHECK_LINK_US(206u))
+_Static_assert(2u * CHECK_LOOP_US < NUCLEO_IWDG_SHORTEST_US,
+               "SKIN_BOARD_SCAN_RATE_HZ or SKIN_BOARD_BAUD too low: the slowest scan loop would "
+               "outlast the watchdog (docs/firmware.md, \"Faults and their bounds\")");

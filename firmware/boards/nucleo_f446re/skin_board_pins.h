@@ -121,10 +121,15 @@
 
 /*
  * Scans per second. The firmware waits for the link before each frame, so a rate above what the
- * link carries (88 frames/s of 1048 bytes at 921 600 baud) would only stretch the scans; 80
- * leaves room for the information frame. 1 000 000 must be a multiple of it.
+ * link carries (114 version-2 frames/s of 800 bytes at 921 600 baud, 87 of version 1's 1 048)
+ * would only stretch the scans; 100 (80 with version 1) leaves room for the information frame
+ * (pins_check.c checks it). 1 000 000 must be a multiple of it.
  */
+#if defined(SKIN_FW_PROTOCOL) && SKIN_FW_PROTOCOL == 1
 #define SKIN_BOARD_SCAN_RATE_HZ 80
+#else
+#define SKIN_BOARD_SCAN_RATE_HZ 100
+#endif
 
 /* ---- Link over USB (the USB image, skin_fw_nucleo_f446re_usb) ---------------------------- */
 

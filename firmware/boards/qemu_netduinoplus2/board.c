@@ -12,7 +12,10 @@
  *    late, so they cannot be the tick themselves: the scene's time would drift from the scans');
  *  - USART1 (QEMU's first -serial) takes each byte within the write to DR, so the link is idle
  *    when a send returns;
- *  - the clock tree is left at reset (a PLL set-up would wait forever on QEMU's missing RCC).
+ *  - the clock tree is left at reset (a PLL set-up would wait forever on QEMU's missing RCC);
+ *  - QEMU 7.2 stubs the RCC and the IWDG (writes ignored, reads 0): no watchdog runs here and
+ *    no reset flag can be read, so the information frame says reset=unknown and no clock; the
+ *    fault counters are the core's and are sent as on the Nucleo.
  *
  * scans.bin (little-endian): "SKNS", u8 format 1, u8 rows, u8 cols, u8 0, u32 scan rate in Hz,
  * u32 number of scans, then each scan: rows*cols u16 top counts, rows*cols u16 bottom counts.
@@ -140,10 +143,11 @@ void board_delay_us(uint32_t us) {
   }
 }
 
-void board_sample_row(uint16_t *dst, uint8_t cols) {
+bool board_sample_row(uint16_t *dst, uint8_t cols) {
   /* Copy the slack too, as a board converting in groups would: the core must cope with it. */
   const uint16_t *src = scan_counts + ((uint32_t)driven_layer * SKIN_FW_ROWS + driven_row) * cols;
   memcpy(dst, src, 2u * ((uint32_t)cols + SKIN_FW_ROW_SLACK));
+  return true;
 }
 
 void board_wait_scan_tick(void) {
@@ -173,3 +177,10 @@ void board_link_send(const uint8_t *buf, uint32_t len) {
 }
 
 bool board_link_idle(void) { return true; }
+
+/* Never called: the link is idle whenever a send has returned. */
+bool board_link_abort(void) { return false; }
+
+void board_watchdog_feed(void) {}
+
+void board_status(skin_board_status_t *status) { status->reset_cause = "unknown"; }

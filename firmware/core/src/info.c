@@ -1,6 +1,12 @@
 #include "skin_fw/info.h"
 
 #include "skin_fw/crc.h"
+#include "skin_fw/fault.h"
+#include "skin_fw/frame.h"
+
+/* The frames-with-a-failed-row counter of the other protocol version: always 0, not sent. */
+#define OTHER_VERSIONS_COUNTER \
+  (SKIN_FW_PROTOCOL == 1 ? SKIN_FAULT_FRAME_FLAGGED : SKIN_FAULT_FRAME_DROPPED)
 
 typedef struct {
   uint8_t *text;
@@ -42,8 +48,43 @@ static void put_uint(text_t *t, uint32_t v) {
   }
 }
 
+/* ";key=value" whole, or nothing when it does not fit (the text stays parseable). */
+static void put_optional(text_t *t, const char *key, const char *value, uint32_t number) {
+  const uint32_t mark = t->len;
+  put_char(t, ';');
+  put_str(t, key);
+  put_char(t, '=');
+  if (value) {
+    put_field_value(t, value);
+  } else {
+    put_uint(t, number);
+  }
+  if (t->overflow) {
+    t->len = mark;
+    t->overflow = 0;
+  }
+}
+
+static void put_status(text_t *t, const skin_board_status_t *status) {
+  if (status->reset_cause) {
+    put_optional(t, "reset", status->reset_cause, 0u);
+  }
+  if (status->fault) {
+    put_optional(t, "fault", status->fault, 0u);
+  }
+  if (status->clock) {
+    put_optional(t, "clock", status->clock, 0u);
+  }
+  for (unsigned f = 0; f < SKIN_FAULTS; f++) {
+    if (f != OTHER_VERSIONS_COUNTER) {
+      put_optional(t, skin_fault_key((skin_fault_t)f), NULL, skin_fault_get((skin_fault_t)f));
+    }
+  }
+}
+
 uint32_t skin_info_build(uint8_t out[SKIN_INFO_MAX_SIZE], const skin_board_info_t *board,
-                         const char *fw_version, uint8_t rows, uint8_t cols, uint32_t pitch_um) {
+                         const skin_board_status_t *status, const char *fw_version, uint8_t rows,
+                         uint8_t cols, uint32_t pitch_um) {
   static const char hex[] = "0123456789abcdef";
   text_t t = {out + 4, 0u, 0};
   put_str(&t, "board=");
@@ -65,6 +106,9 @@ uint32_t skin_info_build(uint8_t out[SKIN_INFO_MAX_SIZE], const skin_board_info_
   put_uint(&t, board->scan_rate_hz);
   if (t.overflow) {
     return 0u;
+  }
+  if (status) {
+    put_status(&t, status);
   }
   out[0] = 0xA5u;
   out[1] = 0x69u;

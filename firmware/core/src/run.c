@@ -1,6 +1,9 @@
 #include "skin_fw/fw.h"
 
+#include <string.h>
+
 #include "skin_fw/board.h"
+#include "skin_fw/fault.h"
 #include "skin_fw/frame.h"
 #include "skin_fw/info.h"
 #include "skin_fw/scan.h"
@@ -10,35 +13,72 @@ _Static_assert(SKIN_FW_ROWS >= 1 && SKIN_FW_ROWS <= 128, "SKIN_FW_ROWS must be 1
 _Static_assert(SKIN_FW_COLS >= 1 && SKIN_FW_COLS <= 128, "SKIN_FW_COLS must be 1..128");
 _Static_assert(SKIN_FW_PITCH_UM > 0, "SKIN_FW_PITCH_UM must be positive");
 
+_Static_assert(SKIN_FW_PROTOCOL == 1 || SKIN_FW_PROTOCOL == 2, "SKIN_FW_PROTOCOL must be 1 or 2");
+
 #ifndef SKIN_FW_INFO_PERIOD_US
 #define SKIN_FW_INFO_PERIOD_US 1000000u
 #endif
 
 static uint32_t frames[2][SKIN_FRAME_BUFFER_WORDS(SKIN_FW_ROWS, SKIN_FW_COLS)];
+/* Sent while the link sends the other: the information frame's text changes with the counters. */
 static uint8_t info_frame[SKIN_INFO_MAX_SIZE];
-static uint32_t info_len;
+static skin_board_info_t board;
 static uint64_t next_info_us;
 static skin_scan_t scan;
 
+/* Build the information frame with the counters of now and send it; false when the link had
+ * stalled (or the text does not fit: nothing sent, which a test of the board would show). */
+static bool send_info(void) {
+  skin_board_status_t status = {0};
+  board_status(&status);
+  const uint32_t len = skin_info_build(info_frame, &board, &status, SKIN_FW_VERSION,
+                                       SKIN_FW_ROWS, SKIN_FW_COLS, SKIN_FW_PITCH_UM);
+  return !len || skin_link_send_when_idle(info_frame, len) != SKIN_LINK_STALLED;
+}
+
+/*
+ * The fault bits that restate the board's state on every version-2 frame, so they agree with
+ * the information frame (docs/protocol.md, "Fault bits"): clock=hsi is SKIN_FAULT_CLOCK and
+ * reset=iwdg SKIN_FAULT_WATCHDOG_RESET.
+ */
+static uint16_t state_faults(void) {
+  skin_board_status_t status = {0};
+  board_status(&status);
+  uint16_t bits = 0u;
+  if (status.clock && strcmp(status.clock, "hsi") == 0) {
+    bits |= SKIN_FAULT_CLOCK;
+  }
+  if (status.reset_cause && strcmp(status.reset_cause, "iwdg") == 0) {
+    bits |= SKIN_FAULT_WATCHDOG_RESET;
+  }
+  return bits;
+}
+
 void skin_fw_start(void) {
-  skin_board_info_t board = {0};
+  board = (skin_board_info_t){0};
+  skin_faults_clear();
   board_init(&board);
   board_release_rows();
-  info_len = skin_info_build(info_frame, &board, SKIN_FW_VERSION, SKIN_FW_ROWS, SKIN_FW_COLS,
-                             SKIN_FW_PITCH_UM);
+  skin_link_init(board.link_byte_ns);
   skin_scan_init(&scan, frames[0], frames[1], SKIN_FW_ROWS, SKIN_FW_COLS, SKIN_FW_SETTLE_US);
-  if (info_len) {
-    skin_link_send_when_idle(info_frame, info_len);
-  }
+  scan.version = SKIN_FW_PROTOCOL;
+  send_info();
   next_info_us = skin_clock_extend(&scan.clock, board_time_us32()) + SKIN_FW_INFO_PERIOD_US;
+  board_watchdog_feed();
 }
 
 void skin_fw_step(void) {
   board_wait_scan_tick();
+  skin_scan_fault(state_faults());
   const uint32_t len = skin_scan_fill(&scan);
-  if (info_len && scan.last_time_us >= next_info_us) {
+  /* Healthy: the link took what it was given. A row that failed was recovered by the board
+     (version 2: marked in its frame; version 1: the scan dropped and counted; the loop goes
+     on); a link that stalled was reset, and if
+     it stalls scan after scan the watchdog, no longer fed, resets the board. */
+  bool healthy = true;
+  if (scan.last_time_us >= next_info_us) {
     /* Between two data frames: the previous one has left once the link is idle again. */
-    skin_link_send_when_idle(info_frame, info_len);
+    healthy = send_info();
     /* On a fixed schedule of device time: a late scan delays one information frame, not every
        one after it. After a stall of over a period, one frame, not a burst to catch up. */
     next_info_us += SKIN_FW_INFO_PERIOD_US;
@@ -46,7 +86,12 @@ void skin_fw_step(void) {
       next_info_us = scan.last_time_us + SKIN_FW_INFO_PERIOD_US;
     }
   }
-  skin_scan_send(&scan, len);
+  if (len && skin_scan_send(&scan, len) == SKIN_LINK_STALLED) {
+    healthy = false;
+  }
+  if (healthy) {
+    board_watchdog_feed();
+  }
 }
 
 void skin_fw_run(void) {

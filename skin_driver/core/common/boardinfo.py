@@ -12,6 +12,8 @@ import re
 
 import numpy as np
 
+from .boardhealth import HEALTH_KEYS
+
 __all__ = ['BoardInfo', 'INFO_KEYS', 'INFO_MAX_TEXT', 'UID_PATTERN']
 
 # The longest text an information frame carries (its length is one byte, 1..200).
@@ -106,6 +108,13 @@ class BoardInfo:
                   ('grid', f'{self.rows}x{self.cols}'), ('pitch_um', str(self.pitch_um)),
                   ('rate_hz', str(self.rate_hz)), *self.extra]
         return ';'.join(f'{k}={v}' for k, v in fields)
+
+    @property
+    def identity(self) -> 'BoardInfo':
+        """Return who the board is: this info without its health (core.common.boardhealth)."""
+        extra = tuple((k, v) for k, v in self.extra if k not in HEALTH_KEYS)
+        return self if extra == self.extra else BoardInfo(
+            self.board, self.uid, self.fw, self.rows, self.cols, self.pitch_m, self.rate_hz, extra)
 
     def describe(self) -> str:
         """Return e.g. 'nucleo-f446re uid 0039001e3438510b34313939, fw 0.1.0, 16x16 ...'."""

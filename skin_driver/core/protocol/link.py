@@ -24,6 +24,7 @@ from typing import Callable, List, Optional
 
 import serial
 
+from skin_driver.core.protocol.hold import RowHold
 from skin_driver.core.protocol.realtime import (name_this_thread, NORMAL, schedule_this_thread,
                                                 Scheduling, StageCpu)
 from skin_driver.core.protocol.wire import BoardInfo, Frame, FrameDecoder, MAX_SEQ
@@ -96,6 +97,8 @@ class SerialLink:
     ``scheduling`` says what it got once start() has returned. ``cpu`` (a StageCpu with at
     least the stages read, decode and deliver) measures the thread's CPU per stage; on_frames
     may mark stages of its own in it.
+    Rows a version-2 board says it did not sample are held at their last valid counts before
+    on_frames sees them (``hold``, core.protocol.hold).
     """
 
     def __init__(self, port: str, baud: int, decoder: FrameDecoder,
@@ -113,6 +116,7 @@ class SerialLink:
         self._scheduled = threading.Event()
         self.baud = baud
         self.decoder = decoder
+        self.hold = RowHold()
         self.stats = LinkStats()
         self.state = STOPPED
         self._on_frames = on_frames
@@ -196,6 +200,7 @@ class SerialLink:
         self.stats.last_connect_s = time.monotonic()
         # Bytes buffered from the previous connection belong to a frame that will never finish.
         self.decoder.reset()
+        self.hold.reset()
         self._resumed = self._last_frame is not None
         self._set_state(CONNECTED, f'reading {self.port}')
         return True
@@ -230,7 +235,7 @@ class SerialLink:
             cpu.mark('read')
             if data:
                 self.stats.bytes_read += len(data)
-                frames = self.decoder.feed(data)
+                frames = self.hold.apply(self.decoder.feed(data))
                 cpu.mark('decode')
                 if self.decoder.board_info is not self._board_info:
                     # The decoder keeps the same object while the board repeats itself.

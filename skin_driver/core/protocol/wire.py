@@ -25,6 +25,10 @@ Between two frames the board may send a board information frame (its identity, s
 :class:`BoardInfo`): marker 0xA5 0x69, info version (1), text length L (1..200), L bytes of
 ASCII text ``key=value;...``, CRC-16/CCITT-FALSE of all bytes before it.  A host that only knows
 version 1 finds no 0xA5 0x5A in it and discards it as junk between frames.
+
+Version 2 (core.protocol.packed) keeps the header, with version 2 and two flags, and carries the
+board's fault bits, a map of the rows it sampled and the counts packed two in three bytes: 800
+bytes for 16 x 16 instead of 1 048.  The decoder takes both versions, mixed on one stream.
 """
 
 from __future__ import annotations
@@ -36,9 +40,12 @@ import zlib
 
 import numpy as np
 
+from . import packed
 from ..common.boardinfo import BoardInfo, INFO_MAX_TEXT
 
-PROTOCOL_VERSION = 1
+PROTOCOL_VERSION = 1  # what encode_frame writes unless told otherwise
+PROTOCOL_VERSIONS = (1, 2)
+LATEST_VERSION = 2
 SYNC = b'\xa5\x5a'
 HEADER = struct.Struct('<2sBBIQBB')
 HEADER_CHECK = struct.Struct('<H')
@@ -65,14 +72,23 @@ def header_crc(data) -> int:
     return binascii.crc_hqx(data, 0xFFFF)
 
 
-def frame_size(rows: int, cols: int) -> int:
-    """Return the number of bytes of a frame with the given shape."""
+def frame_size(rows: int, cols: int, version: int = 1) -> int:
+    """Return the number of bytes of a frame with the given shape in protocol ``version``."""
+    if version == 2:
+        return packed.body_layout(rows, cols)[3]
     return HEADER_SIZE + 4 * rows * cols + CRC_SIZE
 
 
 @dataclass(frozen=True, eq=False)
 class Frame:
-    """One decoded scan: both layers as read-only uint16 (rows, cols) ADC count maps."""
+    """
+    One decoded scan: both layers as read-only uint16 (rows, cols) ADC count maps.
+
+    ``version`` is the protocol version that carried it. A version-2 board also says which rows
+    it sampled: ``row_valid`` is None when it sampled them all (and always in version 1), else
+    read-only (2, rows) booleans (top, bottom); an invalid row's counts are meaningless.
+    ``faults`` are the board's fault bits (packed.FAULT_NAMES), 0 in version 1.
+    """
 
     seq: int
     device_time_us: int
@@ -80,15 +96,28 @@ class Frame:
     cols: int
     top: np.ndarray
     bottom: np.ndarray
+    version: int = 1
+    faults: int = 0
+    row_valid: np.ndarray | None = None
 
     def __eq__(self, other: object) -> bool:
-        """Compare header fields and both maps count for count."""
+        """Compare the scans: header fields, rows sampled, faults, both maps count for count."""
         if not isinstance(other, Frame):
             return NotImplemented
+        # The version is how the scan travelled, not what it is.
+        valid = (self.row_valid is None and other.row_valid is None) or np.array_equal(
+            self.valid_rows(), other.valid_rows())
         return (self.seq == other.seq and self.device_time_us == other.device_time_us
                 and self.rows == other.rows and self.cols == other.cols
+                and self.faults == other.faults and valid
                 and np.array_equal(self.top, other.top)
                 and np.array_equal(self.bottom, other.bottom))
+
+    def valid_rows(self) -> np.ndarray:
+        """Return the (2, rows) booleans of the rows the board sampled."""
+        if self.row_valid is None:
+            return np.ones((2, self.rows), dtype=bool)
+        return self.row_valid
 
     __hash__ = None
 
@@ -116,42 +145,76 @@ def _check_layer(name: str, layer: np.ndarray) -> np.ndarray:
     return layer
 
 
-def encode_frame(seq: int, device_time_us: int, top: np.ndarray, bottom: np.ndarray) -> bytes:
+def encode_frame(seq: int, device_time_us: int, top: np.ndarray, bottom: np.ndarray,
+                 version: int = PROTOCOL_VERSION, faults: int = 0, row_valid=None) -> bytes:
     """
-    Encode one scan of both layers as a frame.
+    Encode one scan of both layers as a frame of protocol ``version`` (1 or 2).
 
-    Raise ValueError when seq is outside uint32, the time outside uint64, the layers differ in
-    shape, are not 2-D integer arrays of at most 255 x 255, or hold counts outside 0..4095.
+    Version 2 also carries ``faults`` (uint16 fault bits) and ``row_valid`` ((2, rows)
+    booleans, None: every row sampled); version 1 has neither. Raise ValueError when seq is
+    outside uint32, the time outside uint64, the layers differ in shape, are not 2-D integer
+    arrays of at most 255 x 255, or hold counts outside 0..4095, or version 1 is given faults
+    or an invalid row.
     """
-    return frame_with_counts(seq, device_time_us, *encode_counts(top, bottom))
+    return frame_with_counts(seq, device_time_us, *encode_counts(top, bottom, version),
+                             version=version, faults=faults, row_valid=row_valid)
 
 
-def encode_counts(top: np.ndarray, bottom: np.ndarray) -> tuple:
+def encode_counts(top: np.ndarray, bottom: np.ndarray, version: int = PROTOCOL_VERSION) -> tuple:
     """
-    Return (rows, cols, the counts of both layers as a frame carries them), checked.
+    Return (rows, cols, the counts of both layers as a ``version`` frame carries them), checked.
 
     A board that sends the same scan again (a replay) encodes its counts once and each frame
     with :func:`frame_with_counts`. Raises ValueError as :func:`encode_frame` does.
     """
+    _check_version(version)
     top = _check_layer('top', top)
     bottom = _check_layer('bottom', bottom)
     if top.shape != bottom.shape:
         raise ValueError(f'top and bottom must have the same shape, got {top.shape} and '
                          f'{bottom.shape}')
     rows, cols = top.shape
+    if version == 2:
+        return rows, cols, packed.pack_counts(np.concatenate((top.ravel(), bottom.ravel())))
     counts = (np.ascontiguousarray(top, dtype=_COUNTS).tobytes()
               + np.ascontiguousarray(bottom, dtype=_COUNTS).tobytes())
     return rows, cols, counts
 
 
-def frame_with_counts(seq: int, device_time_us: int, rows: int, cols: int,
-                      counts: bytes) -> bytes:
-    """Return the frame of counts from :func:`encode_counts` with this sequence and time."""
+def _check_version(version: int) -> None:
+    if version not in PROTOCOL_VERSIONS:
+        raise ValueError(f'protocol version must be one of {PROTOCOL_VERSIONS}, got {version!r}')
+
+
+def frame_with_counts(seq: int, device_time_us: int, rows: int, cols: int, counts: bytes,
+                      version: int = PROTOCOL_VERSION, faults: int = 0,
+                      row_valid=None) -> bytes:
+    """
+    Return the frame of counts from :func:`encode_counts` with this sequence and time.
+
+    ``version`` must be the one the counts were encoded for; ``faults`` and ``row_valid`` as
+    :func:`encode_frame` takes them.
+    """
+    _check_version(version)
     seq = _check_int('seq', seq, MAX_SEQ)
     device_time_us = _check_int('device_time_us', device_time_us, MAX_DEVICE_TIME_US)
-    body = bytearray(HEADER.pack(SYNC, PROTOCOL_VERSION, 0, seq, device_time_us, rows, cols))
+    faults = _check_int('faults', faults, 0xFFFF)
+    clean = packed.all_valid_map(rows)
+    # A board that sampled every row (nearly every scan) builds no map: the cached one is it.
+    row_map = clean if row_valid is None else packed.encode_row_map(row_valid, rows)
+    if version == 1:
+        if faults or row_map != clean:
+            raise ValueError('version 1 carries no fault bits and no invalid rows')
+        flags, extra = 0, b''
+    else:
+        flags = ((packed.FLAG_ROWS_INVALID if row_map != clean else 0)
+                 | (packed.FLAG_FAULT if faults else 0))
+        extra = packed.FAULTS.pack(faults) + row_map
+    body = bytearray(HEADER.pack(SYNC, version, flags, seq, device_time_us, rows, cols))
     body += HEADER_CHECK.pack(header_crc(body))
+    body += extra
     body += counts
+    body += bytes(-len(body) % 4 if version == 2 else 0)
     body += _CRC.pack(zlib.crc32(body))
     return bytes(body)
 
@@ -176,15 +239,19 @@ class DecoderStats:
     """Counters of what the decoder accepted and rejected since it was created."""
 
     frames: int = 0
-    crc_errors: int = 0       # header, frame or info CRC mismatch, or a count above 4095
+    # header, frame or info CRC mismatch, a count above 4095 (version 1), or a version-2 body
+    # that disagrees with its flags or has a non-zero spare bit
+    crc_errors: int = 0
     size_errors: int = 0      # rows/cols of 0, above the maximum or unlike expected_shape
-    version_errors: int = 0   # unknown protocol or info version, or non-zero flags
+    version_errors: int = 0   # unknown protocol or info version, or flags it does not have
     bytes_discarded: int = 0  # bytes that were not part of an accepted frame
     seq_gaps: int = 0         # times the sequence number jumped forwards by more than one
     frames_missed: int = 0    # frames skipped by those jumps
     seq_implausible: int = 0  # forward jumps the device clock cannot explain (corrupt seq)
     info_frames: int = 0      # board information frames accepted
     info_errors: int = 0      # info frames of a length outside 1..200 or text that does not parse
+    rows_flagged: int = 0     # frames with a row the board says it did not sample (version 2)
+    fault_frames: int = 0     # frames whose fault bits are not zero (version 2)
 
 
 class FrameDecoder:
@@ -216,9 +283,11 @@ class FrameDecoder:
             if rows < 1 or cols < 1:
                 raise ValueError(f'expected_shape must be at least 1 x 1, got {expected_shape}')
             expected_shape = (rows, cols)
-            self._max_frame = frame_size(rows, cols)
+            self._max_frame = max(frame_size(rows, cols, v) for v in PROTOCOL_VERSIONS)
         else:
-            self._max_frame = frame_size(self._max_rows, self._max_cols)
+            # Version 1 is the longer but for the smallest grids (28 against 32 bytes for 1 x 1).
+            self._max_frame = max(frame_size(self._max_rows, self._max_cols, v)
+                                  for v in PROTOCOL_VERSIONS)
         # An info frame may be longer than the smallest frames (206 bytes against 28 for 1 x 1).
         self._max_frame = max(self._max_frame, INFO_MAX_SIZE)
         self._expected = expected_shape
@@ -229,6 +298,9 @@ class FrameDecoder:
         self.last_rejected_shape: tuple[int, int] | None = None
         # (rows, cols) of the newest frame accepted, to compare with the board's own word.
         self.last_shape: tuple[int, int] | None = None
+        # The protocol version of the newest frame accepted (None: none yet), for diagnostics.
+        self.last_version: int | None = None
+        self.last_faults = 0  # the fault bits of the newest frame accepted (version 2)
         self.board_info: BoardInfo | None = None
         self._info_text = b''  # the text of board_info as sent: a repeat is not parsed again
 
@@ -319,7 +391,7 @@ class FrameDecoder:
             if end - pos < HEADER_SIZE:
                 break
             _, version, flags, seq, time_us, rows, cols = HEADER.unpack_from(buf, pos)
-            if version != PROTOCOL_VERSION or flags != 0:
+            if flags & ~(packed.FLAGS_V2 if version == 2 else 0) or version not in (1, 2):
                 stats.version_errors += 1
                 stats.bytes_discarded += len(SYNC)
                 pos += len(SYNC)
@@ -337,7 +409,11 @@ class FrameDecoder:
                 pos += len(SYNC)
                 continue
             n = rows * cols
-            size = HEADER_SIZE + 4 * n + CRC_SIZE
+            if version == 1:
+                size = HEADER_SIZE + 4 * n + CRC_SIZE
+            else:
+                clean = packed.clean_body(rows, cols)
+                size = clean[0][3]
             if end - pos < size:
                 break
             crc_at = pos + size - CRC_SIZE
@@ -347,25 +423,73 @@ class FrameDecoder:
                 stats.bytes_discarded += len(SYNC)
                 pos += len(SYNC)
                 continue
-            counts = np.frombuffer(buf, dtype=_COUNTS, count=2 * n, offset=pos + HEADER_SIZE)
-            if copy:
-                counts = counts.copy()
-                counts.flags.writeable = False
-            if counts.max() > MAX_COUNT:
+            if version == 1:
+                body = self._body_v1(buf, pos, n, copy)
+            else:
+                body = self._body_v2(buf, pos, rows, clean, flags)
+            if body is None:
                 stats.crc_errors += 1
                 stats.bytes_discarded += len(SYNC)
                 pos += len(SYNC)
                 continue
-            if counts.dtype != np.uint16:  # big-endian host
-                counts = counts.astype(np.uint16)
-                counts.flags.writeable = False
+            counts, faults, row_valid = body
             layers = counts.reshape(2, rows, cols)
             self._count_seq(seq, time_us)
             self.last_shape = (rows, cols)
-            frames.append(Frame(seq, time_us, rows, cols, layers[0], layers[1]))
+            self.last_version = version
+            self.last_faults = faults
+            if faults:
+                stats.fault_frames += 1
+            if row_valid is not None:
+                stats.rows_flagged += 1
+            frames.append(Frame(seq, time_us, rows, cols, layers[0], layers[1], version, faults,
+                                row_valid))
             stats.frames += 1
             pos += size
         return pos
+
+    @staticmethod
+    def _body_v1(buf, pos: int, n: int, copy: bool):
+        """Return (counts, 0, None) of the version-1 frame at pos, None if a count is corrupt."""
+        counts = np.frombuffer(buf, dtype=_COUNTS, count=2 * n, offset=pos + HEADER_SIZE)
+        if copy:
+            counts = counts.copy()
+            counts.flags.writeable = False
+        if counts.max() > MAX_COUNT:
+            return None
+        if counts.dtype != np.uint16:  # big-endian host
+            counts = counts.astype(np.uint16)
+            counts.flags.writeable = False
+        return counts, 0, None
+
+    @staticmethod
+    def _body_v2(buf, pos: int, rows: int, clean: tuple, flags: int):
+        """
+        Return (counts, faults, row_valid or None) of the checked version-2 frame at pos.
+
+        None if its body disagrees with its flags, or a spare or padding bit is set.
+        """
+        (at_map, at_counts, at_pad, size), clean_head, zeros = clean
+        if buf[pos + at_pad:pos + size - CRC_SIZE] != zeros:
+            return None
+        if not flags:  # the usual scan: no fault, every row sampled
+            if buf[pos + HEADER_SIZE:pos + at_counts] != clean_head:
+                return None
+            counts = packed.unpack_counts(buf, pos + at_counts, (at_pad - at_counts) * 2 // 3)
+            return counts, 0, None
+        (faults,) = packed.FAULTS.unpack_from(buf, pos + HEADER_SIZE)
+        row_map = bytes(buf[pos + at_map:pos + at_counts])
+        all_valid = row_map == clean_head[packed.FAULTS.size:]
+        if (bool(flags & packed.FLAG_FAULT) != bool(faults)
+                or bool(flags & packed.FLAG_ROWS_INVALID) == all_valid):
+            return None
+        row_valid = None
+        if not all_valid:
+            row_valid = packed.decode_row_map(row_map, rows)
+            if packed.encode_row_map(row_valid, rows) != row_map:  # a spare bit set
+                return None
+        counts = packed.unpack_counts(buf, pos + at_counts, (at_pad - at_counts) * 2 // 3)
+        return counts, faults, row_valid
 
     def _info(self, buf, view: memoryview, pos: int, end: int) -> int:
         """

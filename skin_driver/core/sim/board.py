@@ -22,6 +22,10 @@ Like the firmware, the board says who it is (docs/protocol.md, board information
 before its first frame and then once a second of device time, between two frames. By default
 it is a fixed fake board (:func:`sim_board_info`: board ``sim``, the scene's grid and pitch);
 ``identity`` names another, or None for a version-1 board that sends no identity.
+
+It sends protocol version 2 (packed counts, fault bits, row map) unless ``protocol=1`` asks for
+version 1. A version-2 board can report rows it failed to sample and fault bits
+(``set_row_faults``), as the firmware does.
 """
 
 from __future__ import annotations
@@ -43,7 +47,7 @@ from .pty_line import PtyLine
 from .scene import load_scene, Scene
 from ..common.validate import check_int, check_number
 from ..protocol.wire import (BoardInfo, encode_counts, encode_frame, encode_info, frame_size,
-                             frame_with_counts, MAX_SEQ)
+                             frame_with_counts, LATEST_VERSION, MAX_SEQ, PROTOCOL_VERSIONS)
 
 # Below this period frames are written in batches: one wake-up per BATCH_S instead of per frame.
 BATCH_S = 0.002
@@ -56,6 +60,8 @@ SIM_FIRMWARE = '0.1.0'
 INFO_PERIOD_US = 1_000_000
 # Default of SimulatedSkin's identity: the simulated board's own.
 SIM = 'sim'
+# What an invalid row carries: meaningless counts, here the ADC's full scale.
+INVALID_ROW_COUNT = 4095
 
 
 def sim_uid(name: str = '') -> str:
@@ -118,14 +124,20 @@ class SimulatedSkin:
 
     def __init__(self, scene, rate_hz: float = 100.0, link_path: str | None = None,
                  seed: int = 0, loop: bool = False, truth_capacity: int = 10_000,
-                 replay: bool = False, identity=SIM):
+                 replay: bool = False, identity=SIM, protocol: int = LATEST_VERSION):
         """
         Prepare a board for a Scene (or a bundled scene name or YAML path); start() runs it.
 
         replay (looped boards only): render one pass of the scene at start() and replay it.
         identity: the BoardInfo the board sends, ``SIM`` (default) the simulated board's, None
         none (a version-1 board).
+        protocol: the wire protocol version of its frames, 2 (default) or 1.
         """
+        if protocol not in PROTOCOL_VERSIONS:
+            raise ValueError(f'protocol must be one of {PROTOCOL_VERSIONS}, got {protocol!r}')
+        self.protocol = protocol
+        self._row_valid = None  # (2, rows) booleans of the rows it samples; None: all
+        self._faults = 0
         self.scene = _as_scene(scene)
         self.rate_hz = check_number(rate_hz, 'rate_hz', positive=True, high=20_000)
         check_int(truth_capacity, 'truth_capacity', low=1)
@@ -145,7 +157,7 @@ class SimulatedSkin:
         self._truth: dict = {}
         self._truth_order: deque = deque()
         self._truth_capacity = truth_capacity
-        one_frame = frame_size(self.scene.model.rows, self.scene.model.cols)
+        one_frame = frame_size(self.scene.model.rows, self.scene.model.cols, protocol)
         self._line = PtyLine(self.link_path, max_pending=max(65536, 4 * one_frame))
         self._lock = threading.Lock()  # guards the truth
         self._stop = threading.Event()
@@ -301,6 +313,27 @@ class SimulatedSkin:
             shape = (rows, cols)
         self._wire_shape = shape
 
+    def set_row_faults(self, row_valid=None, faults: int = 0) -> None:
+        """
+        From the next scan on, fail to sample the rows false in ``row_valid`` and report faults.
+
+        row_valid: (2, rows) booleans (top, bottom), None: every row sampled. An invalid row
+        carries meaningless counts (full scale) and is marked so in the frame; faults: the fault
+        bits (0..0xFFFF). Version 2 only: a version-1 frame cannot say so (ValueError).
+        """
+        if self.protocol == 1 and (row_valid is not None or faults):
+            raise ValueError('a version-1 board cannot report invalid rows or faults')
+        model = self.scene.model
+        if row_valid is not None:
+            row_valid = np.array(row_valid, dtype=bool)
+            if row_valid.shape != (2, model.rows):
+                raise ValueError(f'row_valid must have shape (2, {model.rows}), got '
+                                 f'{row_valid.shape}')
+            if row_valid.all():
+                row_valid = None
+        self._faults = check_int(faults, 'faults', low=0, high=0xFFFF)
+        self._row_valid = row_valid
+
     def __enter__(self) -> SimulatedSkin:
         """Start the board."""
         self.start()
@@ -354,13 +387,18 @@ class SimulatedSkin:
         top, bottom = scan.top, scan.bottom
         wire_shape = self._wire_shape
         wrong_shape = wire_shape is not None and wire_shape != top.shape
+        row_valid, faults = self._row_valid, self._faults
         if wrong_shape:
             top, bottom = _reshape(top, wire_shape), _reshape(bottom, wire_shape)
             top.flags.writeable = False
             bottom.flags.writeable = False
-            raw = encode_frame(seq, device_time_us, top, bottom)
+            raw = encode_frame(seq, device_time_us, top, bottom, self.protocol, faults)
+        elif row_valid is not None:
+            sent = [np.where(valid[:, None], layer, INVALID_ROW_COUNT)
+                    for layer, valid in zip((top, bottom), row_valid)]
+            raw = encode_frame(seq, device_time_us, *sent, self.protocol, faults, row_valid)
         else:
-            raw = frame_with_counts(seq, device_time_us, *scan.counts)
+            raw = frame_with_counts(seq, device_time_us, *scan.counts, self.protocol, faults)
         truth = FrameTruth(seq, device_time_us, top, bottom, scan.presses, scan.scene_time_s,
                            scan.press_indices)
         info = b''
@@ -398,7 +436,7 @@ class SimulatedSkin:
         top.flags.writeable = False
         bottom.flags.writeable = False
         return _Scan(t, presses, tuple(i for i, _ in active), top, bottom,
-                     encode_counts(top, bottom))
+                     encode_counts(top, bottom, self.protocol))
 
     def _remember(self, truth: FrameTruth) -> None:
         if truth.seq in self._truth:

@@ -300,6 +300,8 @@ def stage_costs(repeats=500) -> dict:
     top, bottom = render(model, press, rng)
     raw = encode_frame(1, 1000, top, bottom)
     decoder = FrameDecoder(expected_shape=(16, 16))
+    raw_v2 = encode_frame(1, 1000, top, bottom, version=2)
+    decoder_v2 = FrameDecoder(expected_shape=(16, 16))
     with ros_session():
         ns = f'/skin_bench_stages_{os.getpid()}'
         node = DirectionNode(subscribe=False, namespace=ns, parameter_overrides=overrides(
@@ -327,6 +329,9 @@ def stage_costs(repeats=500) -> dict:
                                                         repeats),
             'sim: encode_frame': _per_call(lambda: encode_frame(1, 1000, top, bottom), repeats),
             'driver: decode': _per_call(lambda: decoder.feed(raw), repeats),
+            # Measured beside version 1 (and in the same way): only the ratio travels.
+            'driver: decode, protocol version 2': _per_call(lambda: decoder_v2.feed(raw_v2),
+                                                            repeats),
             'driver: stamp + header': _per_call(lambda: conversions.make_header(
                 node.get_clock().now().to_msg(), 'skin_link'), repeats),
             'driver: skin_frame_to_msg + publish SkinFrame': _per_call(

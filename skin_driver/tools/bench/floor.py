@@ -2,10 +2,11 @@
 The rclpy floor of the end-to-end benchmark: the least an rclpy process does per scan.
 
 It reads the port with one poll and one os.read, checks each frame's CRC-32, views its counts
-with np.frombuffer, estimates them with the estimator the nodes build from the same method, fills
-one reused TactileContactArray and publishes it on ``contacts``. No parameters, services,
-diagnostics, executor, resynchronisation counters or reconnects: the benchmark runs it beside the
-layouts, measured the same way, as the reference for the driver's CPU per scan.
+with np.frombuffer (protocol version 1) or unpacks them (version 2), estimates them with the
+estimator the nodes build from the same method, fills one reused TactileContactArray and
+publishes it on ``contacts``. No parameters, services, diagnostics, executor, resynchronisation
+counters or reconnects: the benchmark runs it beside the layouts, measured the same way, as the
+reference for the driver's CPU per scan.
 
     python -m skin_driver.tools.bench.floor PORT NAMESPACE METHOD ROWS COLS
 """
@@ -22,6 +23,7 @@ import numpy as np
 import rclpy
 import serial
 from skin_driver.core.estimation.scan.pipeline import ContactEstimator, EstimatorConfig
+from skin_driver.core.protocol.packed import body_layout, unpack_counts
 from skin_driver.core.protocol.wire import CRC_SIZE, frame_size, HEADER_SIZE, SYNC
 from skin_driver.ros import conversions, qos
 from skin_driver.ros.spin import freeze_heap
@@ -52,7 +54,8 @@ def main(argv=None) -> int:
     device = _open(port)
     poller = select.poll()
     poller.register(device.fileno(), select.POLLIN)
-    size, count = frame_size(rows, cols), 2 * rows * cols
+    sizes = {version: frame_size(rows, cols, version) for version in (1, 2)}
+    count, packed_at = 2 * rows * cols, body_layout(rows, cols)[1]
     pending = b''
     freeze_heap()  # as the nodes do before they spin
     try:
@@ -62,18 +65,26 @@ def main(argv=None) -> int:
             pending += os.read(device.fileno(), 65536)
             sec, nanosec = divmod(time.time_ns(), 1_000_000_000)
             header = Header(stamp=Time(sec=sec, nanosec=nanosec), frame_id='skin_link')
-            while len(pending) >= size:
+            while len(pending) > len(SYNC):
                 start = pending.find(SYNC)
                 if start != 0:
                     pending = pending[start:] if start > 0 else pending[-1:]
                     continue
+                version = pending[len(SYNC)]
+                size = sizes.get(version)
+                if size is None:
+                    pending = pending[len(SYNC):]
+                    continue
+                if len(pending) < size:
+                    break
                 if zlib.crc32(pending[:size - CRC_SIZE]) != int.from_bytes(
                         pending[size - CRC_SIZE:size], 'little'):
                     pending = pending[len(SYNC):]
                     continue
                 seq, device_us = _SEQ_AND_TIME.unpack_from(pending, 4)
-                top, bottom = np.frombuffer(pending, '<u2', count, HEADER_SIZE).reshape(
-                    2, rows, cols)
+                counts = (np.frombuffer(pending, '<u2', count, HEADER_SIZE) if version == 1
+                          else unpack_counts(pending, packed_at, count))
+                top, bottom = counts.reshape(2, rows, cols)
                 contacts = estimator.process(top, bottom)
                 publisher.publish(writer.fill(header, contacts, seq, device_us))
                 pending = pending[size:]

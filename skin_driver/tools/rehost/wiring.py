@@ -41,8 +41,22 @@ def _pairs(body: str) -> list:
     return [(int(a), int(b)) for a, b in re.findall(r'X\((\d+),\s*(\d+)\)', body)]
 
 
-def load_wiring(path) -> Wiring:
-    """Parse the pin table at path (firmware/boards/nucleo_f446re/skin_board_pins.h)."""
+def _scan_rate(text: str, protocol: int) -> int:
+    """Return the USART image's scan rate for protocol (the table sets one for each version)."""
+    match = re.search(r'#if defined\(SKIN_FW_PROTOCOL\) && SKIN_FW_PROTOCOL == 1\s*'
+                      r'#define\s+SKIN_BOARD_SCAN_RATE_HZ\s+(\d+)\s*#else\s*'
+                      r'#define\s+SKIN_BOARD_SCAN_RATE_HZ\s+(\d+)', text)
+    if match is None:
+        return int(_define(text, 'SKIN_BOARD_SCAN_RATE_HZ'))
+    return int(match.group(1) if protocol == 1 else match.group(2))
+
+
+def load_wiring(path, protocol: int = 2) -> Wiring:
+    """
+    Parse the pin table at path (firmware/boards/nucleo_f446re/skin_board_pins.h).
+
+    ``protocol``: the wire protocol version the image was built for (its scan rate depends on it).
+    """
     text = Path(path).read_text()
     rows = int(_define(text, 'SKIN_BOARD_ROWS'))
     cols = int(_define(text, 'SKIN_BOARD_COLS'))
@@ -57,4 +71,4 @@ def load_wiring(path) -> Wiring:
         enable_pins=(_pin(text, 'SKIN_BOARD_ROW_EN_TOP'), _pin(text, 'SKIN_BOARD_ROW_EN_BOTTOM')),
         enable_active_low=_define(text, 'SKIN_BOARD_ROW_EN_ACTIVE_LOW') == '1',
         baud=int(_define(text, 'SKIN_BOARD_BAUD')),
-        scan_rate_hz=int(_define(text, 'SKIN_BOARD_SCAN_RATE_HZ')))
+        scan_rate_hz=_scan_rate(text, protocol))

@@ -155,3 +155,46 @@ def test_a_port_that_is_a_regular_file_is_refused_naming_the_file(tmp_path):
     assert details[0] == (f'cannot open {port}: {port} is a regular file, not a serial port or '
                           "pty; name the board's device (e.g. /dev/ttyACM0) or the link the "
                           'simulated skin makes')
+
+
+class ScriptedPort:
+    """A port that gives one scripted read at a time, then nothing."""
+
+    def __init__(self, reads):
+        self._reads = list(reads)
+        self.in_waiting = 0
+
+    def read(self, size):
+        time.sleep(0.001)
+        return self._reads.pop(0) if self._reads else b''
+
+    def close(self):
+        pass
+
+
+def test_the_link_hands_over_invalid_rows_held_and_drops_what_it_cannot_hold():
+    def frame(seq, value, bad_row=None):
+        valid = np.ones((2, 4), bool)
+        if bad_row is not None:
+            valid[0, bad_row] = False
+        counts = np.full((4, 3), value)
+        return encode_frame(seq, 1000 * seq, counts, counts, 2, faults=0, row_valid=valid)
+
+    # Frame 1 has a bad row before any was sampled; frame 3's bad row is held from frame 2.
+    reads = [frame(1, 10, bad_row=0), frame(2, 20) + frame(3, 30, bad_row=1)]
+    got, done = [], threading.Event()
+
+    def on_frames(frames, now):
+        got.extend(frames)
+        if len(got) >= 2:
+            done.set()
+    link = SerialLink('fake', 921600, FrameDecoder(expected_shape=(4, 3)), on_frames,
+                      open_port=lambda: ScriptedPort(reads))
+    link.start()
+    try:
+        assert done.wait(WAIT_S)
+    finally:
+        link.stop()
+    assert [f.seq for f in got] == [2, 3]
+    assert got[1].top[1].tolist() == [20] * 3 and got[1].top[0].tolist() == [30] * 3
+    assert (link.hold.rows_held, link.hold.frames_flagged) == (1, 1)

@@ -171,7 +171,7 @@ def corrupt_frames():
     bad_rows = bytearray(good)
     bad_rows[16] = 128  # would announce a frame eight times longer
     version = bytearray(good)
-    version[2] = 2
+    version[2] = 3
     flags = bytearray(good)
     flags[3] = 1
     rows0 = bytearray(good)
@@ -186,7 +186,7 @@ def corrupt_frames():
         'header bit flip': (bytes(bad_header), 'crc_errors'),
         'rows changed, header check not updated': (bytes(bad_rows), 'crc_errors'),
         'truncated frame': (good[:-7], None),
-        'version 2 even with a valid crc': (reseal(bytes(version)), 'version_errors'),
+        'unknown version 3 even with a valid crc': (reseal(bytes(version)), 'version_errors'),
         'non-zero flags': (reseal(bytes(flags)), 'version_errors'),
         'zero rows': (reseal(bytes(rows0)), 'size_errors'),
         'cols above max_cols': (reseal(bytes(cols_big)), 'size_errors'),

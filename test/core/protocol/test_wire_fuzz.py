@@ -32,12 +32,21 @@ MUTATIONS = ('bit flip', 'drop', 'duplicate', 'insert', 'truncate', 'absurd size
              'wrong version', 'junk between')
 
 
-def reference_frame(seq, shape=(2, 3)):
-    """Return the encoded frame with this seq: its counts are a function of seq alone."""
+def reference_frame(seq, shape=(2, 3), version=1, flagged=False):
+    """
+    Return the encoded frame with this seq: its counts are a function of seq alone.
+
+    flagged (version 2): some rows invalid and fault bits set, also a function of seq alone.
+    """
     rng = np.random.default_rng(seq)
     top = rng.integers(0, 4096, shape, dtype=np.uint16)
     bottom = rng.integers(0, 4096, shape, dtype=np.uint16)
-    return encode_frame(seq, seq * 1000 + 7, top, bottom)
+    if not flagged:
+        return encode_frame(seq, seq * 1000 + 7, top, bottom, version=version)
+    row_valid = rng.random((2, shape[0])) < 0.7
+    row_valid[0, 0] = False
+    return encode_frame(seq, seq * 1000 + 7, top, bottom, version=version,
+                        faults=int(rng.integers(1, 0x10000)), row_valid=row_valid)
 
 
 def reseal_header(raw):
@@ -93,7 +102,9 @@ class Fuzzer:
         parts = []
         for seq in range(frames):
             shape = shapes[int(rng.integers(len(shapes)))]
-            raw = reference_frame(seq, shape)
+            # Both versions mixed on one stream, as after a board's firmware update.
+            version = int(rng.integers(1, 3))
+            raw = reference_frame(seq, shape, version, version == 2 and rng.random() < 0.3)
             self.originals[seq] = FrameDecoder().feed(raw)[0]
             wire = raw
             if rng.random() < 0.5:
@@ -221,7 +232,7 @@ def _corpus_cases():
         'claims_16x16_swallows_next_frames': (
             f[0] + reseal_header(head + bytes([16, 16, 0, 0])) + f[1] + f[2] + SETTLE,
             [0, 1, 2], {'crc_errors': 1}),
-        'wrong_version_2_valid_checks': (f[0] + reseal(edit(f[1], 2, 2)) + f[2], [0, 2],
+        'wrong_version_3_valid_checks': (f[0] + reseal(edit(f[1], 2, 3)) + f[2], [0, 2],
                                          {'version_errors': 1}),
         'nonzero_flags_valid_checks': (f[0] + reseal(edit(f[1], 3, 0x80)) + f[2], [0, 2],
                                        {'version_errors': 1}),
@@ -255,6 +266,7 @@ def _corpus_cases():
         'info_grid_disagrees_with_frames': (encode_info(info_text.replace(b'2x3', b'16x16'))
                                             + f[0] + f[1], [0, 1], {'info_frames': 1}),
     }
+    cases.update(_corpus_cases_v2(edit))
     for name, (stream, seqs, counters) in cases.items():
         if seqs == [0, 2]:
             # The damaged frame 1 shows as a sequence gap.
@@ -268,6 +280,56 @@ def _corpus_cases():
             expected['board_info'] = board.board_info.text
         out[name] = (stream, expected)
     return out
+
+
+def fake_header_frame(seq):
+    """
+    Return a 4 x 4 version-2 frame whose payload holds a fake header.
+
+    The packed counts begin with a whole version-2 header (valid header check) of a 16 x 16
+    frame: packed counts can hold any bytes.
+    """
+    fake = reseal_header(SYNC + bytes([2, 0]) + bytes(12) + bytes([16, 16, 0, 0]))
+    payload = fake + bytes(range(48 - len(fake)))
+    counts = np.empty(32, dtype=np.uint16)
+    for k in range(16):  # two counts in three bytes, little-endian
+        word = int.from_bytes(payload[3 * k:3 * k + 3], 'little')
+        counts[2 * k], counts[2 * k + 1] = word & 0xFFF, word >> 12
+    return encode_frame(seq, seq * 1000 + 7, counts[:16].reshape(4, 4),
+                        counts[16:].reshape(4, 4), version=2)
+
+
+def _corpus_cases_v2(edit):
+    """Return the version-2 cases: {name: (stream, sequence numbers accepted, counters)}."""
+    f = [reference_frame(s) for s in range(4)]
+    g = [reference_frame(s, version=2) for s in range(4)]
+    flagged = reference_frame(1, version=2, flagged=True)
+    pad_at = len(g[1]) - 5  # 2 x 3: 42 bytes of body, 2 of padding, the CRC
+    fake = fake_header_frame(1)
+    return {
+        'v2_intact_three_frames': (g[0] + g[1] + g[2], [0, 1, 2], {}),
+        'v1_and_v2_mixed': (f[0] + g[1] + f[2] + g[3], [0, 1, 2, 3], {}),
+        'v2_bit_flip_in_payload': (g[0] + edit(g[1], 30, g[1][30] ^ 4) + g[2], [0, 2],
+                                   {'crc_errors': 1}),
+        'v2_bit_flip_in_row_map': (g[0] + edit(g[1], 22, g[1][22] ^ 1) + g[2], [0, 2],
+                                   {'crc_errors': 1}),
+        'v2_truncated_mid_payload': (g[0] + g[1][:26] + g[2], [0, 2], {'crc_errors': 1}),
+        'v2_truncated_then_v1': (g[0] + g[1][:-3] + f[2], [0, 2], {'crc_errors': 1}),
+        'v2_rows_invalid_and_faults': (g[0] + flagged + g[2], [0, 1, 2],
+                                       {'rows_flagged': 1, 'fault_frames': 1}),
+        'v2_unknown_flag_valid_checks': (g[0] + reseal(edit(g[1], 3, 0x80)) + g[2], [0, 2],
+                                         {'version_errors': 1}),
+        'v2_flags_disagree_with_body_valid_checks': (
+            g[0] + reseal(edit(g[1], 3, 1)) + g[2], [0, 2], {'crc_errors': 1}),
+        'v2_nonzero_padding_valid_checks': (g[0] + reseal(edit(g[1], pad_at, 1)) + g[2],
+                                            [0, 2], {'crc_errors': 1}),
+        # The frame's own header is damaged: the search runs into its payload, meets a whole
+        # fake header there, waits for the 16 x 16 frame it announces, fails its CRC and
+        # resumes after the fake marker: every intact frame behind it is still found.
+        'v2_fake_header_in_a_damaged_payload': (
+            g[0] + edit(fake, 5, fake[5] ^ 1) + g[2] + g[3] + SETTLE, [0, 2, 3],
+            {'crc_errors': 2, 'seq_gaps': 1, 'frames_missed': 1}),
+    }
 
 
 def write_corpus():
@@ -307,12 +369,14 @@ def test_corpus_replays_to_its_expected_outcome(name, expected, chunk):
         assert decoder.buffered_bytes <= decoder.max_buffer_bytes
     assert [f.seq for f in frames] == expected['frames']
     for frame in frames:
-        assert frame == FrameDecoder().feed(reference_frame(frame.seq))[0]
+        flagged = frame.row_valid is not None
+        assert frame == FrameDecoder().feed(reference_frame(frame.seq, (2, 3), frame.version,
+                                                            flagged))[0]
     stats = decoder.stats
     counters = expected['counters']
     if counters is not None:
         for key in ('crc_errors', 'size_errors', 'version_errors', 'seq_gaps', 'frames_missed',
-                    'info_frames', 'info_errors'):
+                    'info_frames', 'info_errors', 'rows_flagged', 'fault_frames'):
             assert getattr(stats, key) == counters.get(key, 0), key
     info = decoder.board_info
     assert (info.text if info else None) == expected.get('board_info')

@@ -276,3 +276,46 @@ def test_a_scene_without_drift_renders_as_before_and_one_with_it_cannot_be_repla
     assert all((f.top == 20).all() for f in frames)
     with pytest.raises(ValueError, match='cannot be replayed'):
         SimulatedSkin(replace(scene, period_s=2000.0), loop=True, replay=True)
+
+
+@pytest.mark.parametrize('protocol', [2, 1])
+def test_the_board_sends_version_2_by_default_and_version_1_on_request(protocol):
+    kwargs = {} if protocol == 2 else {'protocol': 1}
+    sim = SimulatedSkin(held_press_scene(), rate_hz=RATE_HZ, seed=3, **kwargs)
+    reader = Reader(sim.start())
+    try:
+        reader.read_frames(20)
+    finally:
+        reader.close()
+        sim.stop()
+    assert {f.version for f in reader.frames} == {protocol}
+    assert_equal_to_truth(sim, reader.frames)
+
+
+def test_rows_the_board_failed_to_sample_are_marked_with_its_fault_bits():
+    sim = SimulatedSkin(held_press_scene(), rate_hz=RATE_HZ, seed=3)
+    row_valid = np.ones((2, 16), bool)
+    row_valid[0, 7] = False  # the pressed centre's row of the top layer
+    sim.set_row_faults(row_valid, faults=0b11)
+    reader = Reader(sim.start())
+    try:
+        reader.read_frames(10)
+    finally:
+        reader.close()
+        sim.stop()
+    for frame in reader.frames:
+        assert frame.faults == 0b11 and np.array_equal(frame.row_valid, row_valid)
+        truth = sim.truth(frame.seq)
+        # The sampled rows are the scan's; the failed one carries meaningless full-scale counts.
+        np.testing.assert_array_equal(np.delete(frame.top, 7, axis=0),
+                                      np.delete(truth.top, 7, axis=0))
+        assert (frame.top[7] == 4095).all() and not (truth.top[7] == 4095).all()
+        np.testing.assert_array_equal(frame.bottom, truth.bottom)
+
+
+def test_a_version_1_board_cannot_report_failed_rows_or_faults():
+    sim = SimulatedSkin(held_press_scene(), rate_hz=RATE_HZ, protocol=1)
+    with pytest.raises(ValueError, match='version-1 board cannot report'):
+        sim.set_row_faults(faults=1)
+    with pytest.raises(ValueError, match='protocol must be one of'):
+        SimulatedSkin(held_press_scene(), protocol=3)

@@ -66,6 +66,18 @@ bool board_link_idle(void) {
   return left == 0u;
 }
 
+bool board_link_abort(void) {
+  /* The core's bound ran out: the host holds the port open but takes nothing. The rest of the
+   * frame goes (counted), as after USB_LINK_STALL_US. Not a stall of the board's own (the stack
+   * runs, nothing to reset): a host that stops reading must not reset the board through the
+   * watchdog, so this says every byte was dealt with. */
+  if (left != 0u) {
+    usb_link_discarded++;
+  }
+  usb_link_reset();
+  return false;
+}
+
 static bool host_open; /* DTR as the host last set it */
 
 static void new_session(void) {

@@ -9,6 +9,8 @@
  *   SKIN_FW_SETTLE_US  microseconds a driven row settles before it is sampled
  *   SKIN_FW_VERSION    firmware version string "major.minor.patch"
  * Optional: SKIN_FW_INFO_PERIOD_US (default 1 000 000), how often the information frame repeats.
+ *           SKIN_FW_PROTOCOL (default 2), the wire protocol version of the frames, 1 or 2
+ *           (docs/protocol.md; cmake -DSKIN_FW_PROTOCOL=1 for every board).
  * Its main() calls skin_fw_run().
  */
 #ifndef SKIN_FW_FW_H

@@ -15,11 +15,16 @@ extern "C" {
 #define SKIN_INFO_MAX_SIZE (SKIN_INFO_MAX_TEXT + 6u)
 
 /*
- * Build the frame into out; return its size, or 0 when the text would exceed 200 bytes.
- * Characters of the board name outside 0x20..0x7E, and ';' and '=', become '_'.
+ * Build the frame into out; return its size, or 0 when the six keys of version 1 would exceed
+ * 200 bytes. Characters of the board name outside 0x20..0x7E, and ';' and '=', become '_'.
+ *
+ * With a status (NULL: none), the board's health follows the six keys: reset, fault, clock
+ * (those of the status that are not NULL), then the fault counters (skin_fw/fault.h) by key.
+ * A field that does not fit whole in the 200 bytes is left out, never cut.
  */
 uint32_t skin_info_build(uint8_t out[SKIN_INFO_MAX_SIZE], const skin_board_info_t *board,
-                         const char *fw_version, uint8_t rows, uint8_t cols, uint32_t pitch_um);
+                         const skin_board_status_t *status, const char *fw_version, uint8_t rows,
+                         uint8_t cols, uint32_t pitch_um);
 
 #ifdef __cplusplus
 }
