@@ -11,6 +11,7 @@
 #include "skin_fw/crc.h"
 #include "skin_fw/fault.h"
 #include "skin_fw/frame.h"
+#include "skin_fw/mux_check.h"
 #include "skin_fw/scan.h"
 
 #define ROWS 4
@@ -175,6 +176,79 @@ static void a_failed_row_drops_its_scan_and_is_counted(void **state) {
   assert_int_equal(skin_fault_get(SKIN_FAULT_LINK_TIMEOUT), 0);
 }
 
+/* The largest count of a layer of a sent frame. */
+static uint16_t layer_max(const uint8_t *f, uint8_t layer) {
+  uint16_t m = 0;
+  for (uint32_t k = 0; k < ROWS * COLS; k++) {
+    const uint16_t v = (uint16_t)get_le(f + 20 + 2 * (layer * ROWS * COLS + k), 2);
+    m = v > m ? v : m;
+  }
+  return m;
+}
+
+static void rows_alike_while_pressed_drop_the_scan_and_are_counted(void **state) {
+  (void)state;
+  /* Scan 1: the mux selects row 1 whatever row is driven; the bottom layer (counts from 2048)
+   * is pressed. Dropped like a failed row: counted, no sequence number taken. */
+  uint32_t len = skin_scan_fill(&scan);
+  skin_scan_send(&scan, len);
+  fake.mux_stuck = true;
+  fake.mux_stuck_row = 1u;
+  assert_int_equal(skin_scan_fill(&scan), 0u);
+  assert_int_equal(fake.events[fake.n_events - 1].kind, EV_RELEASE);
+  fake.mux_stuck = false;
+  len = skin_scan_fill(&scan);
+  skin_scan_send(&scan, len);
+  fake_drain();
+  assert_int_equal(fake.n_sent, 2);
+  assert_frame(fake.sent[0], fake.sent_len[0], 0, 0);
+  assert_frame(fake.sent[1], fake.sent_len[1], 2, 1);
+  assert_int_equal(skin_fault_get(SKIN_FAULT_MUX_STUCK), 1);
+  assert_int_equal(skin_fault_get(SKIN_FAULT_FRAME_DROPPED), 1);
+}
+
+static void rows_alike_at_idle_are_sent(void **state) {
+  (void)state;
+  /* Every count below 64: a stuck mux cannot be told from an untouched skin; sent. */
+  fake.idle = true;
+  fake.mux_stuck = true;
+  fake.mux_stuck_row = 2u;
+  const uint32_t len = skin_scan_fill(&scan);
+  assert_int_equal(len, SKIN_FRAME_SIZE(ROWS, COLS));
+  skin_scan_send(&scan, len);
+  fake_drain();
+  assert_int_equal(fake.n_sent, 1);
+  const uint8_t *f = fake.sent[0];
+  assert_memory_equal(f + 20 + 2 * COLS, f + 20, 2 * COLS); /* row 1 is row 0 */
+  assert_int_equal(skin_fault_get(SKIN_FAULT_MUX_STUCK), 0);
+  assert_int_equal(skin_fault_get(SKIN_FAULT_FRAME_DROPPED), 0);
+}
+
+static void a_healthy_press_is_sent(void **state) {
+  (void)state;
+  const uint32_t len = skin_scan_fill(&scan);
+  skin_scan_send(&scan, len);
+  fake_drain();
+  assert_int_equal(fake.n_sent, 1);
+  assert_frame(fake.sent[0], fake.sent_len[0], 0, 0);
+  assert_true(layer_max(fake.sent[0], 1) > SKIN_MUX_PRESSED); /* pressed, rows differ */
+  assert_int_equal(skin_fault_get(SKIN_FAULT_MUX_STUCK), 0);
+}
+
+static void rows_within_the_noise_are_alike(void **state) {
+  (void)state;
+  /* 2 x 2 x 2: the top layer idle and unlike, the bottom pressed (3000) with rows 16 apart. */
+  uint16_t counts[8] = {10, 40, 90, 5, 3000, 2000, 3016, 1984};
+  assert_true(skin_mux_stuck(counts, 2, 2));
+  counts[6] = 3017; /* one count past the noise: two lines */
+  assert_false(skin_mux_stuck(counts, 2, 2));
+  /* Rows alike at SKIN_MUX_PRESSED itself: not pressed. */
+  const uint16_t at_threshold[4] = {SKIN_MUX_PRESSED, 7, SKIN_MUX_PRESSED, 7};
+  assert_false(skin_mux_stuck(at_threshold, 1, 2)); /* one row: cannot be told */
+  const uint16_t two_layers[8] = {SKIN_MUX_PRESSED, 7, SKIN_MUX_PRESSED, 7, 1, 2, 3, 4};
+  assert_false(skin_mux_stuck(two_layers, 2, 2));
+}
+
 static void the_link_bound_is_the_bytes_time_twice_plus_the_slack(void **state) {
   (void)state;
   /* A 16 x 16 frame (1048 bytes) at 921 600 baud, 10 bits a byte: 10 851 ns a byte, 11.37 ms
@@ -240,6 +314,10 @@ int main(void) {
       cmocka_unit_test_setup(seq_counts_up_and_wraps, setup),
       cmocka_unit_test_setup(never_fills_the_buffer_the_link_is_sending, setup),
       cmocka_unit_test_setup(a_failed_row_drops_its_scan_and_is_counted, setup),
+      cmocka_unit_test_setup(rows_alike_while_pressed_drop_the_scan_and_are_counted, setup),
+      cmocka_unit_test_setup(rows_alike_at_idle_are_sent, setup),
+      cmocka_unit_test_setup(a_healthy_press_is_sent, setup),
+      cmocka_unit_test_setup(rows_within_the_noise_are_alike, setup),
       cmocka_unit_test_setup(the_link_bound_is_the_bytes_time_twice_plus_the_slack, setup),
       cmocka_unit_test_setup(a_transfer_that_never_completes_is_aborted_past_its_bound, setup),
       cmocka_unit_test_setup(a_completion_lost_after_the_last_byte_is_late_not_stalled, setup),

@@ -32,7 +32,7 @@ FRAME = frame_size(*firmware_board.QEMU_GRID)
 # The emulated board's health: QEMU stubs the RCC (no reset flags) and the IWDG; no fault.
 INFO_TEXT = re.compile(rb'board=qemu-netduinoplus2;uid=0{24};fw=\d+\.\d+\.\d+;grid=16x16;'
                        rb'pitch_um=5000;rate_hz=1000;reset=unknown;drop=0;adc_ovr=0;adc_to=0;'
-                       rb'link_to=0;hse_lost=0')
+                       rb'link_to=0;hse_lost=0;mux=0')
 
 
 def _split_stream(raw: bytes, start: int):

@@ -3,6 +3,7 @@
 #include "skin_fw/board.h"
 #include "skin_fw/fault.h"
 #include "skin_fw/frame.h"
+#include "skin_fw/mux_check.h"
 
 void skin_scan_init(skin_scan_t *s, uint32_t *buf0, uint32_t *buf1, uint8_t rows, uint8_t cols,
                     uint32_t settle_us) {
@@ -40,6 +41,12 @@ uint32_t skin_scan_fill(skin_scan_t *s) {
     }
   }
   board_release_rows();
+  if (skin_mux_stuck(skin_frame_counts(frame), s->rows, s->cols)) {
+    /* Valid-looking counts of one row in every row: not sent, like a row that failed. */
+    skin_fault_count(SKIN_FAULT_MUX_STUCK);
+    skin_fault_count(SKIN_FAULT_FRAME_DROPPED);
+    return 0u;
+  }
   const uint32_t len = skin_frame_finish(frame, s->rows, s->cols, s->seq, now);
   s->seq++; /* wraps 2^32 - 1 -> 0 as the protocol says */
   return len;
