@@ -143,7 +143,7 @@ def test_the_host_not_reading(nucleo_image):
 
 
 def _rows_alike_while_pressed(frame):
-    """A layer of the frame has every row equal while a count is well above idle (100)."""
+    """Tell whether a layer has every row equal while a count is well above idle (100)."""
     return any((layer == layer[0]).all() and layer.max() > 1000
                for layer in (frame.top, frame.bottom))
 
