@@ -151,6 +151,15 @@ static void never_fills_the_buffer_the_link_is_sending(void **state) {
   }
 }
 
+/* After scan 0 sent and scan 1 dropped: scan 2 is sent, numbered 1 (the drop took no number). */
+static void the_third_scan_follows_the_first_as_number_1(void) {
+  skin_scan_send(&scan, skin_scan_fill(&scan));
+  fake_drain();
+  assert_int_equal(fake.n_sent, 2);
+  assert_frame(fake.sent[0], fake.sent_len[0], 0, 0);
+  assert_frame(fake.sent[1], fake.sent_len[1], 2, 1);
+}
+
 static void a_failed_row_drops_its_scan_and_is_counted(void **state) {
   (void)state;
   /* Scan 1 (the second) fails on bottom row 2: nothing of it is sent, the scan stops there with
@@ -165,12 +174,7 @@ static void a_failed_row_drops_its_scan_and_is_counted(void **state) {
   /* Drives of the 4 top rows and bottom rows 0..2, each driven, settled, sampled; release. */
   assert_int_equal(fake.n_events - before, 3u * (ROWS + 3u) + 1u);
   assert_int_equal(fake.events[fake.n_events - 1].kind, EV_RELEASE);
-  len = skin_scan_fill(&scan);
-  skin_scan_send(&scan, len);
-  fake_drain();
-  assert_int_equal(fake.n_sent, 2);
-  assert_frame(fake.sent[0], fake.sent_len[0], 0, 0);
-  assert_frame(fake.sent[1], fake.sent_len[1], 2, 1);
+  the_third_scan_follows_the_first_as_number_1();
   assert_int_equal(skin_fault_get(SKIN_FAULT_FRAME_DROPPED), 1);
   assert_int_equal(skin_fault_get(SKIN_FAULT_ADC_OVERRUN), 1);
   assert_int_equal(skin_fault_get(SKIN_FAULT_LINK_TIMEOUT), 0);
@@ -197,12 +201,7 @@ static void rows_alike_while_pressed_drop_the_scan_and_are_counted(void **state)
   assert_int_equal(skin_scan_fill(&scan), 0u);
   assert_int_equal(fake.events[fake.n_events - 1].kind, EV_RELEASE);
   fake.mux_stuck = false;
-  len = skin_scan_fill(&scan);
-  skin_scan_send(&scan, len);
-  fake_drain();
-  assert_int_equal(fake.n_sent, 2);
-  assert_frame(fake.sent[0], fake.sent_len[0], 0, 0);
-  assert_frame(fake.sent[1], fake.sent_len[1], 2, 1);
+  the_third_scan_follows_the_first_as_number_1();
   assert_int_equal(skin_fault_get(SKIN_FAULT_MUX_STUCK), 1);
   assert_int_equal(skin_fault_get(SKIN_FAULT_FRAME_DROPPED), 1);
 }
