@@ -20,6 +20,7 @@ set(SKIN_FW_CORE_SOURCES
     "${SKIN_FW_DIR}/core/src/frame.c"
     "${SKIN_FW_DIR}/core/src/clock.c"
     "${SKIN_FW_DIR}/core/src/info.c"
+    "${SKIN_FW_DIR}/core/src/mux_check.c"
     "${SKIN_FW_DIR}/core/src/scan.c"
     "${SKIN_FW_DIR}/core/src/wait.c")
 set(SKIN_FW_RUN_SOURCE "${SKIN_FW_DIR}/core/src/run.c")

@@ -87,8 +87,10 @@ bool board_sample_row(uint16_t *dst, uint8_t cols) {
     skin_fault_count(SKIN_FAULT_ADC_OVERRUN);
     return false;
   }
+  const uint8_t row = fake.mux_stuck ? fake.mux_stuck_row : fake.driven_row;
   for (uint8_t c = 0; c < cols; c++) {
-    dst[c] = fake_count(fake.scans - 1u, fake.driven_layer, fake.driven_row, c);
+    const uint16_t count = fake_count(fake.scans - 1u, fake.driven_layer, row, c);
+    dst[c] = fake.idle ? (uint16_t)(count & 0x3Fu) : count;
   }
   /* The slack the interface allows, with counts no frame may carry. */
   for (uint8_t s = 0; s < SKIN_FW_ROW_SLACK; s++) {

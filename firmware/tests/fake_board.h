@@ -3,7 +3,8 @@
  * where they came from, writes garbage into the row slack, and keeps its link busy for a number
  * of polls after each send, as a DMA link would. Its faults, set by a test: a row that fails
  * (as an ADC overrun, counted as the Nucleo counts it), a link whose transfer never completes
- * (stalled with bytes left, or with every byte gone and only the completion lost); its clock
+ * (stalled with bytes left, or with every byte gone and only the completion lost), a row mux
+ * stuck on one row; its clock
  * advances by poll_us at every poll of the link, so a bounded wait can end.
  */
 #ifndef FAKE_BOARD_H
@@ -54,6 +55,9 @@ typedef struct {
   uint32_t fail_scan;
   uint8_t fail_layer, fail_row;
   bool fail_persists;
+  bool mux_stuck;            /* the row mux selects mux_stuck_row whatever row is driven */
+  uint8_t mux_stuck_row;
+  bool idle;                 /* the skin untouched: every count below 64 */
   uint32_t link_stalls;      /* so many next transfers never complete: no byte leaves */
   uint32_t link_loses_completion; /* so many next transfers send every byte, never complete */
   int in_flight_fault;       /* the transfer in flight: 0 fine, 1 stalls, 2 loses completion */

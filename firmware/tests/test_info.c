@@ -96,7 +96,7 @@ static void health_follows_the_six_keys(void **state) {
   assert_string_equal(text_of(out),
                       "board=nucleo-f446re;uid=0039001e3438510b34313939;fw=0.1.0;grid=16x16;"
                       "pitch_um=5000;rate_hz=1000;reset=iwdg;fault=busfault;clock=hsi;flagged=2;"
-                      "adc_ovr=1;adc_to=0;link_to=0;hse_lost=0");
+                      "adc_ovr=1;adc_to=0;link_to=0;hse_lost=0;mux=0");
   assert_int_equal(len, 6u + out[3]);
   const uint16_t crc = skin_crc16(out, 4u + out[3]);
   assert_int_equal(out[4 + out[3]] | out[5 + out[3]] << 8, crc);
@@ -113,23 +113,42 @@ static void a_status_left_unknown_sends_only_the_counters(void **state) {
   assert_null(strstr(text_of(out), "reset="));
 }
 
-static void the_nucleo_text_holds_every_counter_up_to_four_digits(void **state) {
-  /* The longest status the Nucleo sends with every counter at 9999: all of it fits in 200. */
-  (void)state;
+/* Every counter at n, with the longest status the Nucleo sends with version 2: a fault record
+ * (usagefault, the longest name) with the watchdog reset that ended its handler (iwdg; the
+ * handler's own reset is sw, shorter), on HSI, at the version-2 scan rate. */
+static const char *nucleo_text_with_every_counter_at(uint32_t n, uint8_t *out) {
   skin_faults_clear();
-  for (int i = 0; i < 9999; i++) {
+  for (uint32_t i = 0; i < n; i++) {
     for (unsigned f = 0; f < SKIN_FAULTS; f++) {
       skin_fault_count((skin_fault_t)f);
     }
   }
-  uint8_t out[SKIN_INFO_MAX_SIZE];
   skin_board_info_t b = board("nucleo-f446re");
-  b.scan_rate_hz = 80u;
+  b.scan_rate_hz = 100u;
   const skin_board_status_t status = {
-      .reset_cause = "unknown", .fault = "usagefault", .clock = "hsi"};
+      .reset_cause = "iwdg", .fault = "usagefault", .clock = "hsi"};
   skin_info_build(out, &b, &status, "0.1.0", 16, 16, 5000);
-  assert_non_null(strstr(text_of(out), ";flagged=9999;adc_ovr=9999;adc_to=9999;link_to=9999;hse_lost=9999"));
-  assert_true(out[3] <= SKIN_INFO_MAX_TEXT);
+  return text_of(out);
+}
+
+static void the_nucleo_text_holds_every_counter_up_to_three_digits(void **state) {
+  (void)state;
+  uint8_t out[SKIN_INFO_MAX_SIZE];
+  const char *text = nucleo_text_with_every_counter_at(999u, out);
+  const char *tail = ";flagged=999;adc_ovr=999;adc_to=999;link_to=999;hse_lost=999;mux=999";
+  assert_int_equal(strlen(text), SKIN_INFO_MAX_TEXT); /* exactly full */
+  assert_string_equal(text + strlen(text) - strlen(tail), tail);
+}
+
+static void four_digit_counters_leave_the_last_one_out_whole(void **state) {
+  /* 206 bytes with mux=9999: mux is left out whole (197), the counters before it all there. */
+  (void)state;
+  uint8_t out[SKIN_INFO_MAX_SIZE];
+  const char *text = nucleo_text_with_every_counter_at(9999u, out);
+  const char *tail = ";flagged=9999;adc_ovr=9999;adc_to=9999;link_to=9999;hse_lost=9999";
+  assert_int_equal(strlen(text), 197);
+  assert_string_equal(text + strlen(text) - strlen(tail), tail);
+  assert_null(strstr(text, "mux="));
 }
 
 static void a_field_that_does_not_fit_is_left_out_whole(void **state) {
@@ -163,7 +182,8 @@ int main(void) {
       cmocka_unit_test(too_long_a_text_is_refused),
       cmocka_unit_test(health_follows_the_six_keys),
       cmocka_unit_test(a_status_left_unknown_sends_only_the_counters),
-      cmocka_unit_test(the_nucleo_text_holds_every_counter_up_to_four_digits),
+      cmocka_unit_test(the_nucleo_text_holds_every_counter_up_to_three_digits),
+      cmocka_unit_test(four_digit_counters_leave_the_last_one_out_whole),
       cmocka_unit_test(a_field_that_does_not_fit_is_left_out_whole),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);

@@ -33,7 +33,7 @@ static void boot_sends_the_information_before_the_first_frame(void **state) {
   assert_int_equal(fake.n_sent, 1);
   assert_true(is_info(0));
   const char *text = "board=fake;uid=01112131415161718191a1b1;fw=1.2.3;grid=3x5;pitch_um=4500;"
-                     "rate_hz=1000;flagged=0;adc_ovr=0;adc_to=0;link_to=0;hse_lost=0";
+                     "rate_hz=1000;flagged=0;adc_ovr=0;adc_to=0;link_to=0;hse_lost=0;mux=0";
   assert_int_equal(fake.sent[0][3], strlen(text));
   assert_memory_equal(fake.sent[0] + 4, text, strlen(text));
   for (int i = 0; i < 3; i++) {
@@ -228,7 +228,7 @@ static void a_row_failing_on_every_scan_is_marked_in_every_frame_and_counted(voi
   }
   assert_int_equal(infos, 2);
   assert_true(is_info(0) && is_info(10));
-  const char *want = ";flagged=10;adc_ovr=10;adc_to=0;link_to=0;hse_lost=0";
+  const char *want = ";flagged=10;adc_ovr=10;adc_to=0;link_to=0;hse_lost=0;mux=0";
   assert_memory_equal(fake.sent[10] + 4 + fake.sent[10][3] - strlen(want), want, strlen(want));
 }
 

@@ -14,6 +14,7 @@
 #include "skin_fw/crc.h"
 #include "skin_fw/fault.h"
 #include "skin_fw/frame.h"
+#include "skin_fw/mux_check.h"
 #include "skin_fw/scan.h"
 
 #define ROWS 4
@@ -198,6 +199,15 @@ static void never_fills_the_buffer_the_link_is_sending(void **state) {
   }
 }
 
+/* After scan 0 sent and scan 1 dropped: scan 2 is sent, numbered 1 (the drop took no number). */
+static void the_third_scan_follows_the_first_as_number_1(void) {
+  skin_scan_send(&scan, skin_scan_fill(&scan));
+  fake_drain();
+  assert_int_equal(fake.n_sent, 2);
+  assert_frame(fake.sent[0], fake.sent_len[0], 0, 0);
+  assert_frame(fake.sent[1], fake.sent_len[1], 2, 1);
+}
+
 static void a_failed_row_drops_its_version_1_scan_and_is_counted(void **state) {
   (void)state;
   /* Version 1 cannot mark a row. Scan 1 (the second) fails on bottom row 2: nothing of it is
@@ -213,15 +223,82 @@ static void a_failed_row_drops_its_version_1_scan_and_is_counted(void **state) {
   /* Drives of the 4 top rows and bottom rows 0..2, each driven, settled, sampled; release. */
   assert_int_equal(fake.n_events - before, 3u * (ROWS + 3u) + 1u);
   assert_int_equal(fake.events[fake.n_events - 1].kind, EV_RELEASE);
-  len = skin_scan_fill(&scan);
-  skin_scan_send(&scan, len);
-  fake_drain();
-  assert_int_equal(fake.n_sent, 2);
-  assert_frame(fake.sent[0], fake.sent_len[0], 0, 0);
-  assert_frame(fake.sent[1], fake.sent_len[1], 2, 1);
+  the_third_scan_follows_the_first_as_number_1();
   assert_int_equal(skin_fault_get(SKIN_FAULT_FRAME_DROPPED), 1);
   assert_int_equal(skin_fault_get(SKIN_FAULT_ADC_OVERRUN), 1);
   assert_int_equal(skin_fault_get(SKIN_FAULT_LINK_TIMEOUT), 0);
+}
+
+/* The largest count of a layer of a sent frame. */
+static uint16_t layer_max(const uint8_t *f, uint8_t layer) {
+  uint16_t m = 0;
+  for (uint32_t k = 0; k < ROWS * COLS; k++) {
+    const uint16_t v = (uint16_t)count_at(f, layer * ROWS * COLS + k);
+    m = v > m ? v : m;
+  }
+  return m;
+}
+
+static void rows_alike_while_pressed_drop_the_scan_and_are_counted(void **state) {
+  (void)state;
+  /* Scan 1: the mux selects row 1 whatever row is driven; the bottom layer (counts from 2048)
+   * is pressed. Not sent in either version (a row map cannot say "this row is another's"):
+   * counted as mux only (drop is version 1's failed row), no sequence number taken. */
+  uint32_t len = skin_scan_fill(&scan);
+  skin_scan_send(&scan, len);
+  fake.mux_stuck = true;
+  fake.mux_stuck_row = 1u;
+  assert_int_equal(skin_scan_fill(&scan), 0u);
+  assert_int_equal(fake.events[fake.n_events - 1].kind, EV_RELEASE);
+  fake.mux_stuck = false;
+  the_third_scan_follows_the_first_as_number_1();
+  assert_int_equal(skin_fault_get(SKIN_FAULT_MUX_STUCK), 1);
+  assert_int_equal(skin_fault_get(SKIN_FAULT_FRAME_DROPPED), 0);
+  assert_int_equal(skin_fault_get(SKIN_FAULT_FRAME_FLAGGED), 0);
+}
+
+static void rows_alike_at_idle_are_sent(void **state) {
+  (void)state;
+  /* Every count below 64: a stuck mux cannot be told from an untouched skin; sent. */
+  fake.idle = true;
+  fake.mux_stuck = true;
+  fake.mux_stuck_row = 2u;
+  const uint32_t len = skin_scan_fill(&scan);
+  assert_int_equal(len, skin_frame_size(version, ROWS, COLS));
+  skin_scan_send(&scan, len);
+  fake_drain();
+  assert_int_equal(fake.n_sent, 1);
+  const uint8_t *f = fake.sent[0];
+  for (uint32_t c = 0; c < COLS; c++) {
+    assert_int_equal(count_at(f, COLS + c), count_at(f, c)); /* row 1 is row 0 */
+  }
+  assert_int_equal(skin_fault_get(SKIN_FAULT_MUX_STUCK), 0);
+  assert_int_equal(skin_fault_get(SKIN_FAULT_FRAME_DROPPED), 0);
+}
+
+static void a_healthy_press_is_sent(void **state) {
+  (void)state;
+  const uint32_t len = skin_scan_fill(&scan);
+  skin_scan_send(&scan, len);
+  fake_drain();
+  assert_int_equal(fake.n_sent, 1);
+  assert_frame(fake.sent[0], fake.sent_len[0], 0, 0);
+  assert_true(layer_max(fake.sent[0], 1) > SKIN_MUX_PRESSED); /* pressed, rows differ */
+  assert_int_equal(skin_fault_get(SKIN_FAULT_MUX_STUCK), 0);
+}
+
+static void rows_within_the_noise_are_alike(void **state) {
+  (void)state;
+  /* 2 x 2 x 2: the top layer idle and unlike, the bottom pressed (3000) with rows 16 apart. */
+  uint16_t counts[8] = {10, 40, 90, 5, 3000, 2000, 3016, 1984};
+  assert_true(skin_mux_stuck(counts, 2, 2));
+  counts[6] = 3017; /* one count past the noise: two lines */
+  assert_false(skin_mux_stuck(counts, 2, 2));
+  /* Rows alike at SKIN_MUX_PRESSED itself: not pressed. */
+  const uint16_t at_threshold[4] = {SKIN_MUX_PRESSED, 7, SKIN_MUX_PRESSED, 7};
+  assert_false(skin_mux_stuck(at_threshold, 1, 2)); /* one row: cannot be told */
+  const uint16_t two_layers[8] = {SKIN_MUX_PRESSED, 7, SKIN_MUX_PRESSED, 7, 1, 2, 3, 4};
+  assert_false(skin_mux_stuck(two_layers, 2, 2));
 }
 
 static void the_link_bound_is_the_bytes_time_twice_plus_the_slack(void **state) {
@@ -334,6 +411,10 @@ int main(void) {
       BOTH(never_fills_the_buffer_the_link_is_sending),
       cmocka_unit_test_setup(a_failed_row_drops_its_version_1_scan_and_is_counted, setup_v1),
       cmocka_unit_test_setup(a_failed_row_is_marked_in_its_version_2_frame_only, setup_v2),
+      BOTH(rows_alike_while_pressed_drop_the_scan_and_are_counted),
+      BOTH(rows_alike_at_idle_are_sent),
+      BOTH(a_healthy_press_is_sent),
+      cmocka_unit_test_setup(rows_within_the_noise_are_alike, setup_v2),
       cmocka_unit_test_setup(the_link_bound_is_the_bytes_time_twice_plus_the_slack, setup_v2),
       BOTH(a_transfer_that_never_completes_is_aborted_past_its_bound),
       BOTH(a_completion_lost_after_the_last_byte_is_late_not_stalled),

@@ -34,7 +34,7 @@ FRAME = frame_size(*firmware_board.QEMU_GRID, 2)
 # version-2 board counts the frames it sent with a row marked (flagged), not dropped ones.
 INFO_TEXT = re.compile(rb'board=qemu-netduinoplus2;uid=0{24};fw=\d+\.\d+\.\d+;grid=16x16;'
                        rb'pitch_um=5000;rate_hz=1000;reset=unknown;flagged=0;adc_ovr=0;adc_to=0;'
-                       rb'link_to=0;hse_lost=0')
+                       rb'link_to=0;hse_lost=0;mux=0')
 
 
 def _split_stream(raw: bytes, start: int):

@@ -6,6 +6,7 @@ static const char *const keys[SKIN_FAULTS] = {
     [SKIN_FAULT_FRAME_DROPPED] = "drop",    [SKIN_FAULT_FRAME_FLAGGED] = "flagged",
     [SKIN_FAULT_ADC_OVERRUN] = "adc_ovr",   [SKIN_FAULT_ADC_TIMEOUT] = "adc_to",
     [SKIN_FAULT_LINK_TIMEOUT] = "link_to",  [SKIN_FAULT_HSE_LOST] = "hse_lost",
+    [SKIN_FAULT_MUX_STUCK] = "mux",
 };
 
 void skin_fault_count(skin_fault_t fault) {

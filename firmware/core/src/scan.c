@@ -3,6 +3,7 @@
 #include "skin_fw/board.h"
 #include "skin_fw/fault.h"
 #include "skin_fw/frame.h"
+#include "skin_fw/mux_check.h"
 
 /* Set by the board (skin_scan_fault), taken by the scan that follows. */
 static volatile uint16_t pending_faults;
@@ -60,6 +61,14 @@ uint32_t skin_scan_fill(skin_scan_t *s) {
     }
   }
   board_release_rows();
+  if (skin_mux_stuck(skin_frame_counts(frame, s->version, s->rows), s->rows, s->cols)) {
+    /* Valid-looking counts of one row in every row: not sent in either version (a version-2
+     * row map cannot say "this row is another row's"). Counted as mux only: drop is the
+     * version-1 failed row's counter, and the information frame carries mux in both. No
+     * sequence number is taken, and the board's pending fault bits wait for the next frame. */
+    skin_fault_count(SKIN_FAULT_MUX_STUCK);
+    return 0u;
+  }
   /* A fault raised by an interrupt between the read and the clear waits for the next frame. */
   const uint16_t faults = pending_faults;
   pending_faults &= (uint16_t)~faults;

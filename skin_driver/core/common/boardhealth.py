@@ -4,9 +4,9 @@ What a board says of its health in its information frame, by name (docs/firmware
 The firmware appends to the six identity keys (core.common.boardinfo) why it last reset
 (``reset``), the fault that stopped it before that reset (``fault``), its clock's source
 (``clock``) and counters of the faults it recovered from since (``drop`` from a version-1 board
-or ``flagged`` from a version-2 one, ``adc_ovr``, ``adc_to``, ``link_to``, ``hse_lost``). A
-board that sends none of them (the simulator, an older firmware) has no health to show; a value
-this host does not know is shown as sent.
+or ``flagged`` from a version-2 one, ``adc_ovr``, ``adc_to``, ``link_to``, ``hse_lost``,
+``mux``). A board that sends none of them (the simulator, an older firmware) has no health to
+show; a value this host does not know is shown as sent.
 """
 
 from __future__ import annotations
@@ -37,7 +37,9 @@ COUNTERS = (
     ('flagged', 'frames sent with a row the board failed to sample marked'),
     ('adc_ovr', 'ADC overruns'), ('adc_to', 'ADC timeouts'),
     ('link_to', 'link timeouts (a transfer to the host did not end)'),
-    ('hse_lost', 'external clock failures'))
+    ('hse_lost', 'external clock failures'),
+    ('mux', 'scans dropped by the board with every row of a layer alike while pressed '
+            '(row mux stuck?)'))
 HEALTH_KEYS = ('reset', 'fault', 'clock', *(key for key, _ in COUNTERS))
 
 

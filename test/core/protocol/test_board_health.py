@@ -15,9 +15,10 @@ from skin_driver.core.protocol.wire import BoardInfo, encode_frame, encode_info,
 # image's (it counts frames sent with a row marked, 'flagged').
 IDENTITY = ('board=nucleo-f446re;uid=0039001e3438510b34313939;fw=0.1.0;grid=16x16;'
             'pitch_um=5000;rate_hz=80')
-HEALTHY = f'{IDENTITY};reset=por;clock=hse;drop=0;adc_ovr=0;adc_to=0;link_to=0;hse_lost=0'
+HEALTHY = (f'{IDENTITY};reset=por;clock=hse;drop=0;adc_ovr=0;adc_to=0;link_to=0;hse_lost=0;'
+           'mux=0')
 V2_HEALTHY = (f"{IDENTITY.replace('rate_hz=80', 'rate_hz=100')};reset=por;clock=hse;flagged=0;"
-              'adc_ovr=0;adc_to=0;link_to=0;hse_lost=0')
+              'adc_ovr=0;adc_to=0;link_to=0;hse_lost=0;mux=0')
 
 
 def link_after(stream, decoder=None):
@@ -101,6 +102,13 @@ def test_frames_a_version_2_board_flagged_are_named_with_its_fault_bits():
     # transfers to the host that did not end in their bound
     (('link_to=0', 'link_to=2'), '2 link timeouts (a transfer to the host did not end)',
      ('board link timeouts (a transfer to the host did not end)', '2')),
+    # scans whose rows were all alike while pressed: the row mux stuck, not the line (counted as
+    # mux only, in either version: drop stays 0)
+    (('hse_lost=0;mux=0', 'hse_lost=0;mux=4'),
+     '4 scans dropped by the board with every row of a layer alike while pressed '
+     '(row mux stuck?)',
+     ('board scans dropped by the board with every row of a layer alike while pressed '
+      '(row mux stuck?)', '4')),
 ])
 def test_each_fault_is_a_warning_that_names_it(sent, named, value):
     text = HEALTHY.replace(*sent)

@@ -23,6 +23,7 @@ typedef enum {
   SKIN_FAULT_ADC_TIMEOUT,   /* "adc_to": a row's conversion or its DMA did not end in its bound */
   SKIN_FAULT_LINK_TIMEOUT,  /* "link_to": a transfer to the host did not end in its bound */
   SKIN_FAULT_HSE_LOST,      /* "hse_lost": the external clock failed while running */
+  SKIN_FAULT_MUX_STUCK,     /* "mux": a scan not sent (either version): rows alike, pressed */
   SKIN_FAULTS
 } skin_fault_t;
 
