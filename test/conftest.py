@@ -5,6 +5,7 @@ import pathlib
 import sys
 
 from hypothesis import settings
+import pytest
 
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
 
@@ -20,3 +21,13 @@ if _worker.startswith('gw'):
     _index = int(_worker[2:]) + 1
     _domain = _base + _index if _base + _index <= 101 else _base - _index
     os.environ['ROS_DOMAIN_ID'] = str(_domain)
+
+
+@pytest.fixture
+def owner_checked(monkeypatch):
+    """Kernels made in the test refuse every thread but their owner; a refusal fails the test."""
+    from skin_driver.core.estimation.scan import kernel
+    monkeypatch.setenv(kernel.CHECK_VARIABLE, '1')
+    before = len(kernel.breaches())
+    yield
+    assert kernel.breaches()[before:] == []

@@ -22,7 +22,12 @@ press, cancel (Ctrl-C on ``ros2 action send_goal``) ends it. One runs at a time:
 arrives while one runs is rejected at once (the reason is logged). A goal is checked before any
 press is awaited: one no presses could satisfy ends at once, aborted with the reason. The node
 calls :meth:`feed` with every scan and its contacts (on the scans' thread), and
-:meth:`check_skin` (off it) before it estimates the scans of a skin's grid and pitch. The
+:meth:`check_skin` (off it) before it estimates the scans of a skin's grid and pitch. The scans'
+thread only hands a running calibration its scans (a bounded queue: a scan that finds it full is
+dropped and counted, in the diagnostics and the log); a worker thread of the calibration's own
+gives them to the session, which conditions each press on a kernel of its own and, for a
+direction calibration, scans again without the correction in force: no calibration work, and no
+kernel of the calibration's, on the scans' thread. The
 calibration lives in the estimator alone, which the node owns: ``get_estimator()`` returns the
 one in force and ``put_calibration(calibration)`` asks the node to put a new one in force. A new
 calibration is written to the file first and put in force only once written; a refusal, a
@@ -43,6 +48,7 @@ loads with a WARN on a board that does not say who it is (a version-1 stream).
 from dataclasses import replace
 import math
 import os
+import queue
 import threading
 import time
 
@@ -69,6 +75,8 @@ MAX_CALIBRATION_S = 3600.0
 MAX_WRENCH_AGE_S = 0.5
 # How often a running calibration looks for a cancel or its timeout.
 POLL_S = 0.1
+# Scans a running calibration's worker may be behind by (1 s at 2 kHz) before one is dropped.
+MAX_WAITING_SCANS = 2000
 KEEP = '; the previous calibration stays in force'
 # A board says who it is once a second (docs/protocol.md); a driver that opens the port while
 # the board runs hears it up to a second after the first frame. Until this long after the
@@ -122,31 +130,57 @@ def request_problem(presses: int, timeout: float, forces=()) -> str:
     return ''
 
 
-class _Running:
+class RunningCalibration:
     """
     The calibration running: its session and goal together, put in force by one assignment.
 
-    The scans' thread gives the session scans until the executor closes it; closing waits for
-    a scan being given, so none reaches a session that is being finished.
+    The scans' thread hands it scans (:meth:`offer`) until the executor closes it; a worker
+    thread of its own gives them to the session, in order, and says what a press made of them
+    (``on_note(running, note)``). Closing waits for the worker to end, so no scan reaches a
+    session that is being finished.
     """
 
-    __slots__ = ('session', 'goal', '_feeding', '_open')
+    __slots__ = ('session', 'goal', 'dropped', '_scans', '_open', '_worker')
 
-    def __init__(self, session: CalibrationSession, goal_handle):
+    def __init__(self, session: CalibrationSession, goal_handle, on_note):
         self.session = session
         self.goal = goal_handle
-        self._feeding = threading.Lock()
+        self.dropped = 0  # scans that found the queue full (the scans' thread's count)
+        self._scans = queue.SimpleQueue()
         self._open = True
+        self._worker = threading.Thread(target=self._work, args=(on_note,), daemon=True,
+                                        name='skin-calibration')
+        self._worker.start()
 
-    def add_scan(self, top, bottom, contacts, wrench) -> str:
-        """Give the session one scan, unless it is closed; return its note ('' if none)."""
-        with self._feeding:
-            return self.session.add_scan(top, bottom, contacts, wrench) if self._open else ''
+    def offer(self, top, bottom, contacts, wrench) -> None:
+        """Hand the worker one scan (never blocks); one the queue has no room for is counted."""
+        if not self._open:
+            return
+        # The scans' thread alone puts: the queue only shrinks between the check and the put.
+        if self._scans.qsize() >= MAX_WAITING_SCANS:
+            self.dropped += 1
+            return
+        self._scans.put((top, bottom, contacts, wrench))
+
+    def _work(self, on_note) -> None:
+        while True:
+            scan = self._scans.get()
+            if scan is None:
+                return
+            if not self._open:
+                continue  # closed: what is left waits for nothing
+            try:
+                note = self.session.add_scan(*scan)
+            except Exception as err:  # noqa: B902 - said, and the next scan is given still
+                note = f'a scan not taken: {err!r}'
+            if note:
+                on_note(self, note)
 
     def close(self) -> None:
-        """Take no more scans (after the one being given, if any)."""
-        with self._feeding:
-            self._open = False
+        """Take no more scans; return once the worker has ended (after the scan it gives)."""
+        self._open = False
+        self._scans.put(None)
+        self._worker.join()
 
 
 async def goal_outcome(node, goal_handle, done, timeout_s: float) -> str:
@@ -183,7 +217,8 @@ class CalibrationServices:
         self._node = node
         self._get_estimator = get_estimator
         self._put_calibration = put_calibration
-        self._running_now = None  # a _Running while a calibration runs, read once per scan
+        self._running_now = None  # a RunningCalibration while one runs, read once per scan
+        self._dropped = 0  # scans the calibrations that ended had no room for
         self._running = threading.Lock()  # held from a goal's acceptance to its end
         self._wrench = None
         self._wrench_sub = None
@@ -399,7 +434,8 @@ class CalibrationServices:
                 'force curve': (f'{cal.force_presses} presses' if cal.force_curves
                                 else '- (assumed FSR model)'),
                 'calibrating': (f'{session.kind}: {len(session.accepted)} of {session.wanted} '
-                                'presses' if session else 'no')}
+                                'presses' if session else 'no'),
+                'calibration scans dropped': self._dropped + (running.dropped if running else 0)}
 
     # ---- data --------------------------------------------------------------------------------
     def _follow_wrench_topic(self) -> None:
@@ -425,12 +461,13 @@ class CalibrationServices:
         known = self._wrench
         if known is not None and time.monotonic() - known[1] <= MAX_WRENCH_AGE_S:
             wrench = known[0]
+        running.offer(top, bottom, contacts, wrench)
+
+    def _on_note(self, running: RunningCalibration, note: str) -> None:
+        """Say what a press made of the scans (the calibration's worker thread)."""
         session, goal = running.session, running.goal
-        note = running.add_scan(top, bottom, contacts, wrench)
-        if note:
-            self._node.get_logger().info(f'calibration ({session.kind}): {note}')
-            goal.publish_feedback(
-                conversions.calibration_feedback(type(goal.request), session, note))
+        self._node.get_logger().info(f'calibration ({session.kind}): {note}')
+        goal.publish_feedback(conversions.calibration_feedback(type(goal.request), session, note))
 
     # ---- actions -----------------------------------------------------------------------------
     def _param(self, name: str):
@@ -549,7 +586,7 @@ class CalibrationServices:
             goal_handle.abort()
             return result
         timeout = goal_handle.request.timeout or self._param('calibration.timeout')
-        running = _Running(session, goal_handle)
+        running = RunningCalibration(session, goal_handle, self._on_note)
         self._running_now = running
         self._node.get_logger().info(
             f'calibration ({kind}): make {session.wanted} presses within {timeout:.0f} s')
@@ -558,6 +595,11 @@ class CalibrationServices:
         finally:
             self._running_now = None
             running.close()
+            self._dropped += running.dropped
+        if running.dropped:
+            self._node.get_logger().warning(
+                f'calibration ({kind}): {running.dropped} scans dropped, its worker being '
+                f'{MAX_WAITING_SCANS} scans behind; its presses are read from the others')
         result.presses_used = len(session.accepted)
         made = f'{len(session.accepted)} of {session.wanted} presses'
         if outcome == 'cancel':

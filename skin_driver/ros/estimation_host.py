@@ -12,14 +12,19 @@ the same whichever way the scans arrive.
 Threads: process() is the hot path and may run on any one thread; everything else runs on the
 executor (parameter changes on a thread of their own). An estimator slower than the scans
 (``model_fit`` with a learned taxel model) takes the newest scan on a thread of its own instead, so
-that the hot path is never held up. The host is the one owner of what the hot path reads: one
-immutable :class:`Live` (the estimator, the skin it was checked for, its generation), read once per
-scan. The hot path builds no estimator and takes no lock but a running calibration's (uncontended
-but for the moment it ends, so no scan reaches a session being finished): every change (tare,
-calibration, parameters, a new skin or taxel pitch) builds a new estimator from the current one off
-the hot path, serialised by a lock only changes take (:meth:`EstimationHost._swap`), and puts it in
-force by one reference assignment. A scan of a skin the estimator was not checked for asks the
-executor to check it (the calibration's skin, the pitch) and is counted, not estimated, until then.
+that the hot path is never held up. The thread that estimates owns the live estimator and its
+kernels (dead marks, drift tracked, time under load), and it alone enters them; it takes no lock.
+Every change (tare, calibration, parameters, a new skin or taxel pitch) builds a new estimator
+from the newest one off the hot path, with its kernel, serialised by a lock only changes take,
+and hands it over (core scan/handover.py, one immutable :class:`Live`: the estimator, the skin it
+was checked for, its generation); the estimating thread puts the changes in force in order
+before its next scan and carries the drift state into the new estimator then, so no scan is lost
+from it. Other threads read what the owner publishes (the drift and dead marks each kernel
+publishes after a scan) or work on kernels of their own (heatmaps: ``maps_of``; a calibration's
+presses, on the calibration's worker thread: calibration_services). The scans' thread changes
+only between two scans (to a slow estimator's thread and back); the new one claims the kernels.
+A scan of a skin the estimator was not checked for asks the executor to check it (the
+calibration's skin, the pitch) and is counted, not estimated, until then.
 Each diagnostic count is written by one thread only: the hot path raises totals, the report takes
 differences. Work a lower rate does as well (heatmaps, markers, diagnostics) runs on timers, on the
 latest scan only, and heatmaps and markers only while someone subscribes to them. Contacts, contact
@@ -43,6 +48,7 @@ from skin_driver.core.common.boardhealth import BoardHealth
 from skin_driver.core.estimation.calibration.calibration import SkinMount
 from skin_driver.core.estimation.calibration.tare import RecentScans
 from skin_driver.core.estimation.scan.drift import drift_status
+from skin_driver.core.estimation.scan.handover import Handover
 from skin_driver.core.estimation.scan.heatmap import (colour_map, display_scale, grey_levels,
                                                       top_down)
 from skin_driver.core.estimation.scan.pipeline import ContactEstimator, EstimatorConfig
@@ -94,18 +100,21 @@ class EstimationHost:
         cv2.setNumThreads(1)
         self._declare_parameters()
         accept_whole_numbers(node)
-        self._lock = threading.Lock()  # serialises changes of the estimator, never the hot path
-        self._live = Live(ContactEstimator(self._config(EstimatorConfig().pitch_m)), None, 0)
+        # What is in force, the estimating thread's; changes are handed over to it (_swap).
+        self._handover = Handover(
+            Live(ContactEstimator(self._config(EstimatorConfig().pitch_m)), None, 0),
+            lambda new, old: new.estimator.carry_time_from(old.estimator))
+        self._estimating = None  # the thread that estimated last (threading.get_ident())
         # The estimator holds the calibration; the services put every new one in force here.
         self.mount = None  # until made: the file's calibration is put in force first
         self._skin = default_frame_id(node.get_namespace())
-        self.calibration = CalibrationServices(node, lambda: self._live.estimator,
+        self.calibration = CalibrationServices(node, lambda: self.estimator,
                                                self.put_calibration)
         self.mount = MountCalibration(node, lambda: self._skin, self._skin_grid, self._put_mount,
                                       self.calibration.file_problem)
         # The file's mount goes on /tf_static at every start, before any scan.
         self._show_mount()
-        self.creep = CreepCalibration(node, lambda: self._live.estimator, self._put_creep,
+        self.creep = CreepCalibration(node, lambda: self.estimator, self._put_creep,
                                       self.calibration.file_problem)
         # The scans a tare averages: filled and resized by the estimating thread alone.
         self._recent = RecentScans(self._p('tare.frames'))
@@ -272,36 +281,42 @@ class EstimationHost:
     # ---- the live estimator -----------------------------------------------------------------
     @property
     def estimator(self) -> ContactEstimator:
-        """Return the estimator in force (immutable; a change swaps in another)."""
-        return self._live.estimator
+        """Return the newest estimator: immutable, in force from the next scan at the latest."""
+        return self._handover.newest.estimator
 
     @property
     def live(self) -> Live:
-        """Return what is in force: the estimator, the skin it was checked for, its generation."""
-        return self._live
+        """Return the newest estimator, the skin it was checked for and its generation."""
+        return self._handover.newest
+
+    @property
+    def in_force(self) -> Live:
+        """Return what the last scan met (a snapshot: the estimating thread's)."""
+        return self._handover.in_force
 
     def _swap(self, change, skin=None) -> None:
         """
-        Put ``change(current estimator)`` in force; nothing changes if it raises.
+        Hand ``change(newest estimator)`` over to the scans; nothing changes if it raises.
 
-        ``skin`` (rows, cols, frame_pitch): the new estimator was checked for it; without, it
-        serves the skin the current one served.
+        Built here, off the hot path, with its kernel; the estimating thread puts it in force
+        before its next scan and carries the drift tracked and the time under load into it
+        then (across a change of parameters or calibration; a tare, another baseline, starts
+        afresh). ``skin`` (rows, cols, frame_pitch): the new estimator was checked for it;
+        without, it serves the skin the current one served.
         """
-        with self._lock:
-            live = self._live
-            skin = skin or live.skin
+        def made(live: Live) -> Live:
+            checked = skin or live.skin
             estimator = change(live.estimator)
-            if skin is not None:
+            if checked is not None:
                 # Its kernel now, not by the first scan on the thread that reads them.
-                estimator.ready_for(skin[0], skin[1])
-                # Drift tracked and time under load stay true across a change of parameters
-                # or calibration; a tare (another baseline) starts afresh.
-                estimator.carry_time_from(live.estimator)
-            self._live = Live(estimator, skin, live.generation + 1)
+                estimator.ready_for(checked[0], checked[1])
+            return Live(estimator, checked, live.generation + 1)
+        self._handover.put(made)
 
     def _skin_grid(self) -> tuple:
         """Return (rows, cols, pitch) of the skin the scans show (touches come with scans)."""
-        return self._live.skin or (0, 0, self._live.estimator.config.pitch_m)
+        live = self.live
+        return live.skin or (0, 0, live.estimator.config.pitch_m)
 
     def _put_mount(self, parent: str, fit) -> str:
         """Store a mount found from touches with the calibration; return where it was written."""
@@ -314,7 +329,7 @@ class EstimationHost:
 
     def _put_part(self, **part) -> str:
         """Store one part, stamped now (in the made map and its own time alike); say where."""
-        calibration = self._live.estimator.calibration.updated(**part)
+        calibration = self.estimator.calibration.updated(**part)
         name, value = next(iter(part.items()))
         path = self.calibration.write_and_put(replace(calibration, **{
             name: replace(value, made_utc=calibration.made(name))}))
@@ -327,7 +342,7 @@ class EstimationHost:
 
     def _show_mount(self) -> None:
         if self.mount is not None:
-            self.mount.show(self._live.estimator.calibration, self.calibration.loaded_from)
+            self.mount.show(self.estimator.calibration, self.calibration.loaded_from)
 
     def prepare(self, rows: int, cols: int, pitch_m: float) -> None:
         """
@@ -351,7 +366,7 @@ class EstimationHost:
     def _check_skin(self) -> None:
         """Check the estimator for the skin the scans show (the executor's, asked by them)."""
         asked = self._asked_skin
-        if asked is None or asked == self._live.skin:
+        if asked is None or asked == self.live.skin:
             return
         rows, cols, pitch_m = asked
         try:
@@ -377,7 +392,7 @@ class EstimationHost:
         """
         scan = (header, sequence, device_time_us, pitch_m, top, bottom)
         newest = self._newest
-        if self._live.estimator.every_scan and (newest is None or not newest.busy):
+        if self.estimator.every_scan and (newest is None or not newest.busy):
             self._estimate(scan)
             return
         if newest is None:
@@ -398,7 +413,12 @@ class EstimationHost:
         header, sequence, device_time_us, pitch_m, top, bottom = scan
         cpu = self._cpu
         cpu.begin()
-        live = self._live  # the one read of what is in force, for the whole scan
+        if threading.get_ident() != self._estimating:
+            # The scans moved to this thread (a slow estimator's, or back): it owns the kernels.
+            self._estimating = threading.get_ident()
+            self._handover.in_force.estimator.claim()
+        # The changes handed over, in force from this scan on: the one read for the whole scan.
+        live = self._handover.take()
         try:
             if not (math.isfinite(pitch_m) and pitch_m > 0):
                 raise ValueError(f'pitch {pitch_m} is not a positive length')
@@ -564,7 +584,7 @@ class EstimationHost:
     def _describe_skin(self) -> None:
         """Publish what the skin is on skin_info (latched) when any of it changed."""
         self._show_mount()  # the scans' frame, once known
-        live = self._live
+        live = self.live
         if live.skin is None:
             return
         info = skin_info(self._skin, live.skin, live.estimator, self.calibration.board,
@@ -588,14 +608,14 @@ class EstimationHost:
                 tally.left_for_newer,
             'frames before the estimator was checked for their skin': tally.before_skin_checked,
             'contacts': tally.contacts,
-            'estimator generation': self._live.generation,
+            'estimator generation': self.in_force.generation,
             'mean cost [us]': 1e6 * total / count if count else 0.0,
             'max cost [us]': 1e6 * worst,
             **{f'CPU per scan, {stage} [us]': round(us, 1)
                for stage, us in self._cpu_reading.ask().items()},
             **self.calibration.diagnostic_values(),
         }
-        drifted, drift_warning = drift_status(self._live.estimator)
+        drifted, drift_warning = drift_status(self.in_force.estimator)
         values.update(drifted)
         level, message = diagnostics.OK, self.calibration.note
         if drift_warning:

@@ -66,7 +66,7 @@ def test_a_refused_realtime_priority_reads_at_normal_priority_with_a_warning(
     assert 'serial reader: SCHED_FIFO 60 not permitted' in capfd.readouterr().err
 
 
-def test_a_slow_estimator_takes_the_newest_scan_and_holds_up_no_read(tmp_path):
+def test_a_slow_estimator_takes_the_newest_scan_and_holds_up_no_read(tmp_path, owner_checked):
     # model_fit with a taxel model fits each contact in milliseconds: fused, at 500 scans a
     # second, the reader decodes on and the contacts come from the newest scans.
     path = tmp_path / 'calibration.yaml'

@@ -2,7 +2,8 @@
 Tares, calibrations and parameter changes while the fused reader estimates 2000 scans a second.
 
 Every contacts message must be what one estimator in force made of its scan (no scan meets half
-of a change), and every scan the reader handed over is either published or counted.
+of a change), every scan the reader handed over is either published or counted, and only the
+thread that estimates enters a live kernel (the owner check on).
 """
 
 import math
@@ -49,7 +50,8 @@ def _untouched(probe, scans=40):
     return len(counts) == scans and not any(counts)
 
 
-def test_changes_under_a_2_khz_fused_reader_never_tear_a_scan_nor_lose_one(tmp_path):
+def test_changes_under_a_2_khz_fused_reader_never_tear_a_scan_nor_lose_one(tmp_path,
+                                                                           owner_checked):
     files = [str(tmp_path / f'calibration_{i}.yaml') for i in range(len(CALIBRATIONS))]
     for cal, path in zip(CALIBRATIONS, files):
         cal.save_yaml(path)

@@ -13,8 +13,11 @@
  * A kernel is built once per estimator from its state (tare, gains, force tables, settings) and
  * is not changed afterwards, except for its per-scan state: dead-taxel marks that a touch
  * revives (reported) and, for scans given their time, the baselines that follow drift and each
- * taxel's age under load (drift.c, sk_drift_state). It is owned by whoever runs the scans; a
- * kernel is never used by two threads at once.
+ * taxel's age under load (drift.c, sk_drift_state). It is owned by the one thread that runs its
+ * scans, and no other thread calls it: the binding copies what others read (the drift of the last
+ * scan, the dead marks) after each scan, and can check that only the owner enters a kernel
+ * (SKIN_KERNEL_CHECK_OWNER). The kernel takes no lock and keeps no global state, so kernels on
+ * different threads run side by side.
  */
 #ifndef SKIN_KERNEL_SKIN_KERNEL_H
 #define SKIN_KERNEL_SKIN_KERNEL_H

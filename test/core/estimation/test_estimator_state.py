@@ -70,7 +70,7 @@ def test_a_calibrations_kernel_revives_its_own_marks_only():
     assert est.conditioning_kernel(16, 16).dead_masks()[0][8, 8]
 
 
-def test_readers_and_changes_beside_a_scanning_thread_see_whole_states():
+def test_readers_and_changes_beside_a_scanning_thread_see_whole_states(owner_checked):
     model = SkinModel()
     rng = np.random.default_rng(3)
     # Its dead taxel far from the presses: every scan's contacts are the same in every round.

@@ -11,9 +11,14 @@ A :class:`Kernel` copies an estimator's state once (tare, gains, force tables, s
 preallocated buffers, so a scan costs one copy of the maps into its buffer and one foreign call.
 Maps of uint16, as the driver and the datasets give them, are copied as they are (any value is
 a count, no check); others are checked and copied as float64.
-The kernel owns the dead-taxel marks its scans revive (:meth:`Kernel.dead_masks`) and, for
-scans given their time, the baselines that follow drift and each taxel's age under load
-(:meth:`Kernel.drift_state`): the estimation's mutable state, which whoever runs the scans owns.
+The kernel owns the dead-taxel marks its scans revive and, for scans given their time, the
+baselines that follow drift and each taxel's age under load (:meth:`Kernel.drift_state`): the
+estimation's mutable state. One thread owns a kernel, the one that runs its scans, and it alone
+enters it; it takes no lock. Other threads read what the owner publishes after each scan
+(:meth:`Kernel.dead_masks`, :attr:`Kernel.drift`), replaced whole, never changed. With the owner
+check on (``SKIN_KERNEL_CHECK_OWNER=1`` or ``Kernel(spec, check_owner=True)``: the tests') a
+kernel records the first thread that enters it and refuses any other (:class:`NotTheOwner`,
+kept in :func:`breaches` too) until :meth:`Kernel.claim` hands it over.
 :meth:`Kernel.condition` and :meth:`Kernel.force` give a scan's conditioning alone (tared
 counts, cut taxels, the line leak taken off, forces): what a calibration reads its presses from.
 
@@ -39,8 +44,9 @@ from ...common.validate import check_pair
 
 __all__ = ['METHODS', 'ABI_VERSION', 'TaxelModelNumbers', 'Curve', 'Direction', 'DriftNumbers',
            'Settings', 'ContactRecord', 'Status', 'Record', 'KernelSettings', 'Conditioned',
-           'Kernel', 'KernelMissing', 'KernelMismatch', 'load_library', 'library_candidates',
-           'fit_contact', 'taxel_model_of', 'direction_of', 'DIRECTION_FEATURES']
+           'Kernel', 'KernelMissing', 'KernelMismatch', 'NotTheOwner', 'breaches',
+           'load_library', 'library_candidates', 'fit_contact', 'taxel_model_of', 'direction_of',
+           'DIRECTION_FEATURES']
 
 # Shift methods the kernel runs, by their registered names (skin_kernel.h: SK_CENTROID, ...).
 METHODS = {'centroid': 0, 'taxel_fit': 1, 'poc': 2, 'model_fit': 3}
@@ -50,6 +56,8 @@ ABI_VERSION = 14
 LIBRARY = f'libskin_kernel.so.{ABI_VERSION}'
 # The variable that names the library file to load, before any place searched.
 LIBRARY_VARIABLE = 'SKIN_KERNEL_LIBRARY'
+# The variable that turns the owner check on for kernels made without check_owner (1: on).
+CHECK_VARIABLE = 'SKIN_KERNEL_CHECK_OWNER'
 
 _OK, _NOT_FINITE, _NEGATIVE, _BAD_SETTINGS, _NO_MEMORY = 0, -1, -2, -3, -4
 _COUNTS = np.dtype(np.uint16)  # sk_scan_counts's maps, native byte order
@@ -67,6 +75,19 @@ class KernelMissing(RuntimeError):
 
 class KernelMismatch(KernelMissing):
     """The library found is not the one this binding was written for (layout or ABI)."""
+
+
+class NotTheOwner(RuntimeError):
+    """A thread entered a kernel another thread owns (raised with the owner check on)."""
+
+
+# What the owner check refused, in order: a refusal on a thread nobody joins is seen here.
+_BREACHES = []
+
+
+def breaches() -> list:
+    """Return the owner check's refusals so far (messages): a test wants none."""
+    return list(_BREACHES)
 
 
 class TaxelModelNumbers(ctypes.Structure):
@@ -294,15 +315,25 @@ def _address(array: np.ndarray) -> ctypes.c_void_p:
 
 class Kernel:
     """
-    One estimator's compiled state and buffers; scans run one at a time.
+    One estimator's compiled state and buffers; its owner thread runs the scans, one at a time.
 
     The kernel is the estimation's one piece of mutable state: the dead-taxel marks its scans
-    revive, the drift followed and the time under load. Whoever runs the scans owns it;
-    :meth:`dead_masks`, :attr:`drift` and :meth:`drift_state` give consistent snapshots.
+    revive, the drift followed and the time under load. The thread that runs the scans owns it
+    and alone enters it (:meth:`scan`, :meth:`condition`, :meth:`drift_state`, ...); any
+    thread reads the snapshots the owner publishes (:meth:`dead_masks`, :attr:`drift`,
+    :attr:`timed_scans`) and :meth:`force`, which reads only what never changes.
     """
 
-    def __init__(self, spec: KernelSettings):
-        """Copy ``spec`` into a new compiled kernel (raises KernelMissing without one)."""
+    # What only the owner enters: with the owner check on, each is wrapped by _owned.
+    _ENTERED = ('scan', 'scan_shifted', 'condition', 'drift_state', 'set_drift_state')
+
+    def __init__(self, spec: KernelSettings, check_owner: bool = None):
+        """
+        Copy ``spec`` into a new compiled kernel (raises KernelMissing without one).
+
+        ``check_owner``: refuse a thread other than the owner (None: as ``CHECK_VARIABLE``
+        says). The thread that makes a kernel is not its owner: the first to enter it is.
+        """
         lib = load_library()
         rows, cols = spec.baseline.shape[1:]
         settings = Settings.from_buffer_copy(spec.settings)
@@ -345,7 +376,41 @@ class Kernel:
         self._scans = tuple((scan, maps[0], maps[1], (self._handle, _address(maps)), outputs)
                             for scan, maps in ((lib.sk_scan, self._maps),
                                                (lib.sk_scan_counts, self._counts)))
-        self._lock = threading.Lock()
+        # Published by the owner, each replaced whole (never changed): the dead marks, and the
+        # last timed scan's drift (sk_status) and how many timed scans the drift state saw.
+        self._dead_seen = dead.astype(bool)
+        self._drift_seen = Status()
+        self.timed_scans = 0
+        self._owner = None
+        if check_owner is None:
+            check_owner = os.environ.get(CHECK_VARIABLE, '') not in ('', '0')
+        if check_owner:
+            # Instance attributes before the class's methods: unchecked kernels pay nothing.
+            for name in self._ENTERED:
+                setattr(self, name, self._owned(name, getattr(self, name)))
+
+    def _owned(self, name: str, method):
+        """Return ``method`` refusing every thread but the owner (the first to enter)."""
+        def entered(*args, **kwargs):
+            me = threading.get_ident()
+            if self._owner is None:
+                self._owner = me
+            elif self._owner != me:
+                refusal = (f'skin_kernel: thread {threading.current_thread().name!r} entered '
+                           f'a kernel (Kernel.{name}) that thread {self._owner} owns')
+                _BREACHES.append(refusal)
+                raise NotTheOwner(refusal)
+            return method(*args, **kwargs)
+        return entered
+
+    def claim(self) -> None:
+        """
+        Make the calling thread the owner: the hand-over of a kernel from one thread to another.
+
+        The caller makes sure the old owner has left it (the scans' thread changes only between
+        two scans).
+        """
+        self._owner = threading.get_ident()
 
     def _checked(self, top, bottom) -> tuple:
         """Return (whether both are uint16 counts, top, bottom), checked as a scan needs."""
@@ -369,15 +434,19 @@ class Kernel:
         """
         counts, top, bottom = self._checked(top, bottom)
         scan, top_buffer, bottom_buffer, (handle, maps), (out, status) = self._scans[counts]
+        top_buffer[...] = top
+        bottom_buffer[...] = bottom
         clock = _NO_TIME if time_s is None else _double(time_s)
-        with self._lock:
-            top_buffer[...] = top
-            bottom_buffer[...] = bottom
-            count = scan(handle, maps, clock, int(every_pair), out, status)
-            if count < 0:
-                check_pair(top, bottom, self.shape)
-                raise ValueError('top or bottom holds a value that is not a count')
-            return list(map(Record._make, self._out[:count].tolist()))
+        count = scan(handle, maps, clock, int(every_pair), out, status)
+        if count < 0:
+            check_pair(top, bottom, self.shape)
+            raise ValueError('top or bottom holds a value that is not a count')
+        if time_s is not None:
+            self._drift_seen = Status.from_buffer_copy(self._status)
+            self.timed_scans += 1
+        if self._status.revived:
+            self._publish_dead()
+        return list(map(Record._make, self._out[:count].tolist()))
 
     def scan_shifted(self, top, bottom, shift, every_pair: bool = False) -> list:
         """
@@ -401,19 +470,19 @@ class Kernel:
                 raised.append(err)
                 return 1
 
-        with self._lock:
-            self._maps[0] = top
-            self._maps[1] = bottom
-            count = self._lib.sk_scan_shifted(self._handle, _address(self._maps),
-                                              int(every_pair), _SHIFT_FN(given), None,
-                                              _address(self._out),
-                                              ctypes.byref(self._status))
-            if raised:
-                raise raised[0]
-            if count < 0:
-                check_pair(top, bottom, self.shape)
-                raise ValueError('top or bottom holds a value that is not a count')
-            return list(map(Record._make, self._out[:count].tolist()))
+        self._maps[0] = top
+        self._maps[1] = bottom
+        count = self._lib.sk_scan_shifted(self._handle, _address(self._maps), int(every_pair),
+                                          _SHIFT_FN(given), None, _address(self._out),
+                                          ctypes.byref(self._status))
+        if raised:
+            raise raised[0]
+        if count < 0:
+            check_pair(top, bottom, self.shape)
+            raise ValueError('top or bottom holds a value that is not a count')
+        if self._status.revived:
+            self._publish_dead()
+        return list(map(Record._make, self._out[:count].tolist()))
 
     def condition(self, top, bottom) -> Conditioned:
         """
@@ -427,14 +496,14 @@ class Kernel:
         layers = (2,) + self.shape
         out = Conditioned(np.zeros(layers), np.zeros(layers), np.zeros(layers, dtype=np.uint8),
                           np.zeros((2, sum(self.shape))))
-        with self._lock:
-            self._maps[0] = top
-            self._maps[1] = bottom
-            status = self._lib.sk_condition(self._handle, _address(self._maps),
-                                            *(_address(a) for a in out))
+        self._maps[0] = top
+        self._maps[1] = bottom
+        status = self._lib.sk_condition(self._handle, _address(self._maps),
+                                        *(_address(a) for a in out))
         if status != _OK:
             check_pair(top, bottom, self.shape)
             raise ValueError('top or bottom holds a value that is not a count')
+        self._publish_dead()
         return out._replace(clipped=out.clipped.astype(bool))
 
     def force(self, counts, clipped=None) -> np.ndarray:
@@ -443,7 +512,7 @@ class Kernel:
 
         In newtons, the gains applied. A count at or below 0 has none; a taxel ``clipped`` marks
         (bool, same shape; None: none) reads the force at the ADC's full scale. Counts that are
-        not numbers raise ValueError.
+        not numbers raise ValueError. Any thread: it reads only what the kernel was made with.
         """
         counts = np.ascontiguousarray(counts, dtype=np.float64)
         if counts.shape != (2,) + self.shape:
@@ -461,31 +530,37 @@ class Kernel:
 
     @property
     def drift(self) -> tuple:
-        """Return the last scan's (mean, largest |drift|) of each layer's baseline, counts."""
-        with self._lock:
-            return (tuple(self._status.drift_mean), tuple(self._status.drift_max))
+        """Return the last timed scan's (mean, largest |drift|) of each layer, in counts."""
+        seen = self._drift_seen  # the one read: published whole by the owner
+        return (tuple(seen.drift_mean), tuple(seen.drift_max))
 
     def drift_state(self) -> np.ndarray:
         """Return the time's per-scan state (``sk_drift_state``): to carry into another kernel."""
-        with self._lock:
-            out = np.zeros(self._lib.sk_drift_state(self._handle, None))
-            self._lib.sk_drift_state(self._handle, _address(out))
+        out = np.zeros(self._lib.sk_drift_state(self._handle, None))
+        self._lib.sk_drift_state(self._handle, _address(out))
         return out
 
-    def set_drift_state(self, state: np.ndarray) -> None:
-        """Put another kernel's :meth:`drift_state` of the same grid in force here."""
+    def set_drift_state(self, state: np.ndarray, timed_scans: int = 0) -> None:
+        """
+        Put another kernel's :meth:`drift_state` of the same grid in force here.
+
+        ``timed_scans``: how many timed scans that state saw (:attr:`timed_scans`), carried on.
+        """
         state = np.ascontiguousarray(state, dtype=np.float64)
         if state.shape != (4 * self.shape[0] * self.shape[1] + 1,):
             raise ValueError(f'a drift state of {state.shape} for a {self.shape} kernel')
-        with self._lock:
-            self._lib.sk_set_drift_state(self._handle, _address(state))
+        self._lib.sk_set_drift_state(self._handle, _address(state))
+        self.timed_scans = int(timed_scans)
+
+    def _publish_dead(self) -> None:
+        """Publish the dead marks as they are now (the owner's, after a scan revived one)."""
+        out = np.zeros((2,) + self.shape, dtype=np.uint8)
+        self._lib.sk_dead(self._handle, _address(out))
+        self._dead_seen = out.astype(bool)
 
     def dead_masks(self) -> np.ndarray:
-        """Return a snapshot of the kernel's dead-taxel marks, (2, rows, cols) bool."""
-        out = np.zeros((2,) + self.shape, dtype=np.uint8)
-        with self._lock:
-            self._lib.sk_dead(self._handle, _address(out))
-        return out.astype(bool)
+        """Return the dead-taxel marks the owner published last, (2, rows, cols) bool (a copy)."""
+        return self._dead_seen.copy()
 
 
 def taxel_model_of(model) -> TaxelModelNumbers:

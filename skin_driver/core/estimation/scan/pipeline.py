@@ -141,13 +141,14 @@ class ContactEstimator:
     An estimator does not change once made: its config, calibration and tare are fixed, and a
     change (``with_*``) makes a new one, which a live host swaps in whole. The mutable state is
     the kernel's: the dead-taxel marks that its scans revive and, for scans given their time,
-    the drift followed and the time under load (:meth:`carry_time_from`). It belongs to the
-    thread that runs the scans (:meth:`process`, :meth:`measure_shifts`); other threads read
-    snapshots (:meth:`dead_masks`, :attr:`conditioning`) or condition maps on a kernel of their
-    own (:meth:`maps_of`, :meth:`conditioning_kernel`). A kernel is built when the estimator is
-    made if the maps' shape is known then (a tare or gains fix it), else by the first scan of
-    each new shape: readers find it in a dict that is replaced, never changed, so a scan takes
-    no lock to look it up.
+    the drift followed and the time under load. It belongs to the thread that runs the scans
+    (:meth:`process`, :meth:`measure_shifts`, :meth:`carry_time_from`), which alone enters the
+    kernel and takes no lock; other threads read the snapshots it publishes after each scan
+    (:meth:`dead_masks`, :meth:`drift`, :attr:`conditioning`, :attr:`timed_scans`) or
+    condition maps on a kernel of their own (:meth:`maps_of`, :meth:`conditioning_kernel`). A
+    kernel is built when the estimator is made if the maps' shape is known then (a tare or
+    gains fix it), else by :meth:`ready_for` or the first scan of each new shape: readers find
+    it in a dict that is replaced, never changed, so a scan takes no lock to look it up.
     """
 
     def __init__(self, config: EstimatorConfig = None, calibration: Calibration = None,
@@ -263,13 +264,15 @@ class ContactEstimator:
         Return the (top, bottom) force maps (N per taxel) of one scan, as the scans condition it.
 
         For the heatmaps of a thread that does not run the scans: it conditions on a kernel of
-        its own (the dead marks as they were when it was made), never on the scanning one.
+        its own (the dead marks as they were when it was made), never on the scanning one. That
+        kernel belongs to whichever thread holds its lock.
         """
         t, b = check_pair(top_counts, bottom_counts)
         with self._viewer_lock:
             viewer = self._viewer
             if viewer is None or viewer.shape != t.shape:
                 viewer = self._viewer = self._new_kernel(t.shape)
+            viewer.claim()
             force = viewer.condition(t, b).force
         return force[0], force[1]
 
@@ -357,16 +360,34 @@ class ContactEstimator:
         Return this estimator with ``other``'s tracked baselines and creep ages in force.
 
         For a change of parameters or calibration of the same skin and tare, made off the hot
-        path: the time a skin has been loaded and how far it drifted stay true. Of another grid
-        or tare there is nothing to carry (a tare starts afresh).
+        path and put in force by the thread that runs the scans, which calls this between two
+        scans (it enters both kernels): the time a skin has been loaded and how far it drifted
+        stay true, and no scan is lost from them. Of another grid or tare there is nothing to
+        carry (a tare starts afresh).
         """
-        if other is None or other._tare_epoch is not self._tare_epoch:
+        if other is None or other is self or other._tare_epoch is not self._tare_epoch:
             return self
         # Each grid's kernel, tared or not (an untared estimator's is made for the scans' grid).
         theirs = other._kernels
         for shape, mine in self._kernels.items():
             if shape in theirs:
-                mine.set_drift_state(theirs[shape].drift_state())
+                mine.set_drift_state(theirs[shape].drift_state(), theirs[shape].timed_scans)
+        return self
+
+    @property
+    def timed_scans(self) -> int:
+        """Return how many timed scans its drift state has seen since the tare (carried on)."""
+        return sum(kernel.timed_scans for kernel in self._kernels.values())
+
+    def claim(self) -> 'ContactEstimator':
+        """
+        Return this estimator, its kernels now the calling thread's (:meth:`kernel.Kernel.claim`).
+
+        For a host whose scans move to another thread (a slow estimator's own, and back): the
+        new thread claims them between two scans, once the old one has left them.
+        """
+        for kernel in self._kernels.values():
+            kernel.claim()
         return self
 
     def _scan(self, top_counts, bottom_counts, every_pair: bool = False,

@@ -1,0 +1,67 @@
+"""
+Changes of the live estimator handed to the thread that runs the scans, applied between two.
+
+The thread that runs the scans owns the estimator in force and its kernels (:mod:`kernel`).
+Any other thread that changes it (a tare, a calibration, a parameter) builds the new estimator
+itself, off the hot path, and hands it over with :meth:`Handover.put`; the owner applies what was
+handed over, in order, when it calls :meth:`Handover.take` before its next scan, and carries the
+drift state into each new estimator then (``carry``): every scan is seen by the drift state of
+the estimator it met, none is lost between a copy and the swap. The owner takes no lock: the
+hand-over is a deque, whose append and popleft are atomic.
+"""
+
+from collections import deque
+import threading
+from typing import Callable
+
+__all__ = ['Handover']
+
+
+class Handover:
+    """The live state in force (the owner's) and the changes handed over to it, in order."""
+
+    def __init__(self, first, carry: Callable = lambda new, old: None):
+        """
+        Start with ``first`` in force.
+
+        ``carry(new, old)`` is called by the owner as it puts ``new`` in force after ``old``:
+        where the per-scan state moves on (it may enter both; it is the owner's call).
+        """
+        self.in_force = first  # the owner's: read by other threads as a snapshot only
+        self._newest = first
+        self._carry = carry
+        self._handed = deque()
+        # Serialises the changers (each builds on the newest), never the owner.
+        self._changing = threading.Lock()
+
+    @property
+    def newest(self):
+        """Return the newest state: in force, or handed over and in force by the next scan."""
+        return self._newest
+
+    @property
+    def pending(self) -> int:
+        """Return how many changes wait for the owner's next scan."""
+        return len(self._handed)
+
+    def put(self, change: Callable):
+        """
+        Hand over ``change(newest)`` (built here, on the caller's thread); return it.
+
+        Changes are serialised: each is built on the one handed over before it. Nothing is
+        handed over if ``change`` raises.
+        """
+        with self._changing:
+            made = change(self._newest)
+            self._newest = made
+            self._handed.append(made)
+        return made
+
+    def take(self):
+        """Return the state in force after applying what was handed over (the owner's call)."""
+        handed = self._handed
+        while handed:
+            made = handed.popleft()
+            self._carry(made, self.in_force)
+            self.in_force = made
+        return self.in_force
