@@ -204,3 +204,27 @@ def test_a_direction_node_checks_the_skin_its_frames_show_before_estimating_them
         contact = next(m for m in reversed(probe.contacts) if m.contacts).contacts[0]
         assert (contact.location.x, contact.location.y) == pytest.approx((0.026, 0.018),
                                                                          abs=0.001)
+
+
+def test_the_drift_state_sees_every_scan_across_changes_under_a_2_khz_fused_reader(
+        tmp_path, owner_checked):
+    # Each change is put in force by the reader between two scans, the drift state carried
+    # then: the estimator in force at the end has tracked every scan estimated (no tare here,
+    # which would start it afresh).
+    with pipeline(tmp_path, SCENE, rate_hz=RATE_HZ, fused=True, loop=True) as (
+            _, driver, direction, probe, executor):
+        host = direction.host
+        assert spin_until(executor, lambda: len(probe.contacts) > 50, WAIT_S)
+        first = host.live.generation
+        for values in PARAMETERS:
+            direction.set_parameters_atomically(
+                [Parameter(n, value=v) for n, v in values.items()])
+            assert spin_until(executor, lambda: not host.rebuilding, WAIT_S)
+            seen = len(probe.contacts)
+            assert spin_until(executor, lambda: len(probe.contacts) > seen + 20, WAIT_S)
+        driver.trigger_deactivate()  # the reader stops: what is in force is final
+        tally = host.tally()
+        in_force = host.in_force
+    assert in_force.generation == first + len(PARAMETERS)
+    assert tally.estimated > 200 and tally.refused == 0
+    assert in_force.estimator.timed_scans == tally.estimated
