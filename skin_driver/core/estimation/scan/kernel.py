@@ -381,7 +381,7 @@ class Kernel:
         self._dead_seen = dead.astype(bool)
         self._drift_seen = Status()
         self.timed_scans = 0
-        self._owner = None
+        self._owner = self._owner_name = None
         if check_owner is None:
             check_owner = os.environ.get(CHECK_VARIABLE, '') not in ('', '0')
         if check_owner:
@@ -394,10 +394,10 @@ class Kernel:
         def entered(*args, **kwargs):
             me = threading.get_ident()
             if self._owner is None:
-                self._owner = me
+                self.claim()
             elif self._owner != me:
                 refusal = (f'skin_kernel: thread {threading.current_thread().name!r} entered '
-                           f'a kernel (Kernel.{name}) that thread {self._owner} owns')
+                           f'a kernel (Kernel.{name}) that thread {self._owner_name!r} owns')
                 _BREACHES.append(refusal)
                 raise NotTheOwner(refusal)
             return method(*args, **kwargs)
@@ -411,6 +411,7 @@ class Kernel:
         two scans).
         """
         self._owner = threading.get_ident()
+        self._owner_name = threading.current_thread().name
 
     def _checked(self, top, bottom) -> tuple:
         """Return (whether both are uint16 counts, top, bottom), checked as a scan needs."""
