@@ -388,7 +388,8 @@ class EstimationHost:
         thread of its own, each time the newest scan: the scans in between are left, and the
         caller (the serial reader, fused) is never held up. A switch of method lets the scan in
         flight there finish, and scans go there until it has: one thread estimates at a time,
-        the one owner of the estimation's counts, caches and reused messages.
+        the one owner of the live estimator and its kernels, and of the estimation's counts,
+        caches and reused messages. It puts the changes handed over in force before the scan.
         """
         scan = (header, sequence, device_time_us, pitch_m, top, bottom)
         newest = self._newest

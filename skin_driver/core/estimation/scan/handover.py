@@ -62,6 +62,8 @@ class Handover:
         handed = self._handed
         while handed:
             made = handed.popleft()
-            self._carry(made, self.in_force)
-            self.in_force = made
+            try:
+                self._carry(made, self.in_force)
+            finally:  # in force whatever the carry raised: a change is never lost
+                self.in_force = made
         return self.in_force
