@@ -5,8 +5,6 @@ Whatever the board does, the driver keeps running, publishes only frames equal t
 simulator's ground truth, and says what happened at the level a maintainer expects.
 """
 
-import time
-
 from diagnostic_msgs.msg import DiagnosticStatus
 import numpy as np
 from pipeline import pipeline, scene
@@ -49,21 +47,27 @@ def link_is(probe, predicate):
     return status is not None and predicate(status)
 
 
-def test_unplug_is_an_error_and_replug_reconnects_within_a_second(tmp_path):
-    # The driver's own defaults for the back-off: what the issue's one second is about.
+def test_unplug_is_an_error_and_replug_reconnects_at_the_first_open_after_it(tmp_path):
+    # The driver's own defaults for the back-off: a retry at least every 0.5 s, and at once when
+    # the port's path comes back (how soon, on a given machine, is the bench's to say).
     defaults = {'reconnect_min': 0.1, 'reconnect_max': 0.5}
     with pipeline(tmp_path, scene([]), driver=defaults) as (sim, driver, _, probe, executor):
         more_frames(executor, probe, 20)
+        stats = driver.link.stats
         for _ in range(2):
+            failed = stats.open_failures
             sim.unplug()
             assert spin_until(executor, lambda: link_is(probe, lambda s: s.level == ERROR), WAIT_S)
             assert 'disconnected' in probe.link_status().message
-            # Long enough for the back-off to reach its longest delay.
-            spin_until(executor, lambda: False, 1.5)
-            replugged = time.monotonic()
+            # The back-off at its longest delay: 0.1, 0.2, 0.4, then 0.5 s between failed opens.
+            assert spin_until(executor, lambda: stats.open_failures >= failed + 4, WAIT_S)
+            connects, failed = stats.connects, stats.open_failures
             sim.replug()
             more_frames(executor, probe, 20)
-            assert driver.link.stats.last_connect_s - replugged < 1.0
+            # One more connect, and at most the one open that may have failed just before the
+            # path came back: the wait for the path ends with it, not with the back-off.
+            assert stats.connects == connects + 1
+            assert stats.open_failures <= failed + 1
         assert spin_until(executor, lambda: link_is(probe, lambda s: s.level == OK), WAIT_S)
         values = status_values(probe.link_status())
         assert int(values['disconnects']) == 2 and int(values['connects']) == 3, \
