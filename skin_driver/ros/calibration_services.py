@@ -348,6 +348,10 @@ class CalibrationServices:
 
     def _check(self, skin: SkinIdentity) -> None:
         self._skin = skin
+        running = self._running_now
+        if running is not None:
+            # A session begun before the board spoke is stamped for the skin known at its end.
+            running.session.skin = skin
         cal = self._get_estimator().calibration
         problem = cal.check_skin(skin)
         if problem:

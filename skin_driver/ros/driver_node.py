@@ -65,6 +65,7 @@ from skin_driver.ros import conversions, diagnostics, qos
 from skin_driver.ros.direction_node import DirectionNode
 from skin_driver.ros.frames import default_frame_id
 from skin_driver.ros.hot_path import LatestOnly, Listened
+from skin_driver.ros.lifetime import destroy_state_machine, destroyed_if_refused
 from skin_driver.ros.mount_calibration import declare_given_mount, GIVEN_POSE
 from skin_driver.ros.params import accept_whole_numbers, declare
 from skin_driver.ros.spin import create_or_exit, spin_nodes
@@ -86,6 +87,7 @@ READER_STAGES = ('read', 'decode', 'estimation', 'frame', 'images', 'deliver')
 class SkinDriverNode(Node):
     """Lifecycle node that owns the serial link to the skin."""
 
+    @destroyed_if_refused
     def __init__(self, **kwargs):
         super().__init__('skin_driver', **kwargs)
         self._declare_parameters()
@@ -284,6 +286,13 @@ class SkinDriverNode(Node):
     def _end_process(self) -> None:
         self.destroy_timer(self._end)
         rclpy.try_shutdown(context=self.context)
+
+    def destroy_node(self):
+        """Stop reading, release everything, then destroy the node and its state machine."""
+        self.close()
+        result = super().destroy_node()
+        destroy_state_machine(self)
+        return result
 
     def close(self) -> None:
         """Stop reading and release the port and diagnostics; safe to call in any state."""

@@ -12,6 +12,7 @@ import rclpy
 from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 from skin_driver.ros import conversions
+from skin_driver.ros.lifetime import destroyed_if_refused
 from skin_driver.ros.params import accept_whole_numbers, declare
 from skin_driver.ros.spin import create_or_exit, spin_nodes
 
@@ -30,6 +31,7 @@ class MountTransform(Node):
     launch file places the skin where tf2_ros is not installed.
     """
 
+    @destroyed_if_refused
     def __init__(self, **kwargs):
         super().__init__('skin_mount_tf', **kwargs)
         # tf2_msgs comes with every ROS 2 install but has no wheel: imported where it is used.

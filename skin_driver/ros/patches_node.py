@@ -43,6 +43,7 @@ from skin_driver.core.robot.patches import (carry_contact, check_frame_name, che
                                             UnknownTransform, vector3)
 from skin_driver.ros import diagnostics, qos
 from skin_driver.ros.frames import default_frame_id
+from skin_driver.ros.lifetime import destroyed_if_refused
 from skin_driver.ros.params import declare, ParameterError
 from skin_driver.ros.spin import create_or_exit, spin_nodes
 from skin_msgs.msg import TactileContact, TactileContactArray
@@ -70,6 +71,7 @@ class _Patch:
 class PatchesNode(Node):
     """Publish the contacts of several patches in one frame and the net wrench per link."""
 
+    @destroyed_if_refused
     def __init__(self, **kwargs):
         """Create the node; a parameter it cannot work with raises ParameterError."""
         super().__init__('skin_patches', **kwargs)

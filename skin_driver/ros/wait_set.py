@@ -1,5 +1,8 @@
 """
-The one use of rclpy's private API in skin_driver: the wait set of rclpy's C extension.
+The uses of rclpy's private API in skin_driver, in this module alone.
+
+The wait set of rclpy's C extension, and the end of a lifecycle node's state machine
+(:func:`destroy_state_machine`).
 
 Jazzy's rclpy has no public wait set; its executors and ``rclpy.wait_for_message`` wait on this
 one. :class:`skin_driver.ros.hot_path.TakenOnThread` waits on its subscriptions and a guard
@@ -19,4 +22,17 @@ except (ImportError, AttributeError) as err:
         '(rclpy.impl.implementation_singleton.rclpy_implementation.WaitSet and RCLError, as '
         f"in ROS 2 Jazzy's rclpy), which this rclpy does not have: {err}") from err
 
-__all__ = ['WaitSet', 'RCLError']
+__all__ = ['WaitSet', 'RCLError', 'destroy_state_machine']
+
+
+def destroy_state_machine(node) -> None:
+    """
+    Destroy a lifecycle node's state machine now (after Node.destroy_node).
+
+    Jazzy's LifecycleNode.destroy_node leaves it, and with it the node's rcl handle, to the
+    garbage collector (skin_driver.ros.lifetime says why that matters). A node without one, or
+    an rclpy that names it otherwise, is left as it is.
+    """
+    machine = getattr(node, '_state_machine', None)
+    if machine is not None:
+        machine.destroy_when_not_in_use()

@@ -18,6 +18,7 @@ from builtin_interfaces.msg import Time
 import numpy as np
 from pipeline import call, overrides, pipeline, scene, send_goal
 import pytest
+from rclpy.node import Node
 from rclpy.parameter import Parameter
 from rclpy.qos import qos_profile_sensor_data
 from rosutil import ros_context, spin_until
@@ -74,9 +75,14 @@ def test_every_ranged_parameter_is_covered():
 @pytest.mark.parametrize('kind, name, spec', RANGED, ids=[f'{k}:{n}' for k, n, _ in RANGED])
 def test_out_of_range_at_start_up_stops_the_node_naming_the_parameter(kind, name, spec):
     with ros_context() as (context, _):
+        probe = Node('probe', context=context)
         for value in out_of_range(spec):
             with pytest.raises(ParameterError, match=f"'{name}' = .* is out of range"):
                 NODES[kind](context=context, parameter_overrides=overrides({name: value}))
+            # Destroyed before the error left the constructor, not left to the garbage
+            # collector (this context's own graph is updated at once, with no discovery).
+            assert probe.get_node_names() == ['probe']
+        probe.destroy_node()
 
 
 @pytest.mark.ros

@@ -1,0 +1,39 @@
+"""
+A node's end at a known moment: what it made is destroyed by destroy_node, not by the collector.
+
+Jazzy's Node.destroy_node leaves action servers alone, and LifecycleNode's leaves its state
+machine; each keeps the node's rcl handle alive. Left to the garbage collector, they are destroyed
+at any later moment, on whatever thread allocates, maybe after their context is shut down, and
+rclpy's native destruction may then block holding the GIL (a test worker once hung 600 s in the
+next node's constructor). The same holds for a node whose constructor refused a parameter.
+"""
+
+import functools
+
+from rclpy.action import ActionServer
+from rclpy.node import Node
+from skin_driver.ros.wait_set import destroy_state_machine
+
+__all__ = ['destroy_actions', 'destroyed_if_refused', 'destroy_state_machine']
+
+
+def destroy_actions(node) -> None:
+    """Destroy the node's action servers (before Node.destroy_node)."""
+    for waitable in list(node.waitables):
+        if isinstance(waitable, ActionServer):
+            waitable.destroy()
+
+
+def destroyed_if_refused(init):
+    """Decorate a node's __init__: if it raises once rclpy's Node exists, destroy that first."""
+    @functools.wraps(init)
+    def wrapper(self, *args, **kwargs):
+        try:
+            init(self, *args, **kwargs)
+        except BaseException:
+            if getattr(self, '_Node__node', None) is not None:  # rclpy's Node was made
+                destroy_actions(self)
+                Node.destroy_node(self)
+                destroy_state_machine(self)
+            raise
+    return wrapper
