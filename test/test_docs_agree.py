@@ -246,7 +246,7 @@ def test_every_section_the_code_points_to_exists():
     # Comments and messages say where to read more: README, "Real-time priority".
     cited = re.compile(r'(README(?:\.md)?|docs/\w+\.md),?\s+"([^"]+)"')
     missing = []
-    patterns = ('skin_driver/**/*', 'config/*', 'launch/*', 'skin_kernel/**/*')
+    patterns = ('skin_driver/**/*', 'skin_lab/**/*', 'config/*', 'launch/*', 'skin_kernel/**/*')
     sources = [path for pattern in patterns for path in ROOT.glob(pattern)
                if path.suffix in ('.py', '.yaml', '.c', '.h', '.txt')]
     for path in sources:

@@ -61,7 +61,7 @@ def render_frames(model: SkinModel, frames: list, rng: np.random.Generator,
 
 def render_scene(scene, seed: int = 0, samples_per_press: int = 1) -> Dataset:
     """
-    Render a simulator scene (:class:`skin_driver.core.sim.scene.Scene`) offline into a dataset with ground truth.
+    Render a scene (:class:`skin_driver.core.sim.scene.Scene`) offline as a dataset with truth.
 
     Samples are taken during the hold phase of every press (every repetition), at full force, with
     all presses active at that moment rendered together; the tare frames have no press.

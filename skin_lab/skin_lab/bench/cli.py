@@ -404,8 +404,8 @@ def main(argv=None) -> int:
                              "shipped config's)")
     parser.add_argument('--only', metavar='PARTS', type=_parts,
                         help='measure only these comma-separated parts (' + ', '.join(PARTS)
-                        + ') and put them into the report in --out, the others as measured '
-                        'before')
+                        + ') and put them into the report in --out and its raw numbers in '
+                        '--json, the others as measured before')
     parser.add_argument('--family-only', metavar='SKINS',
                         help='run only the skin family on these comma-separated skins (names or '
                              'held_out:N), every method and the oracle, and print its rows')
