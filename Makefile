@@ -16,7 +16,7 @@ stress:
 	@bash tools/stress.sh $(ARGS)
 
 demo: setup
-	@$(RUN) python -m skin_driver.tools.demo $(ARGS)
+	@$(RUN) python -m skin_lab.demo $(ARGS)
 
 # The board images (build/fw-arm/boards/*/*.elf, .bin); installs the toolchain as root.
 firmware:
@@ -30,7 +30,7 @@ flash: firmware
 	@cmake -DSKIN_FW_LINK=$(LINK) build/fw-arm >/dev/null && cmake --build build/fw-arm --target flash
 
 bench: setup
-	@$(RUN) python -m skin_driver.tools.bench.cli $(ARGS)
+	@$(RUN) python -m skin_lab.bench.cli $(ARGS)
 
 soak: setup
 	@$(RUN) python -m skin_driver.tools.soak $(ARGS)

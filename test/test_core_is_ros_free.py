@@ -14,10 +14,13 @@ import sys
 import pytest
 
 CORE = pathlib.Path(__file__).resolve().parents[1] / 'skin_driver' / 'core'
-# The ROS-free tools beside the core: the evaluator, the simulator and the bag converter run
-# without ROS too.
-ROS_FREE_TOOLS = ['skin_driver.tools.evaluate.cli', 'skin_driver.tools.sim',
-                  'skin_driver.tools.bench.estimators', 'skin_driver.tools.bag_to_dataset']
+# The ROS-free tools beside the core: the simulator, its export and the bag converter run
+# without ROS too, and so does the lab's offline part (the evaluator, the experiments, the oracle
+# and floor, the in-process benchmark).
+ROS_FREE_TOOLS = ['skin_driver.tools.sim', 'skin_driver.tools.export',
+                  'skin_driver.tools.bag_to_dataset', 'skin_lab.evaluate.cli',
+                  'skin_lab.bench.estimators', 'skin_lab.experiments', 'skin_lab.oracle',
+                  'skin_lab.floor']
 FORBIDDEN = ('rclpy', 'rosidl', 'builtin_interfaces', 'std_msgs', 'geometry_msgs', 'sensor_msgs',
              'skin_msgs', 'visualization_msgs', 'diagnostic_msgs', 'std_srvs', 'launch')
 # What each wing may not import (besides ROS).

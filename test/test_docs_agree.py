@@ -16,8 +16,8 @@ HAND_WRITTEN = ('README.md', 'CHANGELOG.md', 'docs/estimation.md', 'docs/dataset
 # Documents that explain the code as it is: no measured run and no history belongs in them.
 AS_IT_IS = ('README.md', 'docs/estimation.md')
 # The repository's top-level folders and files a path in backticks may start with.
-TOP = ('skin_driver/', 'skin_kernel/', 'skin_msgs/', 'docs/', 'test/', 'tools/', 'launch/',
-       'config/', 'urdf/', 'firmware/', 'resource/')
+TOP = ('skin_driver/', 'skin_lab/', 'skin_kernel/', 'skin_msgs/', 'docs/', 'test/', 'tools/',
+       'launch/', 'config/', 'urdf/', 'firmware/', 'resource/')
 # The firmware and its guide are written in parallel; they are checked once they exist.
 ONCE_THERE = ('firmware/', 'docs/firmware.md')
 
@@ -217,9 +217,10 @@ def test_every_path_a_document_names_exists(name):
 
 
 def _module_attribute(dotted):
-    """Return why a dotted skin_driver.* name does not resolve in the sources, or ''."""
+    """Return why a dotted skin_driver.* or skin_lab.* name does not resolve in the sources."""
     parts = dotted.split('.')
-    at = ROOT
+    # The lab's Python package sits in its own ament package's folder.
+    at = ROOT / 'skin_lab' if parts[0] == 'skin_lab' else ROOT
     for i, part in enumerate(parts):
         if (at / part).is_dir():
             at = at / part
@@ -237,7 +238,7 @@ def _module_attribute(dotted):
 
 @pytest.mark.parametrize('name', HAND_WRITTEN)
 def test_every_module_a_document_names_exists(name):
-    names = re.findall(r'\bskin_driver(?:\.[A-Za-z_]\w*)+', (ROOT / name).read_text())
+    names = re.findall(r'\bskin_(?:driver|lab)(?:\.[A-Za-z_]\w*)+', (ROOT / name).read_text())
     assert [why for why in map(_module_attribute, set(names)) if why] == []
 
 
@@ -245,7 +246,7 @@ def test_every_section_the_code_points_to_exists():
     # Comments and messages say where to read more: README, "Real-time priority".
     cited = re.compile(r'(README(?:\.md)?|docs/\w+\.md),?\s+"([^"]+)"')
     missing = []
-    patterns = ('skin_driver/**/*', 'config/*', 'launch/*', 'skin_kernel/**/*')
+    patterns = ('skin_driver/**/*', 'skin_lab/**/*', 'config/*', 'launch/*', 'skin_kernel/**/*')
     sources = [path for pattern in patterns for path in ROOT.glob(pattern)
                if path.suffix in ('.py', '.yaml', '.c', '.h', '.txt')]
     for path in sources:
@@ -328,8 +329,7 @@ def test_readme_launch_arguments_are_the_launch_files():
         f'mount_{axis}' for axis in ('x', 'y', 'z', 'roll', 'pitch', 'yaw')}
     section = _section(README.read_text(), '## Quick start on a ROS 2 Jazzy workstation')
     listed = next(p for p in section.split('\n\n') if '--show-args' in p)
-    values = {'skin', 'skin_link', 'seed', 'random', 'two_finger', 'border', 'calibrate', 'demo',
-              'bench'}
+    values = {'skin', 'skin_link', 'seed', 'random', 'two_finger', 'border', 'calibrate', 'demo'}
     assert set(re.findall(r'`([a-z_]+)`', listed)) - values == declared
 
 

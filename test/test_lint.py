@@ -7,7 +7,7 @@ import sys
 import pytest
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
-PATHS = [str(ROOT / p) for p in ('skin_driver', 'test', 'launch', 'setup.py')]
+PATHS = [str(ROOT / p) for p in ('skin_driver', 'skin_lab', 'test', 'launch', 'setup.py')]
 
 
 def _run(code):

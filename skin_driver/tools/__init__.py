@@ -1,1 +1,1 @@
-"""Command-line tools around the driver: recording, conversion, evaluation."""
+"""Command-line tools around the driver: the simulated skin, recording, conversion, bring-up."""

@@ -11,7 +11,7 @@ were recorded. The bag's own message definitions are used (rosbag2 stores them s
 older bag without them is read with skin_msgs/msg/SkinFrame.msg of this workspace or of a
 sourced install. The board's identity (std_msgs/String board_info beside the frame topic, when
 the bag holds it) stamps the dataset (``board_info``). Then evaluate it: ``python -m
-skin_driver.evaluate OUT.npz``.
+skin_lab.evaluate OUT.npz``.
 """
 
 import argparse

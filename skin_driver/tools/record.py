@@ -8,7 +8,7 @@ Usage::
                                 [--board-info-topic /skin/board_info]
 
 Records until it has ``--scans`` scans, ``--duration`` seconds have passed or Ctrl-C, then writes
-OUT.npz atomically; ``python -m skin_driver.evaluate OUT.npz`` scores it. The subscription has
+OUT.npz atomically; ``python -m skin_lab.evaluate OUT.npz`` scores it. The subscription has
 the sensor-data QoS of the stream and takes ROS 2's QoS overrides
 (``--ros-args -p qos_overrides./skin/frame.subscription.depth:=100``). The driver builds frames
 only while someone subscribes: the recorder is such a subscriber. The board's identity,

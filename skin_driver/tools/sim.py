@@ -21,8 +21,8 @@ from skin_driver.core.estimation.data.dataset import save_dataset
 from skin_driver.core.protocol.link import default_port
 from skin_driver.core.protocol.wire import BoardInfo
 from skin_driver.core.sim.board import SIM, SimulatedSkin
-from skin_driver.core.sim.experiments import render_scene
 from skin_driver.core.sim.scene import bundled_scene_names, load_scene
+from skin_driver.tools.export import render_scene
 from skin_driver.tools.scene_goals import scene_goals
 
 

@@ -19,8 +19,8 @@ from skin_driver.core.estimation.data.dataset import load_dataset
 from skin_driver.core.sim import physics
 from skin_driver.core.sim.scene import load_scene
 from skin_driver.tools.bringup.cli import main
-from skin_driver.tools.evaluate import cli as evaluate
 from skin_driver.tools.rehost.board import RehostBoard
+from skin_lab.evaluate import cli as evaluate
 
 SCANS = 40           # each scene loops over this many scans (half a second at 80 scans/s)
 DEAD = (4, 7)        # in the image the board sends

@@ -13,7 +13,7 @@ def test_the_demo_on_the_emulated_board_prints_table_1(qemu_image):
     # qemu_image builds the image first (or skips, naming what is missing), so the demo's own
     # build is a no-op and its time goes to the scene.
     result = subprocess.run(
-        [sys.executable, '-m', 'skin_driver.tools.demo', '--board', 'qemu', '--plain',
+        [sys.executable, '-m', 'skin_lab.demo', '--board', 'qemu', '--plain',
          '--repeats', '1', '--pace', '0.6'],
         capture_output=True, text=True, timeout=300, env=dict(os.environ))
     assert result.returncode == 0, result.stdout[-2000:] + result.stderr[-2000:]

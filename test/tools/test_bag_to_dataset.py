@@ -9,9 +9,9 @@ from rosbags.rosbag2 import StoragePlugin, Writer
 from rosbags.typesys import get_types_from_msg, get_typestore, Stores
 from skin_driver.core.estimation.data.dataset import load_dataset
 from skin_driver.core.estimation.shift.methods import DEFAULT_METHOD
-from skin_driver.core.sim.experiments import make_scene
 from skin_driver.tools import bag_to_dataset
-from skin_driver.tools.evaluate import cli as evaluate
+from skin_lab.evaluate import cli as evaluate
+from skin_lab.experiments import make_scene
 
 ROOT = pathlib.Path(__file__).resolve().parents[2]
 SKIN_FRAME = 'skin_msgs/msg/SkinFrame'

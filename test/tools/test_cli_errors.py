@@ -7,7 +7,7 @@ import sys
 import pytest
 from skin_driver.core.sim.scene import bundled_scene_names
 from skin_driver.tools import sim
-from skin_driver.tools.evaluate import cli as evaluate
+from skin_lab.evaluate import cli as evaluate
 
 
 def _run(main, argv):
@@ -80,7 +80,7 @@ def test_the_simulators_help_lists_its_scenes(capsys):
 def test_the_evaluator_without_its_compiled_kernel_says_so_in_one_line(tmp_path):
     data = str(tmp_path / 'seed.npz')
     assert _run(evaluate.main, ['--generate', 'paper', data]) == 0
-    out = subprocess.run([sys.executable, '-m', 'skin_driver.evaluate', data],
+    out = subprocess.run([sys.executable, '-m', 'skin_lab.evaluate', data],
                          capture_output=True, text=True, timeout=60,
                          env={**os.environ, 'SKIN_KERNEL_LIBRARY': '/nonexistent/lib.so'})
     assert out.returncode == 2

@@ -9,9 +9,10 @@ import numpy as np
 from port_reader import DEADLINE_S, Reader
 
 from skin_driver.core.estimation.data.dataset import load_dataset
-from skin_driver.core.sim.experiments import paper_presses, render_scene, TARE_FRAMES
+from skin_driver.core.sim.paper import paper_presses
 from skin_driver.core.sim.scene import load_scene
 from skin_driver.core.sim.skins import get_skin
+from skin_driver.tools.export import render_scene, TARE_FRAMES
 from skin_driver.tools.sim import main
 
 

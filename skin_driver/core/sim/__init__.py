@@ -1,1 +1,1 @@
-"""Simulation: the physics of a two-layer FSR skin, a family of skins, scenes and datasets."""
+"""The simulated skin: physics, the family of skins, scenes, the paper's protocol."""

@@ -19,7 +19,7 @@ A scene file is a mapping::
     mount: {xyz: [0.1, 0.0, 0.3], rpy: [0.0, 1.5708, 0.0]}     # optional (below)
 
 Generators: ``kind: random`` (presses at random spots, ranges given per field) and ``kind: paper``
-(the paper's protocol as :func:`experiments.paper_presses` defines it: ``repeats``,
+(the paper's protocol as :func:`.paper.paper_presses` defines it: ``repeats``,
 ``leading_normal``, ``normal_per_repeat``, ``force_n`` (default: the skin's ``paper_force_n``),
 one press every ``interval_s`` from ``start_s``).
 
@@ -54,7 +54,7 @@ import numpy as np
 import yaml
 
 from .drift import Drift, held_age
-from .experiments import PAPER_FORCE_N, paper_presses
+from .paper import PAPER_FORCE_N, paper_presses
 from .physics import Press, SkinModel
 from .skins import family_skin
 from ..estimation.model.fsr import FsrModel
@@ -342,7 +342,7 @@ def _count(spec: Mapping, key: str, default: int) -> int:
 
 def _generate_paper(spec: Mapping, model: SkinModel, first_index: int,
                     paper_force_n: float) -> list:
-    """Return the paper's protocol (experiments.paper_presses) as timed scene presses."""
+    """Return the paper's protocol (paper.paper_presses) as timed scene presses."""
     _check_fields(spec, {'kind', 'repeats', 'leading_normal', 'normal_per_repeat', 'force_n',
                          'start_s', 'interval_s', 'duration_s', 'ramp_s'})
     counts = {k: _count(spec, k, d)

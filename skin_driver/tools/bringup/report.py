@@ -143,7 +143,7 @@ def markdown(s: dict, images: dict) -> str:
         lines += ['', f'![ghosting]({images["ghosting"]})']
     lines += ['', '## Dataset', '',
               '`dataset.npz` (docs/dataset.md): the idle window as tare, every press as frames; '
-              '`python -m skin_driver.evaluate dataset.npz` reads it.', '']
+              '`python -m skin_lab.evaluate dataset.npz` reads it.', '']
     return '\n'.join(lines)
 
 

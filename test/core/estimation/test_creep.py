@@ -8,7 +8,7 @@ import pytest
 from skin_driver.core.estimation.calibration.calibration import Calibration
 from skin_driver.core.estimation.calibration.creep import (CreepError, CreepFit, CreepSession,
                                                            fit_creep, fit_recovery)
-from skin_driver.tools.evaluate.drift import calibrate_creep
+from skin_lab.evaluate.drift import calibrate_creep
 
 AGES = np.concatenate([[0.01, 0.03, 0.1, 0.3, 0.6], np.arange(1.0, 181.0, 1.0)])
 

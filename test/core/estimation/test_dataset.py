@@ -7,8 +7,8 @@ import pytest
 
 from skin_driver.core.estimation.data.dataset import Dataset, load_dataset, save_dataset
 from skin_driver.core.estimation.data.recording import Recording
-from skin_driver.core.sim.experiments import make_random_experiment, make_seed_experiment
 from skin_driver.core.sim.physics import SkinModel
+from skin_lab.experiments import make_random_experiment, make_seed_experiment
 
 
 def small(n=3):

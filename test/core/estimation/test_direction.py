@@ -12,8 +12,8 @@ from skin_driver.core.estimation.calibration.session import CalibrationRefused, 
 from skin_driver.core.estimation.calibration.session import CalibrationSession
 from skin_driver.core.estimation.scan.kernel import DIRECTION_FEATURES
 from skin_driver.core.estimation.scan.pipeline import ContactEstimator, EstimatorConfig
-from skin_driver.core.sim.experiments import calibrated_scene
 from skin_driver.core.sim.physics import Press, render, SkinModel
+from skin_lab.experiments import calibrated_scene
 
 
 def _presses(bias, n=120, seed=0, noise=0.02):

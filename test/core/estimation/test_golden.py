@@ -26,7 +26,7 @@ from skin_driver.core.estimation.calibration.calibration import Calibration
 from skin_driver.core.estimation.calibration.prepared import prepared_estimator
 from skin_driver.core.estimation.model.taxelmodel import render_counts, X, Y
 from skin_driver.core.estimation.scan.pipeline import ContactEstimator, EstimatorConfig
-from skin_driver.core.sim.experiments import make_scene
+from skin_lab.experiments import make_scene
 from taxel_presses import FILM, noisy, press
 
 GOLDEN = pathlib.Path(__file__).resolve().parent / 'golden'

@@ -27,9 +27,9 @@ from skin_driver.core.estimation.model.taxelmodel import (
 from skin_driver.core.estimation.scan.kernel import fit_contact
 from skin_driver.core.estimation.scan.pipeline import ContactEstimator, EstimatorConfig
 from skin_driver.core.estimation.shift.methods import Method, REFERENCES
-from skin_driver.core.sim.experiments import calibrated_scene, make_scene
 from skin_driver.core.sim.physics import Press, render, SkinModel
 from skin_driver.core.sim.skins import family_skin
+from skin_lab.experiments import calibrated_scene, make_scene
 from taxel_presses import FILM, noisy, press as model_press
 
 

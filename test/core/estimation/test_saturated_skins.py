@@ -5,9 +5,9 @@ import pytest
 from skin_driver.core.estimation.calibration.prepared import prepared_estimator
 from skin_driver.core.estimation.calibration.session import CalibrationSession
 from skin_driver.core.estimation.scan.pipeline import ContactEstimator, EstimatorConfig
-from skin_driver.core.sim.experiments import calibrated_scene
 from skin_driver.core.sim.physics import Press, render
 from skin_driver.core.sim.skins import family_skin
+from skin_lab.experiments import calibrated_scene
 
 
 @pytest.mark.parametrize('skin', ['saturating', 'saturating@64'])

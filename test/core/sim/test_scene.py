@@ -3,7 +3,7 @@
 import math
 
 import pytest
-from skin_driver.core.sim.experiments import paper_presses
+from skin_driver.core.sim.paper import paper_presses
 from skin_driver.core.sim.physics import Press, SkinModel
 from skin_driver.core.sim.scene import bundled_scene_names, find_scene, load_scene
 from skin_driver.core.sim.scene import scene_from_dict, ScenePress

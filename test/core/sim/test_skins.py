@@ -8,13 +8,12 @@ import pytest
 from skin_driver.core.estimation.calibration.prepared import prepared_estimator
 from skin_driver.core.estimation.calibration.session import CalibrationSession
 from skin_driver.core.estimation.data.dataset import Dataset, load_dataset, save_dataset
-from skin_driver.core.sim.experiments import (
-    calibrated_scene, CALIBRATION_RADIUS_M, make_scene, PAPER_BETAS_DEG, press_for_shift,
-    SCENE_KINDS)
 from skin_driver.core.sim.physics import (
     layer_shift_m, Press, render, render_force, SkinModel, taxel_spread)
 from skin_driver.core.sim.skins import (family_skin, FamilySkin, get_skin, skin_for_grid,
                                         skin_names)
+from skin_lab.experiments import (calibrated_scene, CALIBRATION_RADIUS_M, make_scene,
+                                  PAPER_BETAS_DEG, press_for_shift, SCENE_KINDS)
 
 
 def test_family_names_at_least_eight_seeded_skins_with_a_description():
