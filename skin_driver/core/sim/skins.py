@@ -54,12 +54,12 @@ class FamilySkin:
 
 _SOFT_FSR = FsrFilm(force_at_r_max_n=0.5, force_at_r_min_n=60.0)
 _SATURATING_FSR = FsrFilm(r_min_ohm=200.0, r_max_ohm=6000.0, force_at_r_max_n=0.1,
-                           force_at_r_min_n=3.0)
+                          force_at_r_min_n=3.0)
 _FLAT_FSR = FsrFilm(r_min_ohm=500.0, r_max_ohm=2500.0, force_at_r_max_n=0.3,
-                     force_at_r_min_n=40.0)
+                    force_at_r_min_n=40.0)
 
 _FILM_FSR = FsrFilm(r_series_ohm=2200.0, r_min_ohm=250.0, r_max_ohm=3500.0,
-                     force_at_r_max_n=0.3, force_at_r_min_n=12.0)
+                    force_at_r_max_n=0.3, force_at_r_min_n=12.0)
 
 _FAMILY = (
     FamilySkin('default', "the project's own simulated skin (seed prototype), 0.36 mm misaligned",
@@ -176,8 +176,8 @@ def held_out_skin(seed: int) -> FamilySkin:
     force = pick(8.0, 40.0)
     shift_taxels = math.exp(pick(math.log(0.3), math.log(5.0)))
     fsr = FsrFilm(r_min_ohm=pick(200.0, 500.0), r_max_ohm=pick(2500.0, 6000.0),
-                   force_at_r_max_n=pick(0.1, 0.5),
-                   force_at_r_min_n=math.exp(pick(math.log(3.0), math.log(60.0))))
+                  force_at_r_max_n=pick(0.1, 0.5),
+                  force_at_r_min_n=math.exp(pick(math.log(3.0), math.log(60.0))))
     offset, angle = pick(0.0, 0.5 * pitch), pick(0.0, 2.0 * math.pi)
     model = SkinModel(
         compliance_m_per_n=shift_taxels * pitch / (force * math.sin(math.radians(45.0))),
