@@ -20,9 +20,9 @@ the offsets by the board's clock, which runs on across the passes of a looped sc
 
 Like the firmware, the board says who it is (docs/protocol.md, board information frame): once
 before its first frame and then once a second of device time, between two frames, on the
-firmware's schedule (:class:`InfoSchedule`). By default
-it is a fixed fake board (:func:`sim_board_info`: board ``sim``, the scene's grid and pitch);
-``identity`` names another, or None for a version-1 board that sends no identity.
+firmware's schedule (:class:`InfoSchedule`). By default it is a fixed fake board
+(:func:`sim_board_info`: board ``sim``, the scene's grid and pitch); ``identity`` names another,
+or None for a version-1 board that sends no identity.
 
 It sends protocol version 2 (packed counts, fault bits, row map) unless ``protocol=1`` asks for
 version 1. A version-2 board can report rows it failed to sample and fault bits
