@@ -1,9 +1,9 @@
 """
 The core must run where no ROS is installed, and its wings keep one import rule.
 
-No core module imports rclpy or a message package; ``estimation`` never imports ``sim``;
-``protocol`` imports neither; ``common`` (checks, atomic writes) and ``robot`` (frames, mounts)
-import none of them.
+No core module imports rclpy or a message package; ``estimation`` and ``sim`` never import each
+other (the simulator is the truth the estimator is judged against); ``protocol`` imports
+neither; ``common`` (checks, atomic writes) and ``robot`` (frames, mounts) import none of them.
 """
 
 import ast
@@ -25,7 +25,7 @@ FORBIDDEN = ('rclpy', 'rosidl', 'builtin_interfaces', 'std_msgs', 'geometry_msgs
              'skin_msgs', 'visualization_msgs', 'diagnostic_msgs', 'std_srvs', 'launch')
 # What each wing may not import (besides ROS).
 WING_RULES = {'common': ('estimation', 'sim', 'protocol'), 'protocol': ('estimation', 'sim'),
-              'estimation': ('sim', 'protocol'), 'sim': (),
+              'estimation': ('sim', 'protocol'), 'sim': ('estimation',),
               'robot': ('estimation', 'sim', 'protocol')}
 
 
@@ -110,6 +110,20 @@ def test_importing_estimation_loads_no_sim_module():
         f'for m in {modules!r}:\n'
         '    importlib.import_module(m)\n'
         'print(",".join(sorted(m for m in sys.modules if m.startswith("skin_driver.core.sim"))))\n'
+    )
+    out = subprocess.run([sys.executable, '-c', code], capture_output=True, text=True, check=True)
+    assert out.stdout.strip() == ''
+
+
+def test_importing_the_simulator_loads_no_estimation_module():
+    modules = [_module_name(p) for p in _core_modules() if _wing(_module_name(p)) == 'sim']
+    assert 'skin_driver.core.sim.physics' in modules
+    code = (
+        'import importlib, sys\n'
+        f'for m in {modules!r}:\n'
+        '    importlib.import_module(m)\n'
+        'print(",".join(sorted(m for m in sys.modules\n'
+        '                      if m.startswith("skin_driver.core.estimation"))))\n'
     )
     out = subprocess.run([sys.executable, '-c', code], capture_output=True, text=True, check=True)
     assert out.stdout.strip() == ''

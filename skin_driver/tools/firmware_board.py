@@ -101,6 +101,12 @@ def build_frame_dump() -> Path:
     return HOST_BUILD / 'tests' / 'frame_dump'
 
 
+def build_board_dump() -> Path:
+    """Build the host program that runs the firmware's loop at given times; return its path."""
+    _cmake(HOST_BUILD, target='board_dump')
+    return HOST_BUILD / 'tests' / 'board_dump'
+
+
 def build_image(protocol: int = 2) -> Path:
     """
     Cross-build the emulated board's image; return the ELF's path.

@@ -26,6 +26,13 @@ def frame_dump():
 
 
 @pytest.fixture(scope='session')
+def board_dump():
+    """Return the path of the host program that runs the firmware's main loop at given times."""
+    _need(qemu=False)
+    return firmware_board.build_board_dump()
+
+
+@pytest.fixture(scope='session')
 def nucleo_image():
     """Return the path of the Nucleo-F446RE image, built as ``make firmware`` builds it."""
     _need(qemu=False)

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from skin_driver.core.estimation.data.dataset import save_dataset
-from skin_driver.core.estimation.model.fsr import FsrModel
+from skin_driver.core.sim.fsr import FsrFilm
 from skin_driver.core.sim.physics import SkinModel
 from skin_lab.evaluate import cli, scoring, tables
 from skin_lab.experiments import (add_calibration_frames, make_random_experiment,
@@ -60,8 +60,8 @@ def test_the_papers_table_stands_beside_the_seed_experiment_only():
 def test_calibration_frames_make_force_and_alpha_right_on_another_skin():
     # Another FSR curve and three times the compliance: the assumed model is far off here.
     skin = SkinModel(misalignment_m=(3e-4, -2e-4), compliance_m_per_n=2.1e-3,
-                     fsr=FsrModel(r_series_ohm=2000.0, r_min_ohm=150.0, r_max_ohm=6000.0,
-                                  force_at_r_min_n=40.0))
+                     fsr=FsrFilm(r_series_ohm=2000.0, r_min_ohm=150.0, r_max_ohm=6000.0,
+                                 force_at_r_min_n=40.0))
     rng = np.random.default_rng(5)
     scored = make_random_experiment(skin, frames=40, rng=rng, alpha_range_deg=(15.0, 40.0))
     plain = scoring.evaluate_method(scored, 'poc')['summary']

@@ -19,9 +19,10 @@ A scene that drifts (``drift``, :mod:`.scene`) is rendered with its creep and of
 the offsets by the board's clock, which runs on across the passes of a looped scene.
 
 Like the firmware, the board says who it is (docs/protocol.md, board information frame): once
-before its first frame and then once a second of device time, between two frames. By default
-it is a fixed fake board (:func:`sim_board_info`: board ``sim``, the scene's grid and pitch);
-``identity`` names another, or None for a version-1 board that sends no identity.
+before its first frame and then once a second of device time, between two frames, on the
+firmware's schedule (:class:`InfoSchedule`). By default it is a fixed fake board
+(:func:`sim_board_info`: board ``sim``, the scene's grid and pitch); ``identity`` names another,
+or None for a version-1 board that sends no identity.
 
 It sends protocol version 2 (packed counts, fault bits, row map) unless ``protocol=1`` asks for
 version 1. A version-2 board can report rows it failed to sample and fault bits
@@ -109,6 +110,34 @@ class _Scan:
     counts: tuple  # (rows, cols, bytes) of wire.encode_counts
 
 
+class InfoSchedule:
+    """
+    When the board information frame goes out: the firmware's rule (firmware/core/src/run.c).
+
+    Once ahead of the first frame, then ahead of the first frame at or after each period of
+    device time since the last one was due: a late scan delays one, not every one after it;
+    after a stall of over a period one goes out, not a burst, and the next is a period later.
+    ``test/firmware/test_info_schedule.py`` holds it against the firmware's own loop.
+    """
+
+    def __init__(self, period_us: int = INFO_PERIOD_US):
+        """Start with the first information frame due at the first frame."""
+        self.period_us = check_int(period_us, 'period_us', low=1)
+        self._due_us = None
+
+    def due(self, device_time_us: int) -> bool:
+        """Return whether an information frame goes ahead of the frame of this device time."""
+        return self._due_us is None or device_time_us >= self._due_us
+
+    def sent(self, device_time_us: int) -> None:
+        """Note that one went ahead of the frame of this device time."""
+        if self._due_us is None:
+            self._due_us = device_time_us
+        self._due_us += self.period_us
+        if self._due_us <= device_time_us:
+            self._due_us = device_time_us + self.period_us
+
+
 def _as_scene(scene) -> Scene:
     return scene if isinstance(scene, Scene) else load_scene(scene)
 
@@ -176,7 +205,7 @@ class SimulatedSkin:
             raise ValueError(f'identity must be a BoardInfo, {SIM!r} or None, got {identity!r}')
         self.identity = identity
         self._info = encode_info(identity) if identity is not None else b''
-        self._info_due_us = 0  # device time from which the next info frame is due
+        self._info_schedule = InfoSchedule()
         self.info_frames_sent = 0  # info frames queued on the line
         self._not_queued = 0          # frames scanned while unplugged, the queue full, or lagging
         self.seq_skipped = 0          # sequence numbers skipped by skip_sequence()
@@ -402,7 +431,7 @@ class SimulatedSkin:
         truth = FrameTruth(seq, device_time_us, top, bottom, scan.presses, scan.scene_time_s,
                            scan.press_indices)
         info = b''
-        if self._info and device_time_us >= self._info_due_us:
+        if self._info and self._info_schedule.due(device_time_us):
             info = self._info
         junk, wire, damaged = b'', raw, False
         if self._noise and self._noise_rng.random() < self._noise:
@@ -420,7 +449,7 @@ class SimulatedSkin:
             self._not_queued += 1
         elif info:
             self.info_frames_sent += 1
-            self._info_due_us = (device_time_us // INFO_PERIOD_US + 1) * INFO_PERIOD_US
+            self._info_schedule.sent(device_time_us)
 
     def _render(self, t: float, clock_s: float = 0.0) -> _Scan:
         """Render the scan of scene time t; a drifting scene's offsets at the clock's time."""

@@ -15,10 +15,11 @@ layer between them, a 12-bit ADC reading each FSR through a voltage divider):
   and displaced along the tangential force (the seed's convention):
   ``shift = misalignment + compliance * force_n * sin(alpha) * (cos(beta), sin(beta))``.
 * Each taxel's force, times its own gain (``gain_spread``: FSRs differ by up to that fraction),
-  becomes ADC counts through :class:`FsrModel`; then come an amplifier offset with a per-taxel
-  spread (``baseline_spread_counts``), row/column crosstalk of the passive matrix (a share
-  ``crosstalk`` of the load of every other taxel on the same row and column), Gaussian noise, dead
-  taxels and 12-bit clipping. Per-taxel gains and offsets are fixed by the skin's ``seed``.
+  becomes ADC counts through the film (:class:`.fsr.FsrFilm`); then come an amplifier offset
+  with a per-taxel spread (``baseline_spread_counts``), row/column crosstalk of the passive
+  matrix (a share ``crosstalk`` of the load of every other taxel on the same row and column),
+  Gaussian noise, dead taxels and 12-bit clipping. Per-taxel gains and offsets are fixed by the
+  skin's ``seed``.
 
 Optional physics of real films and tips (all off by default, so older skins render unchanged):
 
@@ -30,7 +31,7 @@ Optional physics of real films and tips (all off by default, so older skins rend
   of the normal force (Hertz); ``Press.radius_m`` is the radius at this normal force.
 * ``normal_shift_m_per_n``: the bottom imprint also moves with the normal load (an anisotropic
   or pre-sheared layer), so the zero shift depends on how hard one presses.
-* The FSR's resistance floor ``FsrModel.r_min_ohm`` is a hard saturation already.
+* The film's resistance floor ``FsrFilm.r_min_ohm`` is a hard saturation already.
 * ``drift`` (:mod:`.drift`): creep under load and drift of the offsets over time; only
   :func:`render_held`, which takes a time, renders it.
 """
@@ -44,12 +45,9 @@ from typing import Sequence
 
 import numpy as np
 
-# How a taxel samples a profile is the estimation's description too (cellops).
+from .contact import hertz_pressure, pad_sum, spread, taxel_operator
 from .drift import creep_factor, Drift, offset_counts
-from ..estimation.model.cellops import (axis_operator as _axis_operator, blur as _blur,
-                                        gather as _gather)
-from ..estimation.model.fsr import FsrModel
-from ..estimation.model.taxelmodel import hertz_profile
+from .fsr import FsrFilm
 
 __all__ = ['SkinModel', 'Press', 'render', 'render_plate', 'render_force', 'render_expected',
            'expected_counts', 'layer_shift_m', 'taxel_spread', 'contact_radius_m', 'render_held',
@@ -117,7 +115,7 @@ class SkinModel:
     crosstalk: float = 0.0
     dead_taxels: tuple = ()
     misalignment_m: tuple = (0.0, 0.0)
-    fsr: FsrModel = field(default_factory=FsrModel)
+    fsr: FsrFilm = field(default_factory=FsrFilm)
     fill_factor: float = 0.9
     baseline_counts: float = 20.0
     cover_spread_m: float = 0.001
@@ -149,6 +147,10 @@ class SkinModel:
             v = getattr(self, name)
             if len(v) != 2 or not all(math.isfinite(x) for x in v):
                 raise ValueError(f'SkinModel.{name} must be two finite numbers')
+        if not isinstance(self.fsr, FsrFilm):
+            # The driver's assumed film is another thing: the truth is the simulator's own.
+            raise TypeError('SkinModel.fsr must be a core.sim.fsr.FsrFilm, '
+                            f'not {type(self.fsr).__name__}')
         if self.turn_on_ohm > 0 and not self.turn_on_pa > 0:
             # Without a turn-on pressure every blur tail would step the film on.
             raise ValueError('SkinModel.turn_on_ohm needs turn_on_pa > 0')
@@ -229,8 +231,8 @@ def _press_maps(model: SkinModel, press: Press) -> tuple:
         # The Hertz profile is zero outside the disc: evaluate it on the disc's bounding box only.
         x0, x1 = _support(xs, cx, a)
         y0, y1 = _support(ys, cy, a)
-        fine = hertz_profile(xs[x0:x1], ys[y0:y1], cx, cy, press.radius_m, press.aspect,
-                             press.orientation_rad)
+        fine = hertz_pressure(xs[x0:x1], ys[y0:y1], (cx, cy), press.radius_m, press.aspect,
+                              press.orientation_rad)
         # The integral of the Hertz profile over its ellipse is 2/3 pi a b (in samples of h^2).
         total = (2.0 / 3.0 * math.pi * press.radius_m ** 2 * press.aspect / (h * h)
                  if clipped else fine.sum())
@@ -246,8 +248,8 @@ def _press_maps(model: SkinModel, press: Press) -> tuple:
             cells = _sensed_cells(model, fine * (fz / total), (r1 - r0, c1 - c0), sub,
                                   (y0, y1, x0, x1), blur_px, h)
         else:
-            op_y = _axis_operator(r1 - r0, sub, fill, blur_px)
-            op_x = op_y if c1 - c0 == r1 - r0 else _axis_operator(c1 - c0, sub, fill, blur_px)
+            op_y = taxel_operator(r1 - r0, sub, fill, blur_px)
+            op_x = op_y if c1 - c0 == r1 - r0 else taxel_operator(c1 - c0, sub, fill, blur_px)
             cells = (op_y[:, y0:y1] @ fine @ op_x[:, x0:x1].T) * (fz / total)
         rr0, cc0 = max(r0, 0), max(c0, 0)
         rr1, cc1 = min(r1, model.rows), min(c1, model.cols)
@@ -269,14 +271,14 @@ def _sensed_cells(model: SkinModel, fine: np.ndarray, cells: tuple, sub: int, su
     y0, y1, x0, x1 = support
     rows, cols = cells
     if blur_px > 0:
-        by, bx = _blur(rows * sub, blur_px), _blur(cols * sub, blur_px)
+        by, bx = spread(rows * sub, blur_px), spread(cols * sub, blur_px)
         load = by[:, y0:y1] @ fine @ bx[:, x0:x1].T
     else:
         load = np.zeros((rows * sub, cols * sub))
         load[y0:y1, x0:x1] = fine
     load = np.where(load > model.turn_on_pa * h * h, load, 0.0)
     fill = float(model.fill_factor)
-    return _gather(rows, sub, fill) @ load @ _gather(cols, sub, fill).T
+    return pad_sum(rows, sub, fill) @ load @ pad_sum(cols, sub, fill).T
 
 
 def render_force(model: SkinModel, presses: Sequence[Press]) -> tuple:

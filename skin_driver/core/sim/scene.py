@@ -54,10 +54,10 @@ import numpy as np
 import yaml
 
 from .drift import Drift, held_age
+from .fsr import FsrFilm
 from .paper import PAPER_FORCE_N, paper_presses
 from .physics import Press, SkinModel
 from .skins import family_skin
-from ..estimation.model.fsr import FsrModel
 
 PRESS_FIELDS = ('time_s', 'x_m', 'y_m', 'force_n', 'alpha_deg', 'beta_deg', 'radius_m',
                 'duration_s')
@@ -278,11 +278,11 @@ def _model(data: Any) -> SkinModel:
             raise ValueError(f'model: unknown field {key!r}; fields are '
                              f'{", ".join(sorted(names))}')
         if key == 'fsr':
-            fsr_names = {f.name for f in dataclasses.fields(FsrModel)}
+            fsr_names = {f.name for f in dataclasses.fields(FsrFilm)}
             if not isinstance(value, Mapping) or set(value) - fsr_names:
                 raise ValueError(f'model: field fsr must be a mapping of {sorted(fsr_names)}')
             try:
-                value = FsrModel(**value)
+                value = FsrFilm(**value)
             except (TypeError, ValueError) as err:
                 raise ValueError(f'model: field fsr: {err}') from None
         elif key == 'dead_taxels':

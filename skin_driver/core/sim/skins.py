@@ -24,8 +24,8 @@ import math
 import numpy as np
 
 from .drift import Drift
+from .fsr import FsrFilm
 from .physics import SkinModel
-from ..estimation.model.fsr import FsrModel
 
 __all__ = ['FamilySkin', 'HELD_OUT', 'GRID', 'skin_names', 'get_skin', 'family_skin',
            'held_out_skin', 'on_grid', 'model_on_grid', 'skin_for_grid', 'PATCH_M']
@@ -52,14 +52,14 @@ class FamilySkin:
                 / self.model.pitch_m)
 
 
-_SOFT_FSR = FsrModel(force_at_r_max_n=0.5, force_at_r_min_n=60.0)
-_SATURATING_FSR = FsrModel(r_min_ohm=200.0, r_max_ohm=6000.0, force_at_r_max_n=0.1,
-                           force_at_r_min_n=3.0)
-_FLAT_FSR = FsrModel(r_min_ohm=500.0, r_max_ohm=2500.0, force_at_r_max_n=0.3,
-                     force_at_r_min_n=40.0)
+_SOFT_FSR = FsrFilm(force_at_r_max_n=0.5, force_at_r_min_n=60.0)
+_SATURATING_FSR = FsrFilm(r_min_ohm=200.0, r_max_ohm=6000.0, force_at_r_max_n=0.1,
+                          force_at_r_min_n=3.0)
+_FLAT_FSR = FsrFilm(r_min_ohm=500.0, r_max_ohm=2500.0, force_at_r_max_n=0.3,
+                    force_at_r_min_n=40.0)
 
-_FILM_FSR = FsrModel(r_series_ohm=2200.0, r_min_ohm=250.0, r_max_ohm=3500.0,
-                     force_at_r_max_n=0.3, force_at_r_min_n=12.0)
+_FILM_FSR = FsrFilm(r_series_ohm=2200.0, r_min_ohm=250.0, r_max_ohm=3500.0,
+                    force_at_r_max_n=0.3, force_at_r_min_n=12.0)
 
 _FAMILY = (
     FamilySkin('default', "the project's own simulated skin (seed prototype), 0.36 mm misaligned",
@@ -130,7 +130,7 @@ def skin_names() -> list:
     return [s.name for s in _FAMILY]
 
 
-def _films_and_tips(pick, rng, force: float, pitch: float, fsr: FsrModel) -> dict:
+def _films_and_tips(pick, rng, force: float, pitch: float, fsr: FsrFilm) -> dict:
     """Return the held-out draw's turn-on, Hertz tip, normal-load shift and divider."""
     extra = {'fsr': replace(fsr, r_series_ohm=pick(1000.0, 3300.0))}
     if rng.random() < 2.0 / 3.0:
@@ -175,9 +175,9 @@ def held_out_skin(seed: int) -> FamilySkin:
     pitch = 0.005
     force = pick(8.0, 40.0)
     shift_taxels = math.exp(pick(math.log(0.3), math.log(5.0)))
-    fsr = FsrModel(r_min_ohm=pick(200.0, 500.0), r_max_ohm=pick(2500.0, 6000.0),
-                   force_at_r_max_n=pick(0.1, 0.5),
-                   force_at_r_min_n=math.exp(pick(math.log(3.0), math.log(60.0))))
+    fsr = FsrFilm(r_min_ohm=pick(200.0, 500.0), r_max_ohm=pick(2500.0, 6000.0),
+                  force_at_r_max_n=pick(0.1, 0.5),
+                  force_at_r_min_n=math.exp(pick(math.log(3.0), math.log(60.0))))
     offset, angle = pick(0.0, 0.5 * pitch), pick(0.0, 2.0 * math.pi)
     model = SkinModel(
         compliance_m_per_n=shift_taxels * pitch / (force * math.sin(math.radians(45.0))),

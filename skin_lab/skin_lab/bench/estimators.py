@@ -7,12 +7,14 @@ interleaved frame by frame in a shuffled order, so that machine noise hits them 
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import warnings
 
 import numpy as np
 
 from skin_driver.core.estimation.calibration.prepared import prepared_estimator
+from skin_driver.core.estimation.model.fsr import FsrModel
 from skin_driver.core.estimation.scan import kernel as compiled_kernel
 from skin_driver.core.estimation.scan.pipeline import ContactEstimator, EstimatorConfig
 from skin_driver.core.estimation.shift.methods import (
@@ -82,7 +84,10 @@ def make_estimator(name: str, model: SkinModel, calibration=None) -> ContactEsti
     registered, reference = resolve(name if name != SKIMAGE else 'centroid')
     # The no-shear floor follows the pitch (the default's 0.25 mm is 1/20 of the seed's taxel),
     # so that small shifts on fine grids are judged by the estimator, not by a fixed threshold.
-    config = EstimatorConfig(method=registered, pitch_m=model.pitch_m, fsr=model.fsr,
+    # The bench tells the estimator the skin's true film: the simulator's film and the
+    # driver's assumed one are named by the same numbers.
+    config = EstimatorConfig(method=registered, pitch_m=model.pitch_m,
+                             fsr=FsrModel(**dataclasses.asdict(model.fsr)),
                              min_shift_m=0.05 * model.pitch_m)
     # Bench only: the reference is never a runtime estimator, so it is swapped in here.
     if name == SKIMAGE:

@@ -6,14 +6,14 @@ import numpy as np
 import pytest
 from skin_driver.core.estimation.calibration.calibration import Calibration, SkinIdentity
 from skin_driver.core.estimation.calibration.session import CalibrationRefused, CalibrationSession
-from skin_driver.core.estimation.model.fsr import FsrModel
 from skin_driver.core.estimation.scan.pipeline import ContactEstimator, EstimatorConfig
+from skin_driver.core.sim.fsr import FsrFilm
 from skin_driver.core.sim.physics import Press, render, SkinModel
 
 # Another FSR curve and three times the default compliance: the assumed model is wrong here.
 SKIN = SkinModel(misalignment_m=(4e-4, -2e-4), compliance_m_per_n=2.1e-3,
-                 fsr=FsrModel(r_series_ohm=2000.0, r_min_ohm=150.0, r_max_ohm=6000.0,
-                              force_at_r_min_n=40.0))
+                 fsr=FsrFilm(r_series_ohm=2000.0, r_min_ohm=150.0, r_max_ohm=6000.0,
+                             force_at_r_min_n=40.0))
 FORCES = np.linspace(5.0, 40.0, 8)
 
 

@@ -9,6 +9,7 @@ from skin_driver.core.estimation.calibration.taxellearn import (film_start, lear
 from skin_driver.core.estimation.model.fsr import FsrModel
 from skin_driver.core.estimation.model.taxelmodel import (
     DX, DY, LOG_FORCE, LOG_RADIUS, render_counts, X, Y)
+from skin_driver.core.sim.fsr import FsrFilm
 from skin_driver.core.sim.physics import layer_shift_m, Press, render_expected, SkinModel
 
 FORCES = np.linspace(5.0, 45.0, 8)
@@ -33,8 +34,8 @@ def presses_on(skin, rng):
     SkinModel(baseline_counts=0.0, noise_counts=0.0, spread_m=0.0006, cover_spread_m=0.0002,
               fill_factor=0.8),
     SkinModel(baseline_counts=0.0, noise_counts=0.0, spread_m=0.003, cover_spread_m=0.0015,
-              fill_factor=0.85, fsr=FsrModel(r_series_ohm=1000.0, r_min_ohm=250.0,
-                                             r_max_ohm=3000.0, force_at_r_min_n=30.0)),
+              fill_factor=0.85, fsr=FsrFilm(r_series_ohm=1000.0, r_min_ohm=250.0,
+                                            r_max_ohm=3000.0, force_at_r_min_n=30.0)),
 ], ids=['sharp', 'soft_other_film'])
 def test_the_skin_is_learned_from_its_presses_of_known_force(skin):
     radii = []

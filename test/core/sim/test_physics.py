@@ -1,17 +1,19 @@
 """Tests of the simulation physics (FSR divider, pressure profile, shift, electronics)."""
 
+import dataclasses
 import math
 
 import numpy as np
 import pytest
 
 from skin_driver.core.estimation.model.fsr import FsrModel
+from skin_driver.core.sim.fsr import FsrFilm
 from skin_driver.core.sim.physics import layer_shift_m, Press, render, render_force, \
     render_plate, SkinModel, taxel_spread
 
 
 def test_fsr_round_trip_and_monotonic():
-    fsr = FsrModel()
+    fsr = FsrFilm()
     force = np.array([0.0, 0.05, 0.2, 1.0, 5.0, 10.0, 19.0])
     counts = fsr.force_to_counts(force)
     assert np.all(np.diff(counts) > 0)
@@ -20,11 +22,12 @@ def test_fsr_round_trip_and_monotonic():
 
 
 def test_fsr_resistance_range_matches_seed():
-    fsr = FsrModel()
+    fsr = FsrFilm()
     # R = r_max at force_at_r_max_n: counts = full * Rs / (Rs + r_max).
     expected = fsr.full_scale * 1000.0 / (1000.0 + 3500.0)
     assert fsr.force_to_counts(np.array([fsr.force_at_r_max_n + fsr.activation_n]))[0] == \
         pytest.approx(expected)
+    assert fsr.resistance_ohm(np.array([0.0, fsr.activation_n]))[0] == np.inf
     assert fsr.force_to_counts(np.array([1e3]))[0] == pytest.approx(fsr.saturation_counts)
     assert fsr.counts_to_force(np.array([4095.0]))[0] == pytest.approx(
         fsr.force_at_r_min_n + fsr.activation_n)
@@ -32,9 +35,32 @@ def test_fsr_resistance_range_matches_seed():
 
 def test_fsr_rejects_bad_parameters():
     with pytest.raises(ValueError, match='r_min_ohm < r_max_ohm'):
-        FsrModel(r_min_ohm=4000.0)
+        FsrFilm(r_min_ohm=4000.0)
     with pytest.raises(ValueError, match='finite and positive'):
-        FsrModel(r_series_ohm=float('nan'))
+        FsrFilm(r_series_ohm=float('nan'))
+    with pytest.raises(TypeError, match='FsrFilm'):
+        SkinModel(fsr=FsrModel())
+
+
+@pytest.mark.parametrize('film', [FsrFilm(), FsrFilm(r_series_ohm=2200.0, r_min_ohm=250.0,
+                                                     force_at_r_max_n=0.3,
+                                                     force_at_r_min_n=12.0)],
+                         ids=['default', 'other'])
+def test_the_drivers_assumed_film_is_the_true_one_when_told_its_numbers(film):
+    """
+    The simulator's film and the driver's assumed one share one law, written twice on purpose.
+
+    The bench tells the estimator a skin's true film by its numbers, and the simulated skin's
+    default film is the driver's default assumption; both need the two laws to agree.
+    """
+    assumed = FsrModel(**dataclasses.asdict(film))
+    force = np.concatenate([[0.0, film.activation_n], np.geomspace(1e-3, 100.0, 200)])
+    np.testing.assert_allclose(film.force_to_counts(force), assumed.force_to_counts(force),
+                               rtol=1e-12, atol=1e-9)
+    counts = np.linspace(0.0, film.full_scale, 400)
+    np.testing.assert_allclose(film.counts_to_force(counts), assumed.counts_to_force(counts),
+                               rtol=1e-12)
+    assert dataclasses.asdict(FsrFilm()) == dataclasses.asdict(FsrModel())
 
 
 def test_normal_force_is_conserved_in_the_interior():

@@ -1,1 +1,1 @@
-"""The skin's forward model: films, force curves and taxels (shared with the simulator)."""
+"""The skin's forward model as the estimation assumes and learns it: films, curves, taxels."""

@@ -3,9 +3,9 @@ Linear operators from a fine, supersampled axis to taxel cells: blur, then sum p
 
 A pressure profile sampled on a fine grid (``sub`` samples a taxel), blurred by a Gaussian and
 summed over each taxel's active square is linear and separable, so along each axis it folds
-into one small matrix: ``cells = A_y @ fine @ A_x.T``. The simulator renders its presses with
-these operators and the estimation's own taxel model (:mod:`taxelmodel`) fits with them: one
-description of how a taxel samples a profile.
+into one small matrix: ``cells = A_y @ fine @ A_x.T``. The estimation's taxel model
+(:mod:`taxelmodel`) fits with them; the simulator has its own (``core/sim/contact.py``, the
+truth the estimate is judged against).
 """
 
 from __future__ import annotations

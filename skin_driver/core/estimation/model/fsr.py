@@ -1,8 +1,8 @@
 """
 The force-sensitive resistor read through a voltage divider: counts to force and back.
 
-The estimation needs it to turn ADC counts into newtons; the simulator uses the same law to
-turn newtons into counts.
+The estimation needs it to turn ADC counts into newtons. It is the driver's assumption; the
+simulated skin's true film is its own (``core/sim/fsr.py``), named by the same numbers.
 """
 
 from __future__ import annotations

@@ -139,7 +139,7 @@ def hertz_profile(x: np.ndarray, y: np.ndarray, cx: float, cy: float, a: float,
     Return a Hertz tip's pressure shape ``sqrt(1 - r**2)`` on the grid of ``x`` by ``y``.
 
     The ellipse has semi-axes ``a`` and ``a * aspect``, the first turned by ``orientation``
-    from +x; rows follow ``y``. The simulator's presses take the same shape.
+    from +x; rows follow ``y``. The simulator's presses take the same shape (its own code).
     """
     if aspect == 1.0:
         r2 = (((x - cx) ** 2)[None, :] + ((y - cy) ** 2)[:, None]) / (a * a)
