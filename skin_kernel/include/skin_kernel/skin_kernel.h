@@ -235,6 +235,16 @@ int sk_model_fit(const sk_taxel_model *model, int rows, int cols, const double *
                  const unsigned char *censored, const double *sensitivity, const double *u0,
                  int iterations, double *u_out, double *misfit_out);
 
+/*
+ * The direction correction's features (sk_direction's order) of n contacts: their places col,
+ * row and raw shifts dx, dy (taxels) and normal forces normal_n, the force feature taken
+ * relative to force_ref_n (> 0). Writes (n, SK_DIRECTION_FEATURES) to out: what a scan applies
+ * a correction's weights to, and what the calibration fits them on.
+ */
+void sk_direction_features(int n, const double *col, const double *row, const double *dx,
+                           const double *dy, const double *normal_n, double force_ref_n,
+                           double *out);
+
 #ifdef __cplusplus
 }
 #endif

@@ -40,7 +40,8 @@ from ...common.validate import check_pair
 __all__ = ['METHODS', 'ABI_VERSION', 'TaxelModelNumbers', 'Curve', 'Direction', 'DriftNumbers',
            'Settings', 'ContactRecord', 'Status', 'Record', 'KernelSettings', 'Conditioned',
            'Kernel', 'KernelMissing', 'KernelMismatch', 'load_library', 'library_candidates',
-           'fit_contact', 'taxel_model_of', 'direction_of', 'DIRECTION_FEATURES']
+           'fit_contact', 'taxel_model_of', 'direction_of', 'DIRECTION_FEATURES',
+           'direction_features']
 
 # Shift methods the kernel runs, by their registered names (skin_kernel.h: SK_CENTROID, ...).
 METHODS = {'centroid': 0, 'taxel_fit': 1, 'poc': 2, 'model_fit': 3}
@@ -255,7 +256,8 @@ def _sign(lib: ctypes.CDLL) -> None:
                   'sk_condition': (_int, [ptr, ptr, ptr, ptr, ptr, ptr]),
                   'sk_force': (_int, [ptr, ptr, ptr, ptr]),
                   'sk_drift_state': (_int, [ptr, ptr]), 'sk_set_drift_state': (None, [ptr, ptr]),
-                  'sk_model_fit': (_int, [ptr, _int, _int, ptr, ptr, ptr, ptr, _int, ptr, ptr])}
+                  'sk_model_fit': (_int, [ptr, _int, _int, ptr, ptr, ptr, ptr, _int, ptr, ptr]),
+                  'sk_direction_features': (None, [_int] + [ptr] * 5 + [_double, ptr])}
     for name, (restype, argtypes) in signatures.items():
         function = getattr(lib, name, None)
         if function is None:
@@ -541,3 +543,21 @@ def fit_contact(model, counts: np.ndarray, censored: np.ndarray, u0: np.ndarray,
     if status != _OK:
         raise MemoryError(f'skin_kernel: no memory to fit a {rows} x {cols} window')
     return PressFit(u, float(misfit[0]))
+
+
+def direction_features(col, row, dx, dy, force_n, force_ref_n: float) -> np.ndarray:
+    """
+    Return the direction correction's features of contacts, (N, DIRECTION_FEATURES).
+
+    ``sk_direction_features``: the features a scan applies a correction's weights to. Arguments
+    are arrays (or numbers, broadcast) of the contacts' places and raw shifts (taxels) and
+    normal forces; ``force_ref_n`` (> 0) is what the force feature is taken relative to.
+    """
+    lib = load_library()
+    columns = [np.ascontiguousarray(v, dtype=np.float64).ravel() for v in np.broadcast_arrays(
+        *(np.atleast_1d(np.asarray(v, dtype=np.float64)) for v in (col, row, dx, dy, force_n)))]
+    n = columns[0].size
+    out = np.zeros((n, DIRECTION_FEATURES))
+    lib.sk_direction_features(n, *(_address(c) for c in columns), float(force_ref_n),
+                              _address(out))
+    return out
