@@ -96,6 +96,8 @@ void sk_pair_window(const sk_kernel *k, int q, double *out);
 void sk_drift_step(sk_kernel *k, const double *maps, double time_s);
 double sk_creep_factor(const sk_kernel *k, int i);
 double sk_held_s(const sk_kernel *k, const sk_pair *p);
+/* drift.c: the creep law, a reading's rise after age_s under load (1 at its arrival) */
+double sk_creep_rise(const sk_drift *d, double age_s);
 
 #define SK_PI 3.14159265358979323846
 

@@ -1,6 +1,6 @@
 /*
  * The models the calibration learns through the ABI, each written once in the kernel: the
- * direction correction's features.
+ * direction correction's features and the creep law.
  */
 #include <math.h>
 #include <stdarg.h>
@@ -61,12 +61,63 @@ static void no_contact_writes_nothing(void **state)
   assert_float_equal(out, 7.0, 0.0);
 }
 
+/* The law's hard cases: a decade, two, no age, a negative age, no creep. */
+static void the_creep_law_rises_by_its_rate_a_decade(void **state)
+{
+  (void)state;
+  sk_drift d = {0.0, 0.03, 1.0, 0.0}, none = {0.0, 0.0, 1.0, 0.0};
+  double ages[4] = {9.0, 99.0, 0.0, -5.0}, out[4];
+  const double expected[4] = {1.03, 1.06, 1.0, 1.0};
+  sk_creep(&d, 4, ages, 0, out);
+  for (int i = 0; i < 4; i++) {
+    assert_float_equal(out[i], expected[i], 1e-12);
+  }
+  double one = 1.0;
+  sk_creep(&d, 1, &one, 1, out);
+  assert_float_equal(out[0], 1.0, 1e-12);
+  sk_creep(&none, 4, ages, 1, out);
+  for (int i = 0; i < 4; i++) {
+    assert_float_equal(out[i], 1.0, 0.0);
+  }
+}
+
+/*
+ * A press held still reads less as it ages, by the law's ratio: scans at 10, 15 and 20 s age it
+ * 0, 5 and 10 s, and its force at 10 s over that at 5 s is the inverse of the law's.
+ */
+static void a_scan_divides_by_the_law_relative_to_1s(void **state)
+{
+  (void)state;
+  spec s = spec_of(9, 9, SK_TAXEL_FIT);
+  s.drift = 1;
+  sk_settings st = settings_of(&s);
+  sk_kernel *k = kernel_of(&s);
+  sk_contact *out = records_for(&s);
+  sk_status status;
+  double *maps = rest_maps(9, 9);
+  press(maps, 9, 9, 4, 4, 0.4, 0, 1500, 1.0);
+  double force[3];
+  for (int i = 0; i < 3; i++) {
+    assert_int_equal(sk_scan(k, maps, 10.0 + 5.0 * i, 0, out, &status), 1);
+    force[i] = out[0].force_n;
+  }
+  double ages[2] = {5.0, 10.0}, law[2];
+  sk_creep(&st.drift, 2, ages, 1, law);
+  assert_true(law[1] > law[0] && law[0] > 1.0);
+  assert_float_equal(force[2] / force[1], law[0] / law[1], 1e-12);
+  free(maps);
+  free(out);
+  sk_free(k);
+}
+
 int main(void)
 {
   const struct CMUnitTest tests[] = {
     cmocka_unit_test(the_features_of_a_quarter_taxel_shift_are_the_header_s),
     cmocka_unit_test(each_contact_gets_its_own_row),
     cmocka_unit_test(no_contact_writes_nothing),
+    cmocka_unit_test(the_creep_law_rises_by_its_rate_a_decade),
+    cmocka_unit_test(a_scan_divides_by_the_law_relative_to_1s),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }

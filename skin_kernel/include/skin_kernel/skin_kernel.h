@@ -245,6 +245,16 @@ void sk_direction_features(int n, const double *col, const double *row, const do
                            const double *dy, const double *normal_n, double force_ref_n,
                            double *out);
 
+/*
+ * The creep law of sk_drift, the one the scans correct by and the creep calibration fits: after
+ * age_s under load a reading has risen to c(age) = 1 + creep_per_decade log10(1 + age /
+ * settle_s) times what it read at the load's arrival (a negative age counts as 0). Writes c of
+ * n ages to out; with relative_to_1s, c(age) / c(1 s) instead: what a scan divides a loaded
+ * taxel's force by. Only creep_per_decade and settle_s (> 0) are read.
+ */
+void sk_creep(const sk_drift *drift, int n, const double *age_s, int relative_to_1s,
+              double *out);
+
 #ifdef __cplusplus
 }
 #endif

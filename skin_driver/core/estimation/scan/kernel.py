@@ -41,7 +41,7 @@ __all__ = ['METHODS', 'ABI_VERSION', 'TaxelModelNumbers', 'Curve', 'Direction', 
            'Settings', 'ContactRecord', 'Status', 'Record', 'KernelSettings', 'Conditioned',
            'Kernel', 'KernelMissing', 'KernelMismatch', 'load_library', 'library_candidates',
            'fit_contact', 'taxel_model_of', 'direction_of', 'DIRECTION_FEATURES',
-           'direction_features']
+           'direction_features', 'creep']
 
 # Shift methods the kernel runs, by their registered names (skin_kernel.h: SK_CENTROID, ...).
 METHODS = {'centroid': 0, 'taxel_fit': 1, 'poc': 2, 'model_fit': 3}
@@ -257,7 +257,8 @@ def _sign(lib: ctypes.CDLL) -> None:
                   'sk_force': (_int, [ptr, ptr, ptr, ptr]),
                   'sk_drift_state': (_int, [ptr, ptr]), 'sk_set_drift_state': (None, [ptr, ptr]),
                   'sk_model_fit': (_int, [ptr, _int, _int, ptr, ptr, ptr, ptr, _int, ptr, ptr]),
-                  'sk_direction_features': (None, [_int] + [ptr] * 5 + [_double, ptr])}
+                  'sk_direction_features': (None, [_int] + [ptr] * 5 + [_double, ptr]),
+                  'sk_creep': (None, [ptr, _int, ptr, _int, ptr])}
     for name, (restype, argtypes) in signatures.items():
         function = getattr(lib, name, None)
         if function is None:
@@ -560,4 +561,20 @@ def direction_features(col, row, dx, dy, force_n, force_ref_n: float) -> np.ndar
     out = np.zeros((n, DIRECTION_FEATURES))
     lib.sk_direction_features(n, *(_address(c) for c in columns), float(force_ref_n),
                               _address(out))
+    return out
+
+
+def creep(drift: DriftNumbers, age_s, relative_to_1s: bool = False) -> np.ndarray:
+    """
+    Return the creep law's rise of readings held ``age_s`` under load (``sk_creep``).
+
+    ``1 + creep_per_decade * log10(1 + age / settle_s)`` of ``drift`` (a :class:`DriftNumbers`)
+    at each age (an array or a number; negative: 0), shaped like ``age_s``; with
+    ``relative_to_1s``, over its value at 1 s: what a scan divides a loaded taxel's force by.
+    """
+    lib = load_library()
+    ages = np.array(age_s, dtype=np.float64)  # a copy, C-ordered, 0-d for a number
+    out = np.zeros(ages.shape)
+    lib.sk_creep(ctypes.byref(drift), ages.size, _address(ages), int(relative_to_1s),
+                 _address(out))
     return out

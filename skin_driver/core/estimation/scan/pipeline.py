@@ -37,7 +37,6 @@ tangential components point along the azimuth, the direction in which the top la
 from __future__ import annotations
 
 from dataclasses import dataclass, field, replace
-import math
 import threading
 
 import numpy as np
@@ -352,9 +351,7 @@ class ContactEstimator:
         d = self._drift_numbers()
         if not d.creep_per_decade > 0:
             return 1.0
-        # drift.c's: the creep of the age over that of a load held 1 s
-        return ((1.0 + d.creep_per_decade * math.log10(1.0 + max(held_s, 0.0) / d.settle_s))
-                / (1.0 + d.creep_per_decade * math.log10(1.0 + 1.0 / d.settle_s)))
+        return float(compiled_kernel.creep(d, held_s, relative_to_1s=True))
 
     def carry_time_from(self, other: 'ContactEstimator') -> 'ContactEstimator':
         """
