@@ -1,6 +1,6 @@
 /*
  * The models the calibration learns through the ABI, each written once in the kernel: the
- * direction correction's features and the creep law.
+ * direction correction's features, the creep law and the forward model of the taxels.
  */
 #include <math.h>
 #include <stdarg.h>
@@ -110,6 +110,116 @@ static void a_scan_divides_by_the_law_relative_to_1s(void **state)
   sk_free(k);
 }
 
+/* A skin's taxel model: 5 mm pitch, 0.9 fill, 1 and 2 mm blurs, an activation of 0.01 N. */
+static const sk_taxel_model MODEL = {0.005, 0.9, 0.001, 0.002, 0.67, 0.53, 3.3, 0.01, 0.0, 0.0,
+                                     FULL_SCALE};
+
+/* A round press u at (x, y) taxels of force_n, shifted (dx, dy), of radius radius taxels. */
+static void press_at(double *u, double x, double y, double force_n, double dx, double dy,
+                     double radius)
+{
+  double v[8] = {x, y, log(force_n), dx, dy, log(radius), 0.0, 0.0};
+  for (int j = 0; j < 8; j++) {
+    u[j] = v[j];
+  }
+}
+
+/*
+ * At a taxel's centre the maps are symmetric; lighter than one taxel's activation nothing reads;
+ * a crushing press reads the film's resistance floor (full scale * ceiling / (1 + ceiling)).
+ */
+static void a_render_is_symmetric_silent_below_activation_and_floors(void **state)
+{
+  (void)state;
+  enum { H = 12, W = 12, N = H * W };
+  double u[8], *counts = malloc(sizeof(double) * 2 * N);
+  press_at(u, 5.0, 6.0, 20.0, 0.0, 0.0, 0.8);
+  assert_int_equal(sk_model_render(&MODEL, H, W, u, 24, NULL, counts), SK_OK);
+  assert_true(counts[6 * W + 5] > 0.0);
+  for (int layer = 0; layer < 2; layer++) {
+    for (int r = 0; r < H; r++) {
+      for (int d = 1; d <= 4; d++) {
+        assert_float_equal(counts[layer * N + r * W + 5 - d], counts[layer * N + r * W + 5 + d],
+                           1e-9);
+      }
+    }
+  }
+  press_at(u, 5.0, 6.0, 0.009, 0.0, 0.0, 0.8);
+  assert_int_equal(sk_model_render(&MODEL, H, W, u, 0, NULL, counts), SK_OK);
+  for (int i = 0; i < 2 * N; i++) {
+    assert_float_equal(counts[i], 0.0, 0.0);
+  }
+  press_at(u, 5.0, 6.0, 1e7, 0.0, 0.0, 0.8);
+  assert_int_equal(sk_model_render(&MODEL, H, W, u, 0, NULL, counts), SK_OK);
+  assert_float_equal(counts[6 * W + 5], FULL_SCALE * 3.3 / 4.3, 1e-9);
+  free(counts);
+}
+
+/*
+ * The residuals of the model's own render are 0; a taxel read lower than the model is a
+ * residual unless censored (a lower bound the model reads above).
+ */
+static void residuals_are_zero_on_the_model_s_render_and_censoring_is_one_sided(void **state)
+{
+  (void)state;
+  enum { H = 9, W = 10, N = H * W };
+  double u[8], misfit = -1.0;
+  double *counts = malloc(sizeof(double) * 2 * N), *r = malloc(sizeof(double) * 2 * N);
+  unsigned char *censored = calloc(2 * N, 1);
+  press_at(u, 4.3, 4.6, 15.0, 0.4, -0.3, 0.9);
+  assert_int_equal(sk_model_render(&MODEL, H, W, u, 0, NULL, counts), SK_OK);
+  assert_int_equal(sk_model_residuals(&MODEL, H, W, counts, censored, NULL, u, 0, r, &misfit),
+                   SK_OK);
+  assert_float_equal(misfit, 0.0, 1e-18);
+  int peak = 4 * W + 4;
+  counts[peak] -= 100.0;
+  assert_int_equal(sk_model_residuals(&MODEL, H, W, counts, censored, NULL, u, 0, r, &misfit),
+                   SK_OK);
+  assert_true(r[peak] > 0.0);
+  assert_float_equal(misfit, r[peak] * r[peak], 1e-9);
+  censored[peak] = 1;
+  assert_int_equal(sk_model_residuals(&MODEL, H, W, counts, censored, NULL, u, 0, r, &misfit),
+                   SK_OK);
+  assert_float_equal(r[peak], 0.0, 0.0);
+  free(counts);
+  free(r);
+  free(censored);
+}
+
+/* Fine samples: 24 for a taxel-wide tip, twelve over a narrow one's radius, at most 48. */
+static void the_fine_samples_follow_the_tip_s_size(void **state)
+{
+  (void)state;
+  double u[8];
+  press_at(u, 0.0, 0.0, 1.0, 0.0, 0.0, 1.0);
+  assert_int_equal(sk_model_sub(u), 24);
+  press_at(u, 0.0, 0.0, 1.0, 0.0, 0.0, 0.3);
+  assert_int_equal(sk_model_sub(u), 40);
+  press_at(u, 0.0, 0.0, 1.0, 0.0, 0.0, 0.1);
+  assert_int_equal(sk_model_sub(u), 48);
+}
+
+/* A start from a render finds its centre; the fit's numbers are the fit's. */
+static void a_start_finds_a_render_s_centre(void **state)
+{
+  (void)state;
+  enum { H = 11, W = 11, N = H * W };
+  double u[8], start[8], *counts = malloc(sizeof(double) * 2 * N);
+  press_at(u, 5.0, 4.0, 10.0, 0.0, 0.0, 1.0);
+  assert_int_equal(sk_model_render(&MODEL, H, W, u, 0, NULL, counts), SK_OK);
+  sk_model_start(&MODEL, counts, H, W, start);
+  assert_float_equal(start[0], 5.0, 1e-9);
+  assert_float_equal(start[1], 4.0, 1e-9);
+  assert_float_equal(start[3], 0.0, 0.0);
+  double steps[8], moves[8], scales[6];
+  sk_model_steps(steps, moves, scales);
+  for (int j = 0; j < 8; j++) {
+    assert_true(steps[j] > 0.0 && moves[j] > steps[j]);
+  }
+  assert_float_equal(scales[3], 1.0, 0.0);
+  free(counts);
+}
+
 int main(void)
 {
   const struct CMUnitTest tests[] = {
@@ -118,6 +228,10 @@ int main(void)
     cmocka_unit_test(no_contact_writes_nothing),
     cmocka_unit_test(the_creep_law_rises_by_its_rate_a_decade),
     cmocka_unit_test(a_scan_divides_by_the_law_relative_to_1s),
+    cmocka_unit_test(a_render_is_symmetric_silent_below_activation_and_floors),
+    cmocka_unit_test(residuals_are_zero_on_the_model_s_render_and_censoring_is_one_sided),
+    cmocka_unit_test(the_fine_samples_follow_the_tip_s_size),
+    cmocka_unit_test(a_start_finds_a_render_s_centre),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }

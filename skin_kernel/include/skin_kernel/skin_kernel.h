@@ -236,6 +236,41 @@ int sk_model_fit(const sk_taxel_model *model, int rows, int cols, const double *
                  int iterations, double *u_out, double *misfit_out);
 
 /*
+ * The forward model itself, for the calibration that learns it (taxellearn.py, rendered.py):
+ * the same render and misfit sk_model_fit uses, at sub fine samples a taxel (0 or less: as
+ * sk_model_sub picks for u).
+ *
+ * sk_model_render writes the (2, rows, cols) counts of press u to counts_out; sk_model_residuals
+ * writes the robust residuals of counts (2, rows, cols; a censored taxel's only where the model
+ * reads below it) to r_out and their sum of squares to misfit_out. sensitivity as sk_model_fit's.
+ * Both return SK_OK, or SK_ERR_NO_MEMORY.
+ */
+int sk_model_render(const sk_taxel_model *model, int rows, int cols, const double *u, int sub,
+                    const double *sensitivity, double *counts_out);
+int sk_model_residuals(const sk_taxel_model *model, int rows, int cols, const double *counts,
+                       const unsigned char *censored, const double *sensitivity,
+                       const double *u, int sub, double *r_out, double *misfit_out);
+
+/* The fine samples a taxel sk_model_fit renders press u with (fixed through a fit). */
+int sk_model_sub(const double *u);
+
+/*
+ * A fit's start from a window's (2, h, w) force (or counts) maps: the top layer's centroid, its
+ * tip radius from its second moment less the cover's blur and the pad's own, the larger layer's
+ * sum over the pad's share as the force; the shift and the ellipse 0. Writes the 8 numbers of u
+ * to start (its force NaN without memory).
+ */
+void sk_model_start(const sk_taxel_model *model, const double *force, int h, int w,
+                    double *start);
+
+/*
+ * The fit's numbers, for a fit of the model made elsewhere (the calibration's learning): each
+ * parameter's finite-difference step and largest move (8 each, u's order) and the tip radius's
+ * scales tried around a start (6).
+ */
+void sk_model_steps(double *steps, double *max_moves, double *radius_scales);
+
+/*
  * The direction correction's features (sk_direction's order) of n contacts: their places col,
  * row and raw shifts dx, dy (taxels) and normal forces normal_n, the force feature taken
  * relative to force_ref_n (> 0). Writes (n, SK_DIRECTION_FEATURES) to out: what a scan applies

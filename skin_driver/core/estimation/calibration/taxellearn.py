@@ -23,8 +23,8 @@ from typing import Sequence
 import numpy as np
 
 from ..model.fsr import FsrModel
-from ..model.taxelmodel import (best_radius, levenberg_marquardt, LOG_FORCE, LOG_RADIUS, MAX_MOVES,
-                                residuals, start_of, STEPS, sub_for, TaxelModel)
+from ..model.taxelmodel import (best_radius, fit_numbers, levenberg_marquardt, LOG_FORCE,
+                                LOG_RADIUS, residuals, start_of, sub_for, TaxelModel)
 from ...common import least_squares
 
 __all__ = ['LearningPress', 'learn_taxel_model', 'film_start']
@@ -175,7 +175,7 @@ def _joint(pitch: float, full_scale: float, g: np.ndarray, presses_u: list, subs
     that fails is retried with more damping at most six times before the fit ends.
     """
     idx = np.flatnonzero(_FREE)
-    steps, moves = STEPS[idx], MAX_MOVES[idx]
+    steps, moves = fit_numbers().steps[idx], fit_numbers().max_moves[idx]
     ng, npress, count = g.size, idx.size, len(windows)
     size = ng + npress * count
 

@@ -258,7 +258,13 @@ def _sign(lib: ctypes.CDLL) -> None:
                   'sk_drift_state': (_int, [ptr, ptr]), 'sk_set_drift_state': (None, [ptr, ptr]),
                   'sk_model_fit': (_int, [ptr, _int, _int, ptr, ptr, ptr, ptr, _int, ptr, ptr]),
                   'sk_direction_features': (None, [_int] + [ptr] * 5 + [_double, ptr]),
-                  'sk_creep': (None, [ptr, _int, ptr, _int, ptr])}
+                  'sk_creep': (None, [ptr, _int, ptr, _int, ptr]),
+                  'sk_model_render': (_int, [ptr, _int, _int, ptr, _int, ptr, ptr]),
+                  'sk_model_residuals': (_int, [ptr, _int, _int, ptr, ptr, ptr, ptr, _int, ptr,
+                                                ptr]),
+                  'sk_model_sub': (_int, [ptr]), 'sk_model_start': (None, [ptr, ptr, _int, _int,
+                                                                         ptr]),
+                  'sk_model_steps': (None, [ptr, ptr, ptr])}
     for name, (restype, argtypes) in signatures.items():
         function = getattr(lib, name, None)
         if function is None:
