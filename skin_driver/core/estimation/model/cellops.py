@@ -4,8 +4,8 @@ Linear operators from a fine, supersampled axis to taxel cells: blur, then sum p
 A pressure profile sampled on a fine grid (``sub`` samples a taxel), blurred by a Gaussian and
 summed over each taxel's active square is linear and separable, so along each axis it folds
 into one small matrix: ``cells = A_y @ fine @ A_x.T``. The simulator renders its presses with
-these operators and the estimation's own taxel model (:mod:`taxelmodel`) fits with them: one
-description of how a taxel samples a profile.
+these operators; the estimation's own taxel model renders in the kernel (model_fit.c, bound by
+:mod:`taxelmodel`), which tabulates the same operators.
 """
 
 from __future__ import annotations
