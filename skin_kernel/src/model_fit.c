@@ -424,6 +424,24 @@ static void free_ctx(fit_ctx *c) {
   free(c->axes);
 }
 
+/* The tip radius of least misfit among a few around u0's (a start's moments misread flat-topped
+ * or stepped imprints, and a fit started at the wrong size stops on the film's cliffs): u0 with
+ * it, to u; r is scratch for the residuals. */
+static void best_radius(fit_ctx *c, const double *u0, double *r, double *u) {
+  double least = INFINITY;
+  memcpy(u, u0, sizeof(double) * NU);
+  for (int s = 0; s < 6; s++) {
+    double v[NU];
+    memcpy(v, u0, sizeof v);
+    v[LOG_RADIUS] += log(RADIUS_SCALES[s]);
+    double cost = residuals(c, v, r);
+    if (cost < least) {
+      least = cost;
+      memcpy(u, v, sizeof v);
+    }
+  }
+}
+
 /* A render's context of a rows x cols window at sub fine samples a taxel: 0, or -1 without
  * memory (free_ctx frees what was made either way). */
 static int open_ctx(fit_ctx *c, const sk_taxel_model *model, int rows, int cols,
@@ -484,9 +502,12 @@ int sk_model_residuals(const sk_taxel_model *model, int rows, int cols, const do
   return status;
 }
 
-int sk_model_fit(const sk_taxel_model *model, int rows, int cols, const double *counts,
-                 const unsigned char *censored, const double *sensitivity, const double *u0,
-                 int iterations, double *u_out, double *misfit_out) {
+/* The best radius, then Levenberg-Marquardt over `free_`; with `ellipses`, then an elliptical
+ * tip from four orientations, every parameter free, the least misfit kept. */
+static int fit(const sk_taxel_model *model, int rows, int cols, const double *counts,
+               const unsigned char *censored, const double *sensitivity, const double *u0,
+               const int *free_, int iterations, int ellipses, double *u_out,
+               double *misfit_out) {
   fit_ctx c;
   int n = 2 * rows * cols, status = SK_ERR_NO_MEMORY;
   double *work = malloc(sizeof(double) * (size_t)n * (4 + NU));  /* r r2 probe base jac */
@@ -495,24 +516,12 @@ int sk_model_fit(const sk_taxel_model *model, int rows, int cols, const double *
   double *r = work, *r2 = work + n, *probe = work + 2 * n, *base = work + 3 * n;
   double *jac = work + 4 * n;
 
-  /* The tip radius of least misfit among a few around the start's (best_radius). */
-  double u[NU], best_u[NU], least = INFINITY;
-  memcpy(u, u0, sizeof u);
-  for (int s = 0; s < 6; s++) {
-    double v[NU];
-    memcpy(v, u0, sizeof v);
-    v[LOG_RADIUS] += log(RADIUS_SCALES[s]);
-    double cost = residuals(&c, v, r);
-    if (cost < least) {
-      least = cost;
-      memcpy(u, v, sizeof u);
-    }
-  }
-  static const int ROUND[NU] = {1, 1, 1, 1, 1, 1, 0, 0};
+  double u[NU], best_u[NU];
+  best_radius(&c, u0, r, u);
   static const int EVERY[NU] = {1, 1, 1, 1, 1, 1, 1, 1};
-  double best = levenberg_marquardt(&c, u, ROUND, iterations, r, r2, jac, probe, base);
+  double best = levenberg_marquardt(&c, u, free_, iterations, r, r2, jac, probe, base);
   memcpy(best_u, u, sizeof u);
-  for (int o = 0; o < 4; o++) {
+  for (int o = 0; ellipses && o < 4; o++) {
     double v[NU];
     memcpy(v, u, sizeof v);
     v[LOG_ASPECT] = log(0.8);
@@ -526,11 +535,27 @@ int sk_model_fit(const sk_taxel_model *model, int rows, int cols, const double *
   if (c.failed) goto done;
   memcpy(u_out, best_u, sizeof best_u);
   *misfit_out = best;
-  status = 0;
+  status = SK_OK;
 done:
   free(work);
   free_ctx(&c);
   return status;
+}
+
+int sk_model_fit(const sk_taxel_model *model, int rows, int cols, const double *counts,
+                 const unsigned char *censored, const double *sensitivity, const double *u0,
+                 int iterations, double *u_out, double *misfit_out) {
+  static const int ROUND[NU] = {1, 1, 1, 1, 1, 1, 0, 0};
+  return fit(model, rows, cols, counts, censored, sensitivity, u0, ROUND, iterations, 1, u_out,
+             misfit_out);
+}
+
+int sk_model_fit_free(const sk_taxel_model *model, int rows, int cols, const double *counts,
+                      const unsigned char *censored, const double *sensitivity,
+                      const double *u0, const int *free_, int iterations, double *u_out,
+                      double *misfit_out) {
+  return fit(model, rows, cols, counts, censored, sensitivity, u0, free_, iterations, 0, u_out,
+             misfit_out);
 }
 
 /* The fit's start (taxelmodel.start_of): the top layer's centroid, its second moment less the

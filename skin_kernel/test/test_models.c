@@ -220,6 +220,30 @@ static void a_start_finds_a_render_s_centre(void **state)
   free(counts);
 }
 
+/*
+ * A fit that holds the force: from a start off by a third of a taxel and a tip 60 % too wide it
+ * finds the rendered press, its force and ellipse left as they were.
+ */
+static void a_fit_with_the_force_held_finds_the_press_and_keeps_the_force(void **state)
+{
+  (void)state;
+  enum { H = 10, W = 10, N = H * W };
+  double truth[8], start[8], u[8], misfit = -1.0, *counts = malloc(sizeof(double) * 2 * N);
+  press_at(truth, 4.4, 5.2, 12.0, 0.6, -0.4, 0.9);
+  assert_int_equal(sk_model_render(&MODEL, H, W, truth, 0, NULL, counts), SK_OK);
+  press_at(start, 4.1, 5.5, 12.0, 0.3, -0.1, 1.45);
+  static const int HELD_FORCE[8] = {1, 1, 0, 1, 1, 1, 0, 0};
+  assert_int_equal(sk_model_fit_free(&MODEL, H, W, counts, NULL, NULL, start, HELD_FORCE, 30,
+                                     u, &misfit), SK_OK);
+  for (int j = 0; j < 8; j++) {
+    assert_float_equal(u[j], truth[j], 2e-3);
+  }
+  assert_float_equal(u[2], start[2], 0.0);
+  assert_float_equal(u[6], 0.0, 0.0);
+  assert_true(misfit < 1e-2);
+  free(counts);
+}
+
 int main(void)
 {
   const struct CMUnitTest tests[] = {
@@ -232,6 +256,7 @@ int main(void)
     cmocka_unit_test(residuals_are_zero_on_the_model_s_render_and_censoring_is_one_sided),
     cmocka_unit_test(the_fine_samples_follow_the_tip_s_size),
     cmocka_unit_test(a_start_finds_a_render_s_centre),
+    cmocka_unit_test(a_fit_with_the_force_held_finds_the_press_and_keeps_the_force),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }

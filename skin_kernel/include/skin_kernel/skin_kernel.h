@@ -251,6 +251,17 @@ int sk_model_residuals(const sk_taxel_model *model, int rows, int cols, const do
                        const unsigned char *censored, const double *sensitivity,
                        const double *u, int sub, double *r_out, double *misfit_out);
 
+/*
+ * One fit of the model as sk_model_fit makes its first: the tip radius of least misfit among a
+ * few around u0's, then Levenberg-Marquardt over the parameters free_ marks (8 flags, u's
+ * order; the others stay u0's) for at most `iterations` trials. For a fit that holds some
+ * parameters known (the calibration's learning holds the force). Returns as sk_model_fit.
+ */
+int sk_model_fit_free(const sk_taxel_model *model, int rows, int cols, const double *counts,
+                      const unsigned char *censored, const double *sensitivity,
+                      const double *u0, const int *free_, int iterations, double *u_out,
+                      double *misfit_out);
+
 /* The fine samples a taxel sk_model_fit renders press u with (fixed through a fit). */
 int sk_model_sub(const double *u);
 
@@ -264,9 +275,9 @@ void sk_model_start(const sk_taxel_model *model, const double *force, int h, int
                     double *start);
 
 /*
- * The fit's numbers, for a fit of the model made elsewhere (the calibration's learning): each
- * parameter's finite-difference step and largest move (8 each, u's order) and the tip radius's
- * scales tried around a start (6).
+ * The fit's numbers, for a fit of the model made elsewhere (the calibration's joint learning of
+ * a skin and its presses): each parameter's finite-difference step and largest move (8 each,
+ * u's order) and the tip radius's scales tried around a start (6).
  */
 void sk_model_steps(double *steps, double *max_moves, double *radius_scales);
 

@@ -29,9 +29,9 @@ Levenberg-Marquardt on its window's tared counts, taxels the film or the ADC sat
 lower bounds; a round tip first, then an elliptical one from four orientations, the least misfit
 kept: the misfit of narrow imprints is rugged, so one start stops in side minima), and the
 learning renders and weighs its presses through the same code (:func:`render_counts`,
-:func:`residuals`, :func:`start_of`, :func:`sub_for`: ``sk_model_render``, ...). What is here
-is the learning's own fit of each press (:func:`levenberg_marquardt`, :func:`best_radius`),
-with the kernel's steps and moves (:func:`fit_numbers`).
+:func:`residuals`, :func:`start_of`, :func:`sub_for`: ``sk_model_render``, ...) and fits
+each press alone with the kernel's fit (:func:`fit_press`); its joint fit of the skin and its
+presses takes the kernel's steps and moves (:func:`fit_numbers`).
 """
 
 from __future__ import annotations
@@ -45,12 +45,10 @@ from typing import NamedTuple
 import numpy as np
 
 from ..scan.kernel import load_library, taxel_model_of
-from ...common import least_squares
 from ...common.validate import check_number
 
 __all__ = ['TaxelModel', 'PressFit', 'FitNumbers', 'hertz_profile', 'render_counts',
-           'residuals', 'levenberg_marquardt', 'best_radius', 'start_of', 'sub_for',
-           'fit_numbers']
+           'residuals', 'fit_press', 'start_of', 'sub_for', 'fit_numbers']
 
 # Per-press parameters: centre x, y (taxels of the window), log normal force (N), shift dx, dy
 # (taxels), log tip radius (taxels), log aspect, orientation (rad).
@@ -62,7 +60,7 @@ class FitNumbers(NamedTuple):
 
     steps: np.ndarray          # finite-difference steps
     max_moves: np.ndarray      # the largest a Levenberg-Marquardt move may take
-    radius_scales: np.ndarray  # the tip radii tried around a start (:func:`best_radius`)
+    radius_scales: np.ndarray  # the tip radii tried around a start (:func:`fit_press`)
 
 
 @lru_cache(maxsize=1)
@@ -212,29 +210,31 @@ def residuals(model: TaxelModel, counts: np.ndarray, censored: np.ndarray, u: np
     return out
 
 
-def levenberg_marquardt(residual, u: np.ndarray, free: np.ndarray, iterations: int) -> tuple:
+def fit_press(model: TaxelModel, counts: np.ndarray, censored: np.ndarray, u0: np.ndarray,
+              free: np.ndarray, iterations: int, sensitivity: np.ndarray = None) -> PressFit:
     """
-    Return (u, misfit) minimising ``residual(u) @ residual(u)`` over the ``free`` parameters.
+    Return the kernel's fit of press ``u0`` to a window's counts, only ``free`` parameters moved.
 
-    Forward-difference Jacobian (the kernel's steps, :func:`fit_numbers`), each move scaled
-    into its largest moves (:func:`skin_driver.core.common.least_squares.levenberg_marquardt`).
+    ``sk_model_fit_free``: the tip radius of least misfit among a few around the start's, then
+    Levenberg-Marquardt over the parameters ``free`` marks (8 bools in ``u``'s order) for at
+    most ``iterations`` trials, at the fine samples :func:`sub_for` picks for ``u0``.
+    ``censored`` and ``sensitivity`` as :func:`residuals`'.
     """
-    numbers = fit_numbers()
-    base = np.array(u, dtype=np.float64)
-    idx = np.flatnonzero(free)
-
-    def of(x):
-        full = base.copy()
-        full[idx] = x
-        return full
-
-    def free_residual(x):
-        return residual(of(x))
-    fit = least_squares.levenberg_marquardt(
-        free_residual, base[idx], iterations=iterations,
-        jacobian=least_squares.forward_jacobian(free_residual, numbers.steps[idx]),
-        limit=least_squares.scaled_into(numbers.max_moves[idx]), stop_move=1e-4)
-    return of(fit.x), fit.cost
+    counts = np.ascontiguousarray(counts, dtype=np.float64)
+    h, w = counts.shape[1:]
+    numbers = taxel_model_of(model)
+    start = np.ascontiguousarray(u0, dtype=np.float64)
+    flags = np.ascontiguousarray(free, dtype=np.intc)
+    u = np.zeros(8)
+    misfit = ctypes.c_double()
+    status = load_library().sk_model_fit_free(
+        ctypes.byref(numbers), h, w, _address(counts),
+        _address(_window(censored, (h, w), np.uint8)),
+        _address(_window(sensitivity, (h, w), np.float64)), _address(start), _address(flags),
+        int(iterations), _address(u), ctypes.byref(misfit))
+    if status != 0:
+        raise MemoryError(f'skin_kernel: no memory to fit a {h} x {w} window')
+    return PressFit(u, misfit.value)
 
 
 def start_of(maps: np.ndarray, shift: tuple, model: TaxelModel) -> np.ndarray:
@@ -258,21 +258,3 @@ def sub_for(u: np.ndarray) -> int:
     """Return the fine samples per taxel for a press of ``u``'s size (``sk_model_sub``)."""
     return int(load_library().sk_model_sub(_address(np.ascontiguousarray(u,
                                                                          dtype=np.float64))))
-
-
-def best_radius(residual, u: np.ndarray) -> np.ndarray:
-    """
-    Return ``u`` with the tip radius of least misfit among a few around its own.
-
-    The moments a start takes its radius from misread flat-topped or stepped imprints, and a
-    fit started at the wrong size stops on the film's cliffs.
-    """
-    best, least = u, math.inf
-    for scale in fit_numbers().radius_scales:
-        v = u.copy()
-        v[LOG_RADIUS] += math.log(scale)
-        r = residual(v)
-        cost = float(r @ r)
-        if cost < least:
-            best, least = v, cost
-    return best

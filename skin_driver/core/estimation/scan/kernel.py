@@ -262,6 +262,8 @@ def _sign(lib: ctypes.CDLL) -> None:
                   'sk_model_render': (_int, [ptr, _int, _int, ptr, _int, ptr, ptr]),
                   'sk_model_residuals': (_int, [ptr, _int, _int, ptr, ptr, ptr, ptr, _int, ptr,
                                                 ptr]),
+                  'sk_model_fit_free': (_int, [ptr, _int, _int, ptr, ptr, ptr, ptr, ptr, _int,
+                                               ptr, ptr]),
                   'sk_model_sub': (_int, [ptr]),
                   'sk_model_start': (None, [ptr, ptr, _int, _int, ptr]),
                   'sk_model_steps': (None, [ptr, ptr, ptr])}
