@@ -8,7 +8,10 @@
  * the contact figures. It is the one implementation of the per-scan estimate; skin_driver binds it
  * (skin_driver/core/estimation/scan/kernel.py) and its tests hold it to behaviour and to golden
  * outputs. The conditioning alone (sk_condition, sk_force) is what a calibration reads its
- * presses from, so that it never conditions a scan a second way.
+ * presses from, so that it never conditions a scan a second way; the models a calibration
+ * learns are written here once too, and it calls them: the direction correction's features
+ * (sk_direction_features), the creep law (sk_creep) and the forward model of the taxels
+ * (sk_model_render, sk_model_residuals, sk_model_fit_free, ...).
  *
  * A kernel is built once per estimator from its state (tare, gains, force tables, settings) and
  * is not changed afterwards, except for its per-scan state: dead-taxel marks that a touch
