@@ -1,7 +1,8 @@
 /*
  * Time in the per-scan estimate: the baseline of untouched taxels follows their slow drift, a
  * touched taxel's baseline follows only the drift its untouched layer shows, and a loaded
- * taxel's force is divided by its creep since it was loaded (skin_kernel.h: sk_drift).
+ * taxel's force is divided by its creep since it was loaded (skin_kernel.h: sk_drift). The creep
+ * law is written here only: the creep calibration fits it through sk_creep.
  *
  * Untouched: no taxel of either layer on its row or its column reads a touch. A press lifts
  * whole lines of a passive matrix (crosstalk), and its rim reads below the threshold: following
@@ -93,10 +94,27 @@ void sk_drift_step(sk_kernel *k, const double *maps, double time_s)
   age_taxels(k, dt);
 }
 
+/* The creep law: what a reading has risen to after age_s under load (1 at its arrival). */
+double sk_creep_rise(const sk_drift *d, double age_s)
+{
+  return 1.0 + d->creep_per_decade * log10(1.0 + age_s / d->settle_s);
+}
+
 double sk_creep_factor(const sk_kernel *k, int i)
 {
-  const sk_drift *d = &k->s.drift;
-  return (1.0 + d->creep_per_decade * log10(1.0 + k->age[i] / d->settle_s)) * k->creep_at_1s;
+  return sk_creep_rise(&k->s.drift, k->age[i]) * k->creep_at_1s;
+}
+
+void sk_creep(const sk_drift *drift, int n, const double *age_s, int relative_to_1s,
+              double *out)
+{
+  /* as sk_new takes it for a kernel's scans: a multiplication a loaded taxel */
+  double at_1s = relative_to_1s && drift->creep_per_decade > 0
+    ? 1.0 / sk_creep_rise(drift, 1.0) : 1.0;
+  for (int i = 0; i < n; i++) {
+    double age = age_s[i] > 0.0 ? age_s[i] : 0.0;
+    out[i] = relative_to_1s ? sk_creep_rise(drift, age) * at_1s : sk_creep_rise(drift, age);
+  }
 }
 
 double sk_held_s(const sk_kernel *k, const sk_pair *p)

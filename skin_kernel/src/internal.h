@@ -96,6 +96,8 @@ void sk_pair_window(const sk_kernel *k, int q, double *out);
 void sk_drift_step(sk_kernel *k, const double *maps, double time_s);
 double sk_creep_factor(const sk_kernel *k, int i);
 double sk_held_s(const sk_kernel *k, const sk_pair *p);
+/* drift.c: the creep law, a reading's rise after age_s under load (1 at its arrival) */
+double sk_creep_rise(const sk_drift *d, double age_s);
 
 #define SK_PI 3.14159265358979323846
 
@@ -168,11 +170,9 @@ double sk_imprint_force(const double *counts, const double *force, int h, int w,
 /* uncertainty.c: 1-sigma uncertainty of one axis of pair p's shift (taxels) */
 double sk_sigma(const sk_kernel *k, const sk_pair *p, const double *window, int alone);
 
-/* model_fit.c: the fit's start from a contact's force window, taken before sk_taxel_fit changes
- * that window; then the fit from the start and taxel_fit's shift, which overwrites *dx, *dy
- * (left as they are when the fit cannot be made). */
-void sk_model_start(const sk_taxel_model *model, const double *force, int h, int w,
-                    double *start);
+/* model_fit.c: the fit from sk_model_start's start (taken before sk_taxel_fit changes the
+ * window) and taxel_fit's shift, which overwrites *dx, *dy (left as they are when the fit
+ * cannot be made). */
 void sk_model_refit(const sk_taxel_model *model, const double *counts, const double *marks,
                     const double *sensitivity, int h, int w, double *start, double *dx,
                     double *dy);

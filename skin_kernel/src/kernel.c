@@ -203,8 +203,7 @@ int sk_new(const sk_settings *settings, unsigned long settings_size, const doubl
   k->tare = copy_of(baseline, 2 * n);
   k->age = calloc(2 * (size_t)n, sizeof(double));
   k->last_time = NAN;
-  k->creep_at_1s = s->drift.creep_per_decade > 0
-    ? 1.0 / (1.0 + s->drift.creep_per_decade * log10(1.0 + 1.0 / s->drift.settle_s)) : 1.0;
+  k->creep_at_1s = s->drift.creep_per_decade > 0 ? 1.0 / sk_creep_rise(&s->drift, 1.0) : 1.0;
   k->labels = malloc(sizeof(int) * n);
   k->iscratch = malloc(sizeof(int) * 4 * n);
   if (!k->baseline || !k->threshold || !k->noise || (gain && !k->gain) || !k->leak_gate

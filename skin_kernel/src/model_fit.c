@@ -282,6 +282,16 @@ static void render_layer(fit_ctx *c, double cx, double cy, const double *u, int 
   }
 }
 
+/* The film's law: the counts of a taxel's load f (newtons, its sensitivity applied). */
+static double film_counts(const sk_taxel_model *m, double f) {
+  double load = f - m->film_activation_n;
+  if (load < 0.0) load = 0.0;
+  double g = m->film_scale * pow(load, m->film_exponent);
+  if (g > m->film_ceiling) g = m->film_ceiling;
+  if (m->film_step > 0.0 && f > 0.0 && g < m->film_step) g = m->film_step;
+  return m->full_scale * g / (1.0 + g);
+}
+
 /* The robust residuals (2 h w of them) of the layers' per-taxel loads into r; returns the
  * misfit r . r. */
 static double film_residuals(const fit_ctx *c, const double *loads, double *r) {
@@ -290,12 +300,7 @@ static double film_residuals(const fit_ctx *c, const double *loads, double *r) {
   double scale = m->full_scale * ROBUST_SHARE, cost = 0.0;
   for (int k = 0; k < 2 * n; k++) {
     double f = loads[k] * (c->sensitivity ? c->sensitivity[k] : 1.0);
-    double load = f - m->film_activation_n;
-    if (load < 0.0) load = 0.0;
-    double g = m->film_scale * pow(load, m->film_exponent);
-    if (g > m->film_ceiling) g = m->film_ceiling;
-    if (m->film_step > 0.0 && f > 0.0 && g < m->film_step) g = m->film_step;
-    double v = m->full_scale * g / (1.0 + g) - c->counts[k];
+    double v = film_counts(m, f) - c->counts[k];
     if (c->censored && c->censored[k] && v > 0.0) v = 0.0;
     v /= scale;
     double s = (v > 0.0) - (v < 0.0);
@@ -394,10 +399,16 @@ static double levenberg_marquardt(fit_ctx *c, double *u, const int *free_, int i
   return cost;
 }
 
-static int sub_for(const double *u) {
+int sk_model_sub(const double *u) {
   double small = exp(u[LOG_RADIUS]) * fmin(exp(u[LOG_ASPECT]), 1.0);
   double s = ceil(12.0 / fmax(small, 1e-3));
   return (int)fmin(fmax(s, 24.0), 48.0);
+}
+
+void sk_model_steps(double *steps, double *max_moves, double *radius_scales) {
+  memcpy(steps, STEPS, sizeof STEPS);
+  memcpy(max_moves, MAX_MOVES, sizeof MAX_MOVES);
+  memcpy(radius_scales, RADIUS_SCALES, sizeof RADIUS_SCALES);
 }
 
 static void free_ctx(fit_ctx *c) {
@@ -413,52 +424,104 @@ static void free_ctx(fit_ctx *c) {
   free(c->axes);
 }
 
-int sk_model_fit(const sk_taxel_model *model, int rows, int cols, const double *counts,
-                 const unsigned char *censored, const double *sensitivity, const double *u0,
-                 int iterations, double *u_out, double *misfit_out) {
-  fit_ctx c;
-  memset(&c, 0, sizeof c);
-  c.model = model;
-  c.h = rows;
-  c.w = cols;
-  c.counts = counts;
-  c.censored = censored;
-  c.sensitivity = sensitivity;
-  c.fill = model->fill_factor;
-  c.turn_on = model->turn_on_pa * model->pitch_m * model->pitch_m;
-  double cover = model->cover_spread_m / model->pitch_m;
-  c.blur[0] = cover;
-  c.blur[1] = hypot(cover, model->layer_spread_m / model->pitch_m);
-  c.sub = sub_for(u0);
-  int n = 2 * rows * cols, status = SK_ERR_NO_MEMORY;
-  double *work = malloc(sizeof(double) * (size_t)n * (4 + NU));  /* r r2 probe base jac */
-  c.weights = malloc(sizeof(double) * (size_t)c.sub);
-  c.layer = malloc(sizeof(double) * (size_t)n);
-  if (!work || !c.weights || !c.layer) goto done;
-  cell_weights(c.sub, c.fill, c.weights);
-  for (int i = 0; i < 2; i++)
-    if (build_tab(&c.tabs[i], c.weights, c.sub, c.blur[i] * c.sub)) goto done;
-  double *r = work, *r2 = work + n, *probe = work + 2 * n, *base = work + 3 * n;
-  double *jac = work + 4 * n;
-
-  /* The tip radius of least misfit among a few around the start's (best_radius). */
-  double u[NU], best_u[NU], least = INFINITY;
-  memcpy(u, u0, sizeof u);
+/* The tip radius of least misfit among a few around u0's (a start's moments misread flat-topped
+ * or stepped imprints, and a fit started at the wrong size stops on the film's cliffs): u0 with
+ * it, to u; r is scratch for the residuals. */
+static void best_radius(fit_ctx *c, const double *u0, double *r, double *u) {
+  double least = INFINITY;
+  memcpy(u, u0, sizeof(double) * NU);
   for (int s = 0; s < 6; s++) {
     double v[NU];
     memcpy(v, u0, sizeof v);
     v[LOG_RADIUS] += log(RADIUS_SCALES[s]);
-    double cost = residuals(&c, v, r);
+    double cost = residuals(c, v, r);
     if (cost < least) {
       least = cost;
-      memcpy(u, v, sizeof u);
+      memcpy(u, v, sizeof v);
     }
   }
-  static const int ROUND[NU] = {1, 1, 1, 1, 1, 1, 0, 0};
+}
+
+/* A render's context of a rows x cols window at sub fine samples a taxel: 0, or -1 without
+ * memory (free_ctx frees what was made either way). */
+static int open_ctx(fit_ctx *c, const sk_taxel_model *model, int rows, int cols,
+                    const double *counts, const unsigned char *censored,
+                    const double *sensitivity, int sub) {
+  memset(c, 0, sizeof *c);
+  c->model = model;
+  c->h = rows;
+  c->w = cols;
+  c->counts = counts;
+  c->censored = censored;
+  c->sensitivity = sensitivity;
+  c->fill = model->fill_factor;
+  c->turn_on = model->turn_on_pa * model->pitch_m * model->pitch_m;
+  double cover = model->cover_spread_m / model->pitch_m;
+  c->blur[0] = cover;
+  c->blur[1] = hypot(cover, model->layer_spread_m / model->pitch_m);
+  c->sub = sub;
+  c->weights = malloc(sizeof(double) * (size_t)sub);
+  c->layer = malloc(sizeof(double) * 2 * (size_t)rows * (size_t)cols);
+  if (!c->weights || !c->layer) return -1;
+  cell_weights(sub, c->fill, c->weights);
+  for (int i = 0; i < 2; i++)
+    if (build_tab(&c->tabs[i], c->weights, sub, c->blur[i] * sub)) return -1;
+  return 0;
+}
+
+int sk_model_render(const sk_taxel_model *model, int rows, int cols, const double *u, int sub,
+                    const double *sensitivity, double *counts_out) {
+  fit_ctx c;
+  int n = rows * cols, status = SK_ERR_NO_MEMORY;
+  if (open_ctx(&c, model, rows, cols, NULL, NULL, sensitivity, sub > 0 ? sub : sk_model_sub(u))
+      == 0) {
+    render_layer(&c, u[X], u[Y], u, 0, c.layer);
+    render_layer(&c, u[X] + u[DX], u[Y] + u[DY], u, 1, c.layer + n);
+    for (int k = 0; k < 2 * n && !c.failed; k++)
+      counts_out[k] = film_counts(model, c.layer[k] * (sensitivity ? sensitivity[k] : 1.0));
+    status = c.failed ? SK_ERR_NO_MEMORY : SK_OK;
+  }
+  free_ctx(&c);
+  return status;
+}
+
+int sk_model_residuals(const sk_taxel_model *model, int rows, int cols, const double *counts,
+                       const unsigned char *censored, const double *sensitivity,
+                       const double *u, int sub, double *r_out, double *misfit_out) {
+  fit_ctx c;
+  int status = SK_ERR_NO_MEMORY;
+  if (open_ctx(&c, model, rows, cols, counts, censored, sensitivity,
+               sub > 0 ? sub : sk_model_sub(u)) == 0) {
+    double misfit = residuals(&c, u, r_out);
+    if (!c.failed) {
+      *misfit_out = misfit;
+      status = SK_OK;
+    }
+  }
+  free_ctx(&c);
+  return status;
+}
+
+/* The best radius, then Levenberg-Marquardt over `free_`; with `ellipses`, then an elliptical
+ * tip from four orientations, every parameter free, the least misfit kept. */
+static int fit(const sk_taxel_model *model, int rows, int cols, const double *counts,
+               const unsigned char *censored, const double *sensitivity, const double *u0,
+               const int *free_, int iterations, int ellipses, double *u_out,
+               double *misfit_out) {
+  fit_ctx c;
+  int n = 2 * rows * cols, status = SK_ERR_NO_MEMORY;
+  double *work = malloc(sizeof(double) * (size_t)n * (4 + NU));  /* r r2 probe base jac */
+  if (open_ctx(&c, model, rows, cols, counts, censored, sensitivity, sk_model_sub(u0)) || !work)
+    goto done;
+  double *r = work, *r2 = work + n, *probe = work + 2 * n, *base = work + 3 * n;
+  double *jac = work + 4 * n;
+
+  double u[NU], best_u[NU];
+  best_radius(&c, u0, r, u);
   static const int EVERY[NU] = {1, 1, 1, 1, 1, 1, 1, 1};
-  double best = levenberg_marquardt(&c, u, ROUND, iterations, r, r2, jac, probe, base);
+  double best = levenberg_marquardt(&c, u, free_, iterations, r, r2, jac, probe, base);
   memcpy(best_u, u, sizeof u);
-  for (int o = 0; o < 4; o++) {
+  for (int o = 0; ellipses && o < 4; o++) {
     double v[NU];
     memcpy(v, u, sizeof v);
     v[LOG_ASPECT] = log(0.8);
@@ -472,11 +535,27 @@ int sk_model_fit(const sk_taxel_model *model, int rows, int cols, const double *
   if (c.failed) goto done;
   memcpy(u_out, best_u, sizeof best_u);
   *misfit_out = best;
-  status = 0;
+  status = SK_OK;
 done:
   free(work);
   free_ctx(&c);
   return status;
+}
+
+int sk_model_fit(const sk_taxel_model *model, int rows, int cols, const double *counts,
+                 const unsigned char *censored, const double *sensitivity, const double *u0,
+                 int iterations, double *u_out, double *misfit_out) {
+  static const int ROUND[NU] = {1, 1, 1, 1, 1, 1, 0, 0};
+  return fit(model, rows, cols, counts, censored, sensitivity, u0, ROUND, iterations, 1, u_out,
+             misfit_out);
+}
+
+int sk_model_fit_free(const sk_taxel_model *model, int rows, int cols, const double *counts,
+                      const unsigned char *censored, const double *sensitivity,
+                      const double *u0, const int *free_, int iterations, double *u_out,
+                      double *misfit_out) {
+  return fit(model, rows, cols, counts, censored, sensitivity, u0, free_, iterations, 0, u_out,
+             misfit_out);
 }
 
 /* The fit's start (taxelmodel.start_of): the top layer's centroid, its second moment less the

@@ -8,7 +8,10 @@
  * the contact figures. It is the one implementation of the per-scan estimate; skin_driver binds it
  * (skin_driver/core/estimation/scan/kernel.py) and its tests hold it to behaviour and to golden
  * outputs. The conditioning alone (sk_condition, sk_force) is what a calibration reads its
- * presses from, so that it never conditions a scan a second way.
+ * presses from, so that it never conditions a scan a second way; the models a calibration
+ * learns are written here once too, and it calls them: the direction correction's features
+ * (sk_direction_features), the creep law (sk_creep) and the forward model of the taxels
+ * (sk_model_render, sk_model_residuals, sk_model_fit_free, ...).
  *
  * A kernel is built once per estimator from its state (tare, gains, force tables, settings) and
  * is not changed afterwards, except for its per-scan state: dead-taxel marks that a touch
@@ -237,6 +240,72 @@ void sk_set_drift_state(sk_kernel *k, const double *state);
 int sk_model_fit(const sk_taxel_model *model, int rows, int cols, const double *counts,
                  const unsigned char *censored, const double *sensitivity, const double *u0,
                  int iterations, double *u_out, double *misfit_out);
+
+/*
+ * The forward model itself, for the calibration that learns it (taxellearn.py, rendered.py):
+ * the same render and misfit sk_model_fit uses, at sub fine samples a taxel (0 or less: as
+ * sk_model_sub picks for u).
+ *
+ * sk_model_render writes the (2, rows, cols) counts of press u to counts_out; sk_model_residuals
+ * writes the robust residuals of counts (2, rows, cols; a censored taxel's only where the model
+ * reads below it) to r_out and their sum of squares to misfit_out. sensitivity as sk_model_fit's.
+ * Both return SK_OK, or SK_ERR_NO_MEMORY.
+ */
+int sk_model_render(const sk_taxel_model *model, int rows, int cols, const double *u, int sub,
+                    const double *sensitivity, double *counts_out);
+int sk_model_residuals(const sk_taxel_model *model, int rows, int cols, const double *counts,
+                       const unsigned char *censored, const double *sensitivity,
+                       const double *u, int sub, double *r_out, double *misfit_out);
+
+/*
+ * One fit of the model as sk_model_fit makes its first: the tip radius of least misfit among a
+ * few around u0's, then Levenberg-Marquardt over the parameters free_ marks (8 flags, u's
+ * order; the others stay u0's) for at most `iterations` trials. For a fit that holds some
+ * parameters known (the calibration's learning holds the force). Returns as sk_model_fit.
+ */
+int sk_model_fit_free(const sk_taxel_model *model, int rows, int cols, const double *counts,
+                      const unsigned char *censored, const double *sensitivity,
+                      const double *u0, const int *free_, int iterations, double *u_out,
+                      double *misfit_out);
+
+/* The fine samples a taxel sk_model_fit renders press u with (fixed through a fit). */
+int sk_model_sub(const double *u);
+
+/*
+ * A fit's start from a window's (2, h, w) force (or counts) maps: the top layer's centroid, its
+ * tip radius from its second moment less the cover's blur and the pad's own, the larger layer's
+ * sum over the pad's share as the force; the shift and the ellipse 0. Writes the 8 numbers of u
+ * to start (its force NaN without memory).
+ */
+void sk_model_start(const sk_taxel_model *model, const double *force, int h, int w,
+                    double *start);
+
+/*
+ * The fit's numbers, for a fit of the model made elsewhere (the calibration's joint learning of
+ * a skin and its presses): each parameter's finite-difference step and largest move (8 each,
+ * u's order) and the tip radius's scales tried around a start (6).
+ */
+void sk_model_steps(double *steps, double *max_moves, double *radius_scales);
+
+/*
+ * The direction correction's features (sk_direction's order) of n contacts: their places col,
+ * row and raw shifts dx, dy (taxels) and normal forces normal_n, the force feature taken
+ * relative to force_ref_n (> 0). Writes (n, SK_DIRECTION_FEATURES) to out: what a scan applies
+ * a correction's weights to, and what the calibration fits them on.
+ */
+void sk_direction_features(int n, const double *col, const double *row, const double *dx,
+                           const double *dy, const double *normal_n, double force_ref_n,
+                           double *out);
+
+/*
+ * The creep law of sk_drift, the one the scans correct by and the creep calibration fits: after
+ * age_s under load a reading has risen to c(age) = 1 + creep_per_decade log10(1 + age /
+ * settle_s) times what it read at the load's arrival (a negative age counts as 0). Writes c of
+ * n ages to out; with relative_to_1s, c(age) / c(1 s) instead: what a scan divides a loaded
+ * taxel's force by. Only creep_per_decade and settle_s (> 0) are read.
+ */
+void sk_creep(const sk_drift *drift, int n, const double *age_s, int relative_to_1s,
+              double *out);
 
 #ifdef __cplusplus
 }

@@ -110,6 +110,19 @@ def test_a_dead_taxel_found_by_the_tare_is_filled_from_its_live_neighbours():
     assert counts[0, 5, 5] == pytest.approx(around.sum() / 8, rel=1e-12)
 
 
+def test_without_fill_dead_a_dead_taxel_reads_nothing_and_a_new_threshold_still_applies():
+    # The estimator's one config conditions the scans: fill_dead off leaves the dead taxel at
+    # 0 under the same press; a higher threshold_counts is applied to the tare kept.
+    model = SkinModel(dead_taxels=((5, 5),))
+    est, model, rng = _tared(model)
+    plain = est.with_config(EstimatorConfig(fill_dead=False, threshold_counts=60.0))
+    top, bottom = render(model, [Press(0.025, 0.025, 10.0, radius_m=0.004)], rng)
+    counts = _kernel(plain).condition(top, bottom).counts
+    assert counts[0, 5, 5] == 0.0 and counts[0, 4, 5] > 0
+    assert plain.conditioning.state((16, 16)).threshold.min() == 60.0
+    assert est.conditioning.state((16, 16)).threshold.min() == 40.0
+
+
 def test_a_stuck_taxel_is_taken_for_dead():
     rng = np.random.default_rng(2)
     frames = rng.normal(50, 5, (10, 6, 6)).clip(0).astype(np.uint16)

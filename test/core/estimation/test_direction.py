@@ -141,6 +141,16 @@ def test_the_kernel_and_the_fit_agree_on_the_features():
         assert _scan_shift(cal).shift_m[0] / pitch - sx == pytest.approx(0.1 * x[j], abs=1e-9)
 
 
+def test_the_features_of_a_quarter_taxel_shift_are_the_kernel_s_order():
+    # A quarter taxel into its column, moved a quarter taxel along x, at twice the reference
+    # force; the second contact (numbers broadcast) at the reference force has no load part.
+    x = features([0.25, 0.25], 0.0, 0.25, 0.0, [20.0, 10.0], 10.0)
+    expected = [-1, -1, 0, 0, 0, 2, 0, 0, 1, 0, 0, 1, 0, -1, 0, 1, -1, -1, 0, 0]
+    assert x.shape == (2, DIRECTION_FEATURES)
+    assert x[0] == pytest.approx(expected, abs=1e-12)
+    assert x[1] == pytest.approx(expected[:16] + [0, 0, 0, 0], abs=1e-12)
+
+
 def test_the_correction_is_stored_and_an_old_file_still_loads(tmp_path):
     cal = Calibration(direction=_correction(True, 0.1))
     path = tmp_path / 'cal.yaml'

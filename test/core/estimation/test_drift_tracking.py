@@ -12,7 +12,7 @@ from skin_driver.core.estimation.scan.drift import drift_status
 from skin_driver.core.estimation.scan.pipeline import ContactEstimator, EstimatorConfig
 from skin_driver.core.sim.drift import Drift
 from skin_driver.core.sim.hold import hold_scene, idle_scene
-from skin_driver.core.sim.physics import Press, render_held
+from skin_driver.core.sim.physics import Press, render, render_held
 from skin_driver.core.sim.skins import family_skin
 
 
@@ -158,3 +158,18 @@ def test_without_a_tare_the_drift_is_named_since_the_start_never_since_the_tare(
     assert values['tare'] == 'no tare yet (the assumed baseline)'
     assert 'drift since the start (no tare yet), top [counts]' in values
     assert not any('since the tare' in key or key.startswith('tare offset') for key in values)
+
+
+def test_a_still_press_reads_less_by_the_creep_factor_the_estimator_reports():
+    # The creep calibration undoes the scans' correction with creep_factor: it must be what a
+    # scan divides by. One map scanned at 10, 15 and 110 s ages its taxels 0, 5 and 100 s (no
+    # baseline tracking: only the creep changes the force).
+    member = family_skin('noisy')
+    scene = idle_scene(member, duration_s=1.0, step_s=1.0)
+    config = EstimatorConfig(creep_per_decade=0.05, creep_settle_s=0.5, track_s=0.0)
+    estimator = _estimator(scene, config)
+    pressed = render(member.model, [Press(0.04, 0.04, 8.0)], np.random.default_rng(0))
+    force = [estimator.process(*pressed, time_s=t)[0].force_n for t in (10.0, 15.0, 110.0)]
+    assert force[2] < force[1] < force[0]
+    assert force[1] / force[2] == pytest.approx(
+        estimator.creep_factor(100.0) / estimator.creep_factor(5.0), rel=1e-12)

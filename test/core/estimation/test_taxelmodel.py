@@ -20,10 +20,13 @@ def press(x=5.3, y=6.1, force=20.0, dx=0.4, dy=-0.7, radius=0.8):
 
 
 def test_the_film_is_open_below_its_activation_and_stops_at_its_resistance_floor():
-    counts = MODEL.counts(np.array([0.0, 0.01, 0.02, 1.0, 1e4]))
-    assert counts[0] == counts[1] == 0.0
-    assert 0.0 < counts[2] < counts[3] < counts[4]
-    assert counts[4] == pytest.approx(4095.0 * 3.3 / 4.3)
+    # A press lighter than one taxel's activation reads nothing; a crushing one reads the
+    # resistance floor's counts at its centre; between them more force reads more.
+    counts = [render_counts(MODEL, SHAPE, press(x=5.0, y=6.0, force=f), 24)[0]
+              for f in (0.009, 2.0, 20.0, 1e7)]
+    assert not counts[0].any()
+    assert 0.0 < counts[1].max() < counts[2].max() < counts[3].max()
+    assert counts[3][6, 5] == pytest.approx(4095.0 * 3.3 / 4.3)
 
 
 def test_a_layer_shifted_by_whole_taxels_without_a_layer_blur_is_the_top_moved():

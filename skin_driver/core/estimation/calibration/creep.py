@@ -2,9 +2,10 @@
 Creep calibration: hold a known load for a few minutes, fit how the skin's reading rises.
 
 An FSR's conductance rises roughly with the logarithm of the time under load. The estimator
-divides each loaded taxel's force by ``1 + per_decade * log10(1 + age / settle_s)`` (the kernel's
-drift.c); this fits ``per_decade`` and ``settle_s`` of the user's skin from the force the
-estimator reads, without creep compensation, while one load is held still:
+divides each loaded taxel's force by ``1 + per_decade * log10(1 + age / settle_s)`` (the creep
+law, written once in the kernel: ``sk_creep``, bound as :func:`..scan.kernel.creep`); this fits
+``per_decade`` and ``settle_s`` of the user's skin from the force the estimator reads, without
+creep compensation, while one load is held still:
 ``F(t) = F0 * (1 + per_decade * log10(1 + t / settle_s))``, ``t`` from the load's arrival.
 For each settling time on a grid the model is linear in ``F0`` and ``F0 * per_decade``; the
 least misfit wins. ``recovery_s`` (how fast a film forgets once unloaded) is not seen in a hold:
@@ -22,6 +23,7 @@ import math
 
 import numpy as np
 
+from ..scan.kernel import creep, DriftNumbers
 from ...common.validate import check_number
 
 __all__ = ['CreepFit', 'CreepError', 'CreepSession', 'fit_creep', 'fit_recovery', 'MIN_HOLD_S']
@@ -73,8 +75,9 @@ class CreepFit:
             check_number(getattr(self, name), f'creep {name}', non_negative=True)
 
     def factor(self, age_s):
-        """Return the reading's rise after ``age_s`` under load (1 at arrival)."""
-        return 1.0 + self.per_decade * np.log10(1.0 + np.maximum(age_s, 0.0) / self.settle_s)
+        """Return the reading's rise after ``age_s`` under load (1 at arrival), the kernel's."""
+        return creep(DriftNumbers(creep_per_decade=self.per_decade, settle_s=self.settle_s),
+                     age_s)
 
     def over_48_hours(self) -> float:
         """Return the rise over 48 h of load, the makers' figure (a share)."""
@@ -119,7 +122,9 @@ def fit_creep(ages_s, forces_n, recovery_s: float = 60.0) -> CreepFit:
                          f'{MIN_HOLD_S:.0f} s (a few minutes is better)')
     best = None
     for settle in _SETTLE_GRID:
-        design = np.stack([np.ones_like(t), np.log10(1.0 + t / settle)], axis=1)
+        # the law's decades of time under load: its rise at a creep of 1 per decade, less 1
+        decades = creep(DriftNumbers(creep_per_decade=1.0, settle_s=settle), t) - 1.0
+        design = np.stack([np.ones_like(t), decades], axis=1)
         coef, *_ = np.linalg.lstsq(design, f, rcond=None)
         residual = f - design @ coef
         cost = float(residual @ residual)
@@ -142,7 +147,8 @@ def fit_recovery(fit: CreepFit, held_s: float, rest_s: float, ratio: float):
 
     After ``held_s`` under load and ``rest_s`` unloaded, a second press read ``ratio`` times
     what the first read, each 1 s after it arrived: the film remembered an age ``a`` with
-    ``c(a + 1) = ratio c(1)``, and ``a = held_s exp(-rest_s / recovery)``.
+    ``c(a + 1) = ratio c(1)`` (``c``: :meth:`CreepFit.factor`, inverted here), and
+    ``a = held_s exp(-rest_s / recovery)``.
     """
     if not (fit.per_decade > 0 and held_s > 0 and rest_s > 0 and math.isfinite(ratio)):
         return None

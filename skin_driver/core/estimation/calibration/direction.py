@@ -31,7 +31,7 @@ from typing import Sequence
 
 import numpy as np
 
-from ..scan.kernel import DIRECTION_FEATURES
+from ..scan.kernel import DIRECTION_FEATURES, direction_features
 
 __all__ = ['KnownPress', 'DirectionCorrection', 'features', 'learn_direction',
            'MIN_DIRECTION_PRESSES', 'FOLDS', 'RIDGES', 'MARGIN']
@@ -74,24 +74,14 @@ class KnownPress:
 
 def features(col, row, dx, dy, force_n, force_ref_n: float) -> np.ndarray:
     """
-    Return the correction's features of contacts (N x DIRECTION_FEATURES), as the kernel has them.
+    Return the correction's features of contacts (N x DIRECTION_FEATURES), the kernel's own.
 
     Arguments are arrays (or numbers) of the contacts' places and raw shifts (taxels: where the
-    bottom imprint is from the top one) and normal forces; the order is skin_kernel.h's
-    (``sk_direction``).
+    bottom imprint is from the top one) and normal forces; the kernel computes them
+    (``sk_direction_features``, skin_kernel.h's order of ``sk_direction``), so that the map is
+    fitted on the very features a scan applies it to.
     """
-    col, row, dx, dy, force = np.broadcast_arrays(*(np.atleast_1d(np.asarray(v, dtype=float))
-                                                    for v in (col, row, dx, dy, force_n)))
-    out, phases = [], []
-    for h in (1, 2):
-        for top, moved in ((col, dx), (row, dy)):
-            a, b = 2.0 * math.pi * h * top, 2.0 * math.pi * h * (top + moved)
-            out += [np.sin(b) - np.sin(a), np.cos(b) - np.cos(a)]
-            phases += [np.sin(a), np.cos(a)]
-    out += phases
-    load = force / force_ref_n - 1.0
-    out += [f * load for f in out[:4]]
-    return np.stack(out, axis=1)
+    return direction_features(col, row, dx, dy, force_n, force_ref_n)
 
 
 @dataclass(frozen=True)

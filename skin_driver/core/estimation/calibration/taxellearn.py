@@ -23,8 +23,8 @@ from typing import Sequence
 import numpy as np
 
 from ..model.fsr import FsrModel
-from ..model.taxelmodel import (best_radius, levenberg_marquardt, LOG_FORCE, LOG_RADIUS, MAX_MOVES,
-                                residuals, start_of, STEPS, sub_for, TaxelModel)
+from ..model.taxelmodel import (fit_numbers, fit_press, LOG_FORCE, LOG_RADIUS, residuals,
+                                start_of, sub_for, TaxelModel)
 from ...common import least_squares
 
 __all__ = ['LearningPress', 'learn_taxel_model', 'film_start']
@@ -153,13 +153,8 @@ def _learn_from(windows: list, pitch: float, full_scale: float, g: np.ndarray,
     for (counts, censored, sensitivity), press in windows:
         u = start_of(counts, press.shift_taxels, model)
         u[LOG_FORCE] = math.log(press.normal_force_n)
-        sub = sub_for(u)
-
-        def residual(v, c=counts, m=censored, s=sub, k=sensitivity):
-            return residuals(model, c, m, v, s, k)
-        u, _ = levenberg_marquardt(residual, best_radius(residual, u), _FREE, 6)
-        presses_u.append(u)
-        subs.append(sub)
+        presses_u.append(fit_press(model, counts, censored, u, _FREE, 6, sensitivity).u)
+        subs.append(sub_for(u))
     g, fitted, cost = _joint(pitch, full_scale, g, presses_u, subs, [w for w, _ in windows],
                              iterations)
     return g, cost, fitted
@@ -175,7 +170,7 @@ def _joint(pitch: float, full_scale: float, g: np.ndarray, presses_u: list, subs
     that fails is retried with more damping at most six times before the fit ends.
     """
     idx = np.flatnonzero(_FREE)
-    steps, moves = STEPS[idx], MAX_MOVES[idx]
+    steps, moves = fit_numbers().steps[idx], fit_numbers().max_moves[idx]
     ng, npress, count = g.size, idx.size, len(windows)
     size = ng + npress * count
 

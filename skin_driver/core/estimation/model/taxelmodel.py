@@ -9,7 +9,7 @@ model"):
   ``a`` and ``a * aspect``, turned by ``orientation``) whose integral is the normal force;
 * the cover blurs it by a Gaussian (``cover_spread_m``); the bottom layer sees it blurred by
   the elastic layer too (``layer_spread_m``, added in quadrature) and displaced by the shift;
-* each taxel sums the load over its active pad (``fill_factor`` of the pitch, :mod:`cellops`);
+* each taxel sums the load over its active pad (``fill_factor`` of the pitch);
 * the film turns a taxel's load ``f`` into counts through the divider:
   ``counts = full_scale * g / (1 + g)``, ``g = min(film_scale * (f - film_activation_n)**
   film_exponent, film_ceiling)`` (an FSR is open below its activation load; its conductance then
@@ -22,45 +22,70 @@ model"):
   grid, a few times the cost of a smooth film's render.
 
 None of the skin's numbers is assumed: :mod:`taxellearn` learns them from the presses of known
-force a force calibration records, and the calibration keeps them (:class:`TaxelModel`). A
-scan's contact is fitted by the compiled kernel (``skin_kernel/src/model_fit.c``, bound as
-:func:`skin_driver.core.estimation.scan.kernel.fit_contact`): Levenberg-Marquardt on its
-window's tared counts, taxels the film or the ADC saturated taken as lower bounds; a round tip
-first, then an elliptical one from four orientations, the least misfit kept (the misfit of
-narrow imprints is rugged, so one start stops in side minima). This module keeps the pieces the
-learning fits its presses with (:func:`residuals`, :func:`levenberg_marquardt`,
-:func:`start_of`, :func:`best_radius`).
+force a force calibration records, and the calibration keeps them (:class:`TaxelModel`). The
+model is written once, in the compiled kernel (``skin_kernel/src/model_fit.c``): a scan's
+contact is fitted there (bound as :func:`skin_driver.core.estimation.scan.kernel.fit_contact`:
+Levenberg-Marquardt on its window's tared counts, taxels the film or the ADC saturated taken as
+lower bounds; a round tip first, then an elliptical one from four orientations, the least misfit
+kept: the misfit of narrow imprints is rugged, so one start stops in side minima), and the
+learning renders and weighs its presses through the same code (:func:`render_counts`,
+:func:`residuals`, :func:`start_of`, :func:`sub_for`: ``sk_model_render``, ...) and fits
+each press alone with the kernel's fit (:func:`fit_press`); its joint fit of the skin and its
+presses takes the kernel's steps and moves (:func:`fit_numbers`).
 """
 
 from __future__ import annotations
 
+import ctypes
 from dataclasses import asdict, dataclass
+from functools import lru_cache
 import math
+from typing import NamedTuple
 
 import numpy as np
 
-from .cellops import axis_operator, blur_block, gather
-from ...common import least_squares
+from ..scan.kernel import load_library, taxel_model_of
 from ...common.validate import check_number
 
-__all__ = ['TaxelModel', 'PressFit', 'hertz_profile', 'render_counts', 'residuals',
-           'levenberg_marquardt', 'best_radius', 'start_of', 'sub_for']
+__all__ = ['TaxelModel', 'PressFit', 'FitNumbers', 'hertz_profile', 'render_counts',
+           'residuals', 'fit_press', 'start_of', 'sub_for', 'fit_numbers']
 
 # Per-press parameters: centre x, y (taxels of the window), log normal force (N), shift dx, dy
 # (taxels), log tip radius (taxels), log aspect, orientation (rad).
 X, Y, LOG_FORCE, DX, DY, LOG_RADIUS, LOG_ASPECT, ORIENTATION = range(8)
-# Finite-difference steps and the largest step a Levenberg-Marquardt move may take, per
-# parameter (taxels, log units, radians): a narrow imprint's misfit is rugged beyond them.
-STEPS = np.array((0.02, 0.02, 0.01, 0.02, 0.02, 0.03, 0.03, 0.05))
-MAX_MOVES = np.array((0.5, 0.5, 0.5, 1.0, 1.0, 0.3, 0.3, 0.5))
-# Radii and aspects a fit may take (log units): beyond them a runaway fit renders huge grids.
-_LOG_RADIUS = (math.log(0.05), math.log(4.0))
-_LOG_ASPECT = (-0.9, 0.9)
-# Fine samples per taxel: at least 24 (where this render equals the simulator's to 1e-11
-# counts) and twelve over the smaller semi-axis.
-_SUB = (24, 48)
-_ROBUST_SHARE = 0.05
-_RADIUS_SCALES = (0.5, 0.63, 0.8, 1.0, 1.25, 1.6)
+
+
+class FitNumbers(NamedTuple):
+    """The kernel's fit numbers (``sk_model_steps``), per parameter in ``u``'s order."""
+
+    steps: np.ndarray          # finite-difference steps
+    max_moves: np.ndarray      # the largest a Levenberg-Marquardt move may take
+    radius_scales: np.ndarray  # the tip radii tried around a start (:func:`fit_press`)
+
+
+@lru_cache(maxsize=1)
+def fit_numbers() -> FitNumbers:
+    """
+    Return the kernel's steps and moves of a press's parameters and its radius scales.
+
+    (taxels, log units, radians): a narrow imprint's misfit is rugged beyond them.
+    """
+    out = FitNumbers(np.zeros(8), np.zeros(8), np.zeros(6))
+    load_library().sk_model_steps(*(a.ctypes.data_as(ctypes.c_void_p) for a in out))
+    for a in out:
+        a.flags.writeable = False
+    return out
+
+
+def _address(array):
+    return None if array is None else array.ctypes.data_as(ctypes.c_void_p)
+
+
+def _window(array, shape: tuple, dtype) -> np.ndarray:
+    """Return ``array`` (None: None) as a C-ordered (2, h, w) array of ``dtype``."""
+    if array is None:
+        return None
+    return np.ascontiguousarray(np.broadcast_to(array, (2,) + tuple(shape)), dtype=dtype)
 
 
 @dataclass(frozen=True)
@@ -95,20 +120,6 @@ class TaxelModel:
         if not 0 < self.fill_factor <= 1:
             raise ValueError(f'taxel model fill_factor must be in (0, 1], got {self.fill_factor}')
 
-    def counts(self, force_n: np.ndarray) -> np.ndarray:
-        """Return the film's counts for per-taxel loads (newtons)."""
-        load = np.maximum(force_n - self.film_activation_n, 0.0)
-        g = np.minimum(self.film_scale * load ** self.film_exponent,
-                       self.film_ceiling)
-        if self.film_step > 0:
-            g = np.where(force_n > 0, np.maximum(g, self.film_step), g)
-        return self.full_scale * g / (1.0 + g)
-
-    def blurs_taxels(self) -> tuple:
-        """Return the (top, bottom) Gaussian blur in taxels."""
-        cover = self.cover_spread_m / self.pitch_m
-        return cover, math.hypot(cover, self.layer_spread_m / self.pitch_m)
-
     def to_dict(self) -> dict:
         """Return the model as plain numbers (the calibration file)."""
         return {k: float(v) if k != 'presses' else int(v) for k, v in asdict(self).items()}
@@ -139,7 +150,8 @@ def hertz_profile(x: np.ndarray, y: np.ndarray, cx: float, cy: float, a: float,
     Return a Hertz tip's pressure shape ``sqrt(1 - r**2)`` on the grid of ``x`` by ``y``.
 
     The ellipse has semi-axes ``a`` and ``a * aspect``, the first turned by ``orientation``
-    from +x; rows follow ``y``. The simulator's presses take the same shape (its own code).
+    from +x; rows follow ``y``. The simulator's presses take the same shape (its own code); the
+    estimator's model renders it in the kernel (model_fit.c).
     """
     if aspect == 1.0:
         r2 = (((x - cx) ** 2)[None, :] + ((y - cy) ** 2)[:, None]) / (a * a)
@@ -151,91 +163,25 @@ def hertz_profile(x: np.ndarray, y: np.ndarray, cx: float, cy: float, a: float,
     return np.sqrt(np.maximum(1.0 - r2, 0.0))
 
 
-def _layer(shape: tuple, cx: float, cy: float, u: np.ndarray, blur: float, fill: float,
-           sub: int, turn_on: float = 0.0) -> np.ndarray:
-    """
-    Return one layer's per-taxel load (the press's normal force spread over the window).
-
-    ``turn_on``: the film's turn-on load per taxel area (newtons), 0 for none.
-    """
-    h, w = shape
-    a = math.exp(min(max(u[LOG_RADIUS], _LOG_RADIUS[0]), _LOG_RADIUS[1]))
-    aspect = math.exp(min(max(u[LOG_ASPECT], _LOG_ASPECT[0]), _LOG_ASPECT[1]))
-    reach = a * max(aspect, 1.0)
-    # The fine axes run past the window by what the blur and the tip reach, so that load just
-    # off the window still blurs onto it.
-    margin = int(math.ceil(reach + 4.0 * blur)) + 1
-    step = 1.0 / sub
-
-    def axis(centre, cells):
-        # The fine samples within the tip's reach of its centre (index 0 is the first sample
-        # of the cell ``-margin``): the profile is zero beyond them.
-        origin = margin + 0.5
-        lo = max(int(math.floor((centre - reach + origin) * sub - 0.5)), 0)
-        hi = min(int(math.ceil((centre + reach + origin) * sub - 0.5)) + 1,
-                 (cells + 2 * margin) * sub)
-        if hi <= lo:
-            return None
-        return lo, (np.arange(lo, hi) + 0.5) * step - origin
-
-    ax, ay = axis(cx, w), axis(cy, h)
-    if ax is None or ay is None:
-        return np.zeros(shape)
-    (x0, xs), (y0, ys) = ax, ay
-    fine = hertz_profile(xs, ys, cx, cy, a, aspect, u[ORIENTATION])
-    total = fine.sum()
-    if total <= 0:
-        return np.zeros(shape)
-    blur_px = blur * sub
-    fine *= math.exp(u[LOG_FORCE]) / total
-    if turn_on > 0:
-        return _sensed(fine, (h, w), margin, sub, (y0, x0), fill, blur_px,
-                       turn_on / (sub * sub))
-    op_y = axis_operator(h + 2 * margin, sub, fill, blur_px)[margin:margin + h,
-                                                             y0:y0 + ys.size]
-    op_x = axis_operator(w + 2 * margin, sub, fill, blur_px)[margin:margin + w,
-                                                             x0:x0 + xs.size]
-    return op_y @ fine @ op_x.T
-
-
-def _sensed(fine: np.ndarray, shape: tuple, margin: int, sub: int, start: tuple, fill: float,
-            blur_px: float, threshold: float) -> np.ndarray:
-    """
-    Return the per-taxel load a turn-on film senses: blurred on the fine grid, cut, summed.
-
-    ``fine`` holds newtons per fine sample from index ``start`` (y, x) of the extended axes;
-    ``threshold`` is the turn-on load per fine sample.
-    """
-    reach = int(math.ceil(4.0 * blur_px)) + 1
-    ops = []
-    for n, cells, first in ((fine.shape[0], shape[0], start[0]),
-                            (fine.shape[1], shape[1], start[1])):
-        total = (cells + 2 * margin) * sub
-        lo, hi = max(first - reach, 0), min(first + n + reach, total)
-        spread = blur_block(lo, hi - lo, first, n, blur_px)
-        sums = gather(cells + 2 * margin, sub, fill)[margin:margin + cells, lo:hi]
-        ops.append((spread, sums))
-    (spread_y, sums_y), (spread_x, sums_x) = ops
-    load = spread_y @ fine @ spread_x.T
-    load[load <= threshold] = 0.0
-    return sums_y @ load @ sums_x.T
-
-
 def render_counts(model: TaxelModel, shape: tuple, u: np.ndarray, sub: int,
                   sensitivity: np.ndarray = None) -> np.ndarray:
     """
-    Return the (2, h, w) counts of one press ``u`` on a window of ``shape``.
+    Return the (2, h, w) counts of one press ``u`` on a window of ``shape`` (``sk_model_render``).
 
-    ``sensitivity`` (2, h, w) multiplies each taxel's load before the film: the inverse of the
-    calibrated per-taxel gains (:mod:`gains`), None for even taxels.
+    ``sub``: fine samples a taxel. ``sensitivity`` (2, h, w) multiplies each taxel's load before
+    the film: the inverse of the calibrated per-taxel gains (:mod:`gains`), None for even taxels.
     """
-    top_blur, bottom_blur = model.blurs_taxels()
-    fill = float(model.fill_factor)
-    turn_on = model.turn_on_pa * model.pitch_m ** 2
-    top = _layer(shape, u[X], u[Y], u, top_blur, fill, sub, turn_on)
-    bottom = _layer(shape, u[X] + u[DX], u[Y] + u[DY], u, bottom_blur, fill, sub, turn_on)
-    load = np.stack((top, bottom))
-    return model.counts(load if sensitivity is None else load * sensitivity)
+    h, w = (int(v) for v in shape)
+    numbers = taxel_model_of(model)
+    out = np.zeros((2, h, w))
+    press = np.ascontiguousarray(u, dtype=np.float64)
+    status = load_library().sk_model_render(ctypes.byref(numbers), h, w, _address(press),
+                                            int(sub),
+                                            _address(_window(sensitivity, (h, w), np.float64)),
+                                            _address(out))
+    if status != 0:
+        raise MemoryError(f'skin_kernel: no memory to render a {h} x {w} window')
+    return out
 
 
 def residuals(model: TaxelModel, counts: np.ndarray, censored: np.ndarray, u: np.ndarray,
@@ -243,86 +189,72 @@ def residuals(model: TaxelModel, counts: np.ndarray, censored: np.ndarray, u: np
     """
     Return the counts' residuals, a censored taxel's only where the model reads below it.
 
-    Residuals beyond a twentieth of the ADC's range weigh as their length, not its square
-    (pseudo-Huber): such a taxel is on the other side of a film's cliff (a rim taxel that a
-    taxel's own gain turned on or off), not noise, and a few of them would outweigh the rest.
+    The kernel's (``sk_model_residuals``), flattened: residuals beyond a twentieth of the ADC's
+    range weigh as their length, not its square (pseudo-Huber): such a taxel is on the other
+    side of a film's cliff (a rim taxel that a taxel's own gain turned on or off), not noise,
+    and a few of them would outweigh the rest.
     """
-    r = render_counts(model, counts.shape[1:], u, sub, sensitivity) - counts
-    if censored is not None:
-        r = np.where(censored & (r > 0), 0.0, r)
-    scale = model.full_scale * _ROBUST_SHARE
-    r = r.ravel() / scale
-    return np.sign(r) * scale * np.sqrt(2.0 * (np.sqrt(1.0 + r * r) - 1.0))
+    counts = np.ascontiguousarray(counts, dtype=np.float64)
+    h, w = counts.shape[1:]
+    numbers = taxel_model_of(model)
+    press = np.ascontiguousarray(u, dtype=np.float64)
+    out = np.zeros(counts.size)
+    misfit = ctypes.c_double()
+    status = load_library().sk_model_residuals(
+        ctypes.byref(numbers), h, w, _address(counts),
+        _address(_window(censored, (h, w), np.uint8)),
+        _address(_window(sensitivity, (h, w), np.float64)), _address(press), int(sub),
+        _address(out), ctypes.byref(misfit))
+    if status != 0:
+        raise MemoryError(f'skin_kernel: no memory to render a {h} x {w} window')
+    return out
 
 
-def levenberg_marquardt(residual, u: np.ndarray, free: np.ndarray, iterations: int) -> tuple:
+def fit_press(model: TaxelModel, counts: np.ndarray, censored: np.ndarray, u0: np.ndarray,
+              free: np.ndarray, iterations: int, sensitivity: np.ndarray = None) -> PressFit:
     """
-    Return (u, misfit) minimising ``residual(u) @ residual(u)`` over the ``free`` parameters.
+    Return the kernel's fit of press ``u0`` to a window's counts, only ``free`` parameters moved.
 
-    Forward-difference Jacobian (steps :data:`STEPS`), each move scaled into :data:`MAX_MOVES`
-    (:func:`skin_driver.core.common.least_squares.levenberg_marquardt`).
+    ``sk_model_fit_free``: the tip radius of least misfit among a few around the start's, then
+    Levenberg-Marquardt over the parameters ``free`` marks (8 bools in ``u``'s order) for at
+    most ``iterations`` trials, at the fine samples :func:`sub_for` picks for ``u0``.
+    ``censored`` and ``sensitivity`` as :func:`residuals`'.
     """
-    base = np.array(u, dtype=np.float64)
-    idx = np.flatnonzero(free)
-
-    def of(x):
-        full = base.copy()
-        full[idx] = x
-        return full
-
-    def free_residual(x):
-        return residual(of(x))
-    fit = least_squares.levenberg_marquardt(
-        free_residual, base[idx], iterations=iterations,
-        jacobian=least_squares.forward_jacobian(free_residual, STEPS[idx]),
-        limit=least_squares.scaled_into(MAX_MOVES[idx]), stop_move=1e-4)
-    return of(fit.x), fit.cost
+    counts = np.ascontiguousarray(counts, dtype=np.float64)
+    h, w = counts.shape[1:]
+    numbers = taxel_model_of(model)
+    start = np.ascontiguousarray(u0, dtype=np.float64)
+    flags = np.ascontiguousarray(free, dtype=np.intc)
+    u = np.zeros(8)
+    misfit = ctypes.c_double()
+    status = load_library().sk_model_fit_free(
+        ctypes.byref(numbers), h, w, _address(counts),
+        _address(_window(censored, (h, w), np.uint8)),
+        _address(_window(sensitivity, (h, w), np.float64)), _address(start), _address(flags),
+        int(iterations), _address(u), ctypes.byref(misfit))
+    if status != 0:
+        raise MemoryError(f'skin_kernel: no memory to fit a {h} x {w} window')
+    return PressFit(u, misfit.value)
 
 
 def start_of(maps: np.ndarray, shift: tuple, model: TaxelModel) -> np.ndarray:
     """
     Return a press's start from its window's (2, h, w) force maps and a first shift (taxels).
 
-    Centre: the top's centroid; force: the larger layer sum over the pad's share; radius: the
-    top's second moment less the cover blur and the pad's own (a Hertz disc's is a**2 / 5).
+    The kernel's (``sk_model_start``). Centre: the top's centroid; force: the larger layer sum
+    over the pad's share; radius: the top's second moment less the cover blur and the pad's own
+    (a Hertz disc's is a**2 / 5).
     """
-    top = maps[0]
-    mass = top.sum()
-    h, w = top.shape
-    xs, ys = np.arange(w, dtype=np.float64), np.arange(h, dtype=np.float64)
-    cx = float(top.sum(axis=0) @ xs / mass)
-    cy = float(top.sum(axis=1) @ ys / mass)
-    var = float((top.sum(axis=0) @ (xs - cx) ** 2 + top.sum(axis=1) @ (ys - cy) ** 2)
-                / (2.0 * mass))
-    cover = model.blurs_taxels()[0]
-    radius = math.sqrt(5.0 * max(var - cover * cover - 1.0 / 12.0, 0.01))
-    force = max(float(maps[0].sum()), float(maps[1].sum())) / model.fill_factor ** 2
+    maps = np.ascontiguousarray(maps, dtype=np.float64)
+    numbers = taxel_model_of(model)
     u = np.zeros(8)
-    u[X], u[Y], u[DX], u[DY] = cx, cy, shift[0], shift[1]
-    u[LOG_FORCE] = math.log(max(force, 1e-3))
-    u[LOG_RADIUS] = math.log(min(max(radius, 0.1), 3.0))
+    load_library().sk_model_start(ctypes.byref(numbers), _address(maps), maps.shape[1],
+                                  maps.shape[2], _address(u))
+    u[DX], u[DY] = shift[0], shift[1]
     return u
 
 
 def sub_for(u: np.ndarray) -> int:
-    """Return the fine samples per taxel for a press of ``u``'s size (fixed through a fit)."""
-    small = math.exp(u[LOG_RADIUS]) * min(math.exp(u[LOG_ASPECT]), 1.0)
-    return int(min(max(math.ceil(12.0 / max(small, 1e-3)), _SUB[0]), _SUB[1]))
-
-
-def best_radius(residual, u: np.ndarray) -> np.ndarray:
-    """
-    Return ``u`` with the tip radius of least misfit among a few around its own.
-
-    The moments a start takes its radius from misread flat-topped or stepped imprints, and a
-    fit started at the wrong size stops on the film's cliffs.
-    """
-    best, least = u, math.inf
-    for scale in _RADIUS_SCALES:
-        v = u.copy()
-        v[LOG_RADIUS] += math.log(scale)
-        r = residual(v)
-        cost = float(r @ r)
-        if cost < least:
-            best, least = v, cost
-    return best
+    """Return the fine samples per taxel for a press of ``u``'s size (``sk_model_sub``)."""
+    return int(load_library().sk_model_sub(_address(np.ascontiguousarray(u,
+                                                                         dtype=np.float64))))

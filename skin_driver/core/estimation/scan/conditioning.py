@@ -13,39 +13,22 @@ kernel (:meth:`kernel.Kernel.condition`, :meth:`kernel.Kernel.force`).
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
 from typing import NamedTuple
 
 import numpy as np
 
-from ..model.fsr import FsrModel
-from ...common.validate import check_map, check_number, check_stack
+from ...common.validate import check_map, check_stack
 
-__all__ = ['ConditioningConfig', 'Conditioning', 'ConditioningState']
+__all__ = ['Conditioning', 'ConditioningState', 'CONDITIONING_FIELDS']
 
 
-@dataclass(frozen=True)
-class ConditioningConfig:
-    """
-    Parameters of the counts-to-force conversion.
+# What of an estimator's settings (pipeline.EstimatorConfig, the one home of them) conditions a
+# scan: two settings alike in these condition alike.
+CONDITIONING_FIELDS = ('fsr', 'threshold_counts', 'noise_sigmas', 'fill_dead', 'remove_crosstalk')
 
-    ``threshold_counts`` is the minimum reading above baseline that counts as touch;
-    after :meth:`Conditioning.tare` the per-taxel threshold is raised to ``noise_sigmas`` times
-    the measured noise when that is larger. ``fill_dead`` fills dead taxels from their live
-    neighbours (else they read 0); ``remove_crosstalk`` takes the load that leaks along the rows
-    and columns of a passive matrix out of every scan (the kernel's crosstalk.c).
-    """
 
-    fsr: FsrModel = field(default_factory=FsrModel)
-    threshold_counts: float = 40.0
-    noise_sigmas: float = 5.0
-    fill_dead: bool = True
-    remove_crosstalk: bool = True
-
-    def __post_init__(self):
-        """Validate the thresholds."""
-        check_number(self.threshold_counts, 'threshold_counts', non_negative=True)
-        check_number(self.noise_sigmas, 'noise_sigmas', non_negative=True)
+def _conditions(config) -> tuple:
+    return tuple(getattr(config, name) for name in CONDITIONING_FIELDS)
 
 
 class _Layer:
@@ -94,9 +77,16 @@ class ConditioningState(NamedTuple):
 class Conditioning:
     """Per-taxel baseline, noise, threshold, gain and dead marks, and force tables, both layers."""
 
-    def __init__(self, config: ConditioningConfig = None, shape: tuple = None):
-        """Create an untared conditioning; ``shape`` fixes the map shape, else first use does."""
-        self.config = config or ConditioningConfig()
+    def __init__(self, config, shape: tuple = None):
+        """
+        Create an untared conditioning; ``shape`` fixes the map shape, else first use does.
+
+        ``config`` is the estimator's :class:`pipeline.EstimatorConfig`: its fsr (the assumed
+        force curve), ``threshold_counts``, the least reading above baseline that counts as
+        touch, raised by a tare to ``noise_sigmas`` times a taxel's measured noise where that
+        is larger, ``fill_dead`` and ``remove_crosstalk`` (:data:`CONDITIONING_FIELDS`).
+        """
+        self.config = config
         self._shape = None
         self._layers = None
         self._stack = None
@@ -118,14 +108,17 @@ class Conditioning:
         """Return whether a tare set the baselines (False: the assumed baseline)."""
         return self._tared
 
-    def copy(self, config: ConditioningConfig = None) -> 'Conditioning':
+    def copy(self, config=None) -> 'Conditioning':
         """
         Return an independent copy, optionally under another ``config``.
 
-        The tare (baseline, noise, dead taxels), gains and fitted force curves carry over; a new
-        config's threshold applies to the measured noise as a tare would have applied it.
+        The tare (baseline, noise, dead taxels), gains and fitted force curves carry over; a
+        config that conditions otherwise (:data:`CONDITIONING_FIELDS`) has its threshold
+        applied to the measured noise as a tare would have applied it.
         """
         new = Conditioning(config or self.config)
+        if config is not None and _conditions(config) == _conditions(self.config):
+            config = None  # conditions alike: the thresholds carry over as they are
         if config is None or config.fsr == self.config.fsr:
             new._tables = tuple(new._assumed if t is self._assumed else t for t in self._tables)
         if self._layers is not None:

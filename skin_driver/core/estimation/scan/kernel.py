@@ -46,7 +46,7 @@ __all__ = ['METHODS', 'ABI_VERSION', 'TaxelModelNumbers', 'Curve', 'Direction', 
            'Settings', 'ContactRecord', 'Status', 'Record', 'KernelSettings', 'Conditioned',
            'Kernel', 'KernelMissing', 'KernelMismatch', 'NotTheOwner', 'breaches',
            'load_library', 'library_candidates', 'fit_contact', 'taxel_model_of', 'direction_of',
-           'DIRECTION_FEATURES']
+           'DIRECTION_FEATURES', 'direction_features', 'creep']
 
 # Shift methods the kernel runs, by their registered names (skin_kernel.h: SK_CENTROID, ...).
 METHODS = {'centroid': 0, 'taxel_fit': 1, 'poc': 2, 'model_fit': 3}
@@ -276,7 +276,17 @@ def _sign(lib: ctypes.CDLL) -> None:
                   'sk_condition': (_int, [ptr, ptr, ptr, ptr, ptr, ptr]),
                   'sk_force': (_int, [ptr, ptr, ptr, ptr]),
                   'sk_drift_state': (_int, [ptr, ptr]), 'sk_set_drift_state': (None, [ptr, ptr]),
-                  'sk_model_fit': (_int, [ptr, _int, _int, ptr, ptr, ptr, ptr, _int, ptr, ptr])}
+                  'sk_model_fit': (_int, [ptr, _int, _int, ptr, ptr, ptr, ptr, _int, ptr, ptr]),
+                  'sk_direction_features': (None, [_int] + [ptr] * 5 + [_double, ptr]),
+                  'sk_creep': (None, [ptr, _int, ptr, _int, ptr]),
+                  'sk_model_render': (_int, [ptr, _int, _int, ptr, _int, ptr, ptr]),
+                  'sk_model_residuals': (_int, [ptr, _int, _int, ptr, ptr, ptr, ptr, _int, ptr,
+                                                ptr]),
+                  'sk_model_fit_free': (_int, [ptr, _int, _int, ptr, ptr, ptr, ptr, ptr, _int,
+                                               ptr, ptr]),
+                  'sk_model_sub': (_int, [ptr]),
+                  'sk_model_start': (None, [ptr, ptr, _int, _int, ptr]),
+                  'sk_model_steps': (None, [ptr, ptr, ptr])}
     for name, (restype, argtypes) in signatures.items():
         function = getattr(lib, name, None)
         if function is None:
@@ -617,3 +627,37 @@ def fit_contact(model, counts: np.ndarray, censored: np.ndarray, u0: np.ndarray,
     if status != _OK:
         raise MemoryError(f'skin_kernel: no memory to fit a {rows} x {cols} window')
     return PressFit(u, float(misfit[0]))
+
+
+def direction_features(col, row, dx, dy, force_n, force_ref_n: float) -> np.ndarray:
+    """
+    Return the direction correction's features of contacts, (N, DIRECTION_FEATURES).
+
+    ``sk_direction_features``: the features a scan applies a correction's weights to. Arguments
+    are arrays (or numbers, broadcast) of the contacts' places and raw shifts (taxels) and
+    normal forces; ``force_ref_n`` (> 0) is what the force feature is taken relative to.
+    """
+    lib = load_library()
+    columns = [np.ascontiguousarray(v, dtype=np.float64).ravel() for v in np.broadcast_arrays(
+        *(np.atleast_1d(np.asarray(v, dtype=np.float64)) for v in (col, row, dx, dy, force_n)))]
+    n = columns[0].size
+    out = np.zeros((n, DIRECTION_FEATURES))
+    lib.sk_direction_features(n, *(_address(c) for c in columns), float(force_ref_n),
+                              _address(out))
+    return out
+
+
+def creep(drift: DriftNumbers, age_s, relative_to_1s: bool = False) -> np.ndarray:
+    """
+    Return the creep law's rise of readings held ``age_s`` under load (``sk_creep``).
+
+    ``1 + creep_per_decade * log10(1 + age / settle_s)`` of ``drift`` (a :class:`DriftNumbers`)
+    at each age (an array or a number; negative: 0), shaped like ``age_s``; with
+    ``relative_to_1s``, over its value at 1 s: what a scan divides a loaded taxel's force by.
+    """
+    lib = load_library()
+    ages = np.array(age_s, dtype=np.float64)  # a copy, C-ordered, 0-d for a number
+    out = np.zeros(ages.shape)
+    lib.sk_creep(ctypes.byref(drift), ages.size, _address(ages), int(relative_to_1s),
+                 _address(out))
+    return out

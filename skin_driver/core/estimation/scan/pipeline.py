@@ -37,13 +37,12 @@ tangential components point along the azimuth, the direction in which the top la
 from __future__ import annotations
 
 from dataclasses import dataclass, field, replace
-import math
 import threading
 
 import numpy as np
 
 from . import kernel as compiled_kernel
-from .conditioning import Conditioning, ConditioningConfig
+from .conditioning import Conditioning
 from ..calibration.calibration import Calibration
 from ..model.fsr import FsrModel
 from ..shift.methods import DEFAULT_METHOD, get_method, Method
@@ -63,6 +62,12 @@ class EstimatorConfig:
     ``force_scale``: extra factor on the normal force (a user's force calibration; 1 = none).
     ``fill_factor``: sensitive fraction of the pitch on each axis; normal force = summed taxel
     forces / fill_factor**2.
+    The conditioning of each scan (:mod:`.conditioning`): ``threshold_counts``, the least
+    reading above baseline that counts as touch, raised by a tare to ``noise_sigmas`` times a
+    taxel's measured noise where that is larger; ``fsr``, the force curve assumed until a force
+    calibration fits one; ``fill_dead`` fills dead taxels from their live neighbours (else they
+    read 0); ``remove_crosstalk`` takes the load that leaks along the rows and columns of a
+    passive matrix out of every scan (the kernel's crosstalk.c).
     Scans given their time (:meth:`ContactEstimator.process`'s ``time_s``): ``track_s``, the time
     constant with which untouched taxels' baselines follow their drift (0: none); the creep
     model a loaded taxel's force is corrected by, ``creep_per_decade`` (0: none),
@@ -82,6 +87,8 @@ class EstimatorConfig:
     force_scale: float = 1.0
     fsr: FsrModel = field(default_factory=FsrModel)
     fill_factor: float = 0.9
+    fill_dead: bool = True
+    remove_crosstalk: bool = True
     track_s: float = 60.0
     creep_per_decade: float = 0.025
     creep_settle_s: float = 1.0
@@ -162,12 +169,8 @@ class ContactEstimator:
         :class:`kernel.KernelMissing`.
         """
         self.config = config or EstimatorConfig()
-        cond_config = ConditioningConfig(fsr=self.config.fsr,
-                                         threshold_counts=self.config.threshold_counts,
-                                         noise_sigmas=self.config.noise_sigmas)
-        conditioning = (Conditioning(cond_config) if conditioning is None
-                        else conditioning.copy(None if conditioning.config == cond_config
-                                               else cond_config))
+        conditioning = (Conditioning(self.config) if conditioning is None
+                        else conditioning.copy(self.config))
         self._calibration = calibration or Calibration()
         conditioning.set_force_curves(*(self._calibration.force_curves or (None, None)))
         top, bottom = self._calibration.gain_maps()
@@ -351,9 +354,7 @@ class ContactEstimator:
         d = self._drift_numbers()
         if not d.creep_per_decade > 0:
             return 1.0
-        # drift.c's: the creep of the age over that of a load held 1 s
-        return ((1.0 + d.creep_per_decade * math.log10(1.0 + max(held_s, 0.0) / d.settle_s))
-                / (1.0 + d.creep_per_decade * math.log10(1.0 + 1.0 / d.settle_s)))
+        return float(compiled_kernel.creep(d, held_s, relative_to_1s=True))
 
     def carry_time_from(self, other: 'ContactEstimator') -> 'ContactEstimator':
         """
@@ -453,10 +454,9 @@ class ContactEstimator:
             spread_taxels=c.spread_taxels, bump_power=c.bump_power,
             activation_n=c.activation_n) for c in (cal.force_curves or (None, None))]
         slope_x, slope_y = cal.zero_slope_m_per_n
-        cond = self._conditioning.config
         return compiled_kernel.Settings(
-            max_contacts=cfg.max_contacts, remove_crosstalk=cond.remove_crosstalk,
-            fill_dead=cond.fill_dead, pitch_m=cfg.pitch_m,
+            max_contacts=cfg.max_contacts, remove_crosstalk=cfg.remove_crosstalk,
+            fill_dead=cfg.fill_dead, pitch_m=cfg.pitch_m,
             compliance_m_per_n=self.compliance_m_per_n, min_force_n=cfg.min_contact_force_n,
             min_confidence=cfg.min_confidence, min_shift_m=cfg.min_shift_m,
             force_scale=cfg.force_scale, fill_factor=cfg.fill_factor, x_p_m=cal.x_p_m,
