@@ -296,6 +296,10 @@ def _per_call(fn, repeats, rounds=5) -> float:
     return best
 
 
+# Frames in the read of a backlog whose decoding stage_costs times (64 kB of version 1).
+BACKLOG_FRAMES = 64
+
+
 def stage_costs(repeats=500) -> dict:
     """Return the per-scan cost (us) of each stage of the 16 x 16 chain, measured in process."""
     model = SkinModel(misalignment_m=(3e-4, -2e-4))
@@ -306,6 +310,9 @@ def stage_costs(repeats=500) -> dict:
     decoder = FrameDecoder(expected_shape=(16, 16))
     raw_v2 = encode_frame(1, 1000, top, bottom, version=2)
     decoder_v2 = FrameDecoder(expected_shape=(16, 16))
+    # A backlog: one read that holds many frames (a USB board sends several per transfer).
+    backlog = {v: b''.join(encode_frame(i, 1000 * i, top, bottom, version=v)
+                           for i in range(BACKLOG_FRAMES)) for v in (1, 2)}
     with ros_session():
         ns = f'/skin_bench_stages_{os.getpid()}'
         node = DirectionNode(subscribe=False, namespace=ns, parameter_overrides=overrides(
@@ -336,6 +343,12 @@ def stage_costs(repeats=500) -> dict:
             # Measured beside version 1 (and in the same way): only the ratio travels.
             'driver: decode, protocol version 2': _per_call(lambda: decoder_v2.feed(raw_v2),
                                                             repeats),
+            f'driver: decode, {BACKLOG_FRAMES} frames in one read, per frame': _per_call(
+                lambda: decoder.feed(backlog[1]), max(repeats // BACKLOG_FRAMES, 1))
+            / BACKLOG_FRAMES,
+            f'driver: decode, {BACKLOG_FRAMES} frames in one read, per frame, protocol version 2':
+            _per_call(lambda: decoder_v2.feed(backlog[2]), max(repeats // BACKLOG_FRAMES, 1))
+            / BACKLOG_FRAMES,
             'driver: stamp + header': _per_call(lambda: conversions.make_header(
                 node.get_clock().now().to_msg(), 'skin_link'), repeats),
             'driver: skin_frame_to_msg + publish SkinFrame': _per_call(
