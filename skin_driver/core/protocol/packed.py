@@ -110,7 +110,7 @@ def unpack_frames(buf, offset: int, count: int, frames: int, stride: int) -> np.
         out = out.astype(np.uint16)
     np.right_shift(out, shifts, out=out)
     np.bitwise_and(out, MAX_COUNT, out=out)
-    out.flags.writeable = False
+    out.setflags(write=False)
     return out
 
 

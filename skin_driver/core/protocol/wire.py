@@ -382,7 +382,7 @@ class FrameDecoder:
             del buf[:pos]
             start += step
         if not buf and start < len(view):
-            pos = self._scan(data, view, frames, copy=False, start=start)
+            pos = self._scan(data, view, frames, False, start)
             if pos < len(view):
                 buf += view[pos:]
         return frames
@@ -403,11 +403,11 @@ class FrameDecoder:
         end = len(buf)
         run: list = []  # (seq, device time) of the clean version-2 frames not yet unpacked
         run_at = run_end = 0  # where the run's first frame starts and its last one ends
-        run_shape = (0, 0)
+        run_shape = (0, 0, 0, 0)  # rows, cols, counts offset and size of the run's frames
         # Where the next info marker is: one search per info frame, not one per frame (-1: none
         # up to the end, which does not move within this call).
         info_at = buf.find(INFO_SYNC, pos)
-        while True:
+        while pos < end:
             found = buf.find(SYNC, pos)
             if info_at >= 0:
                 if info_at < pos:
@@ -471,12 +471,12 @@ class FrameDecoder:
                     pos += len(SYNC)
                     continue
                 self._accept(seq, time_us, rows, cols, 2, 0, None)
-                if run and (pos != run_end or run_shape != (rows, cols)
+                if run and (pos != run_end or run_shape[:2] != (rows, cols)
                             or 2 * n * len(run) >= RUN_COUNTS):
                     self._unpack_run(buf, run_at, run, run_shape, frames)
                     run = []
                 if not run:
-                    run_at, run_shape = pos, (rows, cols)
+                    run_at, run_shape = pos, (rows, cols, at_counts, size)
                 run.append((seq, time_us))
                 pos = run_end = pos + size
                 continue
@@ -518,9 +518,12 @@ class FrameDecoder:
 
     @staticmethod
     def _unpack_run(buf, start: int, heads: list, shape: tuple, frames: list) -> None:
-        """Append the Frames of the clean version-2 frames that follow each other from start."""
-        rows, cols = shape
-        (_, at_counts, _, size), _, _ = packed.clean_body(rows, cols)
+        """
+        Append the Frames of the clean version-2 frames that follow each other from start.
+
+        shape: (rows, cols, offset of the counts in a frame, frame size).
+        """
+        rows, cols, at_counts, size = shape
         count = len(heads)
         counts = packed.unpack_frames(buf, start + at_counts, 2 * rows * cols, count, size)
         if count == 1:
