@@ -408,14 +408,13 @@ def _e2e_section(res, images) -> list:
         cpu = r['cpu_us_per_scan']
         where = ', '.join(f'{k} {v}' for k, v in r.get('lost_where', {}).items() if v)
         rows.append((label(r), f'{r["rate_hz"]:g}', r['expected_scans'],
-                     r['received'], r['lost'], where or '-',
+                     r['received'], r['lost'], where or '-', _ms(r['latency_ms']),
                      _ms(r.get('published_ms') or dict.fromkeys(('p50', 'p99', 'max'))),
-                     _ms(r['latency_ms']),
                      _ms(r['board_to_driver_ms']), _ms(r['latency_from_device_time_ms']),
                      ' / '.join(f'{k} {v:.0f}' for k, v in cpu.items())))
     out += _table(['layout', 'rate [Hz]', 'scans sent', 'contacts received', 'lost (depth 5)',
-                   'where lost', 'last byte -> published p50 / p99 / max [ms]',
-                   'last byte -> subscriber p50 / p99 / max [ms]',
+                   'where lost', 'last byte -> subscriber p50 / p99 / max [ms]',
+                   'last byte -> published p50 / p99 / max [ms]',
                    'device time -> last byte [ms]', 'device time -> subscriber [ms]',
                    'CPU per scan [us]'], rows)
     out += ['', "The nodes' own counters over the same window (/diagnostics):", '']
