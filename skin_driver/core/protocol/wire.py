@@ -366,16 +366,17 @@ class FrameDecoder:
         buf = self._buf
         # An unfinished frame waits: it is completed in the buffer, in slices of one frame so
         # that the buffer holds less than two frames whatever arrives, until what is left came
-        # with this call. The rest is decoded in place, every frame of a read in one pass, the
-        # layers views of the caller's immutable bytes; only an unfinished tail is kept, shorter
-        # than one frame as _scan stops only inside a frame.
+        # with this call. The rest of the read is decoded in place, every frame of it in one
+        # pass, the layers views of the caller's immutable bytes; only an unfinished tail is
+        # kept, shorter than one frame as _scan stops only inside a frame.
         step = self._max_frame
         while buf and start < len(view):
             held = len(buf)
             buf += view[start:start + step]
             with memoryview(buf) as buf_view:
                 pos = self._scan(buf, buf_view, frames, copy=True)
-            if pos >= held:
+            if pos >= held and start + step < len(view):
+                # What is left came with this read, and more of the read follows: in place.
                 start += pos - held
                 del buf[:]
                 break
