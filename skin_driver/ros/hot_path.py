@@ -129,25 +129,28 @@ class TakenOnThread:
         self._name = name
         self._on_error = on_error
         self._context = node.context
-        self._subscriptions = []  # (rclpy Subscription, callback), served in this order
+        # (rclpy Subscription, callback, with info), served in this order
+        self._subscriptions = []
         self._wake = GuardCondition(None, None, context=self._context)
         self._stopped = False
         self._thread = None
 
     def subscribe(self, msg_type, topic: str, callback: Callable, qos_profile, raw: bool = False,
-                  **kwargs):
+                  info: bool = False, **kwargs):
         """
         Subscribe the node to topic (before start()); return the rclpy Subscription.
 
         The subscription is the node's own (graph, QoS overrides in kwargs), but in a callback
         group no executor runs. ``callback(msg)`` runs on the thread for every message taken;
-        with ``raw`` the messages are their CDR bytes.
+        with ``raw`` the messages are their CDR bytes; with ``info`` it is ``callback(msg,
+        info)``, info the middleware's dict (``source_timestamp``: the publisher's wall-clock
+        time of the publish, ns).
         """
         kwargs.setdefault('event_callbacks',
                           SubscriptionEventCallbacks(use_default_callbacks=False))
         sub = self._node.create_subscription(msg_type, topic, callback, qos_profile,
                                              callback_group=NoExecutor(), raw=raw, **kwargs)
-        self._subscriptions.append((sub, callback))
+        self._subscriptions.append((sub, callback, info))
         return sub
 
     def start(self) -> None:
@@ -177,16 +180,16 @@ class TakenOnThread:
                 wait_set = WaitSet(len(self._subscriptions), 1, 0, 0, 0, 0, context.handle)
             while not self._stopped and context.ok():
                 with contextlib.ExitStack() as handles:
-                    for sub, _ in self._subscriptions:
+                    for sub, _, _ in self._subscriptions:
                         handles.enter_context(sub.handle)
                     handles.enter_context(wake.handle)
                     wait_set.clear_entities()
-                    for sub, _ in self._subscriptions:
+                    for sub, _, _ in self._subscriptions:
                         wait_set.add_subscription(sub.handle)
                     wait_set.add_guard_condition(wake.handle)
                     wait_set.wait(WAIT_NS)
-                    for sub, callback in self._subscriptions:
-                        self._take_all(sub, callback)
+                    for sub, callback, info in self._subscriptions:
+                        self._take_all(sub, callback, info)
         except InvalidHandle:  # the node was destroyed under the thread: nothing left to take
             pass
         except RCLError:
@@ -196,7 +199,7 @@ class TakenOnThread:
         finally:
             wake.destroy()
 
-    def _take_all(self, sub, callback) -> None:
+    def _take_all(self, sub, callback, info: bool) -> None:
         """Hand every waiting message to the callback (one wake-up for all that arrived)."""
         take, msg_type, raw = sub.handle.take_message, sub.msg_type, sub.raw
         while not self._stopped:
@@ -204,7 +207,10 @@ class TakenOnThread:
             if taken is None:
                 return
             try:
-                callback(taken[0])
+                if info:
+                    callback(*taken)
+                else:
+                    callback(taken[0])
             except Exception as err:  # noqa: B902 - reported; the next message is still served
                 if not self._context.ok():
                     # Ctrl-C under the callback: its publish failed on the dead context, which

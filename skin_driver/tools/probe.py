@@ -17,6 +17,7 @@ subscriber's queue, not by the driver.
 from __future__ import annotations
 
 import collections
+import math
 import time
 from typing import Callable, Optional
 
@@ -39,6 +40,9 @@ class Record:
         self.sequence = []      # the scan's sequence number
         self.device_us = []     # the scan's device time
         self.contacts = []      # number of contacts in the message
+        # the publisher's wall-clock time of the publish (the middleware's source timestamp),
+        # NaN where the subscription did not say (an executor's callback gets no message info)
+        self.published_s = []
 
 
 def unwrap(sequence) -> np.ndarray:
@@ -58,6 +62,11 @@ def percentiles_ms(seconds, qs=(50, 99, 100)) -> dict:
         return {names[q]: None for q in qs}
     values = np.percentile(np.asarray(seconds, dtype=np.float64) * 1e3, qs)
     return {names[q]: float(v) for q, v in zip(qs, values)}
+
+
+def _published(info: Optional[dict]) -> float:
+    """Return the publish time (s) in a message info of the middleware, NaN without one."""
+    return math.nan if info is None else info['source_timestamp'] * 1e-9
 
 
 class Probe:
@@ -122,26 +131,31 @@ class Probe:
 
     def _count(self, taker, callback, qos) -> None:
         """Count contacts from their bytes, on the taker's thread or else the node's executor."""
-        subscribe = self.node.create_subscription if taker is None else taker.subscribe
-        subscribe(TactileContactArray, 'contacts', callback, qos, raw=True)
+        if taker is None:
+            self.node.create_subscription(TactileContactArray, 'contacts', callback, qos,
+                                          raw=True)
+        else:
+            taker.subscribe(TactileContactArray, 'contacts', callback, qos, raw=True, info=True)
 
     def close(self) -> None:
         """Stop the probe's own thread (before its node is destroyed)."""
         if self._taker is not None:
             self._taker.stop()
 
-    def _on_contacts_raw(self, data: bytes) -> None:
+    def _on_contacts_raw(self, data: bytes, info: Optional[dict] = None) -> None:
         now = time.time()
-        self._add(now, *read_contacts_head(data))
+        self._add(now, *read_contacts_head(data), published_s=_published(info))
 
-    def _on_audit_raw(self, data: bytes) -> None:
+    def _on_audit_raw(self, data: bytes, info: Optional[dict] = None) -> None:
         now = time.time()
-        self._add(now, *read_contacts_head(data), record=self.audit)
+        self._add(now, *read_contacts_head(data), record=self.audit,
+                  published_s=_published(info))
 
     def _add(self, received_s, sec, nanosec, sequence, device_us, contacts,
-             record: Optional[Record] = None) -> None:
+             record: Optional[Record] = None, published_s: float = math.nan) -> None:
         r = self.record if record is None else record
         r.received_s.append(received_s)
+        r.published_s.append(published_s)
         r.stamp_s.append(sec + nanosec * 1e-9)
         r.sequence.append(sequence)
         r.device_us.append(device_us)
@@ -211,7 +225,9 @@ class Probe:
         device_window_s (start, end) keeps the scans whose device time lies in it. Lost scans
         are the gaps in the received sequence numbers, or expected less received when the
         number of scans sent in the window is known. Latency 'from last byte' runs from the
-        header stamp (the driver's host time for the scan's last byte) to arrival here; with
+        header stamp (the driver's host time for the scan's last byte) to arrival here, and
+        'published after last byte' to the publish (the messages taken on the probe's own
+        thread, which have the middleware's source timestamp); with
         epoch_s (host time of device time 0) also 'from device time', which adds the board's
         own wait before it sent the scan. ``record`` summarises another record (the audit).
         """
@@ -235,6 +251,10 @@ class Probe:
         out['lost'] = (max(expected - int(seq_kept.size), 0) if expected is not None
                        else out['sequence_gaps'])
         out['latency_from_last_byte_ms'] = percentiles_ms(received[keep] - stamp[keep])
+        published = np.full(received.shape, np.nan)  # rows added without it: not told
+        published[:len(r.published_s)] = r.published_s
+        told = keep & np.isfinite(published)
+        out['published_after_last_byte_ms'] = percentiles_ms(published[told] - stamp[told])
         if epoch_s is not None:
             out['latency_from_device_time_ms'] = percentiles_ms(
                 received[keep] - (epoch_s + device[keep]))

@@ -92,7 +92,7 @@ def test_latest_only_is_busy_from_an_offer_until_its_job_has_returned():
 
 
 @contextlib.contextmanager
-def numbers_taken_on_thread(thread_name, on_message, on_error, depth):
+def numbers_taken_on_thread(thread_name, on_message, on_error, depth, info=False):
     """Yield (context, executor, publisher): a node's `numbers` taken by a TakenOnThread."""
     import rclpy
     from rosutil import ros_context, spin_until
@@ -103,7 +103,7 @@ def numbers_taken_on_thread(thread_name, on_message, on_error, depth):
         node = rclpy.create_node('taken_on_thread', context=context)
         executor.add_node(node)
         sub = TakenOnThread(node, thread_name, on_error)
-        sub.subscribe(UInt32, 'numbers', on_message, depth)
+        sub.subscribe(UInt32, 'numbers', on_message, depth, info=info)
         sub.start()
         pub = node.create_publisher(UInt32, 'numbers', depth)
         try:
@@ -136,6 +136,26 @@ def test_a_subscription_taken_on_its_own_thread_gets_every_message_and_no_execut
     assert taken == [i for i in range(50) if i != 3]  # in order; the bad one is reported
     assert [str(e) for e in errors] == ['a bad message']
     assert threads == {'skin-test-take'}
+
+
+def test_a_subscription_asked_for_message_info_gets_the_publish_time_with_each_message():
+    import time
+
+    from rosutil import spin_until
+    from std_msgs.msg import UInt32
+
+    taken = []
+    with numbers_taken_on_thread('skin-test-info', lambda msg, info: taken.append(
+            (msg.data, info['source_timestamp'] * 1e-9)), taken.append, 10, info=True) as (
+            _, executor, pub):
+        before = time.time()
+        pub.publish(UInt32(data=5))
+        after = time.time()
+        assert spin_until(executor, lambda: len(taken) == 1, 10.0)
+    (data, published), = taken
+    # The publisher's wall clock during its publish call (a float of time.time() is as fine
+    # as 0.3 us: a millisecond either side only absorbs that).
+    assert data == 5 and before - 1e-3 <= published <= after + 1e-3
 
 
 def test_a_callback_failing_because_ctrl_c_shut_the_context_is_not_reported():

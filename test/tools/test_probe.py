@@ -99,3 +99,18 @@ def test_a_counting_probe_reads_the_contacts_bytes_and_a_keeping_one_the_message
     node = _Node()
     Probe(node, keep_messages=True)
     assert not node.raw['contacts']
+
+
+def test_the_publish_time_comes_from_the_message_info_of_a_taken_message():
+    # Stamped at 5.25 s (the last byte), published 0.4 ms later by the middleware's word.
+    node = _Node()
+    probe = Probe(node)
+    msg = TactileContactArray(header=Header(stamp=Time(sec=5, nanosec=250000000)), sequence=7)
+    node.callbacks['contacts'](serialize_message(msg), {'source_timestamp': 5_250_400_000})
+    assert probe.summary()['published_after_last_byte_ms'] == pytest.approx(
+        {'p50': 0.4, 'p99': 0.4, 'max': 0.4}, abs=1e-3)
+    # An executor's callback has no message info: no publish time, no percentile.
+    node = _Node()
+    probe = Probe(node)
+    node.callbacks['contacts'](serialize_message(msg))
+    assert probe.summary()['published_after_last_byte_ms']['p99'] is None

@@ -34,6 +34,7 @@ bytes for 16 x 16 instead of 1 048.  The decoder takes both versions, mixed on o
 from __future__ import annotations
 
 import binascii
+from binascii import crc_hqx
 from dataclasses import dataclass
 import struct
 import zlib
@@ -58,6 +59,10 @@ MAX_DEVICE_TIME_US = 2 ** 64 - 1
 # the sequence number by more frames than microseconds passed is a corrupt number, not a loss.
 MIN_SCAN_US = 1
 _CRC = struct.Struct('<I')
+_HEAD = struct.Struct('<2sBBIQBBH')  # the header and its check, read by one call
+# Clean version-2 frames that follow each other are unpacked together, up to this many counts:
+# a frame a consumer keeps keeps the whole run's array (its layers view it), 16 kB at most.
+RUN_COUNTS = 8192
 _COUNTS = np.dtype('<u2')
 
 # Board information frame: marker, info version, text length, text, CRC-16 of all before it.
@@ -120,6 +125,24 @@ class Frame:
         return self.row_valid
 
     __hash__ = None
+
+
+_new = object.__new__
+
+
+def _frame(seq: int, device_time_us: int, rows: int, cols: int, top: np.ndarray,
+           bottom: np.ndarray, version: int, faults: int, row_valid) -> Frame:
+    """
+    Return Frame(seq, device_time_us, ...) as the decoder makes one per frame it accepts.
+
+    The frozen dataclass's __init__ sets each field by a call to object.__setattr__; one update
+    of the instance's dict does the same with a single call.
+    """
+    frame = _new(Frame)
+    frame.__dict__.update(seq=seq, device_time_us=device_time_us, rows=rows, cols=cols,
+                          top=top, bottom=bottom, version=version, faults=faults,
+                          row_valid=row_valid)
+    return frame
 
 
 def _check_int(name: str, value: int, high: int) -> int:
@@ -334,40 +357,58 @@ class FrameDecoder:
         """
         frames: list[Frame] = []
         view = memoryview(data).cast('B')
-        if not self._buf and type(data) is bytes:
-            # Nothing pending (the usual read of whole frames): decode in place, the layers are
-            # views of the caller's immutable bytes, and only an unfinished tail is kept. That
-            # tail is shorter than one frame, as _scan stops only inside a frame.
-            pos = self._scan(data, view, frames, copy=False)
-            self._buf += view[pos:]
-            return frames
-        # Feeding in slices of one frame keeps the buffer below two frames whatever arrives.
+        if type(data) is not bytes:
+            # The layers of version-1 frames view what they were decoded from: not a buffer the
+            # caller may change.
+            data = view.tobytes()
+            view = memoryview(data)
+        start = 0
+        buf = self._buf
+        # An unfinished frame waits: it is completed in the buffer, in slices of one frame so
+        # that the buffer holds less than two frames whatever arrives, until what is left came
+        # with this call. The rest of the read is decoded in place, every frame of it in one
+        # pass, the layers views of the caller's immutable bytes; only an unfinished tail is
+        # kept, shorter than one frame as _scan stops only inside a frame.
         step = self._max_frame
-        for start in range(0, len(view), step):
-            self._buf += view[start:start + step]
-            self._parse(frames)
+        while buf and start < len(view):
+            held = len(buf)
+            buf += view[start:start + step]
+            with memoryview(buf) as buf_view:
+                pos = self._scan(buf, buf_view, frames, copy=True)
+            if pos >= held and start + step < len(view):
+                # What is left came with this read, and more of the read follows: in place.
+                start += pos - held
+                del buf[:]
+                break
+            del buf[:pos]
+            start += step
+        if not buf and start < len(view):
+            pos = self._scan(data, view, frames, False, start)
+            if pos < len(view):
+                buf += view[pos:]
         return frames
 
-    def _parse(self, frames: list[Frame]) -> None:
-        buf = self._buf
-        with memoryview(buf) as view:
-            pos = self._scan(buf, view, frames, copy=True)
-        if pos:
-            del buf[:pos]
-
-    def _scan(self, buf, view: memoryview, frames: list[Frame], copy: bool) -> int:
+    def _scan(self, buf, view: memoryview, frames: list[Frame], copy: bool,
+              start: int = 0) -> int:
         """
-        Decode what buf (bytes or bytearray) holds; return how many leading bytes are used up.
+        Decode what buf (bytes or bytearray) holds from start; return where it stopped.
 
         copy: the layers are copied out of buf (a buffer that changes later), else they view it.
+        Clean version-2 frames (no flag) that follow each other are checked one by one and
+        unpacked together (:meth:`_unpack_run`); any other frame first unpacks those before it,
+        so the frames come out in the order they were sent.
         """
         stats = self.stats
-        pos = 0
+        expected = self._expected
+        pos = start
         end = len(buf)
+        run: list = []  # (seq, device time) of the clean version-2 frames not yet unpacked
+        run_at = run_end = 0  # where the run's first frame starts and its last one ends
+        run_shape = (0, 0, 0, 0)  # rows, cols, counts offset and size of the run's frames
         # Where the next info marker is: one search per info frame, not one per frame (-1: none
         # up to the end, which does not move within this call).
-        info_at = buf.find(INFO_SYNC)
-        while True:
+        info_at = buf.find(INFO_SYNC, pos)
+        while pos < end:
             found = buf.find(SYNC, pos)
             if info_at >= 0:
                 if info_at < pos:
@@ -390,19 +431,18 @@ class FrameDecoder:
             pos = found
             if end - pos < HEADER_SIZE:
                 break
-            _, version, flags, seq, time_us, rows, cols = HEADER.unpack_from(buf, pos)
+            _, version, flags, seq, time_us, rows, cols, check = _HEAD.unpack_from(buf, pos)
             if flags & ~(packed.FLAGS_V2 if version == 2 else 0) or version not in (1, 2):
                 stats.version_errors += 1
                 stats.bytes_discarded += len(SYNC)
                 pos += len(SYNC)
                 continue
-            (check,) = HEADER_CHECK.unpack_from(buf, pos + HEADER.size)
-            if header_crc(view[pos:pos + HEADER.size]) != check:
+            if crc_hqx(view[pos:pos + HEADER.size], 0xFFFF) != check:  # as header_crc
                 stats.crc_errors += 1
                 stats.bytes_discarded += len(SYNC)
                 pos += len(SYNC)
                 continue
-            if not self._shape_ok(rows, cols):
+            if (rows, cols) != expected and not self._shape_ok(rows, cols):
                 stats.size_errors += 1
                 self.last_rejected_shape = (rows, cols)
                 stats.bytes_discarded += len(SYNC)
@@ -423,6 +463,24 @@ class FrameDecoder:
                 stats.bytes_discarded += len(SYNC)
                 pos += len(SYNC)
                 continue
+            if version == 2 and not flags:  # the usual scan: no fault, every row sampled
+                (_, at_counts, at_pad, _), clean_head, zeros = clean
+                if (buf[pos + HEADER_SIZE:pos + at_counts] != clean_head
+                        or buf[pos + at_pad:crc_at] != zeros):
+                    stats.crc_errors += 1
+                    stats.bytes_discarded += len(SYNC)
+                    pos += len(SYNC)
+                    continue
+                self._accept(seq, time_us, rows, cols, 2, 0, None)
+                if run and (pos != run_end or run_shape[:2] != (rows, cols)
+                            or 2 * n * len(run) >= RUN_COUNTS):
+                    self._unpack_run(buf, run_at, run, run_shape, frames)
+                    run = []
+                if not run:
+                    run_at, run_shape = pos, (rows, cols, at_counts, size)
+                run.append((seq, time_us))
+                pos = run_end = pos + size
+                continue
             if version == 1:
                 body = self._body_v1(buf, pos, n, copy)
             else:
@@ -432,21 +490,51 @@ class FrameDecoder:
                 stats.bytes_discarded += len(SYNC)
                 pos += len(SYNC)
                 continue
+            if run:
+                self._unpack_run(buf, run_at, run, run_shape, frames)
+                run = []
             counts, faults, row_valid = body
             layers = counts.reshape(2, rows, cols)
-            self._count_seq(seq, time_us)
-            self.last_shape = (rows, cols)
-            self.last_version = version
-            self.last_faults = faults
-            if faults:
-                stats.fault_frames += 1
-            if row_valid is not None:
-                stats.rows_flagged += 1
-            frames.append(Frame(seq, time_us, rows, cols, layers[0], layers[1], version, faults,
-                                row_valid))
-            stats.frames += 1
+            self._accept(seq, time_us, rows, cols, version, faults, row_valid)
+            frames.append(_frame(seq, time_us, rows, cols, layers[0], layers[1], version, faults,
+                                 row_valid))
             pos += size
+        if run:
+            self._unpack_run(buf, run_at, run, run_shape, frames)
         return pos
+
+    def _accept(self, seq: int, time_us: int, rows: int, cols: int, version: int, faults: int,
+                row_valid) -> None:
+        """Count an accepted frame and follow its sequence number."""
+        self._count_seq(seq, time_us)
+        self.last_shape = (rows, cols)
+        self.last_version = version
+        self.last_faults = faults
+        stats = self.stats
+        if faults:
+            stats.fault_frames += 1
+        if row_valid is not None:
+            stats.rows_flagged += 1
+        stats.frames += 1
+
+    @staticmethod
+    def _unpack_run(buf, start: int, heads: list, shape: tuple, frames: list) -> None:
+        """
+        Append the Frames of the clean version-2 frames that follow each other from start.
+
+        shape: (rows, cols, offset of the counts in a frame, frame size).
+        """
+        rows, cols, at_counts, size = shape
+        count = len(heads)
+        counts = packed.unpack_frames(buf, start + at_counts, 2 * rows * cols, count, size)
+        if count == 1:
+            top, bottom = counts.reshape(2, rows, cols)
+            (seq, time_us), = heads
+            frames.append(_frame(seq, time_us, rows, cols, top, bottom, 2, 0, None))
+            return
+        layers = counts.reshape(count, 2, rows, cols)
+        for (seq, time_us), top, bottom in zip(heads, layers[:, 0], layers[:, 1]):
+            frames.append(_frame(seq, time_us, rows, cols, top, bottom, 2, 0, None))
 
     @staticmethod
     def _body_v1(buf, pos: int, n: int, copy: bool):
@@ -465,18 +553,14 @@ class FrameDecoder:
     @staticmethod
     def _body_v2(buf, pos: int, rows: int, clean: tuple, flags: int):
         """
-        Return (counts, faults, row_valid or None) of the checked version-2 frame at pos.
+        Return (counts, faults, row_valid or None) of a checked, flagged version-2 frame at pos.
 
-        None if its body disagrees with its flags, or a spare or padding bit is set.
+        None if its body disagrees with its flags, or a spare or padding bit is set. (A frame
+        with no flag is checked and unpacked in :meth:`_scan`.)
         """
         (at_map, at_counts, at_pad, size), clean_head, zeros = clean
         if buf[pos + at_pad:pos + size - CRC_SIZE] != zeros:
             return None
-        if not flags:  # the usual scan: no fault, every row sampled
-            if buf[pos + HEADER_SIZE:pos + at_counts] != clean_head:
-                return None
-            counts = packed.unpack_counts(buf, pos + at_counts, (at_pad - at_counts) * 2 // 3)
-            return counts, 0, None
         (faults,) = packed.FAULTS.unpack_from(buf, pos + HEADER_SIZE)
         row_map = bytes(buf[pos + at_map:pos + at_counts])
         all_valid = row_map == clean_head[packed.FAULTS.size:]

@@ -391,7 +391,9 @@ def _e2e_section(res, images) -> list:
            "queue** (in the audit, not at depth 5: the subscriber's queue overflowed while it "
            'waited for a core).',
            "- **latency**: from the scan's last byte (the header stamp: the driver's host time "
-           'when its read returned the scan) to the contacts message at the subscriber. The '
+           'when its read returned the scan) to the contacts message at the subscriber, and to '
+           "its publish (**published**: the middleware's source timestamp, the driver's "
+           'wall clock as the stamp is, without the subscriber waking up). The '
            "board's own part, from the scan's device time to its last byte at the driver, "
            "is shown apart (it holds the simulator's 2 ms write batching).",
            '- **CPU per scan**: CPU seconds of each process over the measured window '
@@ -409,10 +411,12 @@ def _e2e_section(res, images) -> list:
         where = ', '.join(f'{k} {v}' for k, v in r.get('lost_where', {}).items() if v)
         rows.append((label(r), f'{r["rate_hz"]:g}', r['expected_scans'],
                      r['received'], r['lost'], where or '-', _ms(r['latency_ms']),
+                     _ms(r.get('published_ms') or dict.fromkeys(('p50', 'p99', 'max'))),
                      _ms(r['board_to_driver_ms']), _ms(r['latency_from_device_time_ms']),
                      ' / '.join(f'{k} {v:.0f}' for k, v in cpu.items())))
     out += _table(['layout', 'rate [Hz]', 'scans sent', 'contacts received', 'lost (depth 5)',
                    'where lost', 'last byte -> subscriber p50 / p99 / max [ms]',
+                   'last byte -> published p50 / p99 / max [ms]',
                    'device time -> last byte [ms]', 'device time -> subscriber [ms]',
                    'CPU per scan [us]'], rows)
     out += ['', "The nodes' own counters over the same window (/diagnostics):", '']
