@@ -36,7 +36,7 @@ def test_parameter_file_points_both_nodes_at_the_workdir_and_takes_overrides(tmp
 
 def test_the_simulated_board_plays_a_bundled_scene_and_counts_what_it_sent(tmp_path, executor):
     with open(tmp_path / 'sim.log', 'w') as log:
-        board = harness.start_sim(executor, 'bench', str(tmp_path / 'skin0'), 200.0, log,
+        board = harness.start_sim(executor, 'random', str(tmp_path / 'skin0'), 200.0, log,
                                   loop=True)
         assert board.epoch is not None and os.path.exists(tmp_path / 'skin0')
         harness.spin_for(executor, 0.3)
