@@ -21,10 +21,15 @@ def results():
                                     bench_core.family_methods(False), skins=['default', 'soft'],
                                     log=lambda s: None),
         'calibration': calibration_accuracy(10, skins=['saturating'], log=lambda s: None),
-        'forward': bench_core.forward_family(3, ['default'], log=lambda s: None),
         'how': {'command': 'test', 'pinned_cpu': 0, 'repetitions': 'tiny'},
         'elapsed_s': 1.0, 'generated_utc': 'now',
     }
+
+
+@pytest.fixture(scope='session')
+def forward():
+    """Return section 7's rows: apart from ``results``, as learning the skin costs most."""
+    return bench_core.forward_family(2, ['default'], log=lambda s: None)
 
 
 def _e2e_run(layout, rate, lost, p99, cpu, where=None):

@@ -121,8 +121,8 @@ def test_family_only_prints_every_scene_and_the_worst_with_the_oracle(
 
 
 def test_the_forward_model_section_puts_model_fit_beside_the_default_and_the_oracle(
-        results, tmp_path):
-    res = dict(results)
+        results, forward, tmp_path):
+    res = dict(results, forward=forward)
     res['machine'] = dict(res['machine'], load_after=[0.0, 0.0, 0.0])
     res['targets'] = scoring.targets(res)
     bench.write(res, str(tmp_path))
