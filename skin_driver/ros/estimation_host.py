@@ -103,7 +103,7 @@ class EstimationHost:
         # What is in force, the estimating thread's; changes are handed over to it (_swap).
         self._handover = Handover(
             Live(ContactEstimator(self._config(EstimatorConfig().pitch_m)), None, 0),
-            lambda new, old: new.estimator.carry_time_from(old.estimator))
+            lambda new, old: new.estimator.carry_from(old.estimator))
         self._estimating = None  # the thread that estimated last (threading.get_ident())
         # The estimator holds the calibration; the services put every new one in force here.
         self.mount = None  # until made: the file's calibration is put in force first
