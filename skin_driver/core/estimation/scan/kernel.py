@@ -14,11 +14,12 @@ a count, no check); others are checked and copied as float64.
 The kernel owns the dead-taxel marks its scans revive and, for scans given their time, the
 baselines that follow drift and each taxel's age under load: the estimation's mutable state,
 which a kernel built to replace another takes over at the swap (:meth:`Kernel.carry_from`).
-One thread owns a kernel, the one that runs its scans, and it alone enters it; it takes no lock. Other threads read what the owner publishes after each scan
-(:meth:`Kernel.dead_masks`, :attr:`Kernel.drift`), replaced whole, never changed. With the owner
-check on (``SKIN_KERNEL_CHECK_OWNER=1`` or ``Kernel(spec, check_owner=True)``: the tests') a
-kernel records the first thread that enters it and refuses any other (:class:`NotTheOwner`,
-kept in :func:`breaches` too) until :meth:`Kernel.claim` hands it over.
+One thread owns a kernel, the one that runs its scans, and it alone enters it; it takes no
+lock. Other threads read what the owner publishes after each scan (:meth:`Kernel.dead_masks`,
+:attr:`Kernel.drift`), replaced whole, never changed. With the owner check on
+(``SKIN_KERNEL_CHECK_OWNER=1`` or ``Kernel(spec, check_owner=True)``: the tests') a kernel
+records the first thread that enters it and refuses any other (:class:`NotTheOwner`, kept in
+:func:`breaches` too) until :meth:`Kernel.claim` hands it over.
 :meth:`Kernel.condition` and :meth:`Kernel.force` give a scan's conditioning alone (tared
 counts, cut taxels, the line leak taken off, forces): what a calibration reads its presses from.
 
