@@ -154,3 +154,5 @@ def test_a_taxel_revived_between_a_change_s_build_and_its_swap_stays_revived(own
     top, bottom = render(model, [Press(0.0425, 0.0425, 10.0, 0.5, 2.0)], rng)
     top[8, 8] = 0
     assert live.process(top, bottom) == est.process(top, bottom)
+    # Its heatmaps too: (8, 8) reads its own 0, not its neighbours' mean.
+    assert live.maps_of(top, bottom)[0][8, 8] == 0.0

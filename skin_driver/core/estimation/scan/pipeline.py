@@ -274,14 +274,16 @@ class ContactEstimator:
         Return the (top, bottom) force maps (N per taxel) of one scan, as the scans condition it.
 
         For the heatmaps of a thread that does not run the scans: it conditions on a kernel of
-        its own (the dead marks as they were when it was made), never on the scanning one. That
-        kernel belongs to whichever thread holds its lock.
+        its own (the dead marks the scanning one published when it was made), never on the
+        scanning one. That kernel belongs to whichever thread holds its lock.
         """
         t, b = check_pair(top_counts, bottom_counts)
         with self._viewer_lock:
             viewer = self._viewer
             if viewer is None or viewer.shape != t.shape:
-                viewer = self._viewer = self._new_kernel(t.shape)
+                # Untared, there are no marks, and no grid to hold the snapshot to.
+                published = self.conditioning if self._conditioning.shape is not None else None
+                viewer = self._viewer = self._new_kernel(t.shape, published)
             viewer.claim()
             force = viewer.condition(t, b).force
         return force[0], force[1]
