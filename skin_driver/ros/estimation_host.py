@@ -18,11 +18,12 @@ Every change (tare, calibration, parameters, a new skin or taxel pitch) builds a
 from the newest one off the hot path, with its kernel, serialised by a lock only changes take,
 and hands it over (core scan/handover.py, one immutable :class:`Live`: the estimator, the skin it
 was checked for, its generation); the estimating thread puts the changes in force in order
-before its next scan and carries the drift state into the new estimator then, so no scan is lost
-from it. Other threads read what the owner publishes (the drift and dead marks each kernel
-publishes after a scan) or work on kernels of their own (heatmaps: ``maps_of``; a calibration's
-presses, on the calibration's worker thread: calibration_services). The scans' thread changes
-only between two scans (to a slow estimator's thread and back); the new one claims the kernels.
+before its next scan and carries the kernels' per-scan state (dead marks, drift state) into the
+new estimator then, so no scan is lost from it. Other threads read what the owner publishes
+(the drift and dead marks each kernel publishes after a scan) or work on kernels of their own
+(heatmaps: ``maps_of``; a calibration's presses, on the calibration's worker thread:
+calibration_services). The scans' thread changes only between two scans (to a slow estimator's
+thread and back); the new one claims the kernels.
 A scan of a skin the estimator was not checked for asks the executor to check it (the
 calibration's skin, the pitch) and is counted, not estimated, until then.
 Each diagnostic count is written by one thread only: the hot path raises totals, the report takes
@@ -103,7 +104,7 @@ class EstimationHost:
         # What is in force, the estimating thread's; changes are handed over to it (_swap).
         self._handover = Handover(
             Live(ContactEstimator(self._config(EstimatorConfig().pitch_m)), None, 0),
-            lambda new, old: new.estimator.carry_time_from(old.estimator))
+            lambda new, old: new.estimator.carry_from(old.estimator))
         self._estimating = None  # the thread that estimated last (threading.get_ident())
         # The estimator holds the calibration; the services put every new one in force here.
         self.mount = None  # until made: the file's calibration is put in force first

@@ -130,27 +130,3 @@ double sk_held_s(const sk_kernel *k, const sk_pair *p)
   }
   return held;
 }
-
-int sk_drift_state(const sk_kernel *k, double *out)
-{
-  int n2 = 2 * k->n;
-  if (out) {
-    for (int i = 0; i < n2; i++) {
-      out[i] = k->baseline[i] - k->tare[i];
-    }
-    memcpy(out + n2, k->age, sizeof(double) * (size_t)n2);
-    out[2 * n2] = k->last_time;
-  }
-  return 2 * n2 + 1;
-}
-
-void sk_set_drift_state(sk_kernel *k, const double *state)
-{
-  int n2 = 2 * k->n;
-  for (int i = 0; i < n2; i++) {
-    double off = isfinite(state[i]) ? state[i] : 0.0;
-    k->baseline[i] = k->tare[i] + off;
-    k->age[i] = isfinite(state[n2 + i]) && state[n2 + i] > 0.0 ? state[n2 + i] : 0.0;
-  }
-  k->last_time = state[2 * n2];
-}

@@ -540,3 +540,23 @@ void sk_dead(const sk_kernel *k, unsigned char *out)
 {
   memcpy(out, k->dead, 2 * k->n);
 }
+
+int sk_carry(sk_kernel *into, const sk_kernel *from)
+{
+  if (into->rows != from->rows || into->cols != from->cols) {
+    return SK_ERR_SETTINGS;
+  }
+  if (into == from) {
+    return SK_OK;
+  }
+  int n2 = 2 * into->n;
+  for (int i = 0; i < n2; i++) {
+    /* the drift since each kernel's own tare: a kernel of the same tare has the same one */
+    into->baseline[i] = into->tare[i] + (from->baseline[i] - from->tare[i]);
+  }
+  memcpy(into->age, from->age, sizeof(double) * (size_t)n2);
+  into->last_time = from->last_time;
+  memcpy(into->dead, from->dead, (size_t)n2);
+  sk_live_counts(into);
+  return SK_OK;
+}

@@ -168,36 +168,55 @@ static void conditioning_writes_what_is_asked(void **state)
   sk_free(k);
 }
 
-/* The drift state is 4 n + 1 numbers, carried whole into another kernel of the skin. */
-static void the_drift_state_is_carried_whole(void **state)
+/*
+ * sk_carry puts the per-scan state in force in a kernel built before it changed: a mark revived
+ * and a drift followed after the build are kept, and the two kernels scan alike from then on.
+ */
+static void the_per_scan_state_is_carried_whole(void **state)
 {
   (void)state;
-  spec s = spec_of(5, 7, SK_CENTROID);
+  int rows = 5, cols = 7, n = rows * cols, t = 2 * cols + 3;
+  unsigned char *dead = calloc(2 * (size_t)n, 1), *marks = malloc(2 * (size_t)n);
+  dead[t] = 1;
+  spec s = spec_of(rows, cols, SK_CENTROID);
   s.drift = 1;
-  sk_kernel *k = kernel_of(&s), *other = kernel_of(&s);
-  int n = 5 * 7, size = sk_drift_state(k, NULL);
-  assert_int_equal(size, 4 * n + 1);
-  double *maps = rest_maps(5, 7);
-  press(maps, 5, 7, 2, 3, 0, 0, 800, 1.0);
+  s.dead = dead;
+  sk_kernel *k = kernel_of(&s), *built = kernel_of(&s);
+  double *maps = rest_maps(rows, cols);
+  press(maps, rows, cols, 2, 3, 0, 0, 800, 1.0);
   for (int i = 0; i < 2 * n; i++) {
     maps[i] += i % 3;   /* a drift to follow */
   }
-  sk_contact *out = records_for(&s);
-  sk_status status;
+  sk_contact *out = records_for(&s), *out_built = records_for(&s);
+  sk_status status, status_built;
   assert_true(sk_scan(k, maps, 0.0, 0, out, &status) >= 1);
+  assert_int_equal(status.revived, 1);
   assert_true(sk_scan(k, maps, 2.0, 0, out, &status) >= 1);
-  double *state_k = malloc(sizeof(double) * (size_t)size);
-  double *state_other = malloc(sizeof(double) * (size_t)size);
-  assert_int_equal(sk_drift_state(k, state_k), size);
-  assert_float_equal(state_k[4 * n], 2.0, 0.0);
-  sk_set_drift_state(other, state_k);
-  sk_drift_state(other, state_other);
-  assert_memory_equal(state_k, state_other, sizeof(double) * (size_t)size);
-  free(state_k);
-  free(state_other);
+  sk_dead(built, marks);
+  assert_int_equal(marks[t], 1);   /* built before the scans revived it */
+
+  assert_int_equal(sk_carry(built, k), SK_OK);
+  sk_dead(built, marks);
+  assert_int_equal(marks[t], 0);
+  int found = sk_scan(k, maps, 3.0, 0, out, &status);
+  assert_int_equal(sk_scan(built, maps, 3.0, 0, out_built, &status_built), found);
+  assert_memory_equal(out, out_built, sizeof(sk_contact) * (size_t)found);
+  assert_memory_equal(status.drift_mean, status_built.drift_mean, sizeof status.drift_mean);
+  assert_memory_equal(status.drift_max, status_built.drift_max, sizeof status.drift_max);
+  assert_int_equal(sk_carry(k, k), SK_OK);
+
+  /* a kernel of another grid is refused */
+  spec wide = spec_of(rows, cols + 1, SK_CENTROID);
+  wide.drift = 1;
+  sk_kernel *other = kernel_of(&wide);
+  assert_int_equal(sk_carry(other, k), SK_ERR_SETTINGS);
+  free(dead);
+  free(marks);
   free(maps);
   free(out);
+  free(out_built);
   sk_free(k);
+  sk_free(built);
   sk_free(other);
 }
 
@@ -212,7 +231,7 @@ int main(void)
     cmocka_unit_test(freeing_no_kernel_does_nothing),
     cmocka_unit_test(force_reads_the_tables),
     cmocka_unit_test(conditioning_writes_what_is_asked),
-    cmocka_unit_test(the_drift_state_is_carried_whole),
+    cmocka_unit_test(the_per_scan_state_is_carried_whole),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -152,7 +152,7 @@ def test_changes_under_a_2_khz_fused_reader_never_tear_a_scan_nor_lose_one(tmp_p
 def _timed_copy(estimator, before=None):
     """Return a new copy of estimator, with before's tracked baselines and creep ages if given."""
     copy = estimator.with_config(estimator.config)
-    return copy.carry_time_from(before) if before is not None else copy
+    return copy.carry_from(before) if before is not None else copy
 
 
 def _same_contacts(made, published) -> bool:

@@ -14,13 +14,15 @@
  * (sk_model_render, sk_model_residuals, sk_model_fit_free, ...).
  *
  * A kernel is built once per estimator from its state (tare, gains, force tables, settings) and
- * is not changed afterwards, except for its per-scan state: dead-taxel marks that a touch
- * revives (reported) and, for scans given their time, the baselines that follow drift and each
- * taxel's age under load (drift.c, sk_drift_state). It is owned by the one thread that runs its
- * scans, and no other thread calls it: the binding copies what others read (the drift of the last
- * scan, the dead marks) after each scan, and can check that only the owner enters a kernel
- * (SKIN_KERNEL_CHECK_OWNER). The kernel takes no lock and keeps no global state, so kernels on
- * different threads run side by side.
+ * is not changed afterwards, except for its per-scan state: the dead-taxel marks, which a touch
+ * revives (reported), and, for scans given their time, the baselines that follow drift and each
+ * taxel's age under load (drift.c). The kernel is the one owner of that state: a kernel built to
+ * replace another of the same skin and tare takes it over at the swap (sk_carry), so nothing a
+ * scan changed between the new kernel's build and the swap is lost. It is owned by the one
+ * thread that runs its scans, and no other thread calls it: the binding copies what others read
+ * (the drift of the last scan, the dead marks) after each scan, and can check that only the
+ * owner enters a kernel (SKIN_KERNEL_CHECK_OWNER). The kernel takes no lock and keeps no global
+ * state, so kernels on different threads run side by side.
  */
 #ifndef SKIN_KERNEL_SKIN_KERNEL_H
 #define SKIN_KERNEL_SKIN_KERNEL_H
@@ -36,7 +38,7 @@ extern "C" {
  * (libskin_kernel.so.<SK_ABI_VERSION>), and sk_layout reports it with every struct's layout,
  * which the binding compares with its own mirrors before any other call.
  */
-#define SK_ABI_VERSION 14
+#define SK_ABI_VERSION 15
 
 /* Shift methods: centroid, taxel_fit, poc, and model_fit (taxel_fit's shift refitted by the
  * calibration's taxel model, sk_settings.model; taxel_fit's own without one). */
@@ -222,13 +224,14 @@ int sk_force(const sk_kernel *k, const double *counts, const unsigned char *clip
 void sk_dead(const sk_kernel *k, unsigned char *out);
 
 /*
- * The time's per-scan state, to carry it into another kernel of the same skin (a parameter
- * changed; a tare starts afresh): each taxel's baseline drift since the tare (2, rows, cols),
- * its age under load (2, rows, cols), the last scan's time. Returns the count of doubles
- * (4 rows cols + 1), written to out unless NULL; sk_set_drift_state reads as many.
+ * Put the per-scan state of kernel `from` in force in `into`, built to replace it for the same
+ * skin and tare (a parameter or the calibration changed; a tare starts afresh): the dead-taxel
+ * marks, each taxel's baseline drift since the tare and age under load, and the last scan's
+ * time. The thread that owns both calls it between two scans, as it swaps `into` in: what
+ * `into` was built with is replaced, so a mark revived or a drift followed after its build is
+ * kept. Returns SK_OK, or SK_ERR_SETTINGS when the grids differ (nothing carried).
  */
-int sk_drift_state(const sk_kernel *k, double *out);
-void sk_set_drift_state(sk_kernel *k, const double *state);
+int sk_carry(sk_kernel *into, const sk_kernel *from);
 
 /*
  * Fit a skin's forward model to one contact's window: counts (2, rows, cols) tared counts,

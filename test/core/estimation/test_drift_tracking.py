@@ -104,11 +104,11 @@ def test_a_change_of_settings_carries_the_time_over_and_a_tare_starts_afresh():
     t = frames[-1].time_s + 1.0
     loaded = render_held(member.model, [scene.press], [t - 60.0], t, np.random.default_rng(9))
     changed = estimator.with_config(replace(estimator.config, min_confidence=0.2))
-    changed.carry_time_from(estimator)
+    changed.carry_from(estimator)
     held = changed.process(*loaded, time_s=t)[0].held_s
     assert held == pytest.approx(t - 60.0, abs=1.0)
     retared = estimator.with_tare(scene.tare_top, scene.tare_bottom)
-    retared.carry_time_from(estimator)
+    retared.carry_from(estimator)
     # its tare is new: it has seen no time yet
     assert retared.process(*loaded, time_s=t)[0].held_s == 0.0
 

@@ -3,8 +3,9 @@ The thread that runs the scans owns the live kernels; changes reach it between t
 
 With the owner check on, a kernel refuses every thread but the first to enter it; other threads
 read what the owner publishes. A change is built off the scans' thread and handed over
-(:class:`Handover`); the owner carries the drift state into it as it puts it in force, so the
-drift state sees every scan.
+(:class:`Handover`); the owner carries the per-scan state (drift state, dead marks) into it as it
+puts it in force, so the drift state sees every scan and a mark revived after the build stays
+revived.
 """
 
 from dataclasses import replace
@@ -55,10 +56,10 @@ def test_only_the_owner_enters_a_live_kernel_and_other_threads_read_its_snapshot
     scanned = _on_a_thread(lambda: est.process(top, bottom, 0.01))
     assert isinstance(scanned.get('error'), kernel.NotTheOwner)
     assert len(kernel.breaches()) == before + 1
-    # Carrying the drift state from another thread than the owner's (a swap built off the
+    # Carrying the per-scan state from another thread than the owner's (a swap built off the
     # scans' thread, as before the hand-over) enters the live kernel: refused too.
     changed = est.with_config(est.config)
-    carried = _on_a_thread(lambda: changed.carry_time_from(est))
+    carried = _on_a_thread(lambda: changed.carry_from(est))
     assert isinstance(carried.get('error'), kernel.NotTheOwner)
 
     # What the owner publishes is any thread's to read; so are heatmaps and a new estimator.
@@ -85,7 +86,7 @@ def test_changes_handed_over_mid_stream_lose_no_scan_from_the_drift_state(owner_
 
     def carry(new, old):
         applied.append(new)
-        new.carry_time_from(old)
+        new.carry_from(old)
     handover = Handover(est, carry)
     changes, between = 12, 20
     scanned = [0]
@@ -125,3 +126,33 @@ def test_changes_handed_over_mid_stream_lose_no_scan_from_the_drift_state(owner_
     assert final.config.min_confidence == pytest.approx(0.3 + 0.01 * changes)
     # The drift state saw every scan, across all the swaps.
     assert final.timed_scans == n
+
+
+def test_a_taxel_revived_between_a_change_s_build_and_its_swap_stays_revived(owner_checked):
+    model = SkinModel()
+    rng = np.random.default_rng(9)
+    frames = [render(model, [], rng) for _ in range(8)]
+    tops = np.stack([t for t, _ in frames])
+    tops[:, 8, 8] = 0  # dead at the tare
+    est = ContactEstimator().with_tare(tops, np.stack([b for _, b in frames]))
+    handover = Handover(est, lambda new, old: new.carry_from(old))
+    # A change built off the scans' thread while (8, 8) is still dead.
+    built = _on_a_thread(lambda: handover.put(lambda old: old.with_config(old.config)))['value']
+    assert built.dead_masks()[0][8, 8]
+    # The live estimator's next scan touches (8, 8) and revives it, before the swap.
+    assert handover.in_force is est
+    assert est.process(*render(model, [Press(0.0425, 0.0425, 10.0, 0.5, 2.0)], rng))
+    assert not est.dead_masks()[0][8, 8]
+
+    live = handover.take()
+    assert live is built
+    # Expected: revived in the new kernel too, not again at its next touch.
+    assert not live.dead_masks()[0][8, 8]
+    assert not live.conditioning.dead_masks()[0][8, 8]
+    # And the new kernel scans as the old one: a press around (8, 8) that it reads at 0 (a
+    # dead taxel would be filled from its neighbours, a live one reads its own 0).
+    top, bottom = render(model, [Press(0.0425, 0.0425, 10.0, 0.5, 2.0)], rng)
+    top[8, 8] = 0
+    assert live.process(top, bottom) == est.process(top, bottom)
+    # Its heatmaps too: (8, 8) reads its own 0, not its neighbours' mean.
+    assert live.maps_of(top, bottom)[0][8, 8] == 0.0

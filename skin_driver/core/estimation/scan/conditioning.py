@@ -9,6 +9,11 @@ bound by :mod:`kernel`): subtract the baseline, take the line leak out, zero wha
 touch threshold, level the taxels the ADC cut, fill dead taxels from their live neighbours and
 turn counts into force. Python never conditions a scan a second way: the calibration asks a
 kernel (:meth:`kernel.Kernel.condition`, :meth:`kernel.Kernel.force`).
+
+The dead marks here are what a kernel is built with: those a tare found, or those a kernel
+published (an estimator's snapshot, :attr:`pipeline.ContactEstimator.conditioning`). The live
+marks are the kernel's alone: its scans revive them, and a kernel swapped in for another of the
+same tare takes them over (:meth:`kernel.Kernel.carry_from`), never from here.
 """
 
 from __future__ import annotations

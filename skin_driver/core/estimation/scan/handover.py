@@ -5,8 +5,9 @@ The thread that runs the scans owns the estimator in force and its kernels (:mod
 Any other thread that changes it (a tare, a calibration, a parameter) builds the new estimator
 itself, off the hot path, and hands it over with :meth:`Handover.put`; the owner applies what was
 handed over, in order, when it calls :meth:`Handover.take` before its next scan, and carries the
-drift state into each new estimator then (``carry``): every scan is seen by the drift state of
-the estimator it met, none is lost between a copy and the swap. The owner takes no lock: the
+per-scan state (drift state, dead marks) into each new estimator then (``carry``): every scan is
+seen by the drift state of the estimator it met, none is lost between a copy and the swap, and a
+dead mark revived after the new estimator was built stays revived. The owner takes no lock: the
 hand-over is a deque, whose append and popleft are atomic.
 """
 

@@ -12,13 +12,14 @@ preallocated buffers, so a scan costs one copy of the maps into its buffer and o
 Maps of uint16, as the driver and the datasets give them, are copied as they are (any value is
 a count, no check); others are checked and copied as float64.
 The kernel owns the dead-taxel marks its scans revive and, for scans given their time, the
-baselines that follow drift and each taxel's age under load (:meth:`Kernel.drift_state`): the
-estimation's mutable state. One thread owns a kernel, the one that runs its scans, and it alone
-enters it; it takes no lock. Other threads read what the owner publishes after each scan
-(:meth:`Kernel.dead_masks`, :attr:`Kernel.drift`), replaced whole, never changed. With the owner
-check on (``SKIN_KERNEL_CHECK_OWNER=1`` or ``Kernel(spec, check_owner=True)``: the tests') a
-kernel records the first thread that enters it and refuses any other (:class:`NotTheOwner`,
-kept in :func:`breaches` too) until :meth:`Kernel.claim` hands it over.
+baselines that follow drift and each taxel's age under load: the estimation's mutable state,
+which a kernel built to replace another takes over at the swap (:meth:`Kernel.carry_from`).
+One thread owns a kernel, the one that runs its scans, and it alone enters it; it takes no
+lock. Other threads read what the owner publishes after each scan (:meth:`Kernel.dead_masks`,
+:attr:`Kernel.drift`), replaced whole, never changed. With the owner check on
+(``SKIN_KERNEL_CHECK_OWNER=1`` or ``Kernel(spec, check_owner=True)``: the tests') a kernel
+records the first thread that enters it and refuses any other (:class:`NotTheOwner`, kept in
+:func:`breaches` too) until :meth:`Kernel.claim` hands it over.
 :meth:`Kernel.condition` and :meth:`Kernel.force` give a scan's conditioning alone (tared
 counts, cut taxels, the line leak taken off, forces): what a calibration reads its presses from.
 
@@ -52,7 +53,7 @@ __all__ = ['METHODS', 'ABI_VERSION', 'TaxelModelNumbers', 'Curve', 'Direction', 
 METHODS = {'centroid': 0, 'taxel_fit': 1, 'poc': 2, 'model_fit': 3}
 
 # skin_kernel.h's SK_ABI_VERSION, the library's SOVERSION: libskin_kernel.so.<ABI_VERSION>.
-ABI_VERSION = 14
+ABI_VERSION = 15
 LIBRARY = f'libskin_kernel.so.{ABI_VERSION}'
 # The variable that names the library file to load, before any place searched.
 LIBRARY_VARIABLE = 'SKIN_KERNEL_LIBRARY'
@@ -275,7 +276,7 @@ def _sign(lib: ctypes.CDLL) -> None:
                   'sk_dead': (None, [ptr, ptr]),
                   'sk_condition': (_int, [ptr, ptr, ptr, ptr, ptr, ptr]),
                   'sk_force': (_int, [ptr, ptr, ptr, ptr]),
-                  'sk_drift_state': (_int, [ptr, ptr]), 'sk_set_drift_state': (None, [ptr, ptr]),
+                  'sk_carry': (_int, [ptr, ptr]),
                   'sk_model_fit': (_int, [ptr, _int, _int, ptr, ptr, ptr, ptr, _int, ptr, ptr]),
                   'sk_direction_features': (None, [_int] + [ptr] * 5 + [_double, ptr]),
                   'sk_creep': (None, [ptr, _int, ptr, _int, ptr]),
@@ -329,13 +330,13 @@ class Kernel:
 
     The kernel is the estimation's one piece of mutable state: the dead-taxel marks its scans
     revive, the drift followed and the time under load. The thread that runs the scans owns it
-    and alone enters it (:meth:`scan`, :meth:`condition`, :meth:`drift_state`, ...); any
+    and alone enters it (:meth:`scan`, :meth:`condition`, :meth:`carry_from`, ...); any
     thread reads the snapshots the owner publishes (:meth:`dead_masks`, :attr:`drift`,
     :attr:`timed_scans`) and :meth:`force`, which reads only what never changes.
     """
 
     # What only the owner enters: with the owner check on, each is wrapped by _owned.
-    _ENTERED = ('scan', 'scan_shifted', 'condition', 'drift_state', 'set_drift_state')
+    _ENTERED = ('scan', 'scan_shifted', 'condition', 'carry_from', '_entered')
 
     def __init__(self, spec: KernelSettings, check_owner: bool = None):
         """
@@ -545,23 +546,25 @@ class Kernel:
         seen = self._drift_seen  # the one read: published whole by the owner
         return (tuple(seen.drift_mean), tuple(seen.drift_max))
 
-    def drift_state(self) -> np.ndarray:
-        """Return the time's per-scan state (``sk_drift_state``): to carry into another kernel."""
-        out = np.zeros(self._lib.sk_drift_state(self._handle, None))
-        self._lib.sk_drift_state(self._handle, _address(out))
-        return out
-
-    def set_drift_state(self, state: np.ndarray, timed_scans: int = 0) -> None:
+    def carry_from(self, other: 'Kernel') -> None:
         """
-        Put another kernel's :meth:`drift_state` of the same grid in force here.
+        Put ``other``'s per-scan state in force here (``sk_carry``): the owner's, at the swap.
 
-        ``timed_scans``: how many timed scans that state saw (:attr:`timed_scans`), carried on.
+        ``other`` is the kernel of the same skin and tare this one replaces: its dead marks,
+        drift followed, time under load and count of timed scans (:attr:`timed_scans`) go on
+        here, whatever this one was built with. The owner calls it between two scans (it enters
+        both). Of another grid raises ValueError, nothing carried.
         """
-        state = np.ascontiguousarray(state, dtype=np.float64)
-        if state.shape != (4 * self.shape[0] * self.shape[1] + 1,):
-            raise ValueError(f'a drift state of {state.shape} for a {self.shape} kernel')
-        self._lib.sk_set_drift_state(self._handle, _address(state))
-        self.timed_scans = int(timed_scans)
+        if self._lib.sk_carry(self._handle, other._entered()) != _OK:
+            raise ValueError(f'the per-scan state of a {other.shape} kernel for a {self.shape} '
+                             'one')
+        self.timed_scans = other.timed_scans
+        self._drift_seen = other._drift_seen
+        self._publish_dead()
+
+    def _entered(self) -> ctypes.c_void_p:
+        """Return the handle, to a call that enters this kernel from another (the owner's)."""
+        return self._handle
 
     def _publish_dead(self) -> None:
         """Publish the dead marks as they are now (the owner's, after a scan revived one)."""

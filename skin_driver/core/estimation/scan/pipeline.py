@@ -147,9 +147,10 @@ class ContactEstimator:
 
     An estimator does not change once made: its config, calibration and tare are fixed, and a
     change (``with_*``) makes a new one, which a live host swaps in whole. The mutable state is
-    the kernel's: the dead-taxel marks that its scans revive and, for scans given their time,
-    the drift followed and the time under load. It belongs to the thread that runs the scans
-    (:meth:`process`, :meth:`measure_shifts`, :meth:`carry_time_from`), which alone enters the
+    the kernel's alone: the dead-taxel marks that its scans revive and, for scans given their
+    time, the drift followed and the time under load; the swap carries it into the new
+    estimator's kernel (:meth:`carry_from`). It belongs to the thread that runs the scans
+    (:meth:`process`, :meth:`measure_shifts`, :meth:`carry_from`), which alone enters the
     kernel and takes no lock; other threads read the snapshots it publishes after each scan
     (:meth:`dead_masks`, :meth:`drift`, :attr:`conditioning`, :attr:`timed_scans`) or
     condition maps on a kernel of their own (:meth:`maps_of`, :meth:`conditioning_kernel`). A
@@ -191,8 +192,8 @@ class ContactEstimator:
             self._kernels = {conditioning.shape: self._new_kernel(conditioning.shape)}
         self._viewer = None
         self._viewer_lock = threading.Lock()
-        # Which tare this estimator's baselines come from: a tare starts the time afresh, any
-        # other change carries it (carry_time_from).
+        # Which tare this estimator's baselines and dead marks come from: a tare starts them
+        # afresh, any other change carries them (carry_from).
         self._tare_epoch = object()
 
     def _same_tare(self, made: 'ContactEstimator') -> 'ContactEstimator':
@@ -210,7 +211,9 @@ class ContactEstimator:
         """
         Return a snapshot of the conditioning: tare, gains, curves, the dead marks in force now.
 
-        A copy: changing it changes nothing here. Read it once for a consistent view.
+        A copy: changing it changes nothing here. Read it once for a consistent view. Its dead
+        marks are those the kernel published last; a new estimator built from it starts from
+        them, and takes the kernel's own over when it is swapped in (:meth:`carry_from`).
         """
         snapshot = self._conditioning.copy()
         top, bottom = self.dead_masks()
@@ -219,13 +222,17 @@ class ContactEstimator:
         return snapshot
 
     def dead_masks(self) -> tuple:
-        """Return the (top, bottom) dead-taxel marks in force now (None, None: no shape yet)."""
+        """
+        Return the (top, bottom) dead-taxel marks in force now (None, None: no kernel yet).
+
+        The kernel's, as its owner published them after its last scan: the one copy that lives.
+        """
         shape = self._conditioning.shape
         kernels = self._kernels
         kernel = kernels.get(shape) if shape is not None else (
             next(iter(kernels.values())) if len(kernels) == 1 else None)
         if kernel is None:
-            return self._conditioning.dead_masks()
+            return None, None
         dead = kernel.dead_masks()
         return dead[0], dead[1]
 
@@ -267,14 +274,16 @@ class ContactEstimator:
         Return the (top, bottom) force maps (N per taxel) of one scan, as the scans condition it.
 
         For the heatmaps of a thread that does not run the scans: it conditions on a kernel of
-        its own (the dead marks as they were when it was made), never on the scanning one. That
-        kernel belongs to whichever thread holds its lock.
+        its own (the dead marks the scanning one published when it was made), never on the
+        scanning one. That kernel belongs to whichever thread holds its lock.
         """
         t, b = check_pair(top_counts, bottom_counts)
         with self._viewer_lock:
             viewer = self._viewer
             if viewer is None or viewer.shape != t.shape:
-                viewer = self._viewer = self._new_kernel(t.shape)
+                # Untared, there are no marks, and no grid to hold the snapshot to.
+                published = self.conditioning if self._conditioning.shape is not None else None
+                viewer = self._viewer = self._new_kernel(t.shape, published)
             viewer.claim()
             force = viewer.condition(t, b).force
         return force[0], force[1]
@@ -356,15 +365,17 @@ class ContactEstimator:
             return 1.0
         return float(compiled_kernel.creep(d, held_s, relative_to_1s=True))
 
-    def carry_time_from(self, other: 'ContactEstimator') -> 'ContactEstimator':
+    def carry_from(self, other: 'ContactEstimator') -> 'ContactEstimator':
         """
-        Return this estimator with ``other``'s tracked baselines and creep ages in force.
+        Return this estimator with ``other``'s per-scan state in force (the kernel's, whole).
 
         For a change of parameters or calibration of the same skin and tare, made off the hot
         path and put in force by the thread that runs the scans, which calls this between two
-        scans (it enters both kernels): the time a skin has been loaded and how far it drifted
-        stay true, and no scan is lost from them. Of another grid or tare there is nothing to
-        carry (a tare starts afresh).
+        scans (it enters both kernels): the dead marks as ``other``'s scans left them (a taxel
+        revived after this estimator was built stays revived), how far the skin drifted and how
+        long it has been loaded stay true, and no scan is lost from them. Of another grid or
+        tare there is nothing to carry (a tare measures its dead marks and starts the time
+        afresh).
         """
         if other is None or other is self or other._tare_epoch is not self._tare_epoch:
             return self
@@ -372,7 +383,7 @@ class ContactEstimator:
         theirs = other._kernels
         for shape, mine in self._kernels.items():
             if shape in theirs:
-                mine.set_drift_state(theirs[shape].drift_state(), theirs[shape].timed_scans)
+                mine.carry_from(theirs[shape])
         return self
 
     @property
