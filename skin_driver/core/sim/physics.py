@@ -331,9 +331,9 @@ def _film_counts(model: SkinModel, force: np.ndarray, layer: int,
         counts = np.where(force > 0, np.maximum(counts, step), counts)
     counts = counts + offset[layer]
     if model.crosstalk > 0:
-        # A passive matrix leaks a little of every taxel sharing the row or the column.
-        leak = counts.sum(axis=1, keepdims=True) + counts.sum(axis=0, keepdims=True) - 2 * counts
-        counts = counts + model.crosstalk * leak
+        # Crosstalk: a passive matrix reads a little of every taxel sharing the row or the column.
+        shared = counts.sum(axis=1, keepdims=True) + counts.sum(axis=0, keepdims=True) - 2 * counts
+        counts = counts + model.crosstalk * shared
     return counts
 
 

@@ -2,7 +2,7 @@
 The compiled kernel through the estimator, and its forward model's fit of one contact.
 
 Edge cases, censoring (a saturated imprint's force filled in from its rim, the rim load), gains,
-dead taxels, line leak, map types, bad input, references; the model fit's known presses,
+dead taxels, crosstalk, map types, bad input, references; the model fit's known presses,
 censored taxels and taxel sensitivities.
 
 What the kernel finds on the family's scenes is held by the golden outputs (test_golden.py);
