@@ -266,7 +266,7 @@ def _sensed_cells(model: SkinModel, fine: np.ndarray, cells: tuple, sub: int, su
 
     ``fine`` holds newtons per fine sample on the support box of the window. The turn-on acts
     on the local pressure after the blur, so the blur and the cell sums cannot fold into one
-    operator: blur on the fine grid, cut below the turn-on, then sum per cell.
+    operator: blur on the fine grid, zero below the turn-on, then sum per cell.
     """
     y0, y1, x0, x1 = support
     rows, cols = cells

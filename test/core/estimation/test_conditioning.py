@@ -152,12 +152,12 @@ def test_bad_maps_are_refused_and_good_ones_left_as_they_were():
         kernel.force(np.zeros((4, 4)))
 
 
-def test_a_heavy_press_on_a_fine_grid_leaves_no_line_of_leak_and_its_cut_plateau_level():
+def test_a_heavy_press_on_a_fine_grid_leaves_no_line_of_crosstalk_and_its_clipped_plateau_level():
     # 128 x 128 taxels with 1.1 % crosstalk: a 50 N press leaks several hundred counts onto
     # every taxel of its rows and columns, about a third of its peak, and drives its centre to
-    # the ADC's full scale. The leak comes off (no stripe of loaded taxels across the map);
-    # the cut taxels keep a level shape, the layer's highest count, and read the force at full
-    # scale (a lower bound, which a censoring force curve fills in).
+    # the ADC's full scale. The crosstalk comes off (no stripe of loaded taxels across the map);
+    # the clipped taxels keep a level shape, the layer's highest count, and read the force at
+    # full scale (a lower bound, which a censoring force curve fills in).
     model = family_skin('held_out:2@128').model
     est, _, rng = _tared(model, np.random.default_rng(1), frames=5)
     kernel = _kernel(est, (128, 128))

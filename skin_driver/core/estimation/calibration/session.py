@@ -62,7 +62,7 @@ class PressRecord:
     counts above baseline (2 x rows x cols, 0 where untouched), ``wrench_n`` the reference
     sensor's mean force (x, y, z) in the skin frame when one was fed, ``clipped`` where the
     raw counts read the ADC's full scale (2 x rows x cols, None where no taxel did): those
-    readings are cut, and a force fit censors them. ``crosstalk_share`` is the crosstalk the
+    readings are clipped, and a force fit censors them. ``crosstalk_share`` is the crosstalk the
     press showed as a share of a line's load (:func:`crosstalk_share_of`; NaN where none did).
     ``place_m`` is where its contact was (x, y), when one was found.
     """
@@ -336,7 +336,7 @@ class CalibrationSession:
         conditioning = self.estimator.conditioning
         gains = conditioning.gain_maps()
         full_scale = conditioning.config.fsr.full_scale
-        # A reading the ADC cut is a lower bound whatever its tared counts: the fit is told so
+        # A reading the ADC clipped is a lower bound whatever its tared counts: the fit is told so
         # by its count at full scale, at or past the ceiling of every curve (forcefit).
         marked = [r.counts if r.clipped is None
                   else np.where(r.clipped & (r.counts > 0), float(full_scale), r.counts)
@@ -418,8 +418,8 @@ class CalibrationSession:
         if not clipped:
             return ''
         return (f'; press{"es" if len(clipped) > 1 else ""} {", ".join(map(str, clipped))} '
-                "drove taxels to the ADC's full scale, where readings are cut (crosstalk or an "
-                'overloaded film): press more lightly')
+                "drove taxels to the ADC's full scale, where readings are clipped (crosstalk or "
+                'an overloaded film): press more lightly')
 
     def _known_loads(self) -> tuple:
         """Return (tangential, normal) known force per accepted press, newtons."""
