@@ -326,8 +326,8 @@ def overrides(values: dict) -> list:
 
 @contextlib.contextmanager
 def in_process(workdir: str, scene, rate_hz: float = 200.0, driver: dict = None,
-               direction: dict = None, loop: bool = False, fused: bool = False, noise_seed: int = 1,
-               identity='sim', play: bool = True, protocol: int = 2):
+               direction: dict = None, loop: bool = False, fused: bool = False,
+               noise_seed: int = 1, identity='sim', play: bool = True, protocol: int = 2):
     """
     Yield (sim, driver node, direction node, probe, executor) on a fresh private context.
 

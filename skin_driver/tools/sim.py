@@ -110,7 +110,8 @@ def main(argv=None) -> int:
                 print(f'# {label}: its first press at {start_s:g} s\n{command}')
             return 0
         if args.export:
-            data = render_scene(scene, noise_seed=args.noise_seed, samples_per_press=args.samples_per_press)
+            data = render_scene(scene, noise_seed=args.noise_seed,
+                                samples_per_press=args.samples_per_press)
             save_dataset(args.export, data)
             n = data.frames
             print(f'sim: wrote {n} samples of scene {scene.name!r} to {args.export}',

@@ -323,7 +323,8 @@ def main(argv=None) -> int:
     parser.add_argument('--scene', default='random', help='bundled scene or YAML (random)')
     parser.add_argument('--fused', action='store_true',
                         help='estimate in the driver process (fused) instead of a direction node')
-    parser.add_argument('--noise-seed', type=int, default=0, help='seed of the faults and the noise')
+    parser.add_argument('--noise-seed', type=int, default=0,
+                        help='seed of the faults and the noise (0)')
     parser.add_argument('--json', default=os.path.join('log', 'soak.json'),
                         help='where to write the summary (log/soak.json)')
     args = parser.parse_args(argv)

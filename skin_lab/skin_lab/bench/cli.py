@@ -180,8 +180,8 @@ def _accuracy(cfg, args, log) -> dict:
 IN_PROCESS = (
     ('accuracy', '1. accuracy against speed', _accuracy),
     ('seed', "2. the seed's experiment",
-     lambda cfg, args, log: bench_core.seed_experiment(cfg['seed_repeats'],
-                                                       cfg['random_frames'], seed=args.noise_seed)),
+     lambda cfg, args, log: bench_core.seed_experiment(cfg['seed_repeats'], cfg['random_frames'],
+                                                       seed=args.noise_seed)),
     ('family', '5. the skin family',
      lambda cfg, args, log: bench_core.family(
          cfg['family_sizes'], bench_core.family_methods(cfg['family_all_methods']),
@@ -206,7 +206,8 @@ IN_PROCESS = (
     ('scaling', '4. scale',
      lambda cfg, args, log: bench_core.scaling(cfg['scale_grids'], cfg['contacts'],
                                                [DEFAULT_METHOD, 'seed'], cfg['scale_frames'],
-                                               cfg['scale_repeats'], seed=args.noise_seed, log=log)),
+                                               cfg['scale_repeats'], seed=args.noise_seed,
+                                               log=log)),
 )
 PARTS = tuple(name for name, _, _ in IN_PROCESS) + ('e2e',)
 
@@ -394,7 +395,8 @@ def main(argv=None) -> int:
     parser.add_argument('--skip-ros', action='store_true', help='leave out the ROS chain')
     parser.add_argument('--no-profile', dest='profile', action='store_false',
                         help='leave out the profiled 2 kHz run')
-    parser.add_argument('--noise-seed', type=int, default=0, help='seed of the random data and noise (0)')
+    parser.add_argument('--noise-seed', type=int, default=0,
+                        help='seed of the random data and noise (0)')
     parser.add_argument('--e2e-seconds', type=float, default=None,
                         help='seconds measured per end-to-end run (default 60, --quick 3)')
     parser.add_argument('--e2e-only', action='store_true',

@@ -142,7 +142,7 @@ def main(argv=None) -> int:
     if args.list_skins:
         for name in skin_names():
             print(f'{name:12s} {family_skin(name).description}')
-        print(f'{HELD_OUT + "N":12s} a skin drawn at random within these ranges (random draw number N)')
+        print(f'{HELD_OUT + "N":12s} random draw number N of a skin within these ranges')
         print(f'{"NAME" + GRID + "N":12s} skin NAME with N x N taxels over the same patch')
         return 0
     if args.list_methods:
