@@ -59,7 +59,7 @@ def render_frames(model: SkinModel, frames: list, rng: np.random.Generator,
                    **{'press_' + name: arr for name, arr in truth.items()})
 
 
-def render_scene(scene, seed: int = 0, samples_per_press: int = 1) -> Dataset:
+def render_scene(scene, noise_seed: int = 0, samples_per_press: int = 1) -> Dataset:
     """
     Render a scene (:class:`skin_driver.core.sim.scene.Scene`) offline as a dataset with truth.
 
@@ -75,4 +75,4 @@ def render_scene(scene, seed: int = 0, samples_per_press: int = 1) -> Dataset:
                       + hold * (j + 0.5) / samples_per_press for j in range(samples_per_press)]
     # A validated scene has at least one press, so there is at least one sample.
     return render_frames(scene.model, [scene.presses_at(t) for t in times],
-                         np.random.default_rng(seed))
+                         np.random.default_rng(noise_seed))

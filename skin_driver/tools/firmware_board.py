@@ -121,14 +121,14 @@ def build_image(protocol: int = 2) -> Path:
     return build / 'boards' / 'qemu_netduinoplus2' / 'skin_qemu.elf'
 
 
-def render_scans(scene: Scene, count: int, rate_hz: float, seed: int = 0) -> tuple:
+def render_scans(scene: Scene, count: int, rate_hz: float, noise_seed: int = 0) -> tuple:
     """
     Return (top, bottom), each (count, rows, cols) uint16: the scene scanned at rate_hz.
 
     As the simulator renders a scan (SimulatedSkin): scan i at scene time i / rate_hz (past the
     scene's end, the unloaded skin), one noise generator for the run.
     """
-    rng = np.random.default_rng(seed)
+    rng = np.random.default_rng(noise_seed)
     rows, cols = scene.model.rows, scene.model.cols
     top = np.empty((count, rows, cols), np.uint16)
     bottom = np.empty_like(top)
@@ -239,7 +239,7 @@ def _parser() -> argparse.ArgumentParser:
     parser.add_argument('--scans', type=int, default=None,
                         help='scans in the file the board loops (default: one pass of the scene)')
     parser.add_argument('--link', default=None, help='make this path a symlink to the port')
-    parser.add_argument('--seed', type=int, default=0, help='noise seed (0)')
+    parser.add_argument('--noise-seed', type=int, default=0, help='noise seed (0)')
     parser.add_argument('--protocol', type=int, choices=(1, 2), default=2,
                         help='wire protocol version the image sends (2; 1 is built apart)')
     return parser
@@ -264,14 +264,14 @@ def main(argv=None) -> int:
             raise ValueError(f'--rate must be 1 to 100000, got {args.rate}')
         if args.scans is not None and args.scans < 1:
             raise ValueError(f'--scans must be 1 or more, got {args.scans}')
-        if args.seed < 0:
-            raise ValueError(f'--seed must be 0 or more, got {args.seed}')
+        if args.noise_seed < 0:
+            raise ValueError(f'--noise-seed must be 0 or more, got {args.noise_seed}')
         if (scene.model.rows, scene.model.cols) != QEMU_GRID:
             raise ValueError(f'the emulated board is built for {QEMU_GRID[0]}x{QEMU_GRID[1]}, '
                              f'the scene has {scene.model.rows}x{scene.model.cols}')
         count = args.scans or max(1, round(scene.duration_s * args.rate))
         image = build_image(args.protocol)
-        top, bottom = render_scans(scene, count, args.rate, args.seed)
+        top, bottom = render_scans(scene, count, args.rate, args.noise_seed)
     except (ValueError, OSError, RuntimeError) as err:
         print(f'firmware_board: error: {err}', file=sys.stderr)
         return 2

@@ -326,8 +326,8 @@ def overrides(values: dict) -> list:
 
 @contextlib.contextmanager
 def in_process(workdir: str, scene, rate_hz: float = 200.0, driver: dict = None,
-               direction: dict = None, loop: bool = False, fused: bool = False, seed: int = 1,
-               identity='sim', play: bool = True, protocol: int = 2):
+               direction: dict = None, loop: bool = False, fused: bool = False,
+               noise_seed: int = 1, identity='sim', play: bool = True, protocol: int = 2):
     """
     Yield (sim, driver node, direction node, probe, executor) on a fresh private context.
 
@@ -345,7 +345,7 @@ def in_process(workdir: str, scene, rate_hz: float = 200.0, driver: dict = None,
     from skin_driver.tools.probe import Probe
 
     link = os.path.join(workdir, 'skin0')
-    sim = SimulatedSkin(scene, rate_hz=rate_hz, link_path=link, seed=seed, loop=loop,
+    sim = SimulatedSkin(scene, rate_hz=rate_hz, link_path=link, noise_seed=noise_seed, loop=loop,
                         identity=identity, protocol=protocol)
     driver_params = {'port': link, **grid_params(scene), **(driver or {})}
     direction_params = {'calibration_file': os.path.join(workdir, 'calibration.yaml'),

@@ -36,7 +36,7 @@ def _parser() -> argparse.ArgumentParser:
     parser.add_argument('--duration', type=float, default=None,
                         help='stop after this many seconds (default: run until Ctrl-C)')
     parser.add_argument('--loop', action='store_true', help='replay the scene when it ends')
-    parser.add_argument('--seed', type=int, default=0, help='noise seed, 0 or more (0)')
+    parser.add_argument('--noise-seed', type=int, default=0, help='noise seed, 0 or more (0)')
     return parser
 
 
@@ -55,8 +55,8 @@ def main(argv=None) -> int:
     args = _parser().parse_args(argv)
     boards = []
     try:
-        if args.seed < 0:
-            raise ValueError(f'--seed must be 0 or more, got {args.seed}')
+        if args.noise_seed < 0:
+            raise ValueError(f'--noise-seed must be 0 or more, got {args.noise_seed}')
         if args.duration is not None and not (math.isfinite(args.duration)
                                               and args.duration >= 0):
             raise ValueError(f'--duration must be a non-negative number, got {args.duration}')
@@ -71,7 +71,7 @@ def main(argv=None) -> int:
             model = view.model
             identity = sim_board_info(model.rows, model.cols, model.pitch_m, args.rate, patch)
             boards.append((patch, SimulatedSkin(view, rate_hz=args.rate, link_path=path,
-                                                seed=args.seed + 7 * i, loop=args.loop,
+                                                noise_seed=args.noise_seed + 7 * i, loop=args.loop,
                                                 identity=identity)))
         for patch, board in boards:
             print(f'SKIN_PORT {patch} {board.start()}', flush=True)

@@ -44,7 +44,7 @@ def _parser() -> argparse.ArgumentParser:
     parser.add_argument('--replay', action='store_true',
                         help='with --loop: render one pass before starting and send those scans '
                              'again on every pass (next to no CPU per scan; a benchmark board)')
-    parser.add_argument('--seed', type=int, default=0, help='noise seed, 0 or more (0)')
+    parser.add_argument('--noise-seed', type=int, default=0, help='noise seed, 0 or more (0)')
     parser.add_argument('--protocol', type=int, choices=(1, 2), default=2,
                         help='wire protocol version of the frames (2; 1: unpacked counts, '
                              'docs/protocol.md)')
@@ -90,8 +90,8 @@ def main(argv=None) -> int:
         argv = argv[:argv.index('--ros-args')]
     args = _parser().parse_args(argv)
     try:
-        if args.seed < 0:
-            raise ValueError(f'--seed must be 0 or more, got {args.seed}')
+        if args.noise_seed < 0:
+            raise ValueError(f'--noise-seed must be 0 or more, got {args.noise_seed}')
         for path in (args.link, args.export):
             if path:
                 check_writable(path)
@@ -110,7 +110,8 @@ def main(argv=None) -> int:
                 print(f'# {label}: its first press at {start_s:g} s\n{command}')
             return 0
         if args.export:
-            data = render_scene(scene, seed=args.seed, samples_per_press=args.samples_per_press)
+            data = render_scene(scene, noise_seed=args.noise_seed,
+                                samples_per_press=args.samples_per_press)
             save_dataset(args.export, data)
             n = data.frames
             print(f'sim: wrote {n} samples of scene {scene.name!r} to {args.export}',
@@ -120,7 +121,8 @@ def main(argv=None) -> int:
             # The default place is the simulator's own: its folder is made as needed.
             args.link = default_port()
             os.makedirs(os.path.dirname(args.link), exist_ok=True)
-        skin = SimulatedSkin(scene, rate_hz=args.rate, link_path=args.link, seed=args.seed,
+        skin = SimulatedSkin(scene, rate_hz=args.rate, link_path=args.link,
+                             noise_seed=args.noise_seed,
                              loop=args.loop, replay=args.replay, identity=identity,
                              protocol=args.protocol)
         port = skin.start()

@@ -192,7 +192,8 @@ def run(args, workdir: str) -> dict:
     ns = f'/skin_soak_{os.getpid()}'
     log = open(os.path.join(workdir, 'nodes.log'), 'w')
     sim = SimulatedSkin(args.scene, rate_hz=args.rate, link_path=os.path.join(workdir, 'skin0'),
-                        seed=args.seed, loop=True, truth_capacity=max(10_000, int(args.rate * 20)))
+                        noise_seed=args.noise_seed, loop=True,
+                        truth_capacity=max(10_000, int(args.rate * 20)))
     params = write_params(workdir, driver=grid_params(sim.scene))
     procs = start_nodes(args.fused, ros_args(ns, params, 'error'), log)
     try:
@@ -213,7 +214,7 @@ def _soak(args, executor, node, sim, procs) -> dict:
     """Play the faults for the duration, let the pipeline drain; return the summary."""
     monitor = SoakMonitor(node, sim)
     memory = {name: [] for name in procs}
-    faults = FaultCycle(sim, args.seed)
+    faults = FaultCycle(sim, args.noise_seed)
     wait_for(executor, lambda: monitor.link is not None, 30.0, 'the driver to come up',
              procs.values())
     # The frames are counted from the first one received: the subscription must see the
@@ -322,7 +323,8 @@ def main(argv=None) -> int:
     parser.add_argument('--scene', default='random', help='bundled scene or YAML (random)')
     parser.add_argument('--fused', action='store_true',
                         help='estimate in the driver process (fused) instead of a direction node')
-    parser.add_argument('--seed', type=int, default=0, help='seed of the faults and the noise')
+    parser.add_argument('--noise-seed', type=int, default=0,
+                        help='seed of the faults and the noise (0)')
     parser.add_argument('--json', default=os.path.join('log', 'soak.json'),
                         help='where to write the summary (log/soak.json)')
     args = parser.parse_args(argv)

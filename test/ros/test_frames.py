@@ -42,7 +42,7 @@ def test_two_skins_in_two_namespaces_have_two_frames(tmp_path):
         drivers, directions = [], []
         for name in ('left', 'right'):
             link = str(tmp_path / f'{name}0')
-            sims.append(SimulatedSkin(the_scene, rate_hz=100.0, link_path=link, seed=1))
+            sims.append(SimulatedSkin(the_scene, rate_hz=100.0, link_path=link, noise_seed=1))
             drivers.append(SkinDriverNode(context=context, namespace=f'/{name}',
                                           parameter_overrides=overrides({'port': link})))
             directions.append(DirectionNode(context=context, namespace=f'/{name}',

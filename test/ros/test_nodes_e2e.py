@@ -233,7 +233,7 @@ def test_fused_driver_process_offers_the_direction_nodes_topics_services_and_dia
                     '--params-file', str(given)], log)
     # Looped: a driver process that starts slowly on a loaded machine still sees the press.
     sim = SimulatedSkin(scene([{'time_s': 0.5, 'duration_s': 0.6, 'ramp_s': 0.1}]), rate_hz=200.0,
-                        link_path=link, seed=1, loop=True)
+                        link_path=link, noise_seed=1, loop=True)
     try:
         with ros_context() as (context, executor):
             node = rclpy.create_node('probe', namespace=ns, context=context)

@@ -103,7 +103,7 @@ def _patches_pipeline(tmp_path, scene, rate_hz=50.0):
                 os.makedirs(folder, exist_ok=True)
                 link = str(folder / 'skin0')
                 boards.append(SimulatedSkin(scene.view(name), rate_hz=rate_hz, link_path=link,
-                                            seed=1 + i))
+                                            noise_seed=1 + i))
                 drivers.append(SkinDriverNode(
                     context=context, namespace=name, parameter_overrides=overrides(
                         {**FAST_DRIVER, 'port': link, 'publish_images': False})))

@@ -17,7 +17,7 @@ def test_record_writes_the_live_frames_and_their_tare_as_a_dataset(tmp_path):
     # Pressed from 0.3 s on, for as long as the recorder may take to start.
     the_scene = scene([{'time_s': 0.3, 'alpha_deg': 45.0, 'beta_deg': 90.0,
                         'duration_s': 120.0}])
-    sim = SimulatedSkin(the_scene, rate_hz=100.0, link_path=link, seed=1)
+    sim = SimulatedSkin(the_scene, rate_hz=100.0, link_path=link, noise_seed=1)
     with ros_context() as (context, executor):
         driver = SkinDriverNode(context=context, parameter_overrides=overrides({'port': link}))
         executor.add_node(driver)

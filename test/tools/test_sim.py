@@ -17,7 +17,7 @@ from skin_driver.tools.sim import main
 
 
 def test_render_scene_samples_every_press_of_the_seed_scene_at_full_force():
-    data = render_scene(load_scene('seed'), seed=1)
+    data = render_scene(load_scene('seed'), noise_seed=1)
     n = 9 * 5
     assert data.top.shape == data.bottom.shape == (n, 16, 16)
     assert data.top.dtype == np.uint16 and data.pitch_m == 0.005

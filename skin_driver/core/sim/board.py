@@ -152,7 +152,7 @@ class SimulatedSkin:
     """A virtual skin board on a pseudo-terminal, streaming frames rendered from a scene."""
 
     def __init__(self, scene, rate_hz: float = 100.0, link_path: str | None = None,
-                 seed: int = 0, loop: bool = False, truth_capacity: int = 10_000,
+                 noise_seed: int = 0, loop: bool = False, truth_capacity: int = 10_000,
                  replay: bool = False, identity=SIM, protocol: int = LATEST_VERSION):
         """
         Prepare a board for a Scene (or a bundled scene name or YAML path); start() runs it.
@@ -182,7 +182,7 @@ class SimulatedSkin:
         self._loads = ([list(self.scene.loads(i)) for i in range(len(self.scene.presses))]
                        if self.scene.drifts else None)
         self._replayed = None  # the scans of one pass, with replay
-        self._rng = np.random.default_rng(seed)
+        self._rng = np.random.default_rng(noise_seed)
         self._truth: dict = {}
         self._truth_order: deque = deque()
         self._truth_capacity = truth_capacity
@@ -196,7 +196,7 @@ class SimulatedSkin:
         self._seq_offset = 0
         self._time_offset_us = 0
         self._noise = 0.0
-        self._noise_rng = np.random.default_rng(seed + 1)
+        self._noise_rng = np.random.default_rng(noise_seed + 1)
         self._wire_shape: tuple | None = None
         model = self.scene.model
         if isinstance(identity, str) and identity == SIM:

@@ -266,7 +266,7 @@ def _sensed_cells(model: SkinModel, fine: np.ndarray, cells: tuple, sub: int, su
 
     ``fine`` holds newtons per fine sample on the support box of the window. The turn-on acts
     on the local pressure after the blur, so the blur and the cell sums cannot fold into one
-    operator: blur on the fine grid, cut below the turn-on, then sum per cell.
+    operator: blur on the fine grid, zero below the turn-on, then sum per cell.
     """
     y0, y1, x0, x1 = support
     rows, cols = cells
@@ -331,9 +331,9 @@ def _film_counts(model: SkinModel, force: np.ndarray, layer: int,
         counts = np.where(force > 0, np.maximum(counts, step), counts)
     counts = counts + offset[layer]
     if model.crosstalk > 0:
-        # A passive matrix leaks a little of every taxel sharing the row or the column.
-        leak = counts.sum(axis=1, keepdims=True) + counts.sum(axis=0, keepdims=True) - 2 * counts
-        counts = counts + model.crosstalk * leak
+        # Crosstalk: a passive matrix reads a little of every taxel sharing the row or the column.
+        shared = counts.sum(axis=1, keepdims=True) + counts.sum(axis=0, keepdims=True) - 2 * counts
+        counts = counts + model.crosstalk * shared
     return counts
 
 

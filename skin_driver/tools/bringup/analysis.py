@@ -6,7 +6,7 @@ once here and in the report:
 
 - dead: a taxel whose counts never change while nothing touches the skin (zero variance over the
   idle window): an open line or a channel that reads a constant;
-- stuck: a taxel whose idle mean is within STUCK_MARGIN of full scale (saturated with nothing on
+- stuck: a taxel whose idle mean is within STUCK_MARGIN of full scale (clipped with nothing on
   it): a short to the supply or a failed divider;
 - a row or column is dead or stuck when every one of its taxels is;
 - shorted: two rows (or columns) of live taxels that read alike, their mean absolute difference

@@ -169,7 +169,7 @@ def _parser() -> argparse.ArgumentParser:
                         help='scans the skin plays, looped (default: one pass of the scene at '
                              "the firmware's scan rate)")
     parser.add_argument('--link', default=None, help='make this path a symlink to the port')
-    parser.add_argument('--seed', type=int, default=0, help='noise seed (0)')
+    parser.add_argument('--noise-seed', type=int, default=0, help='noise seed (0)')
     parser.add_argument('--image', default=None,
                         help='ELF to run (default: build the Nucleo image)')
     parser.add_argument('--fast', action='store_true',
@@ -218,7 +218,7 @@ def main(argv=None) -> int:
                 raise RuntimeError(f'missing {", ".join(missing)} to build the image '
                                    '(tools/setup-firmware.sh installs them)')
         image = args.image or build_nucleo_image()
-        top, bottom = firmware_board.render_scans(scene, count, rate, args.seed)
+        top, bottom = firmware_board.render_scans(scene, count, rate, args.noise_seed)
         board = RehostBoard(image, top, bottom, args.link, faults_from_args(args),
                             realtime=not args.fast)
     except (ValueError, OSError, RuntimeError) as err:

@@ -169,7 +169,7 @@ def run(args) -> dict:
 def _accuracy(cfg, args, log) -> dict:
     methods = bench_core.bench_methods()
     rows = bench_core.accuracy_speed(cfg['grids'], cfg['shifts'], cfg['noises'],
-                                     cfg['frames'], methods, seed=args.seed, log=log)
+                                     cfg['frames'], methods, seed=args.noise_seed, log=log)
     return {'grids': cfg['grids'], 'shifts_taxels': cfg['shifts'],
             'noise_counts': cfg['noises'], 'frames': cfg['frames'],
             'methods': methods, 'skimage_upsample': bench_core.SKIMAGE_UPSAMPLE,
@@ -180,33 +180,34 @@ def _accuracy(cfg, args, log) -> dict:
 IN_PROCESS = (
     ('accuracy', '1. accuracy against speed', _accuracy),
     ('seed', "2. the seed's experiment",
-     lambda cfg, args, log: bench_core.seed_experiment(cfg['seed_repeats'],
-                                                       cfg['random_frames'], seed=args.seed)),
+     lambda cfg, args, log: bench_core.seed_experiment(cfg['seed_repeats'], cfg['random_frames'],
+                                                       seed=args.noise_seed)),
     ('family', '5. the skin family',
      lambda cfg, args, log: bench_core.family(
          cfg['family_sizes'], bench_core.family_methods(cfg['family_all_methods']),
-         seed=args.seed, log=log)),
+         seed=args.noise_seed, log=log)),
     ('forward', '7. the forward model beside the oracle',
      lambda cfg, args, log: bench_core.forward_family(cfg['forward_frames'],
-                                                      cfg['forward_skins'], seed=args.seed,
+                                                      cfg['forward_skins'], seed=args.noise_seed,
                                                       log=log)),
     ('direction', '8. direction learned from presses of known direction, beside the floor',
      lambda cfg, args, log: direction_learning(cfg['direction']['skins'],
                                                cfg['direction']['sizes'],
-                                               cfg['direction']['presses'], seed=args.seed,
+                                               cfg['direction']['presses'], seed=args.noise_seed,
                                                log=log)),
     ('drift', '9. drift and creep over hours',
      lambda cfg, args, log: drift_bench(
          (cfg['drift_skins'] or skin_names())
          + [f'{HELD_OUT}{i}' for i in range(cfg['drift_held_out'])], cfg['drift_hours'],
-         cfg['drift_step_s'], cfg['drift_cost_repeats'], seed=args.seed, log=log)),
+         cfg['drift_step_s'], cfg['drift_cost_repeats'], seed=args.noise_seed, log=log)),
     ('calibration', '6. force calibration on the family',
-     lambda cfg, args, log: calibration_accuracy(cfg['calibration_frames'], seed=args.seed,
+     lambda cfg, args, log: calibration_accuracy(cfg['calibration_frames'], seed=args.noise_seed,
                                                  log=log)),
     ('scaling', '4. scale',
      lambda cfg, args, log: bench_core.scaling(cfg['scale_grids'], cfg['contacts'],
                                                [DEFAULT_METHOD, 'seed'], cfg['scale_frames'],
-                                               cfg['scale_repeats'], seed=args.seed, log=log)),
+                                               cfg['scale_repeats'], seed=args.noise_seed,
+                                               log=log)),
 )
 PARTS = tuple(name for name, _, _ in IN_PROCESS) + ('e2e',)
 
@@ -337,7 +338,7 @@ def _family_only(args) -> int:
     _pin()  # its costs on one core, as in the whole benchmark
     try:
         fam = bench_core.family(sizes, bench_core.family_methods(True),
-                                args.family_only.split(','), seed=args.seed,
+                                args.family_only.split(','), seed=args.noise_seed,
                                 log=lambda s: print(s, file=sys.stderr, flush=True))
     finally:
         os.sched_setaffinity(0, everything)
@@ -394,7 +395,8 @@ def main(argv=None) -> int:
     parser.add_argument('--skip-ros', action='store_true', help='leave out the ROS chain')
     parser.add_argument('--no-profile', dest='profile', action='store_false',
                         help='leave out the profiled 2 kHz run')
-    parser.add_argument('--seed', type=int, default=0, help='random seed (0)')
+    parser.add_argument('--noise-seed', type=int, default=0,
+                        help='seed of the random data and noise (0)')
     parser.add_argument('--e2e-seconds', type=float, default=None,
                         help='seconds measured per end-to-end run (default 60, --quick 3)')
     parser.add_argument('--e2e-only', action='store_true',

@@ -153,7 +153,7 @@ CALIBRATION_TEXT = (
     "user following the README's recipe (the evaluator's `--calibration-frames`): tared from "
     'no-touch frames, then 48 calibration frames in front of the scene, never scored: 16 '
     'of a plate over the whole skin give the per-taxel gains (after force curves fitted to the '
-    'normal presses; the line leak the presses show taken off the plate), 16 '
+    'normal presses; the crosstalk the presses show taken off the plate), 16 '
     'normal presses of known load (5-60 N, random spots) give the force curves and the offset '
     '(x_p, y_p), 16 tilted presses of known load the compliance, each through the live '
     "calibration session (`core.estimation.prepared`). In the paper's protocol the scene's "

@@ -5,9 +5,9 @@ Usage::
 
     python -m skin_lab.evaluate DATA.npz [--method NAME] [--params FILE] [--contacts OUT.csv]
                                          [--json]
-    python -m skin_lab.evaluate --skin NAME [--scene KIND] [--size N] [--seed N] [...]
-    python -m skin_lab.evaluate --generate KIND OUT.npz [--skin NAME] [--size N] [--seed N]
-    python -m skin_lab.evaluate --skin NAME --scene hold|idle [--seed N] [--json]
+    python -m skin_lab.evaluate --skin NAME [--scene KIND] [--size N] [--noise-seed N] [...]
+    python -m skin_lab.evaluate --generate KIND OUT.npz [--skin NAME] [--size N] [--noise-seed N]
+    python -m skin_lab.evaluate --skin NAME --scene hold|idle [--noise-seed N] [--json]
     python -m skin_lab.evaluate --list-skins | --list-methods
 
 The single normal presses calibrate (x_p, y_p); every single tilted press's strongest contact is
@@ -69,7 +69,7 @@ def _parser() -> argparse.ArgumentParser:
     parser.add_argument('--json', action='store_true', help='print one JSON object')
     parser.add_argument('--skin', metavar='NAME',
                         help='generate the data from this skin of the family (see --list-skins; '
-                             'held_out:N for one drawn at random, seed N; NAME@N on an N x N '
+                             'held_out:N for random draw number N; NAME@N on an N x N '
                              'grid over the same patch)')
     parser.add_argument('--scene', default='paper', choices=SCENE_KINDS + DRIFT_SCENES,
                         help='scene kind rendered with --skin (default paper); hold and idle: '
@@ -79,7 +79,7 @@ def _parser() -> argparse.ArgumentParser:
     parser.add_argument('--generate', nargs=2, metavar=('KIND', 'OUT'),
                         help=f'write a simulated dataset (KIND one of {", ".join(SCENE_KINDS)}) '
                              'of --skin (default: default) and exit')
-    parser.add_argument('--seed', type=_seed, default=0,
+    parser.add_argument('--noise-seed', type=_non_negative, default=0,
                         help='random seed for generated data (0 or more)')
     parser.add_argument('--calibration-frames', action='store_true',
                         help='with --generate or --skin: put 16 frames of a plate over the '
@@ -106,7 +106,7 @@ def _count(text: str) -> int:
     return value
 
 
-def _seed(text: str) -> int:
+def _non_negative(text: str) -> int:
     """Return a whole number of at least 0 (argparse type)."""
     value = int(text)
     if value < 0:
@@ -142,7 +142,7 @@ def main(argv=None) -> int:
     if args.list_skins:
         for name in skin_names():
             print(f'{name:12s} {family_skin(name).description}')
-        print(f'{HELD_OUT + "N":12s} a skin drawn at random within these ranges (seed N)')
+        print(f'{HELD_OUT + "N":12s} random draw number N of a skin within these ranges')
         print(f'{"NAME" + GRID + "N":12s} skin NAME with N x N taxels over the same patch')
         return 0
     if args.list_methods:
@@ -155,7 +155,7 @@ def main(argv=None) -> int:
             family_skin(args.skin)
         except ValueError as err:
             parser.error(str(err))
-    rng = np.random.default_rng(args.seed)
+    rng = np.random.default_rng(args.noise_seed)
     if args.generate:
         kind, out = args.generate
         if kind not in SCENE_KINDS:
@@ -184,7 +184,7 @@ def main(argv=None) -> int:
             model = family_skin(args.skin).model
             scored = [presses[i] for i in data.scored_frames()]
             truth = None if args.no_oracle else (model, scored)
-            source = f'skin {args.skin}, scene {args.scene}, seed {args.seed}'
+            source = f'skin {args.skin}, scene {args.scene}, noise seed {args.noise_seed}'
         else:
             data = load_dataset(args.data)
             source = args.data
@@ -213,15 +213,15 @@ def _over_hours(args) -> int:
     """Report the --skin's hold or idle scene (simulated hours); return the exit status."""
     try:
         config = _config(args)
-        calibration = user_calibration(args.skin, args.seed, config)
+        calibration = user_calibration(args.skin, args.noise_seed, config)
         if args.scene == 'hold':
-            creep, error = calibrate_creep(args.skin, args.seed, config, calibration)
-            hold = hold_report(args.skin, args.seed, config, creep, calibration)
+            creep, error = calibrate_creep(args.skin, args.noise_seed, config, calibration)
+            hold = hold_report(args.skin, args.noise_seed, config, creep, calibration)
             hold['calibration_error'] = error
             report = {'holds': [hold], 'idles': []}
         else:
-            report = {'holds': [], 'idles': [idle_report(args.skin, args.seed, config=config,
-                                                         calibration=calibration)]}
+            idle = idle_report(args.skin, args.noise_seed, config=config, calibration=calibration)
+            report = {'holds': [], 'idles': [idle]}
     except KernelMissing as exc:
         print(f'error: {exc}', file=sys.stderr)
         return 2
@@ -229,7 +229,7 @@ def _over_hours(args) -> int:
     if args.json:
         print(json.dumps(json_safe({'skin': args.skin, 'scene': args.scene, **report})))
         return 0
-    print(f'skin {args.skin}, scene {args.scene}, seed {args.seed}')
+    print(f'skin {args.skin}, scene {args.scene}, noise seed {args.noise_seed}')
     table = format_drift(report).split('\n\n')
     print(table[0] if args.scene == 'hold' else table[1])
     if args.scene == 'hold':

@@ -1,7 +1,7 @@
 """
 Tests of a scan's conditioning, read through the estimator and the kernel it builds.
 
-Tare, touch threshold, dead-taxel fill, line-leak removal, a cut plateau levelled, counts to
+Tare, touch threshold, dead-taxel fill, crosstalk removal, a clipped plateau levelled, counts to
 force through the curves and gains, and bad input refused: each as the scans do it (the
 kernel's conditioning is the only one; the calibration reads it from a kernel of its own).
 """
@@ -11,8 +11,8 @@ import math
 import numpy as np
 import pytest
 from skin_driver.core.estimation.calibration.calibration import Calibration
-from skin_driver.core.estimation.calibration.gains import without_leak
-from skin_driver.core.estimation.calibration.session import leak_share_of
+from skin_driver.core.estimation.calibration.gains import without_crosstalk
+from skin_driver.core.estimation.calibration.session import crosstalk_share_of
 from skin_driver.core.estimation.model.forcecurve import ForceCurve
 from skin_driver.core.estimation.model.fsr import FsrModel
 from skin_driver.core.estimation.scan.pipeline import ContactEstimator, EstimatorConfig
@@ -152,12 +152,12 @@ def test_bad_maps_are_refused_and_good_ones_left_as_they_were():
         kernel.force(np.zeros((4, 4)))
 
 
-def test_a_heavy_press_on_a_fine_grid_leaves_no_line_of_leak_and_its_cut_plateau_level():
+def test_a_heavy_press_on_a_fine_grid_leaves_no_line_of_crosstalk_and_its_clipped_plateau_level():
     # 128 x 128 taxels with 1.1 % crosstalk: a 50 N press leaks several hundred counts onto
     # every taxel of its rows and columns, about a third of its peak, and drives its centre to
-    # the ADC's full scale. The leak comes off (no stripe of loaded taxels across the map);
-    # the cut taxels keep a level shape, the layer's highest count, and read the force at full
-    # scale (a lower bound, which a censoring force curve fills in).
+    # the ADC's full scale. The crosstalk comes off (no stripe of loaded taxels across the map);
+    # the clipped taxels keep a level shape, the layer's highest count, and read the force at
+    # full scale (a lower bound, which a censoring force curve fills in).
     model = family_skin('held_out:2@128').model
     est, _, rng = _tared(model, np.random.default_rng(1), frames=5)
     kernel = _kernel(est, (128, 128))
@@ -218,9 +218,9 @@ def test_a_press_shows_the_matrix_leak_and_a_plate_is_cleared_of_it_once_it_is_k
     est, _, rng = _tared(leaky)
     kernel = _kernel(est)
     press = kernel.condition(*render(leaky, [Press(0.0412, 0.0388, 25.0, radius_m=0.004)], rng))
-    assert leak_share_of(press.line_leak) == pytest.approx(0.012, rel=0.1)
+    assert crosstalk_share_of(press.line_leak) == pytest.approx(0.012, rel=0.1)
     # No press, no leak to see.
-    assert math.isnan(leak_share_of(kernel.condition(*render(leaky, [], rng)).line_leak))
+    assert math.isnan(crosstalk_share_of(kernel.condition(*render(leaky, [], rng)).line_leak))
     # A plate loads whole lines: the per-scan clean-up leaves it alone (its medians are load),
     # and each taxel reads about a third more than its own load. With the leak known, what
     # is left is the taxel's own reading.
@@ -231,4 +231,4 @@ def test_a_press_shows_the_matrix_leak_and_a_plate_is_cleared_of_it_once_it_is_k
     alone_est, _, rng = _tared(SkinModel(noise_counts=0.0), rng, frames=2)
     alone = _kernel(alone_est).condition(*render_plate(SkinModel(noise_counts=0.0), 1.0, rng))
     assert plate.counts.mean() > 1.3 * alone.counts.mean()
-    np.testing.assert_allclose(without_leak(plate.counts, 0.012), alone.counts, atol=1.0)
+    np.testing.assert_allclose(without_crosstalk(plate.counts, 0.012), alone.counts, atol=1.0)

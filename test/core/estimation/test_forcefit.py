@@ -137,11 +137,11 @@ def test_a_skin_whose_curve_matches_the_assumed_one_keeps_it():
     assert fit.curve.rim_load_n == pytest.approx(0.0, abs=1e-3)
 
 
-def test_taxels_cut_at_full_scale_are_always_censored_and_read_the_highest_uncut_count():
-    # The ADC cut the centre of the heavier presses (crosstalk on top of the film): the
+def test_taxels_clipped_at_full_scale_are_always_censored_and_read_the_highest_unclipped_count():
+    # The ADC clipped the centre of the heavier presses (crosstalk on top of the film): the
     # conditioning puts those taxels at full scale. They are lower bounds: the fit censors
-    # them whatever fits best, and the curve is flat from the highest count read under the cut
-    # (the assumed law run on to full scale would give them hundreds of newtons).
+    # them whatever fits best, and the curve is flat from the highest count read below full
+    # scale (the assumed law run on to full scale would give them hundreds of newtons).
     skin = FsrModel(r_min_ohm=150.0, r_max_ohm=6000.0, force_at_r_min_n=40.0)
     counts, gains, sensed, known = bumps(np.linspace(5.0, 60.0, 16), skin, spread=1.5)
     full = skin.full_scale

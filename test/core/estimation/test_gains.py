@@ -76,8 +76,8 @@ def test_an_even_load_warns_of_nothing():
     assert limits_note(gains, gains > 0) == ''
 
 
-def test_spread_presses_on_a_leaky_matrix_lose_their_leak_once():
-    # Each press's lines are cleaned with its own scan; the leak a force calibration kept is
+def test_spread_presses_on_a_matrix_with_crosstalk_lose_it_once():
+    # Each press's lines are cleaned with its own scan; the crosstalk a force calibration kept is
     # for a plate's frames (which no scan cleans), never a second time for a press.
     skin = SkinModel(crosstalk=0.012, gain_spread=0.1, seed=5)
     rng = np.random.default_rng(0)
@@ -88,12 +88,12 @@ def test_spread_presses_on_a_leaky_matrix_lose_their_leak_once():
     frames = [render(skin, [Press(x, y, 20.0, radius_m=0.004)], rng) for x in spots
               for y in spots]
     found = []
-    for leak in (0.0, 0.012):
-        known = est.with_calibration(est.calibration.updated(leak_share=leak))
+    for share in (0.0, 0.012):
+        known = est.with_calibration(est.calibration.updated(crosstalk_share=share))
         session = CalibrationSession(known, 'gains', presses=len(frames))
         for top, bottom in frames:
             record = session.record(top, bottom, known.process(top, bottom))
-            assert record.leak_share == pytest.approx(0.012, rel=0.3)
+            assert record.crosstalk_share == pytest.approx(0.012, rel=0.3)
             session.add_press(record)
         found.append(np.stack(session.finish().calibration.gain_maps()))
     np.testing.assert_array_equal(found[0], found[1])

@@ -2,7 +2,7 @@
 The compiled kernel through the estimator, and its forward model's fit of one contact.
 
 Edge cases, censoring (a saturated imprint's force filled in from its rim, the rim load), gains,
-dead taxels, line leak, map types, bad input, references; the model fit's known presses,
+dead taxels, crosstalk, map types, bad input, references; the model fit's known presses,
 censored taxels and taxel sensitivities.
 
 What the kernel finds on the family's scenes is held by the golden outputs (test_golden.py);
@@ -263,7 +263,7 @@ def test_counts_of_other_dtypes_give_the_contacts_of_uint16_counts(top_dtype, bo
     assert data.top.dtype == np.uint16 and data.top.max() < full_scale
     found = 0
     for top, bottom in zip(data.top, data.bottom):
-        # the flat tops of the saturated imprints cut by the ADC
+        # the flat tops of the saturated imprints, clipped by the ADC
         top, bottom = (np.where(m >= 0.95 * m.max(), full_scale, m).astype(np.uint16)
                        for m in (top, bottom))
         other = (top.astype(top_dtype), bottom.astype(bottom_dtype))

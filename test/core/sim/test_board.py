@@ -29,7 +29,7 @@ def held_press_scene():
 
 @pytest.fixture
 def skin():
-    sim = SimulatedSkin(held_press_scene(), rate_hz=RATE_HZ, seed=3)
+    sim = SimulatedSkin(held_press_scene(), rate_hz=RATE_HZ, noise_seed=3)
     yield sim
     sim.stop()
 
@@ -168,7 +168,7 @@ def test_a_replaying_board_sends_its_first_pass_again_under_new_numbers():
         'time_s': 0.02, 'x_m': 0.0375, 'y_m': 0.0375, 'force_n': 10.0, 'alpha_deg': 45.0,
         'beta_deg': 90.0, 'radius_m': 0.004, 'duration_s': 0.05, 'ramp_s': 0.0}],
         'period_s': 0.1})
-    sim = SimulatedSkin(scene, rate_hz=RATE_HZ, seed=3, loop=True, replay=True)
+    sim = SimulatedSkin(scene, rate_hz=RATE_HZ, noise_seed=3, loop=True, replay=True)
     frames = frames_of(sim, 60)
     assert_equal_to_truth(sim, frames)
     assert_no_frame_lost(sim, frames)
@@ -187,7 +187,7 @@ def test_only_a_looped_board_replays():
 
 
 def test_the_board_says_who_it_is_before_its_first_frame_then_once_a_second():
-    sim = SimulatedSkin(held_press_scene(), rate_hz=RATE_HZ, seed=3)
+    sim = SimulatedSkin(held_press_scene(), rate_hz=RATE_HZ, noise_seed=3)
     # A plain open: pyserial's would flush what the board wrote before it.
     port = os.open(sim.start(), os.O_RDONLY | os.O_NOCTTY)
     decoder, frames, first = FrameDecoder(expected_shape=(16, 16)), [], b''
@@ -281,7 +281,7 @@ def test_a_scene_without_drift_renders_as_before_and_one_with_it_cannot_be_repla
 @pytest.mark.parametrize('protocol', [2, 1])
 def test_the_board_sends_version_2_by_default_and_version_1_on_request(protocol):
     kwargs = {} if protocol == 2 else {'protocol': 1}
-    sim = SimulatedSkin(held_press_scene(), rate_hz=RATE_HZ, seed=3, **kwargs)
+    sim = SimulatedSkin(held_press_scene(), rate_hz=RATE_HZ, noise_seed=3, **kwargs)
     reader = Reader(sim.start())
     try:
         reader.read_frames(20)
@@ -293,7 +293,7 @@ def test_the_board_sends_version_2_by_default_and_version_1_on_request(protocol)
 
 
 def test_rows_the_board_failed_to_sample_are_marked_with_its_fault_bits():
-    sim = SimulatedSkin(held_press_scene(), rate_hz=RATE_HZ, seed=3)
+    sim = SimulatedSkin(held_press_scene(), rate_hz=RATE_HZ, noise_seed=3)
     row_valid = np.ones((2, 16), bool)
     row_valid[0, 7] = False  # the pressed centre's row of the top layer
     sim.set_row_faults(row_valid, faults=0b11)

@@ -161,16 +161,16 @@ def test_the_plate_frames_give_the_taxel_gains_before_the_presses_calibrate():
     assert np.std(evened / np.median(evened)) < 0.4 * np.std(sensitivity)
 
 
-def test_the_plate_gains_take_off_the_leak_the_force_presses_showed():
+def test_the_plate_gains_take_off_the_crosstalk_the_force_presses_showed():
     # Hard case: a passive matrix leaking 1.2 % of a line's load onto each of its taxels, and
     # taxels 10 % apart. Under a plate every line is loaded, so every taxel reads a third more.
     model = SkinModel(crosstalk=0.012, gain_spread=0.1, seed=5)
     skin = FamilySkin('leaky', 'crosstalk and gains', model, 20.0, (10.0, 30.0))
     data = calibrated_scene('random', skin, np.random.default_rng(0), 2)
     est, _ = prepared_estimator(data, 'taxel_fit')
-    assert est.calibration.leak_share == pytest.approx(0.012, rel=0.1)
-    # The same plate frames with the leak left on.
-    blind = est.with_calibration(est.calibration.updated(leak_share=0.0))
+    assert est.calibration.crosstalk_share == pytest.approx(0.012, rel=0.1)
+    # The same plate frames with the crosstalk left on.
+    blind = est.with_calibration(est.calibration.updated(crosstalk_share=0.0))
     session = CalibrationSession(blind, 'gains', presses=16)
     for i in np.flatnonzero(data.split == 3):
         top, bottom = data.top[i], data.bottom[i]

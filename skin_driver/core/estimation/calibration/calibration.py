@@ -18,9 +18,9 @@ a tangential force and hence the polar angle. Calibrate it by pressing with know
 (:mod:`forcecurve`); ``gains`` (top, bottom maps) even out taxels that read more or less than
 their neighbours (:mod:`gains`). ``taxel_model`` is the skin's forward model learned from the
 force calibration's presses when the estimator in use fits one (``model_fit``, :mod:`taxelmodel`);
-``leak_share`` the passive matrix's leak along a line, as a share of the line's load, that the
-same presses showed (:func:`session.leak_share_of`; 0 where none did), which a plate for the
-gains needs.
+``crosstalk_share`` the passive matrix's crosstalk along a line, as a share of the line's load,
+that the same presses showed (:func:`session.crosstalk_share_of`; 0 where none did), which a
+plate for the gains needs.
 
 A calibration knows its skin (:class:`SkinIdentity`: grid, pitch, the name the user gives it
 and, when the board said who it is, the board's unique ID and name) and when each part was made
@@ -62,7 +62,7 @@ _VERSIONS = (1, 2, 3)
 # The parts of a calibration, each made by its own session, and the fields each one sets.
 PARTS = {'offset': ('x_p_m', 'y_p_m', 'std_x_m', 'std_y_m', 'presses', 'zero_slope_m_per_n',
                     'zero_ref_n'),
-         'force': ('force_curves', 'force_presses', 'taxel_model', 'leak_share'),
+         'force': ('force_curves', 'force_presses', 'taxel_model', 'crosstalk_share'),
          'compliance': ('compliance_m_per_n', 'compliance_presses'),
          'gains': ('gains',),
          'direction': ('direction',),
@@ -244,7 +244,7 @@ class Calibration:
     zero_slope_m_per_n: tuple = (0.0, 0.0)
     zero_ref_n: float = 0.0
     taxel_model: TaxelModel = None
-    leak_share: float = 0.0
+    crosstalk_share: float = 0.0
     mount: 'SkinMount' = None
     direction: DirectionCorrection = None
     creep: CreepFit = None
@@ -257,7 +257,7 @@ class Calibration:
         check_number(self.std_y_m, 'std_y_m', non_negative=True)
         check_number(self.compliance_m_per_n, 'compliance_m_per_n', non_negative=True)
         check_number(self.zero_ref_n, 'zero_ref_n', non_negative=True)
-        check_number(self.leak_share, 'leak_share', non_negative=True)
+        check_number(self.crosstalk_share, 'crosstalk_share', non_negative=True)
         if len(self.zero_slope_m_per_n) != 2:
             raise ValueError('zero_slope_m_per_n must be (x, y) metres per newton')
         object.__setattr__(self, 'zero_slope_m_per_n', tuple(
@@ -361,8 +361,8 @@ class Calibration:
         if self.force_curves:
             parts.append(f'force curve up to {self.force_curves[1].counts[-1]:.0f} counts '
                          f'({self.force_presses} presses)')
-        if self.leak_share:
-            parts.append(f'line leak {100 * self.leak_share:.2f} %')
+        if self.crosstalk_share:
+            parts.append(f'crosstalk {100 * self.crosstalk_share:.2f} %')
         if self.gains:
             parts.append('taxel gains')
         if self.taxel_model:
@@ -399,7 +399,7 @@ class Calibration:
                         {layer: [list(row) for row in g] for layer, g in
                          zip(('top', 'bottom'), self.gains)})
         out['taxel_model'] = None if self.taxel_model is None else self.taxel_model.to_dict()
-        out['leak_share'] = float(self.leak_share)
+        out['crosstalk_share'] = float(self.crosstalk_share)
         if self.mount is not None:
             # Only when there is one: older readers see the file they know.
             out['mount'] = {k: list(v) if isinstance(v, tuple) else v
@@ -469,8 +469,10 @@ class Calibration:
                                         for layer in ('top', 'bottom'))
             if doc.get('taxel_model') is not None:
                 values['taxel_model'] = TaxelModel.from_dict(doc['taxel_model'])
-            if doc.get('leak_share') is not None:
-                values['leak_share'] = float(doc['leak_share'])
+            # Files written before the term was settled name the share leak_share.
+            share = doc.get('crosstalk_share', doc.get('leak_share'))
+            if share is not None:
+                values['crosstalk_share'] = float(share)
             if doc.get('mount') is not None:
                 values['mount'] = SkinMount.from_dict(doc['mount'])
             if doc.get('direction') is not None:

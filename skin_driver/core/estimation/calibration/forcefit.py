@@ -7,9 +7,10 @@ imprint's unsaturated rim tells the rest (:mod:`imprint`: a bump fitted to the r
 the fit chooses with the curve). The sum of a press stays linear in the scale and the rim load,
 so censored and free taxels are fitted together (non-negative least squares of relative
 errors, for each exponent of a search in log steps). Whether the layer is censored at all, and
-with which bump, is chosen by the presses: the choice that fits them best. A taxel the ADC cut
-(the conditioning puts it at full scale) is a lower bound whatever fits best: once a press has
-one, the layer is censored, and the curve is flat from the highest count read under the cut.
+with which bump, is chosen by the presses: the choice that fits them best. A taxel the ADC
+clipped (the conditioning puts it at full scale) is a lower bound whatever fits best: once a press
+has one, the layer is censored, and the curve is flat from the highest count read below full
+scale.
 
 The fit is refused, with a reason in newtons, when there are too few presses, when their forces do
 not span a range (the curve would be a guess outside one point), when a press loaded no taxel, or
@@ -135,8 +136,9 @@ def _highest_read(press_counts, full_scale: int) -> float:
     """
     Return the highest count read under full scale when a press reached it, else inf.
 
-    A taxel at full scale was cut by the ADC (the conditioning puts every such taxel there): its
-    reading tells no more than the highest count any uncut taxel read, which it takes, so the
+    A taxel at full scale was clipped by the ADC (the conditioning puts every such taxel there):
+    its reading tells no more than the highest count any unclipped taxel read, which it takes, so
+    the
     curve is flat from there to full scale instead of running off along the assumed law.
     """
     counts = [np.asarray(c, dtype=np.float64) for c in press_counts]
@@ -282,9 +284,9 @@ def _censoring_choices(presses: list, full_scale: int, shape: tuple) -> list:
 
     A ceiling is the highest count read less a band for noise; it is a saturation only when
     two or more presses reach it (one press's peak is just the highest reading). A taxel at
-    full scale was cut by the ADC (the conditioning puts every such taxel there): a lower bound
-    for certain, so once a press has one, every choice censors it (none is no choice), and the
-    film's own ceiling below the cut, the highest count read under full scale, is tried too.
+    full scale was clipped by the ADC (the conditioning puts every such taxel there): a lower
+    bound for certain, so once a press has one, every choice censors it (none is no choice), and
+    the film's own ceiling below full scale, the highest count read under it, is tried too.
     """
     band = CENSOR_BAND * full_scale
     top = max(float(p.counts.max()) for p in presses)
@@ -311,7 +313,7 @@ def _bump_activation(censor: float, bump_shape: tuple, activation: float) -> flo
     it. A bump wide enough for each imprint to fit its own spread at run time
     (``imprint.MIN_FITTED_SPREAD``) is no fixed bump the fit could model: there the bump is
     fitted to the whole force, activation included: taking the activation out there reads
-    presses whose taxels the ADC cut high on a fine grid with crosstalk.
+    presses whose taxels the ADC clipped on a fine grid with crosstalk.
     """
     return activation if censor and bump_shape[0] < MIN_FITTED_SPREAD else 0.0
 
@@ -386,7 +388,7 @@ def fit_force_curve(press_counts: Sequence[np.ndarray], press_gains: Sequence[np
     residuals = fitted - known
     presses = [presses[k] for k in kept]
     # Stored in counts, sampled over the counts pressed; past them the last slope goes on (flat
-    # past the highest count read under a cut: _presses).
+    # past the highest count read below full scale when a press was clipped: _presses).
     top = max(float(p.counts.max()) for p in presses)
     grid = np.linspace(0.0, min(top, full_scale), _GRID)
     power = _power_part(assumed, np.minimum(grid, highest))

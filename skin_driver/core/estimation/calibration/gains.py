@@ -30,7 +30,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ['gains_from_force_sums', 'limits_note', 'without_leak', 'MIN_COVERED_SHARE',
+__all__ = ['gains_from_force_sums', 'limits_note', 'without_crosstalk', 'MIN_COVERED_SHARE',
            'GAIN_RANGE']
 
 MIN_COVERED_SHARE = 0.5
@@ -105,15 +105,15 @@ def limits_note(gains: np.ndarray, covered: np.ndarray) -> str:
             'the whole skin and repeat')
 
 
-def without_leak(counts: np.ndarray, share: float) -> np.ndarray:
+def without_crosstalk(counts: np.ndarray, share: float) -> np.ndarray:
     """
     Return a (layers, rows, cols) stack of tared counts with a known line ``share`` taken out.
 
     A load that covers whole lines (a plate for the gains) is left alone by the per-scan
-    clean-up, whose medians would take it for leak; with the skin's leak known (the share a
-    force calibration's presses showed along their lines), each taxel's own reading ``c``
-    follows from ``counts = c + share * (row sum + column sum - 2 c)`` (sums of ``c``). Summed
-    over a line, and over the map, that gives the lines' own sums first.
+    clean-up, whose medians would take it for crosstalk; with the skin's crosstalk known (the
+    share a force calibration's presses showed along their lines), each taxel's own reading
+    ``c`` follows from ``counts = c + share * (row sum + column sum - 2 c)`` (sums of ``c``).
+    Summed over a line, and over the map, that gives the lines' own sums first.
     """
     m = np.asarray(counts, dtype=np.float64)
     if share <= 0:

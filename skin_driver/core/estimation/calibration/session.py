@@ -33,14 +33,14 @@ import numpy as np
 from .calibration import calibrate_zero, Calibration, compliance_from_presses, SkinIdentity
 from .direction import KnownPress, learn_direction, MIN_DIRECTION_PRESSES
 from .forcefit import check_known_forces, fit_force_curve
-from .gains import gains_from_force_sums, limits_note, without_leak
+from .gains import gains_from_force_sums, limits_note, without_crosstalk
 from .presses import PressSegmenter
 from .rendered import render_known_presses
 from .taxellearn import film_start, learn_taxel_model, LearningPress
 from ..shift.methods import get_method
 
 __all__ = ['KINDS', 'PressRecord', 'Outcome', 'CalibrationRefused', 'CalibrationSession',
-           'leak_share_of']
+           'crosstalk_share_of']
 
 KINDS = ('offset', 'force', 'compliance', 'gains', 'direction')
 MIN_COMPLIANCE_PRESSES = 3
@@ -62,8 +62,8 @@ class PressRecord:
     counts above baseline (2 x rows x cols, 0 where untouched), ``wrench_n`` the reference
     sensor's mean force (x, y, z) in the skin frame when one was fed, ``clipped`` where the
     raw counts read the ADC's full scale (2 x rows x cols, None where no taxel did): those
-    readings are cut, and a force fit censors them. ``leak_share`` is the line leak the press
-    showed as a share of a line's load (:func:`leak_share_of`; NaN where none did).
+    readings are clipped, and a force fit censors them. ``crosstalk_share`` is the crosstalk the
+    press showed as a share of a line's load (:func:`crosstalk_share_of`; NaN where none did).
     ``place_m`` is where its contact was (x, y), when one was found.
     """
 
@@ -74,7 +74,7 @@ class PressRecord:
     shift_growth_m: float = 0.0
     wrench_n: Optional[tuple] = None
     clipped: Optional[np.ndarray] = None
-    leak_share: float = math.nan
+    crosstalk_share: float = math.nan
     place_m: Optional[tuple] = None
 
 
@@ -215,13 +215,13 @@ class CalibrationSession:
         clipped = [c.clipped for c in scans if c.clipped.any()]
         wrenches = [w for _, _, w, _ in press.plateau if w is not None]
         wrench = tuple(np.mean(wrenches, axis=0)) if wrenches else None
-        leaks = [leak_share_of(c.line_leak) for c in scans]
+        shares = [crosstalk_share_of(c.line_leak) for c in scans]
         place = tuple(np.mean([p for _, _, _, p in press.plateau], axis=0))
         return self.add_press(PressRecord(
             peak_force_n=press.peak_force_n, shift_m=press.plateau_shift_m, counts=counts,
             looks_normal=press.looks_normal, shift_growth_m=press.shift_growth_m,
             wrench_n=wrench, clipped=np.any(clipped, axis=0) if clipped else None,
-            leak_share=_median_of_finite(leaks), place_m=place))
+            crosstalk_share=_median_of_finite(shares), place_m=place))
 
     def _uncorrected(self, top_counts, bottom_counts, contacts) -> list:
         """Return the scan's contacts as measured without a direction correction."""
@@ -236,14 +236,14 @@ class CalibrationSession:
         scan, = self._conditioned([(top_counts, bottom_counts)])
         counts = scan.counts
         clipped = scan.clipped if scan.clipped.any() else None
-        leak = leak_share_of(scan.line_leak)
+        crosstalk = crosstalk_share_of(scan.line_leak)
         if not contacts:
             return PressRecord(0.0, (math.nan, math.nan), counts, wrench_n=wrench_n,
-                               clipped=clipped, leak_share=leak)
+                               clipped=clipped, crosstalk_share=crosstalk)
         c = contacts[0]
         zero = cal.zero_m(c.force_n)
         return PressRecord(c.force_n, (c.shift_m[0] + zero[0], c.shift_m[1] + zero[1]),
-                           counts, wrench_n=wrench_n, clipped=clipped, leak_share=leak,
+                           counts, wrench_n=wrench_n, clipped=clipped, crosstalk_share=crosstalk,
                            place_m=(c.x_m, c.y_m))
 
     def _conditioned(self, scans: list) -> list:
@@ -336,7 +336,7 @@ class CalibrationSession:
         conditioning = self.estimator.conditioning
         gains = conditioning.gain_maps()
         full_scale = conditioning.config.fsr.full_scale
-        # A reading the ADC cut is a lower bound whatever its tared counts: the fit is told so
+        # A reading the ADC clipped is a lower bound whatever its tared counts: the fit is told so
         # by its count at full scale, at or past the ceiling of every curve (forcefit).
         marked = [r.counts if r.clipped is None
                   else np.where(r.clipped & (r.counts > 0), float(full_scale), r.counts)
@@ -361,11 +361,12 @@ class CalibrationSession:
                 fits[name] = fits['bottom']
                 notes += f'; the top layer takes the bottom curve ({err})'
         model, model_note = self._learn_taxel_model(known, fits['bottom'].left_out)
-        # The matrix's leak: what the presses' lines showed (0 where none leaked).
-        leak = _median_of_finite([r.leak_share for r in self.accepted])
+        # The matrix's crosstalk: what the presses' lines showed (0 where they showed none).
+        crosstalk = _median_of_finite([r.crosstalk_share for r in self.accepted])
         new = self._updated(
             force_curves=(fits['top'].curve, fits['bottom'].curve), force_presses=n,
-            taxel_model=model, leak_share=leak if math.isfinite(leak) else 0.0)
+            taxel_model=model,
+            crosstalk_share=crosstalk if math.isfinite(crosstalk) else 0.0)
         # The pipeline's normal force is the bottom layer's sum: report that layer's fit.
         bottom = fits['bottom']
         agreed = [r for k, r in enumerate(bottom.residuals_n) if k not in bottom.left_out]
@@ -417,8 +418,8 @@ class CalibrationSession:
         if not clipped:
             return ''
         return (f'; press{"es" if len(clipped) > 1 else ""} {", ".join(map(str, clipped))} '
-                "drove taxels to the ADC's full scale, where readings are cut (crosstalk or an "
-                'overloaded film): press more lightly')
+                "drove taxels to the ADC's full scale, where readings are clipped (crosstalk or "
+                'an overloaded film): press more lightly')
 
     def _known_loads(self) -> tuple:
         """Return (tangential, normal) known force per accepted press, newtons."""
@@ -509,12 +510,12 @@ class CalibrationSession:
         estimator = self.estimator
         # What each taxel sensed, without the gains in force: those are being replaced. A plate
         # loads whole lines, which the per-scan clean-up leaves alone (its record shows no
-        # leak): the leak the force calibration's presses showed comes off here. A spread
+        # crosstalk): the crosstalk the force calibration's presses showed comes off here. A spread
         # press's lines were cleaned with its scan. Counts to force as a scan reads them.
-        leak = estimator.calibration.leak_share
+        crosstalk = estimator.calibration.crosstalk_share
         kernel = estimator.conditioning_kernel(*self.accepted[0].counts.shape[1:])
-        sums = sum(kernel.force(without_leak(r.counts, leak)
-                                if math.isnan(r.leak_share) else r.counts)
+        sums = sum(kernel.force(without_crosstalk(r.counts, crosstalk)
+                                if math.isnan(r.crosstalk_share) else r.counts)
                    for r in self.accepted) / estimator.conditioning.gain_maps()
         gains, covered = gains_from_force_sums(sums, n)
         new = self._updated(gains=(gains[0], gains[1]))
@@ -527,18 +528,18 @@ class CalibrationSession:
                        covered=share, warnings=(warning,) if warning else ())
 
 
-def leak_share_of(line_leak: np.ndarray) -> float:
+def crosstalk_share_of(line_shares: np.ndarray) -> float:
     """
-    Return the line leak one scan of a press showed, as a share of a line's load (NaN: none).
+    Return the crosstalk one scan of a press showed, as a share of a line's load (NaN: none).
 
-    The median over the lines the kernel took leak off (kernel.Conditioned.line_leak). A press
-    leaks along its own rows and columns only, onto taxels that carry no load of their own, so
-    its lines tell the matrix's leak apart from the load: what a plate over the whole skin
-    cannot (:func:`gains.without_leak`).
+    The median over the lines the kernel took crosstalk off (kernel.Conditioned.line_leak). A
+    press's crosstalk lies along its own rows and columns only, on taxels that carry no load of
+    their own, so its lines tell the matrix's crosstalk apart from the load: what a plate over
+    the whole skin cannot (:func:`gains.without_crosstalk`).
     """
-    shares = np.asarray(line_leak)
-    leaked = shares[shares > 0]
-    return float(np.median(leaked)) if leaked.size else math.nan
+    shares = np.asarray(line_shares)
+    shown = shares[shares > 0]
+    return float(np.median(shown)) if shown.size else math.nan
 
 
 def _median_of_finite(values) -> float:

@@ -52,9 +52,9 @@ class LearningPress:
     """
     One press of known normal force, as a force calibration recorded it.
 
-    Its tared counts (2, rows, cols), its saturated taxels (same shape) or None, its raw
-    shift (taxels, dx along columns) as the estimator measured it, and the taxels' sensitivity
-    (same shape: the inverse of the calibrated gains) or None for even taxels.
+    Its tared counts (2, rows, cols), its censored taxels (same shape: the clipped ones) or
+    None, its raw shift (taxels, dx along columns) as the estimator measured it, and the taxels'
+    sensitivity (same shape: the inverse of the calibrated gains) or None for even taxels.
     """
 
     counts: np.ndarray

@@ -18,20 +18,21 @@ model"):
 * a film may also stay open where its local pressure (after the blur) is below
   ``turn_on_pa``: a taxel then reads only the load where it is exceeded, and with
   ``film_step`` (a conductance ratio like ``g``) it reads at least that as soon as any of it
-  conducts. Imprints get cliffs at their rims; the blur and the cut then act on the fine
+  conducts. Imprints get cliffs at their rims; the blur and the turn-on then act on the fine
   grid, a few times the cost of a smooth film's render.
 
 None of the skin's numbers is assumed: :mod:`taxellearn` learns them from the presses of known
 force a force calibration records, and the calibration keeps them (:class:`TaxelModel`). The
 model is written once, in the compiled kernel (``skin_kernel/src/model_fit.c``): a scan's
 contact is fitted there (bound as :func:`skin_driver.core.estimation.scan.kernel.fit_contact`:
-Levenberg-Marquardt on its window's tared counts, taxels the film or the ADC saturated taken as
-lower bounds; a round tip first, then an elliptical one from four orientations, the least misfit
-kept: the misfit of narrow imprints is rugged, so one start stops in side minima), and the
-learning renders and weighs its presses through the same code (:func:`render_counts`,
-:func:`residuals`, :func:`start_of`, :func:`sub_for`: ``sk_model_render``, ...) and fits
-each press alone with the kernel's fit (:func:`fit_press`); its joint fit of the skin and its
-presses takes the kernel's steps and moves (:func:`fit_numbers`).
+Levenberg-Marquardt on its window's tared counts, taxels the film saturated or the ADC clipped
+censored (taken as lower bounds); a round tip first, then an elliptical one from four
+orientations, the least misfit kept: the misfit of narrow imprints is rugged, so one start
+stops in side minima), and the learning renders and weighs its presses through the same code
+(:func:`render_counts`, :func:`residuals`, :func:`start_of`, :func:`sub_for`:
+``sk_model_render``, ...) and fits each press alone with the kernel's fit (:func:`fit_press`);
+its joint fit of the skin and its presses takes the kernel's steps and moves
+(:func:`fit_numbers`).
 """
 
 from __future__ import annotations

@@ -67,7 +67,7 @@ class Method:
 
     ``whole_map`` references get the whole raw count maps instead of one contact's window.
     ``linear`` methods fit the window's force maps (counts linearised by each layer's force
-    curve) and know its saturated taxels; ``modelled`` ones also need the calibration's
+    curve) and know its censored taxels; ``modelled`` ones also need the calibration's
     :class:`taxelmodel.TaxelModel`.
     ``caution`` is what a live host must say when it runs the method ('' when nothing).
     ``every_scan`` False: the method takes longer than a scan of a live skin, so a live host
