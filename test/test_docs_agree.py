@@ -347,15 +347,9 @@ def test_readme_figures_are_the_benchmarks():
 
 # Retired words and what replaced them: "line leak" is crosstalk; the ADC clips (a cut is
 # geometry); a random seed is a noise seed (`--seed` named the paper's method on one line).
-RETIRED = {r'line[ -]leak': 'crosstalk', r'ADC[- ]cut|cut by the ADC|the ADC cut\b': 'clipped',
+RETIRED = {r'line[ _-]leak': 'crosstalk', r'\bsk_pair\b': 'sk_found_contact',
+           r'ADC[- ]cut|cut by the ADC|the ADC cut\b': 'clipped',
            r'\bcut taxels?\b': 'clipped taxels', r'(?<![\w-])--seed\b': '--noise-seed'}
-# Files other branches edit now (issue #46): the words in them are renamed there. An entry
-# goes once its file says the new word.
-NOT_YET_RENAMED = ('skin_kernel/include/skin_kernel/skin_kernel.h', 'skin_kernel/src/condition.c',
-                   'skin_kernel/src/crosstalk.c', 'skin_kernel/src/internal.h',
-                   'skin_kernel/src/kernel.c', 'skin_driver/core/estimation/scan/conditioning.py',
-                   'skin_driver/core/estimation/scan/kernel.py',
-                   'skin_driver/core/estimation/scan/pipeline.py')
 # Where a retired word belongs: the history, and this file's list of them.
 HISTORY = ('CHANGELOG.md', 'test/test_docs_agree.py')
 SKIPPED_FOLDERS = {'.git', '.venv', 'build', 'install', 'log', '__pycache__', 'vendor'}
@@ -371,7 +365,7 @@ def _sources():
             continue
         if path.suffix in TEXT_SUFFIXES or path.name == 'Makefile':
             name = rel.as_posix()
-            if name not in HISTORY + NOT_YET_RENAMED:
+            if name not in HISTORY:
                 yield name, path.read_text(errors='replace')
 
 

@@ -1,6 +1,6 @@
 /*
- * Conditioning: raw counts to tared touch counts (baseline, line leak: crosstalk.c, threshold,
- * the taxels the ADC cut levelled, dead taxels filled), and touch counts to force through each
+ * Conditioning: raw counts to tared touch counts (baseline, crosstalk: crosstalk.c, threshold,
+ * the taxels the ADC clipped levelled, dead taxels filled), and touch counts to force through each
  * layer's force table and the gains.
  */
 #include <string.h>
@@ -100,8 +100,8 @@ static void dead_taxels(sk_kernel *k)
 }
 
 /*
- * Put the taxels the ADC cut at their layer's highest tared count: a cut reading is a lower
- * bound whatever leak was taken off it, and the lines with most load lose most leak, so a cut
+ * Put the taxels the ADC clipped at their layer's highest tared count: a clipped reading is a
+ * lower bound whatever crosstalk was taken off it, and the lines with most load lose most, so a
  * plateau would otherwise come out as a crater.
  */
 static void level_clipped(sk_kernel *k)
@@ -169,7 +169,7 @@ void sk_touch_counts(sk_kernel *k, const double *maps)
   }
   k->any_clipped = any_clipped;
   if (k->crosstalk) {
-    sk_remove_line_leak(k);
+    sk_remove_crosstalk(k);
   }
   for (int i = 0; i < n2; i++) {
     counts[i] = counts[i] < threshold[i] ? 0.0 : counts[i];
@@ -183,7 +183,7 @@ void sk_touch_counts(sk_kernel *k, const double *maps)
   loaded_box(k);
 }
 
-int sk_clipped_window(const sk_kernel *k, const sk_pair *p, double *window, int mark)
+int sk_clipped_window(const sk_kernel *k, const sk_found_contact *p, double *window, int mark)
 {
   if (!k->any_clipped) {
     return 0;
@@ -210,7 +210,7 @@ int sk_clipped_window(const sk_kernel *k, const sk_pair *p, double *window, int 
 /*
  * One taxel's force by linear interpolation in its layer's table at every integer count: the
  * slope is the next entry less this one, and 0 past the last count; a count at or below 0 has
- * no force, and a reading the ADC cut reads the force at full scale.
+ * no force, and a reading the ADC clipped reads the force at full scale.
  */
 static double force_at(const double *table, int size, double count, int clipped)
 {

@@ -235,7 +235,7 @@ static int strongest(const double *sums, int n)
  * Whether the strongest row or column of the window's bottom share (b over the cut) is the map's
  * edge line (contacts._cut_at_edge); the line sums in the same order. sums: h + w doubles.
  */
-static int cut_at_edge(const sk_kernel *k, const sk_pair *p, const double *b, double cut,
+static int cut_at_edge(const sk_kernel *k, const sk_found_contact *p, const double *b, double cut,
                        double *sums)
 {
   double *row_sums = sums, *col_sums = sums + p->h;
@@ -253,8 +253,8 @@ static int cut_at_edge(const sk_kernel *k, const sk_pair *p, const double *b, do
          || (p->c0 == 0 && col == 0) || (p->c0 + p->w == k->cols && col == p->w - 1);
 }
 
-/* Window, centroid and force sums of contact q (contacts._pair). */
-static void make_pair(sk_kernel *k, int q, sk_pair *p)
+/* Window, centroid and force sums of contact q. */
+static void make_contact(sk_kernel *k, int q, sk_found_contact *p)
 {
   int rows = k->rows, cols = k->cols, n = k->n;
   const int *box = k->box;
@@ -320,10 +320,10 @@ static void make_pair(sk_kernel *k, int q, sk_pair *p)
   p->bottom_cut = cut_at_edge(k, p, b, cut, k->scratch + 2 * n);
 }
 
-/* Copy pair p's window: counts (top, bottom), then its share of the force maps. */
-void sk_pair_window(const sk_kernel *k, int q, double *out)
+/* Copy contact p's window: counts (top, bottom), then its share of the force maps. */
+void sk_contact_window(const sk_kernel *k, int q, double *out)
 {
-  const sk_pair *p = &k->pairs[q];
+  const sk_found_contact *p = &k->found[q];
   int n = k->n, m = p->h * p->w;
   const double *t = k->tops + q * n, *fraction = k->fractions + q * n;
   const double *bottom = k->counts + n;
@@ -398,7 +398,7 @@ int sk_pair_layers(sk_kernel *k)
     sk_share_bottom(k, kn, top + n);
   }
   for (int q = 0; q < kn; q++) {
-    make_pair(k, q, &k->pairs[q]);
+    make_contact(k, q, &k->found[q]);
   }
   return kn;
 }

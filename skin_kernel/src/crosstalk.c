@@ -1,5 +1,5 @@
 /*
- * Line leak (crosstalk): a passive FSR matrix reads each taxel through its row and column
+ * Crosstalk: a passive FSR matrix reads each taxel through its row and column
  * lines, so part of the load on a line shows up on every taxel of that line, the same on each;
  * presses cover only a few taxels of a line, so a line's median is its leak. Each row's and
  * column's leak, the median of its taxels when that is a small share of its load, is taken out
@@ -8,7 +8,7 @@
  * load is a load spread along the line (a plate, a palm) and is left alone.
  *
  * The step runs only on scans where a line is lifted, mostly at its gate or over: after a tare
- * the gate is LEAK_SIGMAS times each taxel's noise, so a leak under the touch threshold still
+ * the gate is CROSSTALK_SIGMAS times each taxel's noise, so a leak under the touch threshold still
  * comes off; before a tare neither the noise nor the rest reading is known, and the touch
  * threshold gates. Each line's share of its load that was taken off is kept (k->line_share)
  * for sk_condition: a force calibration measures the matrix's leak from it.
@@ -19,9 +19,9 @@
 #include "internal.h"
 
 /* Largest median, as a share of the line's load above it, taken for leak. */
-#define MAX_LEAK 0.05
+#define MAX_CROSSTALK 0.05
 /* After a tare, a line is lifted by leak when most of its taxels read this many noise sigmas. */
-#define LEAK_SIGMAS 3.0
+#define CROSSTALK_SIGMAS 3.0
 
 /*
  * A sorting network of 16 inputs: 60 exchanges in 10 layers (Green's first four layers, the
@@ -66,13 +66,13 @@ static void network_sort(double *buf, int len)
   }
 }
 
-void sk_leak_gate(sk_kernel *k)
+void sk_crosstalk_gate(sk_kernel *k)
 {
-  /* LEAK_SIGMAS noise sigmas after a tare, the touch threshold before (the file's comment) */
+  /* CROSSTALK_SIGMAS noise sigmas after a tare, the touch threshold before (the file's comment) */
   const double *gate = k->tared ? k->noise : k->threshold;
-  double scale = k->tared ? LEAK_SIGMAS : 1.0;
+  double scale = k->tared ? CROSSTALK_SIGMAS : 1.0;
   for (int i = 0; i < 2 * k->n; i++) {
-    k->leak_gate[i] = scale * gate[i];
+    k->crosstalk_gate[i] = scale * gate[i];
   }
 }
 
@@ -138,14 +138,14 @@ static double median_of(double *buf, int len)
  * it is larger than any small share (the bound is past the exact threshold by more than the
  * test's rounding). Half the lines of a lifted map are settled so, those away from the touch.
  */
-static double line_leak(const double *a, int len, int stride, double *buf)
+static double line_crosstalk(const double *a, int len, int stride, double *buf)
 {
   double sum = 0.0;
   for (int i = 0; i < len; i++) {
     buf[i] = a[i * stride];
     sum += buf[i];
   }
-  double bound = (MAX_LEAK * sum + 1e-9 * (fabs(sum) + 1.0)) / (1.0 + MAX_LEAK * len);
+  double bound = (MAX_CROSSTALK * sum + 1e-9 * (fabs(sum) + 1.0)) / (1.0 + MAX_CROSSTALK * len);
   int positive = 0, low = 0, half = (len + 1) / 2;
   for (int i = 0; i < len; i++) {
     positive += buf[i] > 0.0;
@@ -155,17 +155,17 @@ static double line_leak(const double *a, int len, int stride, double *buf)
     return 0.0;
   }
   double median = median_of(buf, len);
-  if (median > MAX_LEAK * (sum - len * median)) {
+  if (median > MAX_CROSSTALK * (sum - len * median)) {
     return 0.0;
   }
   return median > 0.0 ? median : 0.0;
 }
 
-/* A line's leak as a share of its load (0 on a line without load), MAX_LEAK at most. */
-static double leak_share(double leak, double load)
+/* A line's leak as a share of its load (0 on a line without load), MAX_CROSSTALK at most. */
+static double crosstalk_share(double leak, double load)
 {
   double share = load > 0 ? leak / load : 0.0;
-  return share < MAX_LEAK ? share : MAX_LEAK;
+  return share < MAX_CROSSTALK ? share : MAX_CROSSTALK;
 }
 
 /*
@@ -173,28 +173,28 @@ static double leak_share(double leak, double load)
  * its own count too much, which is given back. The leak arrays are turned into the lines' shares
  * in place.
  */
-static void give_back_own_leak(double *c, int rows, int cols, double *row_leak,
-                               double *col_leak)
+static void give_back_own_crosstalk(double *c, int rows, int cols, double *row_crosstalk,
+                               double *col_crosstalk)
 {
   /* a line without leak has no share whatever its load, and a taxel of two such lines is
    * divided by 1: both are skipped */
   for (int r = 0; r < rows; r++) {
     double load = 0.0;
-    for (int j = 0; j < cols && row_leak[r] != 0.0; j++) {
+    for (int j = 0; j < cols && row_crosstalk[r] != 0.0; j++) {
       load += c[r * cols + j];
     }
-    row_leak[r] = leak_share(row_leak[r], load);
+    row_crosstalk[r] = crosstalk_share(row_crosstalk[r], load);
   }
   for (int j = 0; j < cols; j++) {
     double load = 0.0;
-    for (int r = 0; r < rows && col_leak[j] != 0.0; r++) {
+    for (int r = 0; r < rows && col_crosstalk[j] != 0.0; r++) {
       load += c[r * cols + j];
     }
-    col_leak[j] = leak_share(col_leak[j], load);
+    col_crosstalk[j] = crosstalk_share(col_crosstalk[j], load);
   }
   for (int r = 0; r < rows; r++) {
     for (int j = 0; j < cols; j++) {
-      double keep = 1.0 - row_leak[r] - col_leak[j];
+      double keep = 1.0 - row_crosstalk[r] - col_crosstalk[j];
       if (keep != 1.0) {
         c[r * cols + j] /= keep;
       }
@@ -212,7 +212,7 @@ static int lifted(const sk_kernel *k)
   double half = 0.5 * (rows < cols ? rows : cols);
   int *col_over = k->iscratch;
   for (int layer = 0; layer < 2; layer++) {
-    const double *c = k->counts + layer * n, *gate = k->leak_gate + layer * n;
+    const double *c = k->counts + layer * n, *gate = k->crosstalk_gate + layer * n;
     memset(col_over, 0, sizeof(int) * cols);
     for (int r = 0; r < rows; r++) {
       int over = 0;
@@ -236,37 +236,38 @@ static int lifted(const sk_kernel *k)
 
 /*
  * Take each line's leak (its median when a small share of its load) out of both layers; each
- * line's share is left in k->line_share and k->leak_removed says whether the scan had any.
+ * line's share is left in k->line_share and k->crosstalk_removed says whether the scan had any.
  */
-void sk_remove_line_leak(sk_kernel *k)
+void sk_remove_crosstalk(sk_kernel *k)
 {
   int rows = k->rows, cols = k->cols, n = k->n;
-  k->leak_removed = lifted(k);
-  if (!k->leak_removed) {
+  k->crosstalk_removed = lifted(k);
+  if (!k->crosstalk_removed) {
     return;
   }
   double *buf = k->scratch; /* median_of's: max(line, NETWORK_INPUTS) doubles */
   /* Rows first, then columns: the leak is a row term plus a column term (layers apart). */
   for (int layer = 0; layer < 2; layer++) {
     double *c = k->counts + layer * n;
-    double *row_leak = k->line_share + layer * (rows + cols), *col_leak = row_leak + rows;
+    double *row_crosstalk = k->line_share + layer * (rows + cols);
+    double *col_crosstalk = row_crosstalk + rows;
     for (int r = 0; r < rows; r++) {
-      row_leak[r] = line_leak(c + r * cols, cols, 1, buf);
+      row_crosstalk[r] = line_crosstalk(c + r * cols, cols, 1, buf);
       /* less 0 is the same number: such lines are left as they are */
-      for (int j = 0; j < cols && row_leak[r] != 0.0; j++) {
-        c[r * cols + j] -= row_leak[r];
+      for (int j = 0; j < cols && row_crosstalk[r] != 0.0; j++) {
+        c[r * cols + j] -= row_crosstalk[r];
       }
     }
     int any_column = 0;
     for (int j = 0; j < cols; j++) {
-      col_leak[j] = line_leak(c + j, rows, cols, buf);
-      any_column |= col_leak[j] != 0.0;
+      col_crosstalk[j] = line_crosstalk(c + j, rows, cols, buf);
+      any_column |= col_crosstalk[j] != 0.0;
     }
     for (int r = 0; r < rows && any_column; r++) {
       for (int j = 0; j < cols; j++) {
-        c[r * cols + j] -= col_leak[j];
+        c[r * cols + j] -= col_crosstalk[j];
       }
     }
-    give_back_own_leak(c, rows, cols, row_leak, col_leak);
+    give_back_own_crosstalk(c, rows, cols, row_crosstalk, col_crosstalk);
   }
 }

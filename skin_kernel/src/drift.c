@@ -117,7 +117,7 @@ void sk_creep(const sk_drift *drift, int n, const double *age_s, int relative_to
   }
 }
 
-double sk_held_s(const sk_kernel *k, const sk_pair *p)
+double sk_held_s(const sk_kernel *k, const sk_found_contact *p)
 {
   double held = 0.0;
   for (int layer = 0; layer < 2; layer++) {

@@ -14,14 +14,14 @@ typedef struct {
   int bottom_cut;          /* the bottom share's strongest line is the map's edge line */
   double dx, dy, confidence, sigma;
   double cut_var;          /* taxel_fit's variance of its profiles cut by the edge; 0: none */
-} sk_pair;
+} sk_found_contact;
 
 struct sk_kernel {
   sk_settings s;                    /* as built; rows, cols, ... below are copies */
   int rows, cols, n, kmax, method, crosstalk, fill_dead, full_scale, has_gain, tared;
   /* the estimator's state, (2, n) each */
   double *baseline, *threshold, *noise, *gain;
-  double *leak_gate;                /* (2, n): a line is lifted at this count (crosstalk.c) */
+  double *crosstalk_gate;                /* (2, n): a line is lifted at this count (crosstalk.c) */
   unsigned char *dead;
   int any_dead[2];
   unsigned char *clipped;           /* (2, n): the last scan's raw count at the ADC's full scale */
@@ -32,16 +32,16 @@ struct sk_kernel {
   double *raw;                      /* (2, n): sk_scan_counts's maps as doubles */
   double *counts, *force;           /* (2, n): tared counts, force */
   /* each layer's rows' then columns' leak as a share of the line's load (2 (rows + cols)),
-   * valid when leak_removed */
+   * valid when crosstalk_removed */
   double *line_share;
-  int leak_removed;
+  int crosstalk_removed;
   /*
    * rows box[0]..box[1] and columns box[2]..box[3] (half-open) hold every taxel of either
    * layer whose tared count is not 0: the loops of the contact stage skip the rest
    */
   int box[4];
-  int npairs;
-  sk_pair *pairs;                   /* kmax */
+  int nfound;
+  sk_found_contact *found;                   /* kmax */
   /* (kmax, n): each contact's own top map and its share (0..1) of every bottom taxel */
   double *tops, *fractions;
   /* scratch */
@@ -69,10 +69,10 @@ static inline double sk_sum(const double *a, int n)
 /* condition.c: each layer's live taxels and their count per 3 x 3, from k->dead */
 void sk_live_counts(sk_kernel *k);
 
-/* crosstalk.c: the count at which a line is lifted (k->leak_gate), once per kernel; each
- * lifted scan's line leak taken out of k->counts */
-void sk_leak_gate(sk_kernel *k);
-void sk_remove_line_leak(sk_kernel *k);
+/* crosstalk.c: the count at which a line is lifted (k->crosstalk_gate), once per kernel; each
+ * lifted scan's crosstalk taken out of k->counts */
+void sk_crosstalk_gate(sk_kernel *k);
+void sk_remove_crosstalk(sk_kernel *k);
 void sk_touch_counts(sk_kernel *k, const double *maps);
 /* the force of tared counts (2, n) through k's tables and gains, taxels in box (rows box[0] to
  * box[1], columns box[2] to box[3], half-open) read, the rest 0; clipped (NULL: none) taxels
@@ -80,22 +80,22 @@ void sk_touch_counts(sk_kernel *k, const double *maps);
 void sk_force_in(const sk_kernel *k, const double *counts, const unsigned char *clipped,
                  const int *box, double *force);
 void sk_force_of(sk_kernel *k);
-/* pair p's layers (bits 0, 1) holding a loaded taxel the ADC cut; with mark, such taxels of its
- * window (sk_pair_window) are put at full scale, where a force curve censors them */
-int sk_clipped_window(const sk_kernel *k, const sk_pair *p, double *window, int mark);
+/* contact p's layers (bits 0, 1) holding a loaded taxel the ADC clipped; with mark, such taxels of
+ * its window (sk_contact_window) are put at full scale, where a force curve censors them */
+int sk_clipped_window(const sk_kernel *k, const sk_found_contact *p, double *window, int mark);
 
-/* contacts.c: fills k->pairs (geometry and forces), returns their number */
+/* contacts.c: fills k->found (geometry and forces), returns their number */
 int sk_pair_layers(sk_kernel *k);
 /* mixture.c: each of the kn tops' share (k->fractions) of the loaded bottom taxels */
 void sk_share_bottom(sk_kernel *k, int kn, const double *bottom);
-/* contacts.c: pair q's window, counts (top, bottom) then its share of the force maps */
-void sk_pair_window(const sk_kernel *k, int q, double *out);
+/* contacts.c: contact q's window, counts (top, bottom) then its share of the force maps */
+void sk_contact_window(const sk_kernel *k, int q, double *out);
 
 /* drift.c: the time's step of a scan at time_s (after its touch counts), a taxel's creep factor
- * (index into the (2, n) maps), the longest age under load in pair p's window */
+ * (index into the (2, n) maps), the longest age under load in contact p's window */
 void sk_drift_step(sk_kernel *k, const double *maps, double time_s);
 double sk_creep_factor(const sk_kernel *k, int i);
-double sk_held_s(const sk_kernel *k, const sk_pair *p);
+double sk_held_s(const sk_kernel *k, const sk_found_contact *p);
 /* drift.c: the creep law, a reading's rise after age_s under load (1 at its arrival) */
 double sk_creep_rise(const sk_drift *d, double age_s);
 
@@ -167,8 +167,8 @@ double sk_imprint_force(const double *counts, const double *force, int h, int w,
                         double censor, double spread, double power, double activation,
                         double rim, double *scratch);
 
-/* uncertainty.c: 1-sigma uncertainty of one axis of pair p's shift (taxels) */
-double sk_sigma(const sk_kernel *k, const sk_pair *p, const double *window, int alone);
+/* uncertainty.c: 1-sigma uncertainty of one axis of contact p's shift (taxels) */
+double sk_sigma(const sk_kernel *k, const sk_found_contact *p, const double *window, int alone);
 
 /* model_fit.c: the fit from sk_model_start's start (taken before sk_taxel_fit changes the
  * window) and taxel_fit's shift, which overwrites *dx, *dy (left as they are when the fit

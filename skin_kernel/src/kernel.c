@@ -32,7 +32,7 @@ void sk_free(sk_kernel *k)
   if (!k) {
     return;
   }
-  double *arrays[] = {k->baseline, k->threshold, k->noise, k->gain, k->leak_gate, k->live,
+  double *arrays[] = {k->baseline, k->threshold, k->noise, k->gain, k->crosstalk_gate, k->live,
                       k->live_count, k->table_force, k->raw, k->counts, k->force, k->line_share, k->tops,
                       k->fractions, k->scratch, k->fit, k->tare, k->age};
   for (size_t i = 0; i < sizeof(arrays) / sizeof(arrays[0]); i++) {
@@ -40,7 +40,7 @@ void sk_free(sk_kernel *k)
   }
   free(k->dead);
   free(k->clipped);
-  free(k->pairs);
+  free(k->found);
   free(k->labels);
   free(k->iscratch);
   free(k);
@@ -86,10 +86,10 @@ static const sk_field layout[] = {
   FIELD(sk_contact, force_z_n), FIELD(sk_contact, confidence), FIELD(sk_contact, dx),
   FIELD(sk_contact, dy), FIELD(sk_contact, sigma), FIELD(sk_contact, top_force_n),
   FIELD(sk_contact, bottom_force_n), FIELD(sk_contact, shift_confidence),
-  FIELD(sk_contact, valid), FIELD(sk_contact, kept), FIELD(sk_contact, pair),
+  FIELD(sk_contact, valid), FIELD(sk_contact, kept), FIELD(sk_contact, index),
   FIELD(sk_contact, censored), FIELD(sk_contact, held_s),
   SIZE(sk_status),
-  FIELD(sk_status, pairs), FIELD(sk_status, censored), FIELD(sk_status, revived),
+  FIELD(sk_status, found), FIELD(sk_status, censored), FIELD(sk_status, revived),
   FIELD(sk_status, drift_mean), FIELD(sk_status, drift_max),
 };
 
@@ -174,7 +174,7 @@ int sk_new(const sk_settings *settings, unsigned long settings_size, const doubl
   k->threshold = copy_of(threshold, 2 * n);
   k->noise = copy_of(noise, 2 * n);
   k->gain = gain ? copy_of(gain, 2 * n) : NULL;
-  k->leak_gate = copy_of(NULL, 2 * n);
+  k->crosstalk_gate = copy_of(NULL, 2 * n);
   k->dead = malloc(2 * n);
   k->clipped = calloc(2 * n, 1);
   k->live = copy_of(NULL, 2 * n);
@@ -184,7 +184,7 @@ int sk_new(const sk_settings *settings, unsigned long settings_size, const doubl
   k->counts = copy_of(NULL, 2 * n);
   k->force = copy_of(NULL, 2 * n);
   k->line_share = copy_of(NULL, 2 * ((size_t)rows + cols));
-  k->pairs = calloc(kcap, sizeof(sk_pair));
+  k->found = calloc(kcap, sizeof(sk_found_contact));
   k->tops = copy_of(NULL, kcap * n);
   k->fractions = copy_of(NULL, kcap * n);
   k->scratch = copy_of(NULL, 4 * (size_t)n + 16 * kcap + 4 * ((size_t)line + 1));
@@ -206,10 +206,10 @@ int sk_new(const sk_settings *settings, unsigned long settings_size, const doubl
   k->creep_at_1s = s->drift.creep_per_decade > 0 ? 1.0 / sk_creep_rise(&s->drift, 1.0) : 1.0;
   k->labels = malloc(sizeof(int) * n);
   k->iscratch = malloc(sizeof(int) * 4 * n);
-  if (!k->baseline || !k->threshold || !k->noise || (gain && !k->gain) || !k->leak_gate
+  if (!k->baseline || !k->threshold || !k->noise || (gain && !k->gain) || !k->crosstalk_gate
       || !k->dead || !k->clipped || !k->live
       || !k->live_count || !k->table_force || !k->raw || !k->counts || !k->force
-      || !k->line_share || !k->pairs || !k->tops || !k->fractions || !k->scratch || !k->fit || !k->labels
+      || !k->line_share || !k->found || !k->tops || !k->fractions || !k->scratch || !k->fit || !k->labels
       || !k->iscratch || !k->tare || !k->age) {
     sk_free(k);
     if (message && message_size) {
@@ -219,7 +219,7 @@ int sk_new(const sk_settings *settings, unsigned long settings_size, const doubl
   }
   memcpy(k->dead, dead, 2 * n);
   sk_live_counts(k);
-  sk_leak_gate(k);
+  sk_crosstalk_gate(k);
   *out = k;
   return SK_OK;
 }
@@ -230,7 +230,7 @@ static double finite_or_zero(double v)
 }
 
 /* Normal force: the sensed sum (bottom, or the larger one when it is cut) / fill_factor**2. */
-static double normal_force(const sk_kernel *k, const sk_pair *p)
+static double normal_force(const sk_kernel *k, const sk_found_contact *p)
 {
   double sensed = p->bottom_cut ? (p->top_force >= p->bottom_force ? p->top_force
                                    : p->bottom_force) : p->bottom_force;
@@ -244,7 +244,7 @@ static double normal_force(const sk_kernel *k, const sk_pair *p)
 /* One contact's record (ContactEstimator.process). */
 static void contact(const sk_kernel *k, int q, sk_contact *rec)
 {
-  const sk_pair *p = &k->pairs[q];
+  const sk_found_contact *p = &k->found[q];
   const sk_settings *c = &k->s;
   double pitch = c->pitch_m, normal = normal_force(k, p);
   double reach = 0.5 * (k->rows < k->cols ? k->rows : k->cols);
@@ -283,7 +283,7 @@ static void contact(const sk_kernel *k, int q, sk_contact *rec)
   rec->kept = normal >= c->min_force_n;
   rec->dx = p->dx;
   rec->dy = p->dy;
-  rec->pair = q;
+  rec->index = q;
   rec->censored = p->censored;
   rec->sigma = p->sigma;
   rec->top_force_n = p->top_force;
@@ -292,10 +292,10 @@ static void contact(const sk_kernel *k, int q, sk_contact *rec)
   rec->held_s = sk_held_s(k, p);
 }
 
-/* Write the records of the last scan's pairs to out, strongest first; returns their number. */
+/* Write the records of the last scan's contacts to out, strongest first; returns their number. */
 static int finish(sk_kernel *k, sk_contact *out)
 {
-  int count = k->npairs;
+  int count = k->nfound;
   for (int q = 0; q < count; q++) {
     contact(k, q, &out[q]);
     /* strongest first, a stable insertion */
@@ -313,7 +313,7 @@ static int finish(sk_kernel *k, sk_contact *out)
  * filled in from its rim (saturated_force.c). marked: p's window counts with the taxels the ADC
  * cut at full scale (censored there), when p->censored; 2 h w doubles of scratch follow it.
  */
-static void imprint_forces(sk_kernel *k, sk_pair *p, const double *marked)
+static void imprint_forces(sk_kernel *k, sk_found_contact *p, const double *marked)
 {
   double *sums[2] = {&p->top_force, &p->bottom_force};
   int m = p->h * p->w;
@@ -331,9 +331,9 @@ static void imprint_forces(sk_kernel *k, sk_pair *p, const double *marked)
   }
 }
 
-/* model_fit's fit of pair p's window (its counts in k->fit), each taxel's load times its
+/* model_fit's fit of contact p's window (its counts in k->fit), each taxel's load times its
  * sensitivity (the inverse of its gain) where the kernel has gains. */
-static void model_refit(sk_kernel *k, sk_pair *p, const sk_taxel_model *model, const double *marks,
+static void model_refit(sk_kernel *k, sk_found_contact *p, const sk_taxel_model *model, const double *marks,
                         double *start)
 {
   int m = p->h * p->w;
@@ -355,23 +355,23 @@ static void model_refit(sk_kernel *k, sk_pair *p, const sk_taxel_model *model, c
 }
 
 /* One scan of maps known to hold counts (sk_scan, sk_scan_counts). */
-static int scan(sk_kernel *k, const double *maps, double time_s, int every_pair,
+static int scan(sk_kernel *k, const double *maps, double time_s, int every_contact,
                 sk_shift_fn shift, void *user, sk_contact *out, sk_status *status)
 {
   k->revived = 0;
-  k->npairs = 0;
+  k->nfound = 0;
   sk_touch_counts(k, maps);
   sk_drift_step(k, maps, time_s);
   sk_force_of(k);
   int count = sk_pair_layers(k);
-  k->npairs = count;
+  k->nfound = count;
   int censored = 0;
   for (int q = 0; q < count; q++) {
-    sk_pair *p = &k->pairs[q];
+    sk_found_contact *p = &k->found[q];
     int m = p->h * p->w;
-    sk_pair_window(k, q, k->fit);
+    sk_contact_window(k, q, k->fit);
     p->censored = 0;
-    /* a loaded taxel the ADC cut is censored whatever its tared counts (condition.c) */
+    /* a loaded taxel the ADC clipped is censored whatever its tared counts (condition.c) */
     int clipped = sk_clipped_window(k, p, k->fit, 0);
     for (int layer = 0; layer < 2; layer++) {
       double censor = k->s.curves[layer].censor_counts, peak = 0.0;
@@ -383,7 +383,7 @@ static int scan(sk_kernel *k, const double *maps, double time_s, int every_pair,
       }
     }
     censored |= p->censored;
-    /* the counts with the ADC's cut taxels marked, for the fill-in and the shift's bounds */
+    /* the counts with the ADC's clipped taxels marked, for the fill-in and the shift's bounds */
     double *marked = k->fit + 4 * m;
     if (p->censored) {
       memcpy(marked, k->fit, sizeof(double) * 2 * m);
@@ -393,7 +393,7 @@ static int scan(sk_kernel *k, const double *maps, double time_s, int every_pair,
     p->dx = p->dy = p->confidence = 0.0;
     p->sigma = INFINITY;
     p->cut_var = 0.0;
-    if (!every_pair && normal_force(k, p) < k->s.min_force_n) {
+    if (!every_contact && normal_force(k, p) < k->s.min_force_n) {
       /* too light to report, and its force is final: its shift is never asked for */
       continue;
     }
@@ -409,8 +409,8 @@ static int scan(sk_kernel *k, const double *maps, double time_s, int every_pair,
       }
     } else if (k->method == SK_TAXEL_FIT || k->method == SK_MODEL_FIT) {
       /*
-       * saturated taxels: at the curve's censoring counts, or cut by the ADC (condition.c);
-       * a pair with none is not censored, and its marks are all 0
+       * saturated taxels: at the curve's censoring counts, or clipped by the ADC (condition.c);
+       * a contact with none is not censored, and its marks are all 0
        */
       double *marks = marked;
       for (int layer = 0; layer < 2; layer++) {
@@ -442,7 +442,7 @@ static int scan(sk_kernel *k, const double *maps, double time_s, int every_pair,
     }
     p->sigma = sk_sigma(k, p, k->fit, count == 1);
   }
-  status->pairs = count;
+  status->found = count;
   status->censored = censored;
   status->revived = k->revived != 0;
   for (int layer = 0; layer < 2; layer++) {
@@ -467,30 +467,30 @@ static int check_maps(const sk_kernel *k, const double *maps)
   return SK_OK;
 }
 
-int sk_scan(sk_kernel *k, const double *maps, double time_s, int every_pair, sk_contact *out,
+int sk_scan(sk_kernel *k, const double *maps, double time_s, int every_contact, sk_contact *out,
             sk_status *status)
 {
   int checked = check_maps(k, maps);
-  return checked == SK_OK ? scan(k, maps, time_s, every_pair, NULL, NULL, out, status)
+  return checked == SK_OK ? scan(k, maps, time_s, every_contact, NULL, NULL, out, status)
     : checked;
 }
 
-int sk_scan_shifted(sk_kernel *k, const double *maps, int every_pair, sk_shift_fn shift,
+int sk_scan_shifted(sk_kernel *k, const double *maps, int every_contact, sk_shift_fn shift,
                     void *user, sk_contact *out, sk_status *status)
 {
   int checked = check_maps(k, maps);
-  return checked == SK_OK ? scan(k, maps, NAN, every_pair, shift, user, out, status)
+  return checked == SK_OK ? scan(k, maps, NAN, every_contact, shift, user, out, status)
     : checked;
 }
 
 int sk_condition(sk_kernel *k, const double *maps, double *counts, double *force,
-                 unsigned char *clipped, double *line_leak)
+                 unsigned char *clipped, double *crosstalk)
 {
   int checked = check_maps(k, maps);
   if (checked != SK_OK) {
     return checked;
   }
-  k->leak_removed = 0;
+  k->crosstalk_removed = 0;
   sk_touch_counts(k, maps);
   sk_force_of(k);
   size_t n2 = 2 * (size_t)k->n, lines = 2 * ((size_t)k->rows + k->cols);
@@ -503,9 +503,9 @@ int sk_condition(sk_kernel *k, const double *maps, double *counts, double *force
   if (clipped) {
     memcpy(clipped, k->clipped, n2);
   }
-  if (line_leak) {
+  if (crosstalk) {
     for (size_t i = 0; i < lines; i++) {
-      line_leak[i] = k->leak_removed ? k->line_share[i] : 0.0;
+      crosstalk[i] = k->crosstalk_removed ? k->line_share[i] : 0.0;
     }
   }
   return SK_OK;
@@ -525,7 +525,7 @@ int sk_force(const sk_kernel *k, const double *counts, const unsigned char *clip
   return SK_OK;
 }
 
-int sk_scan_counts(sk_kernel *k, const uint16_t *maps, double time_s, int every_pair,
+int sk_scan_counts(sk_kernel *k, const uint16_t *maps, double time_s, int every_contact,
                    sk_contact *out, sk_status *status)
 {
   /* exact as doubles: the scan is sk_scan's to the bit */
@@ -533,7 +533,7 @@ int sk_scan_counts(sk_kernel *k, const uint16_t *maps, double time_s, int every_
   for (int i = 0; i < n2; i++) {
     k->raw[i] = maps[i];
   }
-  return scan(k, k->raw, time_s, every_pair, NULL, NULL, out, status);
+  return scan(k, k->raw, time_s, every_contact, NULL, NULL, out, status);
 }
 
 void sk_dead(const sk_kernel *k, unsigned char *out)

@@ -12,7 +12,7 @@
 #define MIN_MASS_COUNTS 1.0
 #define BORDER_SIGMA 0.2
 
-double sk_sigma(const sk_kernel *k, const sk_pair *p, const double *window, int alone)
+double sk_sigma(const sk_kernel *k, const sk_found_contact *p, const double *window, int alone)
 {
   int m = p->h * p->w;
   double total = 0.0;

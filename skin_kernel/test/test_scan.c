@@ -55,7 +55,7 @@ static void an_empty_frame_has_no_contact(void **state)
     double *maps = rest_maps(8, 12);
     sk_status status;
     assert_int_equal(scan_of(&s, maps, &status), 0);
-    assert_int_equal(status.pairs, 0);
+    assert_int_equal(status.found, 0);
     assert_int_equal(status.censored, 0);
     free(maps);
   }
@@ -275,7 +275,7 @@ static void the_most_contacts_a_grid_holds_are_each_reported(void **state)
     }
     sk_status status;
     assert_int_equal(scan_of(&s, maps, &status), pressed);
-    assert_int_equal(status.pairs, pressed);
+    assert_int_equal(status.found, pressed);
     free(maps);
   }
 }

@@ -2,7 +2,7 @@
  * skin_kernel: the per-scan contact estimation of skin_driver, compiled.
  *
  * One call per scan (sk_scan) turns the raw counts of both layers into contacts: conditioning
- * (tare, line-leak removal, threshold, dead-taxel fill, counts to force), contacts (components,
+ * (tare, crosstalk removal, threshold, dead-taxel fill, counts to force), contacts (components,
  * peak split, bottom-load mixture, windows), a saturated imprint's force filled in from its rim,
  * the layer shift of each contact (centroid, taxel_fit, poc or model_fit), its uncertainty and
  * the contact figures. It is the one implementation of the per-scan estimate; skin_driver binds it
@@ -95,7 +95,7 @@ typedef struct {
   int method;             /* SK_CENTROID ... */
   int remove_crosstalk, fill_dead;
   int full_scale;         /* the ADC's highest count */
-  int tared;              /* 1 once a tare measured noise and rest: the line-leak gate */
+  int tared;              /* 1 once a tare measured noise and rest: the crosstalk gate */
   double pitch_m, compliance_m_per_n, min_force_n, min_confidence, min_shift_m;
   double force_scale, fill_factor;
   /* the calibration: the zero shift at zero_ref_n and its slope with the load */
@@ -116,14 +116,14 @@ typedef struct {
   double top_force_n, bottom_force_n, shift_confidence;
   int valid;              /* 1 when the direction is meaningful */
   int kept;               /* 1 when the normal force reaches the minimum: a contact to report */
-  int pair;               /* index of the contact among the scan's pairs */
+  int index;              /* index of the contact among the scan's found ones */
   int censored;           /* bit 0: the top layer reached its censor counts, bit 1: the bottom */
   double held_s;          /* the longest time under load of its taxels (creep's age), s */
 } sk_contact;
 
 /* What a scan found besides its contacts. */
 typedef struct {
-  int pairs;              /* contacts found, reported or not */
+  int found;              /* contacts found, reported or not */
   int censored;           /* bits as sk_contact.censored, over every contact */
   int revived;            /* 1 when the scan revived dead-taxel marks (sk_dead) */
   /* each layer's baseline drift since the tare (tracked), its mean and largest |drift|, counts */
@@ -171,17 +171,17 @@ void sk_free(sk_kernel *k);
  * nothing tracked): maps is the (2, rows, cols) raw counts. Writes one record
  * per contact found (at most max_contacts) to out and the scan's status; returns the number of
  * records, or SK_ERR_NOT_FINITE / SK_ERR_NEGATIVE when the maps hold a value that is not a
- * count. Without every_pair, a contact too light to report (kept 0) gets no shift (0) and no
+ * count. Without every_contact, a contact too light to report (kept 0) gets no shift (0) and no
  * sigma (inf).
  */
-int sk_scan(sk_kernel *k, const double *maps, double time_s, int every_pair, sk_contact *out,
+int sk_scan(sk_kernel *k, const double *maps, double time_s, int every_contact, sk_contact *out,
             sk_status *status);
 
 /*
  * sk_scan of maps as the ADC gives them, (2, rows, cols) unsigned 16-bit counts: every value is
  * a count, so there is no error to return.
  */
-int sk_scan_counts(sk_kernel *k, const uint16_t *maps, double time_s, int every_pair,
+int sk_scan_counts(sk_kernel *k, const uint16_t *maps, double time_s, int every_contact,
                    sk_contact *out, sk_status *status);
 
 /*
@@ -196,20 +196,20 @@ typedef int (*sk_shift_fn)(void *user, const double *window, int h, int w, doubl
  * method: a reference estimator run inside the kernel's pipeline (conditioning, contacts,
  * uncertainty, figures), so that only the shift differs from the kernel's own.
  */
-int sk_scan_shifted(sk_kernel *k, const double *maps, int every_pair, sk_shift_fn shift,
+int sk_scan_shifted(sk_kernel *k, const double *maps, int every_contact, sk_shift_fn shift,
                     void *user, sk_contact *out, sk_status *status);
 
 /*
  * The conditioning of one scan alone, as sk_scan does it. Writes, each output NULL when not
- * wanted: counts, the tared counts (line leak out, cut taxels levelled, dead taxels filled), and
- * force, each taxel's force, (2, rows, cols) each; clipped, 1 where a raw count is at the ADC's
- * full scale, (2, rows, cols); line_leak, the leak taken off each line as a share of its load,
- * each layer's rows then its columns, (2, rows + cols), 0 on a line that gave none and
+ * wanted: counts, the tared counts (crosstalk out, clipped taxels levelled, dead taxels filled),
+ * and force, each taxel's force, (2, rows, cols) each; clipped, 1 where a raw count is at the
+ * ADC's full scale, (2, rows, cols); crosstalk, the crosstalk taken off each line as a share of
+ * its load, each layer's rows then its columns, (2, rows + cols), 0 on a line that gave none and
  * everywhere on a scan whose lines were left as they were. Dead-taxel marks the maps revive
  * are revived, as by a scan. Returns SK_OK or sk_scan's errors.
  */
 int sk_condition(sk_kernel *k, const double *maps, double *counts, double *force,
-                 unsigned char *clipped, double *line_leak);
+                 unsigned char *clipped, double *crosstalk);
 
 /*
  * The force of given tared counts, (2, rows, cols), through the kernel's force tables and gains,

@@ -184,7 +184,7 @@ def test_a_leak_under_the_touch_threshold_comes_off_the_loaded_taxels():
     assert read[1] == pytest.approx(read[0], rel=0.02)
 
 
-def test_before_a_tare_the_rest_reading_is_taken_for_no_line_leak():
+def test_before_a_tare_the_rest_reading_is_taken_for_no_crosstalk():
     # Untared, every taxel still reads its rest counts (about 20 on this skin, 2.5 times the
     # noise guessed before a tare) under the 40-count touch threshold: the leak gate stays
     # shut, and neither rest frames nor a press have their lines touched.
@@ -194,7 +194,7 @@ def test_before_a_tare_the_rest_reading_is_taken_for_no_line_leak():
     frames.append(render(model, [Press(0.035, 0.04, 10.0, radius_m=0.004)], rng))
     kernel = _kernel(ContactEstimator())
     scans = [kernel.condition(top, bottom) for top, bottom in frames]
-    assert not any(s.line_leak.any() for s in scans)
+    assert not any(s.crosstalk.any() for s in scans)
     assert scans[-1].counts.any()
     np.testing.assert_array_equal(scans[-1].counts[1] > 0, frames[-1][1] >= 40)
 
@@ -209,7 +209,7 @@ def test_before_a_tare_a_leak_over_the_touch_threshold_still_comes_off():
     scan = _kernel(ContactEstimator(), (64, 64)).condition(top, bottom)
     rows, cols = np.nonzero(scan.counts[1])
     assert np.ptp(rows) < 20 and np.ptp(cols) < 20
-    assert scan.line_leak.max() > 0
+    assert scan.crosstalk.max() > 0
 
 
 def test_a_press_shows_the_matrix_leak_and_a_plate_is_cleared_of_it_once_it_is_known():
@@ -218,16 +218,16 @@ def test_a_press_shows_the_matrix_leak_and_a_plate_is_cleared_of_it_once_it_is_k
     est, _, rng = _tared(leaky)
     kernel = _kernel(est)
     press = kernel.condition(*render(leaky, [Press(0.0412, 0.0388, 25.0, radius_m=0.004)], rng))
-    assert crosstalk_share_of(press.line_leak) == pytest.approx(0.012, rel=0.1)
+    assert crosstalk_share_of(press.crosstalk) == pytest.approx(0.012, rel=0.1)
     # No press, no leak to see.
-    assert math.isnan(crosstalk_share_of(kernel.condition(*render(leaky, [], rng)).line_leak))
+    assert math.isnan(crosstalk_share_of(kernel.condition(*render(leaky, [], rng)).crosstalk))
     # A plate loads whole lines: the per-scan clean-up leaves it alone (its medians are load),
     # and each taxel reads about a third more than its own load. With the leak known, what
     # is left is the taxel's own reading.
     quiet = SkinModel(noise_counts=0.0, crosstalk=0.012)
     est, _, rng = _tared(quiet, frames=2)
     plate = _kernel(est).condition(*render_plate(quiet, 1.0, rng))
-    assert not plate.line_leak.any()
+    assert not plate.crosstalk.any()
     alone_est, _, rng = _tared(SkinModel(noise_counts=0.0), rng, frames=2)
     alone = _kernel(alone_est).condition(*render_plate(SkinModel(noise_counts=0.0), 1.0, rng))
     assert plate.counts.mean() > 1.3 * alone.counts.mean()

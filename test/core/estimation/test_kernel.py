@@ -226,7 +226,7 @@ def test_a_dead_taxel_between_two_peaks_is_no_dip(row):
 
 
 @pytest.mark.parametrize('rows, cols', [(16, 16), (7, 12), (20, 17), (3, 40)])
-def test_line_leak_is_taken_on_short_and_long_lines(rows, cols):
+def test_crosstalk_is_taken_on_short_and_long_lines(rows, cols):
     # Leak lifts every line through a press over the touch threshold: the kernel sorts lines
     # of up to 16 taxels with a network and selects the median of longer ones, and settles
     # lines away from the press without either; integer counts tie often. The press is found

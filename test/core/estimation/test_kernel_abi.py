@@ -24,7 +24,7 @@ def test_a_changed_layout_is_refused_even_under_python_O():
     code = ('import ctypes\n'
             'from skin_driver.core.estimation.scan import kernel\n'
             'class Status(ctypes.Structure):\n'
-            "    _fields_ = [('revived', ctypes.c_int), ('pairs', ctypes.c_int),\n"
+            "    _fields_ = [('revived', ctypes.c_int), ('found', ctypes.c_int),\n"
             "                ('censored', ctypes.c_int)]\n"
             "kernel._MIRRORS['sk_status'] = Status\n"
             'try:\n'
@@ -33,7 +33,7 @@ def test_a_changed_layout_is_refused_even_under_python_O():
             '    print(err)\n')
     out = subprocess.run([sys.executable, '-O', '-c', code], capture_output=True, text=True)
     assert out.returncode == 0, out.stderr
-    assert 'sk_status.revived' in out.stdout and 'sk_status.pairs' in out.stdout
+    assert 'sk_status.revived' in out.stdout and 'sk_status.found' in out.stdout
 
 
 def test_the_missing_library_error_says_where_it_looked():

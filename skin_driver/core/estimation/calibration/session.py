@@ -215,7 +215,7 @@ class CalibrationSession:
         clipped = [c.clipped for c in scans if c.clipped.any()]
         wrenches = [w for _, _, w, _ in press.plateau if w is not None]
         wrench = tuple(np.mean(wrenches, axis=0)) if wrenches else None
-        shares = [crosstalk_share_of(c.line_leak) for c in scans]
+        shares = [crosstalk_share_of(c.crosstalk) for c in scans]
         place = tuple(np.mean([p for _, _, _, p in press.plateau], axis=0))
         return self.add_press(PressRecord(
             peak_force_n=press.peak_force_n, shift_m=press.plateau_shift_m, counts=counts,
@@ -236,7 +236,7 @@ class CalibrationSession:
         scan, = self._conditioned([(top_counts, bottom_counts)])
         counts = scan.counts
         clipped = scan.clipped if scan.clipped.any() else None
-        crosstalk = crosstalk_share_of(scan.line_leak)
+        crosstalk = crosstalk_share_of(scan.crosstalk)
         if not contacts:
             return PressRecord(0.0, (math.nan, math.nan), counts, wrench_n=wrench_n,
                                clipped=clipped, crosstalk_share=crosstalk)
@@ -532,7 +532,7 @@ def crosstalk_share_of(line_shares: np.ndarray) -> float:
     """
     Return the crosstalk one scan of a press showed, as a share of a line's load (NaN: none).
 
-    The median over the lines the kernel took crosstalk off (kernel.Conditioned.line_leak). A
+    The median over the lines the kernel took crosstalk off (kernel.Conditioned.crosstalk). A
     press's crosstalk lies along its own rows and columns only, on taxels that carry no load of
     their own, so its lines tell the matrix's crosstalk apart from the load: what a plate over
     the whole skin cannot (:func:`gains.without_crosstalk`).

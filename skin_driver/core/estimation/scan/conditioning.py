@@ -5,8 +5,8 @@ The tare's baseline, noise and touch threshold, dead or stuck marks, the gains, 
 layer's force at every count: :class:`Conditioning` measures and holds it (a tare, gains,
 fitted force curves). A compiled kernel is built from a copy of it (:meth:`Conditioning.state`)
 and does the conditioning itself, once per scan (skin_kernel's condition.c and crosstalk.c,
-bound by :mod:`kernel`): subtract the baseline, take the line leak out, zero what is below the
-touch threshold, level the taxels the ADC cut, fill dead taxels from their live neighbours and
+bound by :mod:`kernel`): subtract the baseline, take the crosstalk out, zero what is below the
+touch threshold, level the taxels the ADC clipped, fill dead taxels from their live neighbours and
 turn counts into force. Python never conditions a scan a second way: the calibration asks a
 kernel (:meth:`kernel.Kernel.condition`, :meth:`kernel.Kernel.force`).
 
@@ -76,7 +76,7 @@ class ConditioningState(NamedTuple):
     gain: np.ndarray     # None when no gain is set
     dead: np.ndarray     # bool
     tables: np.ndarray   # (2, full_scale + 1): each layer's force at every count
-    tared: bool          # the noise and rest reading measured: the kernel's line-leak gate
+    tared: bool          # the noise and rest reading measured: the kernel's crosstalk gate
 
 
 class Conditioning:

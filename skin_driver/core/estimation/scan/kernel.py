@@ -21,7 +21,8 @@ lock. Other threads read what the owner publishes after each scan (:meth:`Kernel
 records the first thread that enters it and refuses any other (:class:`NotTheOwner`, kept in
 :func:`breaches` too) until :meth:`Kernel.claim` hands it over.
 :meth:`Kernel.condition` and :meth:`Kernel.force` give a scan's conditioning alone (tared
-counts, cut taxels, the line leak taken off, forces): what a calibration reads its presses from.
+counts, clipped taxels, the crosstalk taken off, forces): what a calibration reads its presses
+from.
 
 The structs of skin_kernel.h are mirrored here field by field (:class:`Settings`,
 :class:`ContactRecord`, ...); before any other call the binding compares every mirror with the
@@ -147,14 +148,14 @@ class ContactRecord(ctypes.Structure):
         'x_m', 'y_m', 'force_n', 'area_m2', 'shift_x_m', 'shift_y_m', 'azimuth_rad',
         'azimuth_sigma_rad', 'alpha_rad', 'force_x_n', 'force_y_n', 'force_z_n', 'confidence',
         'dx', 'dy', 'sigma', 'top_force_n', 'bottom_force_n', 'shift_confidence')]
-        + [(name, _int) for name in ('valid', 'kept', 'pair', 'censored')]
+        + [(name, _int) for name in ('valid', 'kept', 'index', 'censored')]
         + [('held_s', _double)])
 
 
 class Status(ctypes.Structure):
     """skin_kernel.h's sk_status: what a scan found besides its contacts."""
 
-    _fields_ = [('pairs', _int), ('censored', _int), ('revived', _int),
+    _fields_ = [('found', _int), ('censored', _int), ('revived', _int),
                 ('drift_mean', _double * 2), ('drift_max', _double * 2)]
 
 
@@ -265,7 +266,7 @@ def load_library() -> ctypes.CDLL:
 def _sign(lib: ctypes.CDLL) -> None:
     """Set the argument and result types of the library's functions."""
     ptr, ulong = ctypes.c_void_p, ctypes.c_ulong
-    # sk_scan and sk_scan_counts (kernel, maps, time, every_pair, out, status) have no argtypes:
+    # sk_scan and sk_scan_counts (kernel, maps, time, every_contact, out, status) have no argtypes:
     # a Kernel passes the same c_void_p objects, a c_double and a Python int every time, and a
     # scan is where their checks would cost.
     signatures = {'sk_layout': (_int, [ptr, ptr]), 'sk_abi_version': (_int, []),
@@ -314,10 +315,10 @@ class KernelSettings(NamedTuple):
 class Conditioned(NamedTuple):
     """One scan's conditioning as the kernel does it (:meth:`Kernel.condition`)."""
 
-    counts: np.ndarray     # (2, rows, cols) tared counts: leak out, cut levelled, dead filled
+    counts: np.ndarray     # (2, rows, cols) tared: crosstalk out, clipped levelled, dead filled
     force: np.ndarray      # (2, rows, cols) each taxel's force, N
     clipped: np.ndarray    # (2, rows, cols) bool: the raw count at the ADC's full scale
-    line_leak: np.ndarray  # (2, rows + cols): each line's leak taken off, share of its load
+    crosstalk: np.ndarray  # (2, rows + cols): each line's crosstalk taken off, share of its load
 
 
 def _address(array: np.ndarray) -> ctypes.c_void_p:
@@ -434,11 +435,11 @@ class Kernel:
             top, bottom = check_pair(top, bottom, self.shape)
         return counts, top, bottom
 
-    def scan(self, top, bottom, every_pair: bool = False, time_s: float = None) -> list:
+    def scan(self, top, bottom, every_contact: bool = False, time_s: float = None) -> list:
         """
         Return the :class:`Record` of each contact in the raw maps, strongest first.
 
-        Without ``every_pair`` a contact too light to report (``kept`` 0) gets no shift. Dead
+        Without ``every_contact`` a contact too light to report (``kept`` 0) gets no shift. Dead
         taxels that read a touch are revived in the kernel. ``time_s``, the scan's time in
         seconds (any origin, never going back), lets baselines follow drift and forces lose
         their creep (the settings' ``drift``); None: nothing tracked. Bad maps raise ValueError
@@ -449,7 +450,7 @@ class Kernel:
         top_buffer[...] = top
         bottom_buffer[...] = bottom
         clock = _NO_TIME if time_s is None else _double(time_s)
-        count = scan(handle, maps, clock, int(every_pair), out, status)
+        count = scan(handle, maps, clock, int(every_contact), out, status)
         if count < 0:
             check_pair(top, bottom, self.shape)
             raise ValueError('top or bottom holds a value that is not a count')
@@ -460,7 +461,7 @@ class Kernel:
             self._publish_dead()
         return list(map(Record._make, self._out[:count].tolist()))
 
-    def scan_shifted(self, top, bottom, shift, every_pair: bool = False) -> list:
+    def scan_shifted(self, top, bottom, shift, every_contact: bool = False) -> list:
         """
         Return :meth:`scan`'s records with each contact's shift from ``shift``, not the kernel's.
 
@@ -484,7 +485,7 @@ class Kernel:
 
         self._maps[0] = top
         self._maps[1] = bottom
-        count = self._lib.sk_scan_shifted(self._handle, _address(self._maps), int(every_pair),
+        count = self._lib.sk_scan_shifted(self._handle, _address(self._maps), int(every_contact),
                                           _SHIFT_FN(given), None, _address(self._out),
                                           ctypes.byref(self._status))
         if raised:
@@ -500,7 +501,7 @@ class Kernel:
         """
         Return the conditioning of the raw maps as a scan does it (:class:`Conditioned`).
 
-        ``line_leak`` holds each layer's rows, then its columns: 0 on a line that gave none, and
+        ``crosstalk`` holds each layer's rows, then its columns: 0 on a line that gave none, and
         everywhere on a scan whose lines were left as they were. Dead taxels that read a touch
         are revived, as by :meth:`scan`.
         """

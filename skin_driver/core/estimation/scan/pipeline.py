@@ -293,7 +293,7 @@ class ContactEstimator:
         Return a new kernel of this estimator for ``rows`` x ``cols`` maps, its own to keep.
 
         For a thread that conditions scans apart from the scanning one (a calibration reads its
-        presses' tared counts, cut taxels, line leak and forces from it: the scans' own
+        presses' tared counts, clipped taxels, crosstalk and forces from it: the scans' own
         conditioning). Its dead marks are those in force now; the scanning kernel's are never
         touched.
         """
@@ -338,7 +338,7 @@ class ContactEstimator:
         """
         p = self.config.pitch_m
         return [(r.dx * p, r.dy * p)
-                for r in self._scan(top_counts, bottom_counts, every_pair=True)]
+                for r in self._scan(top_counts, bottom_counts, every_contact=True)]
 
     def process(self, top_counts, bottom_counts, time_s: float = None) -> list:
         """
@@ -402,16 +402,16 @@ class ContactEstimator:
             kernel.claim()
         return self
 
-    def _scan(self, top_counts, bottom_counts, every_pair: bool = False,
+    def _scan(self, top_counts, bottom_counts, every_contact: bool = False,
               time_s: float = None) -> list:
         """Return the compiled kernel's records of the contacts (kernel.Kernel.scan)."""
         kernel = self._kernels.get(np.shape(top_counts))
         if kernel is None:
             kernel = self._kernel_for(top_counts, bottom_counts)
         if self._shift is None:
-            return kernel.scan(top_counts, bottom_counts, every_pair, time_s)
+            return kernel.scan(top_counts, bottom_counts, every_contact, time_s)
         return kernel.scan_shifted(top_counts, bottom_counts,
-                                   self._reference(top_counts, bottom_counts), every_pair)
+                                   self._reference(top_counts, bottom_counts), every_contact)
 
     def _reference(self, top_counts, bottom_counts):
         """Return the reference shift's function of a contact's counts window for one scan."""
