@@ -86,8 +86,7 @@ def unpack_counts(buf, offset: int, count: int, shape: tuple | None = None) -> n
     3k + 1, shifted right by 4 (:func:`unpack_frames`). ``shape``: the array's (count,
     default), e.g. (2, rows, cols) for a frame's layers.
     """
-    pairs = count // 2
-    return _unpack(buf, offset, (pairs, 2), (3, 1)).reshape(shape or count)
+    return _unpack(buf, offset, count, (), ()).reshape(shape or count)
 
 
 def unpack_frames(buf, offset: int, count: int, frames: int, stride: int) -> np.ndarray:
@@ -101,16 +100,33 @@ def unpack_frames(buf, offset: int, count: int, frames: int, stride: int) -> np.
     even and of the odd counts' uint16 (stride 3) and one ufunc each into the output, which
     costs more calls but less per count. Either way no per-count or per-frame Python.
     """
+    return _unpack(buf, offset, count, (frames,), (stride,)).reshape(frames, count)
+
+
+def _unpack(buf, offset: int, count: int, frames: tuple, stride: tuple) -> np.ndarray:
+    """
+    Return the counts as read-only (*frames, pairs, 2): frames is () or (frames,), as stride.
+
+    Few counts: the view of pair k's uint16 at byte 3k and 3k + 1 is copied first: on the copy,
+    aligned and contiguous, the ufuncs run unbuffered, several times faster than on the view.
+    The constructor is given positional arguments and a dtype object: no keyword and no type
+    string to parse, a third of its cost at one frame per call.
+    """
     pairs = count // 2
-    if frames * count < MANY_COUNTS:
-        return _unpack(buf, offset, (frames, pairs, 2), (stride, 3, 1)).reshape(frames, count)
-    even = np.ndarray((frames, pairs), _WORD, buf, offset, (stride, 3))
-    odd = np.ndarray((frames, pairs), _WORD, buf, offset + 1, (stride, 3))
-    out = np.empty((frames, pairs, 2), dtype=np.uint16)
-    np.bitwise_and(even, _MASK, out=out[:, :, 0])
-    np.right_shift(odd, 4, out=out[:, :, 1])
+    if count * (frames[0] if frames else 1) < MANY_COUNTS:
+        out = np.ndarray(frames + (pairs, 2), _WORD, buf, offset, stride + (3, 1)).copy()
+        if not _NATIVE:
+            out = out.astype(np.uint16)
+        np.right_shift(out, _shifts(pairs), out=out)
+        np.bitwise_and(out, _MASK, out=out)
+    else:
+        even = np.ndarray(frames + (pairs,), _WORD, buf, offset, stride + (3,))
+        odd = np.ndarray(frames + (pairs,), _WORD, buf, offset + 1, stride + (3,))
+        out = np.empty(frames + (pairs, 2), dtype=np.uint16)
+        np.bitwise_and(even, _MASK, out=out[..., 0])
+        np.right_shift(odd, 4, out=out[..., 1])
     out.setflags(write=False)
-    return out.reshape(frames, count)
+    return out
 
 
 @lru_cache(maxsize=64)
@@ -119,24 +135,6 @@ def _shifts(pairs: int) -> np.ndarray:
     shifts = np.tile(np.array([0, 4], dtype=np.uint16), (pairs, 1))
     shifts.flags.writeable = False
     return shifts
-
-
-def _unpack(buf, offset: int, shape: tuple, strides: tuple) -> np.ndarray:
-    """
-    Return the counts of the pairs viewed with ``shape`` (..., pairs, 2) and ``strides``.
-
-    The view (the uint16 at byte 3k and at 3k + 1 of pair k) is copied first: on the copy,
-    aligned and contiguous, the ufuncs run unbuffered, several times faster than on the view.
-    The constructor is given positional arguments and a dtype object: no keyword and no type
-    string to parse, a third of its cost at one frame per call.
-    """
-    out = np.ndarray(shape, _WORD, buf, offset, strides).copy()
-    if not _NATIVE:
-        out = out.astype(np.uint16)
-    np.right_shift(out, _shifts(shape[-2]), out=out)
-    np.bitwise_and(out, _MASK, out=out)
-    out.setflags(write=False)
-    return out
 
 
 def encode_row_map(row_valid, rows: int) -> bytes:

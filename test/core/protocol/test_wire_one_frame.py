@@ -22,12 +22,17 @@ SIZE = 800  # a version-2 frame of 16 x 16
 
 def frame(seq, shape=SHAPE, **extra):
     """Return a version-2 frame of seeded counts in which no marker occurs past its own."""
+    return sent(seq, shape, **extra)[0]
+
+
+def sent(seq, shape=SHAPE, **extra):
+    """Return (the frame, its top, its bottom) of :func:`frame`."""
     for salt in range(100):
         rng = np.random.default_rng((seq, salt))
         top, bottom = (rng.integers(0, 4096, shape, dtype=np.uint16) for _ in range(2))
         raw = encode_frame(seq, 1000 * seq, top, bottom, version=2, **extra)
         if SYNC not in raw[1:] and INFO_SYNC not in raw[1:]:
-            return raw
+            return raw, top, bottom
     raise AssertionError('no seed gives a frame without a marker inside')
 
 
@@ -72,12 +77,23 @@ def test_clean_frames_read_one_by_one_carry_their_counts_and_sequence():
     frames, together, dec, other = decode_apart_and_together(reads, expected_shape=SHAPE)
     assert [f.seq for f in frames] == [0, 1, 2, 6, 7]
     assert [f.device_time_us for f in frames] == [0, 1000, 2000, 6000, 7000]
-    rng = np.random.default_rng((6, 0))
-    np.testing.assert_array_equal(frames[3].top, rng.integers(0, 4096, SHAPE, dtype=np.uint16))
+    np.testing.assert_array_equal(frames[3].top, sent(6)[1])
+    np.testing.assert_array_equal(frames[4].bottom, sent(7)[2])
     assert (dec.stats.frames, dec.stats.seq_gaps, dec.stats.frames_missed) == (5, 1, 3)
     assert (dec.last_shape, dec.last_version, dec.last_faults) == (SHAPE, 2, 0)
     assert dec.buffered_bytes == 0
     assert_same(frames, together, dec, other)
+
+
+@pytest.mark.parametrize('grid', [(1, 1), (16, 16), (48, 48)])  # 48 x 48: unpacked in two views
+def test_the_counts_of_a_frame_read_by_itself_are_those_sent(grid):
+    dec = FrameDecoder()
+    for seq in range(3):
+        raw, top, bottom = sent(seq, grid)
+        (got,) = dec.feed(raw)
+        np.testing.assert_array_equal(got.top, top)
+        np.testing.assert_array_equal(got.bottom, bottom)
+        assert got.top.dtype == np.uint16 and not got.top.flags.writeable
 
 
 # Each read is one frame's length; the one named is what the decoder must make of it.
