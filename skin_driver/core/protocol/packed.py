@@ -107,10 +107,10 @@ def _unpack(buf, offset: int, count: int, frames: tuple, stride: tuple) -> np.nd
     """
     Return the counts as read-only (*frames, pairs, 2): frames is () or (frames,), as stride.
 
-    Few counts: the view of pair k's uint16 at byte 3k and 3k + 1 is copied first: on the copy,
-    aligned and contiguous, the ufuncs run unbuffered, several times faster than on the view.
-    The constructor is given positional arguments and a dtype object: no keyword and no type
-    string to parse, a third of its cost at one frame per call.
+    Few counts: the view of pair k's uint16 at byte 3k and 3k + 1 is copied first, because the
+    ufuncs run unbuffered on the copy (aligned, contiguous) and buffered on the unaligned view.
+    The constructors are given positional arguments and a dtype object: no keyword and no type
+    string to parse, a fixed cost that weighs when a call unpacks one small frame.
     """
     pairs = count // 2
     if count * (frames[0] if frames else 1) < MANY_COUNTS:
