@@ -19,7 +19,9 @@ HEADER_SIZE = 20
 FAULTS = struct.Struct('<H')
 CRC_SIZE = 4
 MAX_COUNT = 4095
-_NATIVE = np.dtype('<u2') == np.dtype(np.uint16)  # a little-endian host
+_WORD = np.dtype('<u2')
+_NATIVE = _WORD == np.dtype(np.uint16)  # a little-endian host
+_MASK = np.uint16(MAX_COUNT)  # a numpy scalar: the ufunc converts no Python int per call
 # From about this many counts in one call, two strided views unpack faster than one take: their
 # extra calls cost less than the take's work per count.
 MANY_COUNTS = 4096
@@ -76,24 +78,15 @@ def pack_counts(counts: np.ndarray) -> bytes:
     return out.tobytes()
 
 
-def unpack_counts(buf, offset: int, count: int) -> np.ndarray:
+def unpack_counts(buf, offset: int, count: int, shape: tuple | None = None) -> np.ndarray:
     """
     Return ``count`` (even) counts packed at buf[offset:] as a new read-only uint16 array.
 
     Count 2k is the little-endian uint16 at byte 3k, low 12 bits; count 2k+1 the uint16 at byte
-    3k + 1, shifted right by 4 (:func:`unpack_frames`).
+    3k + 1, shifted right by 4 (:func:`unpack_frames`). ``shape``: the array's (count,
+    default), e.g. (2, rows, cols) for a frame's layers.
     """
-    return unpack_frames(buf, offset, count, 1, 0).reshape(count)
-
-
-@lru_cache(maxsize=64)
-def _unpack_plan(count: int) -> tuple:
-    """Return (the byte offset of each count's uint16, the shift that brings it down)."""
-    k = np.arange(count)
-    offsets = k // 2 * 3 + k % 2
-    shifts = (k % 2 * 4).astype(np.uint16)
-    offsets.flags.writeable = shifts.flags.writeable = False
-    return offsets, shifts
+    return _unpack(buf, offset, count, (), ()).reshape(shape or count)
 
 
 def unpack_frames(buf, offset: int, count: int, frames: int, stride: int) -> np.ndarray:
@@ -102,33 +95,46 @@ def unpack_frames(buf, offset: int, count: int, frames: int, stride: int) -> np.
 
     ``offset`` is where the first frame's packed counts start; a frame's count 2k is the
     little-endian uint16 at its byte 3k, low 12 bits, count 2k + 1 the uint16 at byte 3k + 1,
-    shifted right by 4. Few counts (one small frame, a read at 1 kHz): a view of buf as a
-    uint16 at every byte, one take of precomputed offsets, one shift and one mask, the fewest
-    numpy calls. Many: a view of the even and of the odd counts' uint16 (stride 3) and one ufunc
-    each into the output, which costs more calls but less per count. Either way no per-count or
-    per-frame Python.
+    shifted right by 4. Few counts (one small frame, a read at 1 kHz): a copy of the view of
+    every pair's two uint16, one shift and one mask, the fewest numpy calls. Many: a view of the
+    even and of the odd counts' uint16 (stride 3) and one ufunc each into the output, which
+    costs more calls but less per count. Either way no per-count or per-frame Python.
     """
-    if frames * count >= MANY_COUNTS:
-        pairs = count // 2
-        even = np.ndarray((frames, pairs), dtype='<u2', buffer=buf, offset=offset,
-                          strides=(stride, 3))
-        odd = np.ndarray((frames, pairs), dtype='<u2', buffer=buf, offset=offset + 1,
-                         strides=(stride, 3))
-        out = np.empty((frames, pairs, 2), dtype=np.uint16)
-        np.bitwise_and(even, MAX_COUNT, out=out[:, :, 0])
-        np.right_shift(odd, 4, out=out[:, :, 1])
-        out = out.reshape(frames, count)
-    else:
-        offsets, shifts = _unpack_plan(count)
-        words = np.ndarray((frames, count // 2 * 3 - 1), dtype='<u2', buffer=buf,
-                           offset=offset, strides=(stride, 1))
-        out = words.take(offsets, axis=1)
+    return _unpack(buf, offset, count, (frames,), (stride,)).reshape(frames, count)
+
+
+def _unpack(buf, offset: int, count: int, frames: tuple, stride: tuple) -> np.ndarray:
+    """
+    Return the counts as read-only (*frames, pairs, 2): frames is () or (frames,), as stride.
+
+    Few counts: the view of pair k's uint16 at byte 3k and 3k + 1 is copied first, because the
+    ufuncs run unbuffered on the copy (aligned, contiguous) and buffered on the unaligned view.
+    The constructors are given positional arguments and a dtype object: no keyword and no type
+    string to parse, a fixed cost that weighs when a call unpacks one small frame.
+    """
+    pairs = count // 2
+    if count * (frames[0] if frames else 1) < MANY_COUNTS:
+        out = np.ndarray(frames + (pairs, 2), _WORD, buf, offset, stride + (3, 1)).copy()
         if not _NATIVE:
             out = out.astype(np.uint16)
-        np.right_shift(out, shifts, out=out)
-        np.bitwise_and(out, MAX_COUNT, out=out)
+        np.right_shift(out, _shifts(pairs), out=out)
+        np.bitwise_and(out, _MASK, out=out)
+    else:
+        even = np.ndarray(frames + (pairs,), _WORD, buf, offset, stride + (3,))
+        odd = np.ndarray(frames + (pairs,), _WORD, buf, offset + 1, stride + (3,))
+        out = np.empty(frames + (pairs, 2), dtype=np.uint16)
+        np.bitwise_and(even, _MASK, out=out[..., 0])
+        np.right_shift(odd, 4, out=out[..., 1])
     out.setflags(write=False)
     return out
+
+
+@lru_cache(maxsize=64)
+def _shifts(pairs: int) -> np.ndarray:
+    """Return the (pairs, 2) shifts that bring a pair's two uint16 down to its counts."""
+    shifts = np.tile(np.array([0, 4], dtype=np.uint16), (pairs, 1))
+    shifts.flags.writeable = False
+    return shifts
 
 
 def encode_row_map(row_valid, rows: int) -> bytes:
