@@ -234,6 +234,7 @@ class CalibrationServices:
         self._file = CalibrationFile('')
         self.load()
         self._follow_wrench_topic()
+        self._servers = []
         for action, name, kind, goal_args, answer in (
                 (Calibrate, '~/calibrate', 'offset', self._offset_args,
                  conversions.fill_offset_result),
@@ -245,16 +246,22 @@ class CalibrationServices:
                  conversions.fill_gains_result),
                 (CalibrateDirection, '~/calibrate_direction', 'direction', self._direction_args,
                  conversions.fill_direction_result)):
-            ActionServer(
+            self._servers.append(ActionServer(
                 node, action, name,
                 execute_callback=self._executor(action, kind, goal_args, answer),
                 goal_callback=self._on_goal(kind), cancel_callback=self._on_cancel,
                 # A goal waits for presses: in a group of its own it cannot hold up the frames
                 # it waits for, which run in the node's default group.
-                callback_group=MutuallyExclusiveCallbackGroup())
+                callback_group=MutuallyExclusiveCallbackGroup()))
         node.create_service(Trigger, '~/reset_calibration', self._on_reset)
         node.add_on_set_parameters_callback(self._check_parameters)
         node.add_post_set_parameters_callback(self._on_parameters)
+
+    def close(self) -> None:
+        """Destroy the actions (rclpy's Node.destroy_node leaves them: ros/lifetime.py)."""
+        for server in self._servers:
+            server.destroy()
+        self._servers = []
 
     # ---- file --------------------------------------------------------------------------------
     @property

@@ -60,9 +60,16 @@ class CreepCalibration:
         self._put_creep = put_creep
         self._running = None
         self._busy = threading.Lock()
-        ActionServer(node, CalibrateCreep, '~/calibrate_creep', execute_callback=self._execute,
-                     goal_callback=self._on_goal, cancel_callback=self._on_cancel,
-                     callback_group=MutuallyExclusiveCallbackGroup())
+        self._server = ActionServer(
+            node, CalibrateCreep, '~/calibrate_creep', execute_callback=self._execute,
+            goal_callback=self._on_goal, cancel_callback=self._on_cancel,
+            callback_group=MutuallyExclusiveCallbackGroup())
+
+    def close(self) -> None:
+        """Destroy the action (rclpy's Node.destroy_node leaves it: ros/lifetime.py)."""
+        if self._server is not None:
+            self._server.destroy()
+            self._server = None
 
     # ---- per scan ----------------------------------------------------------------------------
     def feed(self, time_s: float, contacts) -> None:

@@ -28,7 +28,7 @@ from skin_driver.core.protocol.wire import BoardInfo
 from skin_driver.ros import conversions, qos
 from skin_driver.ros.estimation_host import EstimationHost
 from skin_driver.ros.hot_path import TakenOnThread
-from skin_driver.ros.lifetime import destroy_actions, destroyed_if_refused
+from skin_driver.ros.lifetime import destroyed_if_refused
 from skin_driver.ros.spin import create_or_exit, spin_nodes
 from skin_msgs.msg import SkinFrame
 from std_msgs.msg import String
@@ -60,7 +60,6 @@ class DirectionNode(Node):
         if self._frames is not None:
             self._frames.stop()
         self.host.close()
-        destroy_actions(self)
         return super().destroy_node()
 
     def _on_board_info(self, msg: String) -> None:

@@ -403,9 +403,12 @@ class EstimationHost:
         newest.offer(scan)
 
     def close(self) -> None:
-        """Stop the thread of a slow estimator, if one ran (after the scan in progress)."""
+        """Stop the thread of a slow estimator, if one ran, and destroy the actions."""
         if self._newest is not None:
             self._newest.stop()
+        self.calibration.close()
+        self.mount.close()
+        self.creep.close()
 
     def _estimate_failed(self, err: Exception) -> None:
         self._bad_frames += 1

@@ -12,13 +12,18 @@ import functools
 
 from rclpy.action import ActionServer
 from rclpy.node import Node
-from skin_driver.ros.wait_set import destroy_state_machine
+from skin_driver.ros.wait_set import destroy_state_machine, node_made
 
 __all__ = ['destroy_actions', 'destroyed_if_refused', 'destroy_state_machine']
 
 
 def destroy_actions(node) -> None:
-    """Destroy the node's action servers (before Node.destroy_node)."""
+    """
+    Destroy every action server of the node (before Node.destroy_node).
+
+    For a node whose constructor raised, where no owner exists to close them; a node built
+    whole has each server closed by what made it.
+    """
     for waitable in list(node.waitables):
         if isinstance(waitable, ActionServer):
             waitable.destroy()
@@ -31,7 +36,7 @@ def destroyed_if_refused(init):
         try:
             init(self, *args, **kwargs)
         except BaseException:
-            if getattr(self, '_Node__node', None) is not None:  # rclpy's Node was made
+            if node_made(self):
                 destroy_actions(self)
                 Node.destroy_node(self)
                 destroy_state_machine(self)

@@ -105,9 +105,16 @@ class MountCalibration:
         declare(node, 'mount.max_residual', MAX_RESIDUAL_M,
                 'Largest miss of a touch (metres) that ~/calibrate_mount accepts.',
                 low=1.0e-5, high=0.1)
-        ActionServer(node, CalibrateMount, '~/calibrate_mount', execute_callback=self._execute,
-                     goal_callback=self._on_goal, cancel_callback=self._on_cancel,
-                     callback_group=MutuallyExclusiveCallbackGroup())
+        self._server = ActionServer(
+            node, CalibrateMount, '~/calibrate_mount', execute_callback=self._execute,
+            goal_callback=self._on_goal, cancel_callback=self._on_cancel,
+            callback_group=MutuallyExclusiveCallbackGroup())
+
+    def close(self) -> None:
+        """Destroy the action (rclpy's Node.destroy_node leaves it: ros/lifetime.py)."""
+        if self._server is not None:
+            self._server.destroy()
+            self._server = None
 
     # ---- per scan ----------------------------------------------------------------------------
     def feed(self, contacts) -> None:

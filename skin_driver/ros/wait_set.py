@@ -1,8 +1,8 @@
 """
 The uses of rclpy's private API in skin_driver, in this module alone.
 
-The wait set of rclpy's C extension, and the end of a lifecycle node's state machine
-(:func:`destroy_state_machine`).
+The wait set of rclpy's C extension, whether a node's rcl handle was made (:func:`node_made`),
+and the end of a lifecycle node's state machine (:func:`destroy_state_machine`).
 
 Jazzy's rclpy has no public wait set; its executors and ``rclpy.wait_for_message`` wait on this
 one. :class:`skin_driver.ros.hot_path.TakenOnThread` waits on its subscriptions and a guard
@@ -22,7 +22,7 @@ except (ImportError, AttributeError) as err:
         '(rclpy.impl.implementation_singleton.rclpy_implementation.WaitSet and RCLError, as '
         f"in ROS 2 Jazzy's rclpy), which this rclpy does not have: {err}") from err
 
-__all__ = ['WaitSet', 'RCLError', 'destroy_state_machine']
+__all__ = ['WaitSet', 'RCLError', 'destroy_state_machine', 'node_made']
 
 
 def destroy_state_machine(node) -> None:
@@ -36,3 +36,13 @@ def destroy_state_machine(node) -> None:
     machine = getattr(node, '_state_machine', None)
     if machine is not None:
         machine.destroy_when_not_in_use()
+
+
+def node_made(node) -> bool:
+    """
+    Return whether rclpy's Node constructor made the node's rcl handle.
+
+    A node whose own constructor raised may have stopped before or after rclpy's; only one made
+    has anything to destroy (skin_driver.ros.lifetime).
+    """
+    return getattr(node, '_Node__node', None) is not None
