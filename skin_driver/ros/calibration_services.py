@@ -54,8 +54,7 @@ import time
 
 from geometry_msgs.msg import WrenchStamped
 from rcl_interfaces.msg import SetParametersResult
-from rclpy.action import ActionServer, CancelResponse, GoalResponse
-from rclpy.callback_groups import MutuallyExclusiveCallbackGroup
+from rclpy.action import CancelResponse, GoalResponse
 from rclpy.task import Future
 from skin_driver.core.estimation.calibration.calfile import (backup_of, CalibrationFile,
                                                              refusal)
@@ -63,6 +62,7 @@ from skin_driver.core.estimation.calibration.calibration import (Calibration, Ca
                                                                  PARTS, SkinIdentity)
 from skin_driver.core.estimation.calibration.session import CalibrationRefused, CalibrationSession
 from skin_driver.ros import conversions, qos
+from skin_driver.ros.lifetime import ActionOwner
 from skin_driver.ros.params import declare
 from skin_driver.ros.paths import ros_home
 from skin_msgs.action import (Calibrate, CalibrateCompliance, CalibrateDirection, CalibrateForce,
@@ -209,7 +209,7 @@ async def goal_outcome(node, goal_handle, done, timeout_s: float) -> str:
         node.destroy_timer(timer)
 
 
-class CalibrationServices:
+class CalibrationServices(ActionOwner):
     """Offer the calibration actions on a node whose estimator ``get_estimator()`` returns."""
 
     def __init__(self, node, get_estimator, put_calibration):
@@ -234,7 +234,6 @@ class CalibrationServices:
         self._file = CalibrationFile('')
         self.load()
         self._follow_wrench_topic()
-        self._servers = []
         for action, name, kind, goal_args, answer in (
                 (Calibrate, '~/calibrate', 'offset', self._offset_args,
                  conversions.fill_offset_result),
@@ -246,22 +245,11 @@ class CalibrationServices:
                  conversions.fill_gains_result),
                 (CalibrateDirection, '~/calibrate_direction', 'direction', self._direction_args,
                  conversions.fill_direction_result)):
-            self._servers.append(ActionServer(
-                node, action, name,
-                execute_callback=self._executor(action, kind, goal_args, answer),
-                goal_callback=self._on_goal(kind), cancel_callback=self._on_cancel,
-                # A goal waits for presses: in a group of its own it cannot hold up the frames
-                # it waits for, which run in the node's default group.
-                callback_group=MutuallyExclusiveCallbackGroup()))
+            self.serve(node, action, name, self._executor(action, kind, goal_args, answer),
+                       self._on_goal(kind), self._on_cancel)
         node.create_service(Trigger, '~/reset_calibration', self._on_reset)
         node.add_on_set_parameters_callback(self._check_parameters)
         node.add_post_set_parameters_callback(self._on_parameters)
-
-    def close(self) -> None:
-        """Destroy the actions (rclpy's Node.destroy_node leaves them: ros/lifetime.py)."""
-        for server in self._servers:
-            server.destroy()
-        self._servers = []
 
     # ---- file --------------------------------------------------------------------------------
     @property

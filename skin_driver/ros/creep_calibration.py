@@ -14,10 +14,10 @@ refused, failed or cancelled calibration changes nothing; each is logged, as is 
 import math
 import threading
 
-from rclpy.action import ActionServer, CancelResponse, GoalResponse
-from rclpy.callback_groups import MutuallyExclusiveCallbackGroup
+from rclpy.action import CancelResponse, GoalResponse
 from skin_driver.core.estimation.calibration.creep import CreepError, CreepSession, MIN_HOLD_S
 from skin_driver.ros.calibration_services import goal_outcome
+from skin_driver.ros.lifetime import ActionOwner
 from skin_msgs.action import CalibrateCreep
 
 DEFAULT_HOLD_S = 180.0
@@ -44,7 +44,7 @@ class _Running:
         self.phase = session.phase
 
 
-class CreepCalibration:
+class CreepCalibration(ActionOwner):
     """Offer ~/calibrate_creep on ``node``."""
 
     def __init__(self, node, get_estimator, put_creep, file_problem=lambda: ''):
@@ -60,16 +60,8 @@ class CreepCalibration:
         self._put_creep = put_creep
         self._running = None
         self._busy = threading.Lock()
-        self._server = ActionServer(
-            node, CalibrateCreep, '~/calibrate_creep', execute_callback=self._execute,
-            goal_callback=self._on_goal, cancel_callback=self._on_cancel,
-            callback_group=MutuallyExclusiveCallbackGroup())
-
-    def close(self) -> None:
-        """Destroy the action (rclpy's Node.destroy_node leaves it: ros/lifetime.py)."""
-        if self._server is not None:
-            self._server.destroy()
-            self._server = None
+        self.serve(node, CalibrateCreep, '~/calibrate_creep', self._execute, self._on_goal,
+                   self._on_cancel)
 
     # ---- per scan ----------------------------------------------------------------------------
     def feed(self, time_s: float, contacts) -> None:

@@ -11,10 +11,11 @@ next node's constructor). The same holds for a node whose constructor refused a 
 import functools
 
 from rclpy.action import ActionServer
+from rclpy.callback_groups import MutuallyExclusiveCallbackGroup
 from rclpy.node import Node
 from skin_driver.ros.wait_set import destroy_state_machine, node_made
 
-__all__ = ['destroy_actions', 'destroyed_if_refused', 'destroy_state_machine']
+__all__ = ['ActionOwner', 'destroy_actions', 'destroyed_if_refused', 'destroy_state_machine']
 
 
 def destroy_actions(node) -> None:
@@ -42,3 +43,24 @@ def destroyed_if_refused(init):
                 destroy_state_machine(self)
             raise
     return wrapper
+
+
+class ActionOwner:
+    """What offers actions: it makes their servers (serve) and destroys them (close)."""
+
+    _servers = ()
+
+    def serve(self, node, action, name, execute, on_goal, on_cancel) -> None:
+        """Offer an action whose goals run in a callback group of their own."""
+        # A goal may wait for scans: in a group of its own it cannot hold up what it waits for,
+        # which runs in the node's default group.
+        server = ActionServer(node, action, name, execute_callback=execute,
+                              goal_callback=on_goal, cancel_callback=on_cancel,
+                              callback_group=MutuallyExclusiveCallbackGroup())
+        self._servers = (*self._servers, server)
+
+    def close(self) -> None:
+        """Destroy the servers (with the node: its destroy_node leaves them)."""
+        for server in self._servers:
+            server.destroy()
+        self._servers = ()

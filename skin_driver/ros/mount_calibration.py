@@ -22,14 +22,14 @@ import threading
 import time
 
 from geometry_msgs.msg import Point, PointStamped, Pose, PoseStamped, Quaternion
-from rclpy.action import ActionServer, CancelResponse, GoalResponse
-from rclpy.callback_groups import MutuallyExclusiveCallbackGroup
+from rclpy.action import CancelResponse, GoalResponse
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 from skin_driver.core.estimation.calibration.mount import (MAX_RESIDUAL_M, MountRefused,
                                                            MountSession, urdf_snippet)
 from skin_driver.core.robot.mount import mount_in_force
 from skin_driver.ros import conversions, qos
 from skin_driver.ros.calibration_services import goal_outcome
+from skin_driver.ros.lifetime import ActionOwner
 from skin_driver.ros.params import declare
 from skin_msgs.action import CalibrateMount
 
@@ -69,7 +69,7 @@ class _Running:
         self.tip_wanted = tip_wanted
 
 
-class MountCalibration:
+class MountCalibration(ActionOwner):
     """Offer ~/calibrate_mount on ``node`` for the skin whose frame is ``frame_id()``."""
 
     def __init__(self, node, frame_id, skin_shape, put_mount, file_problem=lambda: ''):
@@ -105,16 +105,8 @@ class MountCalibration:
         declare(node, 'mount.max_residual', MAX_RESIDUAL_M,
                 'Largest miss of a touch (metres) that ~/calibrate_mount accepts.',
                 low=1.0e-5, high=0.1)
-        self._server = ActionServer(
-            node, CalibrateMount, '~/calibrate_mount', execute_callback=self._execute,
-            goal_callback=self._on_goal, cancel_callback=self._on_cancel,
-            callback_group=MutuallyExclusiveCallbackGroup())
-
-    def close(self) -> None:
-        """Destroy the action (rclpy's Node.destroy_node leaves it: ros/lifetime.py)."""
-        if self._server is not None:
-            self._server.destroy()
-            self._server = None
+        self.serve(node, CalibrateMount, '~/calibrate_mount', self._execute, self._on_goal,
+                   self._on_cancel)
 
     # ---- per scan ----------------------------------------------------------------------------
     def feed(self, contacts) -> None:
