@@ -118,9 +118,11 @@ def test_changes_handed_over_mid_stream_lose_no_scan_from_the_drift_state(owner_
     changer.join()
 
     final = handover.take()
-    # Every change was put in force, in the order handed over, between scans: the last one is
-    # in force.
-    assert applied == handed and len(handed) == changes
+    # Changes were put in force between scans, in the order handed over (one handed over before
+    # the owner took the one before it replaced it, and holds it): the last one is in force.
+    order = [next(i for i, made in enumerate(handed) if made is live) for live in applied]
+    assert len(handed) == changes and applied[-1] is handed[-1]
+    assert order == sorted(set(order))
     assert len(met) > 1 and all(live in applied for live in met[1:])
     assert final is handover.newest
     assert final.config.min_confidence == pytest.approx(0.3 + 0.01 * changes)
@@ -156,3 +158,34 @@ def test_a_taxel_revived_between_a_change_s_build_and_its_swap_stays_revived(own
     assert live.process(top, bottom) == est.process(top, bottom)
     # Its heatmaps too: (8, 8) reads its own 0, not its neighbours' mean.
     assert live.maps_of(top, bottom)[0][8, 8] == 0.0
+
+
+def test_changes_while_no_scan_comes_replace_each_other_and_the_newest_holds_them_all(
+        owner_checked):
+    model = SkinModel()
+    rng = np.random.default_rng(10)
+    est = _tared(model, rng)
+    for i in range(3):
+        est.process(*render(model, [PRESS], rng), time_s=0.01 * i)
+    carried = []
+
+    def carry(new, old):
+        carried.append((new, old))
+        new.carry_from(old)
+    handover = Handover(est, carry)
+
+    def change_threshold(old):
+        return old.with_config(replace(old.config, threshold_counts=old.config.threshold_counts
+                                       + 1)).ready_for(16, 16)
+    # A board unplugged while a script changes a parameter 50 times, on a thread of its own.
+    handed = _on_a_thread(lambda: [handover.put(change_threshold) for _ in range(50)])['value']
+    # Expected: one change waits (the newest), not fifty; the older ones are not kept.
+    assert handover.pending and handover.newest is handed[-1]
+    live = handover.take()
+    # Expected: the newest in force after one carry from the one the scans met, with every
+    # change in it and the drift state of the scans before.
+    assert carried == [(handed[-1], est)]
+    assert live is handed[-1] and not handover.pending
+    assert live.config.threshold_counts == est.config.threshold_counts + 50
+    assert live.timed_scans == est.timed_scans == 3
+    assert handover.take() is live and len(carried) == 1

@@ -3,15 +3,17 @@ Changes of the live estimator handed to the thread that runs the scans, applied 
 
 The thread that runs the scans owns the estimator in force and its kernels (:mod:`kernel`).
 Any other thread that changes it (a tare, a calibration, a parameter) builds the new estimator
-itself, off the hot path, and hands it over with :meth:`Handover.put`; the owner applies what was
-handed over, in order, when it calls :meth:`Handover.take` before its next scan, and carries the
-per-scan state (drift state, dead marks) into each new estimator then (``carry``): every scan is
-seen by the drift state of the estimator it met, none is lost between a copy and the swap, and a
-dead mark revived after the new estimator was built stays revived. The owner takes no lock: the
-hand-over is a deque, whose append and popleft are atomic.
+itself, off the hot path, on the newest one, and hands it over with :meth:`Handover.put`; the
+owner puts the newest handed over in force when it calls :meth:`Handover.take` before its next
+scan, and carries the per-scan state (drift state, dead marks) into it then (``carry``): every
+scan is seen by the drift state of the estimator it met, none is lost between a copy and the
+swap, and a dead mark revived after the new estimator was built stays revived. Each change is
+built on the one before it, so the newest holds them all: while no scan comes, changes replace
+each other in one slot and are not queued (an unplugged board and a script changing parameters
+hold one estimator, not one per change). The owner takes no lock: the slot is one reference,
+read and written whole.
 """
 
-from collections import deque
 import threading
 from typing import Callable
 
@@ -29,9 +31,8 @@ class Handover:
         where the per-scan state moves on (it may enter both; it is the owner's call).
         """
         self.in_force = first  # the owner's: read by other threads as a snapshot only
-        self._newest = first
+        self._newest = first  # handed over: in force from the owner's next take()
         self._carry = carry
-        self._handed = deque()
         # Serialises the changers (each builds on the newest), never the owner.
         self._changing = threading.Lock()
 
@@ -41,28 +42,26 @@ class Handover:
         return self._newest
 
     @property
-    def pending(self) -> int:
-        """Return how many changes wait for the owner's next scan."""
-        return len(self._handed)
+    def pending(self) -> bool:
+        """Return whether a change waits for the owner's next scan."""
+        return self._newest is not self.in_force
 
     def put(self, change: Callable):
         """
         Hand over ``change(newest)`` (built here, on the caller's thread); return it.
 
-        Changes are serialised: each is built on the one handed over before it. Nothing is
-        handed over if ``change`` raises.
+        Changes are serialised: each is built on the one handed over before it, and replaces
+        it if the owner has not taken it yet. Nothing is handed over if ``change`` raises.
         """
         with self._changing:
             made = change(self._newest)
             self._newest = made
-            self._handed.append(made)
         return made
 
     def take(self):
         """Return the state in force after applying what was handed over (the owner's call)."""
-        handed = self._handed
-        while handed:
-            made = handed.popleft()
+        made = self._newest  # read once: a change handed over meanwhile waits for the next scan
+        if made is not self.in_force:
             try:
                 self._carry(made, self.in_force)
             finally:  # in force whatever the carry raised: a change is never lost
