@@ -41,6 +41,9 @@ def library() -> ctypes.CDLL:
     """Return the loaded library, its ABI and schedule layout checked and signatures set."""
     places = library_places('skin_fw_host', LIBRARY, LIBRARY_VARIABLE)
     lib, path = open_library(places, 'skin_fw_host', LIBRARY, _FIX, FirmwareMissing)
+    if not hasattr(lib, 'skin_sim_abi_version'):
+        raise FirmwareMissing(f'skin_fw_host: {path} is not skin_fw_host (no '
+                              f'skin_sim_abi_version); {_FIX}')
     if lib.skin_sim_abi_version() != ABI_VERSION:
         raise FirmwareMissing(f'skin_fw_host: {path} has ABI {lib.skin_sim_abi_version()}, '
                               f'this skin_driver needs {ABI_VERSION}; {_FIX}')

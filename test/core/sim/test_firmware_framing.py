@@ -6,12 +6,17 @@ docs/protocol.md (core.protocol.wire's encoder) on hard cases, and what it sends
 the firmware's frame of the scan it reports as its truth.
 """
 
+import os
+import subprocess
+import sys
+
 import numpy as np
 from port_reader import Reader
 import pytest
 
 from skin_driver.core.protocol.wire import (BoardInfo, encode_frame, encode_info, FrameDecoder,
                                             MAX_DEVICE_TIME_US, MAX_SEQ)
+from skin_driver.core.sim import firmware
 from skin_driver.core.sim.board import sim_board_info, SimulatedSkin
 from skin_driver.core.sim.firmware import Framer, info_frame, InfoSchedule, row_map
 from skin_driver.core.sim.scene import scene_from_dict
@@ -115,3 +120,25 @@ def test_what_the_board_sends_is_the_firmwares_frame_of_its_truth():
         assert encode_frame(frame.seq, frame.device_time_us, frame.top, frame.bottom, 2,
                             frame.faults, frame.row_valid) == expected
         assert frame.faults == 0x8 | ROW_FAILED and frame.seq >= 3
+
+
+def _load_with(library: str) -> str:
+    """Return what loading the library named in the environment printed, in a fresh process."""
+    code = ('from skin_driver.core.sim import firmware\n'
+            'try:\n'
+            '    firmware.library()\n'
+            'except firmware.FirmwareMissing as err:\n'
+            '    print(err)\n')
+    env = {**os.environ, firmware.LIBRARY_VARIABLE: library}
+    out = subprocess.run([sys.executable, '-c', code], capture_output=True, text=True, env=env)
+    assert out.returncode == 0, out.stderr
+    return out.stdout
+
+
+def test_a_missing_or_foreign_library_is_refused_with_where_it_looked():
+    assert 'no /nowhere/libskin_fw_host.so.1' in _load_with('/nowhere/libskin_fw_host.so.1')
+    # Another library of the workspace (the kernel): not taken for the firmware's.
+    from skin_driver.core.estimation.scan import kernel
+    other = kernel.load_library()._name
+    said = _load_with(other)
+    assert f'{other} is not skin_fw_host' in said and 'make setup' in said
