@@ -20,7 +20,7 @@ elif ! python3 -c 'import rclpy, skin_msgs' 2>/dev/null; then
 fi
 if [ -z "${ROS_DISTRO:-}" ] && [ -d "$_skin_root/install/skin_driver" ]; then
   # The wheels are a ROS prefix of their own: ament_index must find their share/ and ours.
-  export AMENT_PREFIX_PATH="$_skin_root/install/skin_lab:$_skin_root/install/skin_driver:$_skin_root/install/skin_kernel:$_skin_root/install/skin_msgs:$_skin_root/.venv"
+  export AMENT_PREFIX_PATH="$_skin_root/install/skin_lab:$_skin_root/install/skin_driver:$_skin_root/install/skin_kernel:$_skin_root/install/skin_fw_host:$_skin_root/install/skin_msgs:$_skin_root/.venv"
 fi
 # The sources win over the installed copy, so an edit is live without a rebuild (the lab's too).
 export PYTHONPATH="$_skin_root:$_skin_root/skin_lab${PYTHONPATH:+:$PYTHONPATH}"

@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Make the workspace usable on a fresh machine: a .venv holding ROS 2 Jazzy's Python side (wheels, or
 # the sourced system Jazzy) and the project's pinned dependencies, then a colcon build of skin_msgs,
-# skin_kernel (the compiled estimation, C), skin_driver and skin_lab (the bench, the evaluator, the
+# skin_kernel (the compiled estimation, C), skin_fw_host (the firmware core built for the
+# simulated board, C), skin_driver and skin_lab (the bench, the evaluator, the
 # demo; beside the driver, never needed by it). Each step is skipped when its inputs have not changed, so a second run takes a second.
 set -euo pipefail
 
@@ -33,7 +34,7 @@ else
 fi
 command -v cmake >/dev/null 2>&1 || die "missing: cmake (needed to build skin_msgs); install it, e.g. apt-get install cmake"
 command -v cc >/dev/null 2>&1 || command -v gcc >/dev/null 2>&1 \
-  || die "missing: a C compiler (needed to build skin_msgs and skin_kernel); install one, e.g. apt-get install gcc"
+  || die "missing: a C compiler (needed to build skin_msgs, skin_kernel and skin_fw_host); install one, e.g. apt-get install gcc"
 "$py" -c 'import ensurepip, venv' 2>/dev/null || die "missing: python venv support for $py; install it, e.g. apt-get install python3-venv"
 pyinc=$("$py" -c 'import sysconfig; print(sysconfig.get_paths()["include"])')
 [ -f "$pyinc/Python.h" ] || die "missing: Python headers in $pyinc (needed by rosidl); install them, e.g. apt-get install python3-dev"
@@ -88,19 +89,19 @@ if [ "$have" != "$want" ]; then
 fi
 
 # --- the colcon build -------------------------------------------------------------------------
-build_inputs=$(find package.xml setup.py setup.cfg resource skin_msgs skin_kernel launch config skin_driver skin_lab \
+build_inputs=$(find package.xml setup.py setup.cfg resource skin_msgs skin_kernel firmware/core firmware/host launch config skin_driver skin_lab \
   -type f \( -name '*.py' -o -name '*.xml' -o -name '*.txt' -o -name '*.msg' -o -name '*.srv' -o -name '*.action' \
   -o -name '*.c' -o -name '*.h' \
   -o -name '*.yaml' -o -name '*.rviz' -o -name '*.cfg' -o -name 'skin_driver' -o -name 'skin_lab' \) -not -path '*/__pycache__/*' | sort)
 bwant=$(hash_of $build_inputs; echo "$want")
 if [ "$(cat install/.build-stamp 2>/dev/null)" != "$bwant" ]; then
-  say "colcon build of skin_msgs, skin_kernel, skin_driver and skin_lab"
+  say "colcon build of skin_msgs, skin_kernel, skin_fw_host, skin_driver and skin_lab"
   prefix=${AMENT_PREFIX_PATH:-}
   [ -n "$system_ros" ] || prefix="$venv"
   # shellcheck disable=SC1091
   if ! ( . "$venv/bin/activate"
          export AMENT_PREFIX_PATH="$prefix" CMAKE_PREFIX_PATH="$prefix${CMAKE_PREFIX_PATH:+:$CMAKE_PREFIX_PATH}"
-         colcon --log-base build/log build --base-paths . skin_msgs skin_kernel skin_lab --build-base build --install-base install \
+         colcon --log-base build/log build --base-paths . skin_msgs skin_kernel firmware/host skin_lab --build-base build --install-base install \
            --event-handlers console_cohesion- status- summary- \
            --cmake-args -DPython3_EXECUTABLE="$venv/bin/python" -DBUILD_TESTING=OFF ) >"$root/build-colcon.log" 2>&1; then
     tail -n 30 "$root/build-colcon.log" >&2

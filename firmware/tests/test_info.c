@@ -174,6 +174,50 @@ static void a_field_that_does_not_fit_is_left_out_whole(void **state) {
   assert_string_equal(text + 168, ";rate_hz=1000;reset=por;adc_to=1");
 }
 
+/* Send at each given scan time when due; return which scans went with an information frame. */
+static uint32_t sends(skin_info_schedule_t *s, const uint64_t *times, uint32_t n) {
+  uint32_t mask = 0u;
+  for (uint32_t i = 0; i < n; i++) {
+    if (skin_info_due(s, times[i])) {
+      skin_info_sent(s, times[i]);
+      mask |= 1u << i;
+    }
+  }
+  return mask;
+}
+
+static void the_schedule_keeps_to_whole_periods_of_device_time(void **state) {
+  (void)state;
+  skin_info_schedule_t s;
+  skin_info_schedule_init(&s, 1000000u);
+  /* Scans 300 ms apart from 0.1 s: at the first scan, then at the first one at or after 1.1 s
+   * and 2.1 s (1.3 and 2.2 s), not a period after each late send (which would be 2.3 s). */
+  const uint64_t times[] = {100000u, 400000u, 700000u, 1000000u, 1300000u, 1600000u,
+                            1900000u, 2200000u, 2500000u};
+  assert_int_equal(sends(&s, times, 9), 0x1u | 0x10u | 0x80u);
+}
+
+static void after_a_stall_one_frame_then_a_period_later(void **state) {
+  (void)state;
+  skin_info_schedule_t s;
+  skin_info_schedule_init(&s, 1000000u);
+  /* A stall from 0.5 s to 5.8 s: one frame at 5.8 s (not five), the next at 6.8 s. */
+  const uint64_t times[] = {0u, 500000u, 5800000u, 5900000u, 6700000u, 6800000u, 7700000u};
+  assert_int_equal(sends(&s, times, 7), 0x1u | 0x4u | 0x20u);
+}
+
+static void the_schedule_runs_on_64_bit_device_time(void **state) {
+  (void)state;
+  skin_info_schedule_t s;
+  skin_info_schedule_init(&s, 1000000u);
+  /* Past 2^32 us, where the board's 32-bit clock wraps: a 32-bit due time would make every
+   * scan after the wrap due (or none). */
+  const uint64_t wrap = 1ull << 32;
+  const uint64_t times[] = {wrap - 600000u, wrap - 100000u, wrap + 300000u, wrap + 400000u,
+                            wrap + 500000u};
+  assert_int_equal(sends(&s, times, 5), 0x1u | 0x8u);
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(text_and_layout),
@@ -185,6 +229,9 @@ int main(void) {
       cmocka_unit_test(the_nucleo_text_holds_every_counter_up_to_three_digits),
       cmocka_unit_test(four_digit_counters_leave_the_last_one_out_whole),
       cmocka_unit_test(a_field_that_does_not_fit_is_left_out_whole),
+      cmocka_unit_test(the_schedule_keeps_to_whole_periods_of_device_time),
+      cmocka_unit_test(after_a_stall_one_frame_then_a_period_later),
+      cmocka_unit_test(the_schedule_runs_on_64_bit_device_time),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }

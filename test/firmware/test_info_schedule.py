@@ -2,14 +2,17 @@
 The simulated board sends its information frames when the firmware's own loop does.
 
 ``board_dump`` runs firmware/core/src/run.c on the host at given scan times and prints what it
-sends (I: information frame, F: data frame); :class:`InfoSchedule` must give the same sequence.
+sends (I: information frame, F: data frame). The simulated board keeps the schedule through the
+same C code (skin_info_schedule_t, in the host build skin_fw_host); this holds the way it uses
+it, as the simulated board does, against the way run.c does (started at the first scan).
 """
 
 import subprocess
 
 import numpy as np
 import pytest
-from skin_driver.core.sim.board import InfoSchedule
+from skin_driver.core.sim.board import INFO_PERIOD_US
+from skin_driver.core.sim.firmware import InfoSchedule
 
 SECOND = 1_000_000
 
@@ -21,7 +24,7 @@ def _firmware(board_dump, times) -> str:
 
 
 def _simulated(times) -> str:
-    schedule, out = InfoSchedule(), []
+    schedule, out = InfoSchedule(INFO_PERIOD_US), []
     for t in times:
         if schedule.due(int(t)):
             schedule.sent(int(t))

@@ -120,3 +120,22 @@ uint32_t skin_info_build(uint8_t out[SKIN_INFO_MAX_SIZE], const skin_board_info_
   out[body + 1u] = (uint8_t)(crc >> 8);
   return body + 2u;
 }
+
+void skin_info_schedule_init(skin_info_schedule_t *s, uint64_t period_us) {
+  *s = (skin_info_schedule_t){.due_us = 0u, .period_us = period_us, .started = 0u};
+}
+
+bool skin_info_due(const skin_info_schedule_t *s, uint64_t now_us) {
+  return !s->started || now_us >= s->due_us;
+}
+
+void skin_info_sent(skin_info_schedule_t *s, uint64_t now_us) {
+  if (!s->started) {
+    s->due_us = now_us;
+    s->started = 1u;
+  }
+  s->due_us += s->period_us;
+  if (s->due_us <= now_us) {
+    s->due_us = now_us + s->period_us;
+  }
+}

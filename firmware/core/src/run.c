@@ -23,7 +23,7 @@ static uint32_t frames[2][SKIN_FRAME_BUFFER_WORDS(SKIN_FW_ROWS, SKIN_FW_COLS)];
 /* Sent while the link sends the other: the information frame's text changes with the counters. */
 static uint8_t info_frame[SKIN_INFO_MAX_SIZE];
 static skin_board_info_t board;
-static uint64_t next_info_us;
+static skin_info_schedule_t info_schedule;
 static skin_scan_t scan;
 
 /* Build the information frame with the counters of now and send it; false when the link had
@@ -62,8 +62,9 @@ void skin_fw_start(void) {
   skin_link_init(board.link_byte_ns);
   skin_scan_init(&scan, frames[0], frames[1], SKIN_FW_ROWS, SKIN_FW_COLS, SKIN_FW_SETTLE_US);
   scan.version = SKIN_FW_PROTOCOL;
+  skin_info_schedule_init(&info_schedule, SKIN_FW_INFO_PERIOD_US);
   send_info();
-  next_info_us = skin_clock_extend(&scan.clock, board_time_us32()) + SKIN_FW_INFO_PERIOD_US;
+  skin_info_sent(&info_schedule, skin_clock_extend(&scan.clock, board_time_us32()));
   board_watchdog_feed();
 }
 
@@ -76,15 +77,10 @@ void skin_fw_step(void) {
      on); a link that stalled was reset, and if
      it stalls scan after scan the watchdog, no longer fed, resets the board. */
   bool healthy = true;
-  if (scan.last_time_us >= next_info_us) {
+  if (skin_info_due(&info_schedule, scan.last_time_us)) {
     /* Between two data frames: the previous one has left once the link is idle again. */
     healthy = send_info();
-    /* On a fixed schedule of device time: a late scan delays one information frame, not every
-       one after it. After a stall of over a period, one frame, not a burst to catch up. */
-    next_info_us += SKIN_FW_INFO_PERIOD_US;
-    if (next_info_us <= scan.last_time_us) {
-      next_info_us = scan.last_time_us + SKIN_FW_INFO_PERIOD_US;
-    }
+    skin_info_sent(&info_schedule, scan.last_time_us);
   }
   if (len && skin_scan_send(&scan, len) == SKIN_LINK_STALLED) {
     healthy = false;

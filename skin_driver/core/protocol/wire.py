@@ -29,6 +29,11 @@ version 1 finds no 0xA5 0x5A in it and discards it as junk between frames.
 Version 2 (core.protocol.packed) keeps the header, with version 2 and two flags, and carries the
 board's fault bits, a map of the rows it sampled and the counts packed two in three bytes: 800
 bytes for 16 x 16 instead of 1 048.  The decoder takes both versions, mixed on one stream.
+
+The encoder here (:func:`encode_frame`, :func:`encode_info`) is the host's own reading of
+docs/protocol.md, for the decoder's tests and tools that write test streams. No board frames with
+it: the firmware and the simulated board share the firmware core's framing (the simulator through
+its host build, core.sim.firmware), which the tests hold byte for byte against this one.
 """
 
 from __future__ import annotations

@@ -20,13 +20,17 @@ the offsets by the board's clock, which runs on across the passes of a looped sc
 
 Like the firmware, the board says who it is (docs/protocol.md, board information frame): once
 before its first frame and then once a second of device time, between two frames, on the
-firmware's schedule (:class:`InfoSchedule`). By default it is a fixed fake board
+firmware's schedule. By default it is a fixed fake board
 (:func:`sim_board_info`: board ``sim``, the scene's grid and pitch); ``identity`` names another,
 or None for a version-1 board that sends no identity.
 
 It sends protocol version 2 (packed counts, fault bits, row map) unless ``protocol=1`` asks for
 version 1. A version-2 board can report rows it failed to sample and fault bits
 (``set_row_faults``), as the firmware does.
+
+Every frame it sends, data or information, is built by the firmware core's own code, and the
+information frames keep the firmware's own schedule: the core built for the host
+(:mod:`.firmware`, package skin_fw_host), so that the real and the simulated board frame alike.
 """
 
 from __future__ import annotations
@@ -43,12 +47,12 @@ import numpy as np
 
 from . import physics
 from .drift import held_age
+from .firmware import Framer, info_frame, InfoSchedule, row_map
 from .line import damage
 from .pty_line import PtyLine
 from .scene import load_scene, Scene
 from ..common.validate import check_int, check_number
-from ..protocol.wire import (BoardInfo, encode_counts, encode_frame, encode_info, frame_size,
-                             frame_with_counts, LATEST_VERSION, MAX_SEQ, PROTOCOL_VERSIONS)
+from ..protocol.wire import BoardInfo, frame_size, LATEST_VERSION, MAX_SEQ, PROTOCOL_VERSIONS
 
 # Below this period frames are written in batches: one wake-up per BATCH_S instead of per frame.
 BATCH_S = 0.002
@@ -107,35 +111,7 @@ class _Scan:
     press_indices: tuple
     top: np.ndarray
     bottom: np.ndarray
-    counts: tuple  # (rows, cols, bytes) of wire.encode_counts
-
-
-class InfoSchedule:
-    """
-    When the board information frame goes out: the firmware's rule (firmware/core/src/run.c).
-
-    Once ahead of the first frame, then ahead of the first frame at or after each period of
-    device time since the last one was due: a late scan delays one, not every one after it;
-    after a stall of over a period one goes out, not a burst, and the next is a period later.
-    ``test/firmware/test_info_schedule.py`` holds it against the firmware's own loop.
-    """
-
-    def __init__(self, period_us: int = INFO_PERIOD_US):
-        """Start with the first information frame due at the first frame."""
-        self.period_us = check_int(period_us, 'period_us', low=1)
-        self._due_us = None
-
-    def due(self, device_time_us: int) -> bool:
-        """Return whether an information frame goes ahead of the frame of this device time."""
-        return self._due_us is None or device_time_us >= self._due_us
-
-    def sent(self, device_time_us: int) -> None:
-        """Note that one went ahead of the frame of this device time."""
-        if self._due_us is None:
-            self._due_us = device_time_us
-        self._due_us += self.period_us
-        if self._due_us <= device_time_us:
-            self._due_us = device_time_us + self.period_us
+    counts: np.ndarray  # (2, rows, cols) uint16, top then bottom, as the firmware samples them
 
 
 def _as_scene(scene) -> Scene:
@@ -166,6 +142,7 @@ class SimulatedSkin:
             raise ValueError(f'protocol must be one of {PROTOCOL_VERSIONS}, got {protocol!r}')
         self.protocol = protocol
         self._row_valid = None  # (2, rows) booleans of the rows it samples; None: all
+        self._row_map = None  # the firmware's row map of _row_valid
         self._faults = 0
         self.scene = _as_scene(scene)
         self.rate_hz = check_number(rate_hz, 'rate_hz', positive=True, high=20_000)
@@ -204,8 +181,9 @@ class SimulatedSkin:
         if identity is not None and not isinstance(identity, BoardInfo):
             raise ValueError(f'identity must be a BoardInfo, {SIM!r} or None, got {identity!r}')
         self.identity = identity
-        self._info = encode_info(identity) if identity is not None else b''
-        self._info_schedule = InfoSchedule()
+        self._info = info_frame(identity) if identity is not None else b''
+        self._info_schedule = InfoSchedule(INFO_PERIOD_US)
+        self._framers = {}  # (rows, cols): the Framer of the frames of that grid
         self.info_frames_sent = 0  # info frames queued on the line
         self._not_queued = 0          # frames scanned while unplugged, the queue full, or lagging
         self.seq_skipped = 0          # sequence numbers skipped by skip_sequence()
@@ -361,6 +339,7 @@ class SimulatedSkin:
             if row_valid.all():
                 row_valid = None
         self._faults = check_int(faults, 'faults', low=0, high=0xFFFF)
+        self._row_map = None if row_valid is None else row_map(row_valid)
         self._row_valid = row_valid
 
     def __enter__(self) -> SimulatedSkin:
@@ -421,13 +400,14 @@ class SimulatedSkin:
             top, bottom = _reshape(top, wire_shape), _reshape(bottom, wire_shape)
             top.flags.writeable = False
             bottom.flags.writeable = False
-            raw = encode_frame(seq, device_time_us, top, bottom, self.protocol, faults)
+            raw = self._framer(wire_shape).frame(seq, device_time_us, _counts(top, bottom),
+                                                 faults)
         elif row_valid is not None:
-            sent = [np.where(valid[:, None], layer, INVALID_ROW_COUNT)
-                    for layer, valid in zip((top, bottom), row_valid)]
-            raw = encode_frame(seq, device_time_us, *sent, self.protocol, faults, row_valid)
+            sent = np.where(row_valid[:, :, None], scan.counts, INVALID_ROW_COUNT)
+            raw = self._framer(top.shape).frame(seq, device_time_us, sent.astype(np.uint16),
+                                                faults, self._row_map)
         else:
-            raw = frame_with_counts(seq, device_time_us, *scan.counts, self.protocol, faults)
+            raw = self._framer(top.shape).frame(seq, device_time_us, scan.counts, faults)
         truth = FrameTruth(seq, device_time_us, top, bottom, scan.presses, scan.scene_time_s,
                            scan.press_indices)
         info = b''
@@ -464,8 +444,13 @@ class SimulatedSkin:
                                               self._rng)
         top.flags.writeable = False
         bottom.flags.writeable = False
-        return _Scan(t, presses, tuple(i for i, _ in active), top, bottom,
-                     encode_counts(top, bottom, self.protocol))
+        return _Scan(t, presses, tuple(i for i, _ in active), top, bottom, _counts(top, bottom))
+
+    def _framer(self, shape: tuple) -> Framer:
+        framer = self._framers.get(shape)
+        if framer is None:
+            framer = self._framers[shape] = Framer(*shape, self.protocol)
+        return framer
 
     def _remember(self, truth: FrameTruth) -> None:
         if truth.seq in self._truth:
@@ -474,6 +459,11 @@ class SimulatedSkin:
         self._truth_order.append(truth.seq)
         while len(self._truth_order) > self._truth_capacity:
             del self._truth[self._truth_order.popleft()]
+
+
+def _counts(top: np.ndarray, bottom: np.ndarray) -> np.ndarray:
+    """Return both layers as the firmware's samples: (2, rows, cols) uint16."""
+    return np.ascontiguousarray(np.stack((top, bottom)), dtype=np.uint16)
 
 
 def _check_duration(seconds: float) -> None:

@@ -12,7 +12,7 @@ import pytest
 
 from skin_driver.core.protocol.wire import (BoardInfo, encode_frame, encode_info, FrameDecoder,
                                             header_crc, SYNC)
-from skin_driver.core.sim.board import InfoSchedule, sim_board_info, SIM_UID, SimulatedSkin
+from skin_driver.core.sim.board import sim_board_info, SIM_UID, SimulatedSkin
 from skin_driver.core.sim.drift import Drift
 from skin_driver.core.sim.physics import render, render_held
 from skin_driver.core.sim.scene import scene_from_dict
@@ -319,16 +319,3 @@ def test_a_version_1_board_cannot_report_failed_rows_or_faults():
         sim.set_row_faults(faults=1)
     with pytest.raises(ValueError, match='protocol must be one of'):
         SimulatedSkin(held_press_scene(), protocol=3)
-
-
-def test_the_information_schedule_keeps_the_firmwares_rule():
-    # Hard cases with their expected frames (test/firmware/test_info_schedule.py holds the
-    # rule against the firmware's own loop): a late scan delays one information frame only; a
-    # stall of over a period gives one, and the next a period after it.
-    schedule = InfoSchedule(1_000_000)
-    sent = []
-    for t in (0, 400_000, 1_300_000, 2_000_000, 7_300_000, 8_000_000, 8_300_000, 9_300_000):
-        if schedule.due(t):
-            schedule.sent(t)
-            sent.append(t)
-    assert sent == [0, 1_300_000, 2_000_000, 7_300_000, 8_300_000, 9_300_000]

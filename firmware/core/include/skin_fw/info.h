@@ -2,6 +2,7 @@
 #ifndef SKIN_FW_INFO_H
 #define SKIN_FW_INFO_H
 
+#include <stdbool.h>
 #include <stdint.h>
 
 #include "skin_fw/board.h"
@@ -25,6 +26,25 @@ extern "C" {
 uint32_t skin_info_build(uint8_t out[SKIN_INFO_MAX_SIZE], const skin_board_info_t *board,
                          const skin_board_status_t *status, const char *fw_version, uint8_t rows,
                          uint8_t cols, uint32_t pitch_um);
+
+/*
+ * When the information frame goes out, on a fixed schedule of 64-bit device time: once ahead of
+ * the first scan, then ahead of the first scan at or after each period since the last one was
+ * due, so that a late scan delays one frame, not every one after it; after a stall of over a
+ * period, one frame (not a burst to catch up) and the next a period after it.
+ * The simulated board keeps the same schedule through this code (firmware/host).
+ */
+typedef struct {
+  uint64_t due_us;    /* the device time at or after which the next one is due */
+  uint64_t period_us;
+  uint8_t started;    /* 0: none sent yet, the next scan's is due */
+} skin_info_schedule_t;
+
+void skin_info_schedule_init(skin_info_schedule_t *s, uint64_t period_us);
+/* Whether an information frame goes ahead of the scan of device time now_us. */
+bool skin_info_due(const skin_info_schedule_t *s, uint64_t now_us);
+/* Note that one went ahead of the scan of device time now_us. */
+void skin_info_sent(skin_info_schedule_t *s, uint64_t now_us);
 
 #ifdef __cplusplus
 }

@@ -35,13 +35,13 @@ from collections import namedtuple
 import ctypes
 from functools import lru_cache
 import os
-from pathlib import Path
 import threading
 from typing import NamedTuple
 import weakref
 
 import numpy as np
 
+from ...common.native import library_places, open_library
 from ...common.validate import check_pair
 
 __all__ = ['METHODS', 'ABI_VERSION', 'TaxelModelNumbers', 'Curve', 'Direction', 'DriftNumbers',
@@ -206,61 +206,17 @@ def _check_layout(lib: ctypes.CDLL, path: str) -> None:
 
 
 def library_candidates() -> list:
-    """
-    Return the places the kernel is looked for, in order, as (where, path or None).
-
-    The file ``SKIN_KERNEL_LIBRARY`` names, alone when it is set; else the install prefix this
-    package is installed under (``<prefix>/lib/python3.X/site-packages``: ``<prefix>/lib``, and
-    a colcon workspace's
-    ``install/skin_kernel/lib`` beside ``install/skin_driver``); the workspace next to a source
-    checkout (``<checkout>/install/skin_kernel/lib``); then the ament index, when importable.
-    """
-    named = os.environ.get(LIBRARY_VARIABLE)
-    if named:
-        # Named explicitly: that file or nothing, never another one found by chance.
-        return [(LIBRARY_VARIABLE, Path(named))]
-    out = []
-    package = Path(__file__).resolve().parents[3]  # .../skin_driver
-    above = package.parent
-    if above.name in ('site-packages', 'dist-packages') and above.parent.parent.name == 'lib':
-        prefix = above.parent.parent.parent
-        out.append(('install prefix', prefix / 'lib' / LIBRARY))
-        out.append(('colcon workspace', prefix.parent / 'skin_kernel' / 'lib' / LIBRARY))
-    else:
-        out.append(('source checkout', above / 'install' / 'skin_kernel' / 'lib' / LIBRARY))
-    try:
-        from ament_index_python.packages import get_package_prefix, PackageNotFoundError
-    except ImportError:
-        out.append(('ament index', None))
-    else:
-        try:
-            out.append(('ament index', Path(get_package_prefix('skin_kernel')) / 'lib' / LIBRARY))
-        except PackageNotFoundError:
-            out.append(('ament index', None))
-    return out
+    """Return the places the kernel is looked for, in order, as (where, path or None)."""
+    return library_places('skin_kernel', LIBRARY, LIBRARY_VARIABLE)
 
 
 @lru_cache(maxsize=1)
 def load_library() -> ctypes.CDLL:
     """Return the loaded ``libskin_kernel.so.<ABI>``, its layout checked and signatures set."""
-    looked = []
-    for where, path in library_candidates():
-        if path is None:
-            looked.append(f'{where}: not available')
-            continue
-        if not path.is_file():
-            looked.append(f'{where}: no {path}')
-            continue
-        try:
-            lib = ctypes.CDLL(str(path))
-        except OSError as exc:
-            looked.append(f'{where}: {path} does not load ({exc})')
-            continue
-        _sign(lib)
-        _check_layout(lib, str(path))
-        return lib
-    raise KernelMissing(f'skin_kernel: no {LIBRARY} found; looked at ' + '; '.join(looked)
-                        + f'. {_FIX}')
+    lib, path = open_library(library_candidates(), 'skin_kernel', LIBRARY, _FIX, KernelMissing)
+    _sign(lib)
+    _check_layout(lib, str(path))
+    return lib
 
 
 def _sign(lib: ctypes.CDLL) -> None:
