@@ -28,6 +28,7 @@ from rclpy.node import Node
 from rclpy.qos import qos_profile_sensor_data
 from skin_driver.core.estimation.shift.methods import DEFAULT_METHOD
 from skin_driver.core.protocol.wire import encode_frame, FrameDecoder
+from skin_driver.core.sim.firmware import Framer
 from skin_driver.core.sim.physics import Press, render, SkinModel
 from skin_driver.core.sim.scene import load_scene
 from skin_driver.ros import conversions
@@ -312,6 +313,8 @@ def stage_costs(repeats=500) -> dict:
     decoder = FrameDecoder(expected_shape=(16, 16))
     raw_v2 = encode_frame(1, 1000, top, bottom, version=2)
     decoder_v2 = FrameDecoder(expected_shape=(16, 16))
+    framer = Framer(16, 16, version=2)
+    counts = np.stack([top, bottom]).astype(np.uint16)
     # A backlog: one read that holds many frames (a USB board sends several per transfer).
     backlog = {v: b''.join(encode_frame(i, 1000 * i, top, bottom, version=v)
                            for i in range(BACKLOG_FRAMES)) for v in (1, 2)}
@@ -340,7 +343,9 @@ def stage_costs(repeats=500) -> dict:
         out = {
             'sim: physics.render (press on)': _per_call(lambda: render(model, press, rng),
                                                         repeats),
-            'sim: encode_frame': _per_call(lambda: encode_frame(1, 1000, top, bottom), repeats),
+            # The simulated board frames as the firmware does (its core built for the host).
+            'sim: frame (firmware core), protocol version 2': _per_call(
+                lambda: framer.frame(1, 1000, counts), repeats),
             'driver: decode': _per_call(lambda: decoder.feed(raw), repeats),
             # Measured beside version 1 (and in the same way): only the ratio travels.
             'driver: decode, protocol version 2': _per_call(lambda: decoder_v2.feed(raw_v2),
