@@ -20,7 +20,7 @@ from skin_driver.core.estimation.calibration.calibration import Calibration
 from skin_driver.core.estimation.calibration.prepared import prepared_estimator
 from skin_driver.core.estimation.shift.methods import DEFAULT_METHOD
 from skin_driver.core.sim.skins import family_skin
-from skin_lab.evaluate.scoring import MethodRun, run_method, score_run
+from skin_lab.evaluate.scoring import MethodRun, score_run
 from skin_lab.experiments import calibrated_scene, ROBOT_PRESS_S
 from skin_lab.floor import mean_bound_deg
 from skin_lab.oracle import ORACLE, oracle_run
@@ -34,19 +34,23 @@ LEARNABLE = ('default', 'loaded', 'saturating', 'film')
 
 
 def _run(member, kind: str, size: int, presses: int, seed: int) -> tuple:
-    """Return (data, truth of every frame, the default's run) of one scene."""
+    """Return (data, truth of every frame, the default's run: its median us per frame)."""
     truth = []
     data = calibrated_scene(kind, member, np.random.default_rng(seed), size, truth,
                             direction_presses=presses)
-    return data, truth, run_method(data, DEFAULT_METHOD)
+    # One calibration serves the scores and the cost: it costs far more than the scored frames.
+    est, notes = prepared_estimator(data, DEFAULT_METHOD)
+    scored = data.select(data.scored_frames())
+    contacts = [est.process(scored.top[i], scored.bottom[i]) for i in range(scored.frames)]
+    return data, truth, MethodRun(DEFAULT_METHOD, est.calibration, contacts,
+                                  _back_to_back_us(est, scored), tuple(notes))
 
 
-def _back_to_back_us(data) -> float:
-    """Return the default's median cost per scored frame (us), its scans back to back."""
-    est, _ = prepared_estimator(data, DEFAULT_METHOD)
+def _back_to_back_us(est, scored) -> float:
+    """Return the estimator's median cost per scored frame (us), its scans back to back."""
     costs = []
-    for i in data.scored_frames():
-        top, bottom = data.top[i], data.bottom[i]
+    for i in range(scored.frames):
+        top, bottom = scored.top[i], scored.bottom[i]
         start = time.perf_counter()
         est.process(top, bottom)
         costs.append(time.perf_counter() - start)
@@ -63,7 +67,7 @@ def _cell(member, kind: str, size: int, counts, seed: int, oracle: bool) -> dict
         learned = run.calibration.direction
         row['learned'][str(n)] = {
             'mean_error_deg': summary['mean_error_deg'], 'valid_share': summary['valid_share'],
-            'us_per_frame': _back_to_back_us(data),
+            'us_per_frame': run.us_per_frame,
             'applied': bool(learned is not None and learned.kept),
             'rendered': bool(learned is not None and learned.rendered),
             'cv_before_deg': learned.before_deg if learned else None,

@@ -1,12 +1,43 @@
-"""Tiny benchmark results shared by the benchmark's tests (computed once per worker)."""
+"""Tiny benchmark results shared by the benchmark's tests (computed once per run)."""
+
+import fcntl
+import os
+import pickle
 
 import pytest
 from skin_lab.bench import cli as bench, estimators as bench_core
 from skin_lab.bench.calibration import calibration_accuracy
 
 
+def _once(tmp_path_factory, name, make):
+    """
+    Return ``make()``, computed by the first pytest-xdist worker that asks and read by the rest.
+
+    A session fixture is per worker: the benchmark's cost half a minute on each. The workers
+    share their base temporary folder's parent (pytest-xdist's own recipe); a lock makes the
+    others wait for the first, which writes the pickle atomically.
+    """
+    if os.environ.get('PYTEST_XDIST_WORKER') is None:
+        return make()
+    root = tmp_path_factory.getbasetemp().parent
+    path = root / f'{name}.pickle'
+    with open(root / f'{name}.lock', 'w') as lock:
+        fcntl.flock(lock, fcntl.LOCK_EX)
+        if path.exists():
+            return pickle.loads(path.read_bytes())
+        value = make()
+        part = root / f'{name}.pickle.part'
+        part.write_bytes(pickle.dumps(value))
+        os.replace(part, path)
+        return value
+
+
 @pytest.fixture(scope='session')
-def results():
+def results(tmp_path_factory):
+    return _once(tmp_path_factory, 'bench_results', _results)
+
+
+def _results():
     methods = ['poc', 'seed', bench_core.SKIMAGE]
     rows = bench_core.accuracy_speed([16], [1.0], [6.0], 2, methods, log=lambda s: None)
     return {

@@ -6,26 +6,28 @@ from skin_lab.bench.tables import _table, figure
 
 
 def test_known_presses_against_the_error_with_the_floor_beside():
-    res = direction_learning(['default'], {'paper': 1, 'random': 15}, [40], log=lambda s: None)
-    assert res['counts'] == [0, 40]  # today's calibration first
+    # 12 presses, a few over the 10 a correction needs: the rows' shape and the floor are
+    # asserted, not how much the presses teach; each one more lengthens the skin's learning.
+    res = direction_learning(['default'], {'paper': 1, 'random': 15}, [12], log=lambda s: None)
+    assert res['counts'] == [0, 12]  # today's calibration first
     paper, random = res['rows']
     assert (paper['scene'], random['scene']) == ('paper', 'random')
     for row in res['rows']:
-        assert set(row['learned']) == {'0', '40'}
+        assert set(row['learned']) == {'0', '12'}
         assert not row['learned']['0']['applied']  # no known presses: nothing learned
-        assert row['learned']['40']['cv_before_deg'] > 0
+        assert row['learned']['12']['cv_before_deg'] > 0
         # The floor beside: the oracle's error and the bound, both below the default's.
         assert 0 < row['crb']['mean_abs_error_deg'] < row['learned']['0']['mean_error_deg']
         assert 0 < row['oracle_deg'] < row['learned']['0']['mean_error_deg']
-        assert row['ratio'] == (row['learned']['40']['mean_error_deg']
+        assert row['ratio'] == (row['learned']['12']['mean_error_deg']
                                 / row['learned']['0']['mean_error_deg'])
     lines = '\n'.join(direction_markdown(res, figure, _table))
-    assert '| skin | scene | 0 presses [deg] | 40 presses [deg] | applied | ratio | oracle [deg]' \
+    assert '| skin | scene | 0 presses [deg] | 12 presses [deg] | applied | ratio | oracle [deg]' \
         in lines
     targets = {t['name']: t for t in direction_targets(res, _target)}
     minutes = targets['robot time of the calibration run [min]']
-    assert minutes['measured'] == '1.7' and minutes['met']
-    assert "paper's protocol with 40 known presses (worst skin)" in targets
+    assert minutes['measured'] == '0.5' and minutes['met']  # 12 presses of 2.5 s
+    assert "paper's protocol with 12 known presses (worst skin)" in targets
 
 
 def _row(skin, scene, errors):

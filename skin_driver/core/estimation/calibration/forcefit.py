@@ -68,25 +68,42 @@ class CurveFit:
 
 def _solve(gram: list, c: list, cols: tuple):
     """Return the least squares solution on ``cols`` (normal equations, Cramer), or None."""
-    g = [[gram[i][j] for j in cols] for i in cols]
-    r = [c[i] for i in cols]
+    # Unrolled per size: the fit solves this a hundred thousand times a calibration, and
+    # building the sub-matrices as lists cost more than the arithmetic.
     if len(cols) == 1:
-        return [r[0] / g[0][0]] if g[0][0] > 0 else None
-    det = _det(g)
-    if not abs(det) > 1e-12 * max(abs(v) for row in g for v in row) ** len(cols):
+        i, = cols
+        return [c[i] / gram[i][i]] if gram[i][i] > 0 else None
+    if len(cols) == 2:
+        i, j = cols
+        a, b, d, e = gram[i][i], gram[i][j], gram[j][i], gram[j][j]
+        r0, r1 = c[i], c[j]
+        det = a * e - b * d
+        if not abs(det) > 1e-12 * max(abs(a), abs(b), abs(d), abs(e)) ** 2:
+            return None
+        # Cramer's rule: column i replaced by the right-hand side.
+        return [(r0 * e - b * r1) / det, (a * r1 - r0 * d) / det]
+    i, j, k = cols
+    gi, gj, gk = gram[i], gram[j], gram[k]
+    a, b, e = gi[i], gi[j], gi[k]
+    d, f, g = gj[i], gj[j], gj[k]
+    h, m, n = gk[i], gk[j], gk[k]
+    r0, r1, r2 = c[i], c[j], c[k]
+    det = _det(a, b, e, d, f, g, h, m, n)
+    if not abs(det) > 1e-12 * max(abs(a), abs(b), abs(e), abs(d), abs(f), abs(g), abs(h),
+                                  abs(m), abs(n)) ** 3:
         return None
-    # Cramer's rule: column i replaced by the right-hand side.
-    return [_det([row[:i] + [v] + row[i + 1:] for row, v in zip(g, r)]) / det
-            for i in range(len(cols))]
+    return [_det(r0, b, e, r1, f, g, r2, m, n) / det, _det(a, r0, e, d, r1, g, h, r2, n) / det,
+            _det(a, b, r0, d, f, r1, h, m, r2) / det]
 
 
-def _det(m: list) -> float:
-    """Return the determinant of a 2 x 2 or 3 x 3 matrix (nested lists)."""
-    if len(m) == 2:
-        return m[0][0] * m[1][1] - m[0][1] * m[1][0]
-    return (m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1])
-            - m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0])
-            + m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0]))
+def _det(a, b, c, d, e, f, g, h, i) -> float:
+    """Return the determinant of the 3 x 3 matrix of rows (a, b, c), (d, e, f), (g, h, i)."""
+    return a * (e * i - f * h) - b * (d * i - f * g) + c * (d * h - e * g)
+
+
+# Every subset of a few columns, in the order _nnls tries them (column j in bit j).
+_SUBSETS = {k: [tuple(j for j in range(k) if mask >> j & 1) for mask in range(1, 1 << k)]
+            for k in (1, 2, 3)}
 
 
 def _nnls(a: np.ndarray, b: np.ndarray) -> np.ndarray:
@@ -100,8 +117,7 @@ def _nnls(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     gram = (a.T @ a).tolist()
     c = (a.T @ b).tolist()
     best, best_cost = [0.0] * k, 0.0
-    for mask in range(1, 1 << k):
-        cols = tuple(j for j in range(k) if mask >> j & 1)
+    for cols in _SUBSETS[k]:
         x = _solve(gram, c, cols)
         if x is None or min(x) < 0:
             continue
