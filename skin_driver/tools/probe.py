@@ -229,7 +229,9 @@ class Probe:
         'published after last byte' to the publish (the messages taken on the probe's own
         thread, which have the middleware's source timestamp); with
         epoch_s (host time of device time 0) also 'from device time', which adds the board's
-        own wait before it sent the scan. ``record`` summarises another record (the audit).
+        own wait before it sent the scan. 'published first of read' keeps the scans that came
+        first in the driver's read (the others wait behind them: 'behind in read' is their
+        share). ``record`` summarises another record (the audit).
         """
         r = self.record if record is None else record
         received = np.asarray(r.received_s, dtype=np.float64)
@@ -255,6 +257,15 @@ class Probe:
         published[:len(r.published_s)] = r.published_s
         told = keep & np.isfinite(published)
         out['published_after_last_byte_ms'] = percentiles_ms(published[told] - stamp[told])
+        # A read that returns several scans stamps them alike: all but the first wait for the
+        # scans before them to be handled. The first of each read is the driver's own latency.
+        order = np.argsort(seq, kind='stable')
+        first = np.ones(len(stamp), dtype=bool)
+        first[order[1:]] = np.diff(stamp[order]) != 0
+        alone = told & first
+        out['published_first_of_read_ms'] = percentiles_ms(published[alone] - stamp[alone])
+        out['behind_in_read'] = (float(np.count_nonzero(keep & ~first)) / keep.sum()
+                                 if keep.any() else 0.0)
         if epoch_s is not None:
             out['latency_from_device_time_ms'] = percentiles_ms(
                 received[keep] - (epoch_s + device[keep]))

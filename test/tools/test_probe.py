@@ -114,3 +114,20 @@ def test_the_publish_time_comes_from_the_message_info_of_a_taken_message():
     probe = Probe(node)
     node.callbacks['contacts'](serialize_message(msg))
     assert probe.summary()['published_after_last_byte_ms']['p99'] is None
+
+
+def test_scans_one_read_returned_together_are_told_apart_from_the_first_of_each_read():
+    # Scans 0 and 1 came in one read (one stamp), 2 alone; published 0.2, 0.5 and 0.3 ms later.
+    node = _Node()
+    probe = Probe(node)
+    for seq, stamp_ns, published_us in ((0, 5_250_000_000, 200), (1, 5_250_000_000, 500),
+                                        (2, 5_251_000_000, 300)):
+        sec, nanosec = divmod(stamp_ns, 1_000_000_000)
+        msg = TactileContactArray(header=Header(stamp=Time(sec=sec, nanosec=nanosec)),
+                                  sequence=seq)
+        node.callbacks['contacts'](serialize_message(msg),
+                                   {'source_timestamp': stamp_ns + published_us * 1000})
+    summary = probe.summary()
+    assert summary['published_after_last_byte_ms']['max'] == pytest.approx(0.5, abs=1e-3)
+    assert summary['published_first_of_read_ms']['max'] == pytest.approx(0.3, abs=1e-3)
+    assert summary['behind_in_read'] == pytest.approx(1 / 3)

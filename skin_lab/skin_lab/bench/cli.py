@@ -31,6 +31,7 @@ import numpy as np
 
 from skin_driver.core.common.atomic import write_atomically
 from skin_driver.core.estimation.shift.methods import DEFAULT_METHOD
+from skin_driver.core.sim.board import BATCH_S
 from skin_driver.core.sim.skins import HELD_OUT, skin_names
 from skin_lab.bench import estimators as bench_core, plots, tables
 from skin_lab.bench.calibration import calibration_accuracy
@@ -234,7 +235,7 @@ def _e2e(cfg, args, log) -> dict:
                                          layouts=layouts, log=log, priority=priority,
                                          method=args.method)[0]
         out = {'seconds': seconds, 'warmup_s': cfg['e2e_warmup'], 'runs': runs,
-               'method': args.method or DEFAULT_METHOD,
+               'method': args.method or DEFAULT_METHOD, 'sim_batch_s': BATCH_S,
                'cores': os.cpu_count(), 'load_before': load,
                'load': [round(v, 2) for v in os.getloadavg()]}
         log('   stage costs')

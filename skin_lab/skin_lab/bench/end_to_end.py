@@ -177,6 +177,8 @@ def _run(executor, probe, layout, nodes, rate, seconds, warmup, port, log, prior
         # The contact published (the middleware's source timestamp): the driver's own part of
         # the latency, without the subscriber's wake-up (issue #45: p99 <= 1 ms at 1 kHz).
         'published_ms': seen['published_after_last_byte_ms'],
+        'published_first_ms': seen['published_first_of_read_ms'],
+        'behind_in_read': seen['behind_in_read'],
         'latency_from_device_time_ms': seen['latency_from_device_time_ms'],
         'board_to_driver_ms': seen['last_byte_after_device_time_ms'],
         'scans_with_contact': seen['with_contact'] / max(seen['received'], 1),

@@ -345,6 +345,7 @@ def _cells(threads) -> str:
 
 def _e2e_section(res, images) -> list:
     e = res['e2e']
+    batch = e.get('sim_batch_s', 0.002)  # runs recorded before it was kept wrote every 2 ms
     out = ['## 3. End to end through ROS: split against fused', '',
            'Two layouts and the rclpy floor, measured one after the other in the same run (at '
            'each rate they take '
@@ -367,8 +368,9 @@ def _e2e_section(res, images) -> list:
            'SCHED_FIFO priority the driver reads at it (parameter `realtime_priority`), and the '
            'simulated board and the subscriber run at it too. Simulated skin: `python -m '
            'skin_driver.tools.sim --rate R --loop --replay` on a pseudo-terminal (a tilted 10 N '
-           'press on the skin ~90 % of the time; above 500 Hz it writes every 2 ms, as a USB '
-           "board's packets would come; it renders one 4 s pass of the scene before it starts "
+           f'press on the skin ~90 % of the time; above {1 / batch:g} Hz it writes every '
+           f"{batch * 1e3:g} ms, as a USB full-speed board's bytes come, in 1 ms bus frames; "
+           'it renders one 4 s pass of the scene before it starts '
            'and replays it, so that the fake board costs the shared cores next to nothing per '
            'scan). Subscriber: `skin_driver.tools.probe.Probe` in the bench process, on '
            '`contacts` only, taking them on a thread of its own (as cheap as rclpy allows: it '
@@ -395,7 +397,9 @@ def _e2e_section(res, images) -> list:
            "its publish (**published**: the middleware's source timestamp, the driver's "
            'wall clock as the stamp is, without the subscriber waking up). The '
            "board's own part, from the scan's device time to its last byte at the driver, "
-           "is shown apart (it holds the simulator's 2 ms write batching).",
+           f"is shown apart (it holds the simulator's {batch * 1e3:g} ms write batching). "
+           'Scans one read returns together carry one stamp and wait for those before them: '
+           'the targets give the p99 of the first scan of each read beside the whole.',
            '- **CPU per scan**: CPU seconds of each process over the measured window '
            '(/proc/<pid>/stat, user + system) divided by the scans that process handled in it '
            '(the simulator: sent; the driver: decoded; the direction node: estimated; the '
