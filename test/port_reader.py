@@ -103,3 +103,14 @@ class Reader:
     def close(self):
         if self.serial is not None:
             self.serial.close()
+
+
+def read_from(board, count):
+    """Start a simulated board, read count frames from its port, stop it; return the reader."""
+    reader = Reader(board.start())
+    try:
+        reader.read_frames(count)
+    finally:
+        reader.close()
+        board.stop()
+    return reader

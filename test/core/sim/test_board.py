@@ -7,7 +7,7 @@ import struct
 import time
 
 import numpy as np
-from port_reader import Reader
+from port_reader import read_from, Reader
 import pytest
 
 from skin_driver.core.protocol.wire import (BoardInfo, encode_frame, encode_info, FrameDecoder,
@@ -126,20 +126,9 @@ def test_unplug_and_replug_on_the_link_is_survived(tmp_path):
     assert not os.path.lexists(link)
 
 
-def frames_of(sim, count):
-    """Start the board, read count frames, stop it; return the frames."""
-    reader = Reader(sim.start())
-    try:
-        reader.read_frames(count)
-    finally:
-        reader.close()
-        sim.stop()
-    return reader.frames
-
-
 def test_ground_truth_is_bounded_and_stop_is_idempotent():
     sim = SimulatedSkin('two_finger', rate_hz=RATE_HZ, truth_capacity=7)
-    frames_of(sim, 20)
+    read_from(sim, 20)
     sim.stop()
     truth = sim.ground_truth
     assert len(truth) == 7
@@ -169,7 +158,7 @@ def test_a_replaying_board_sends_its_first_pass_again_under_new_numbers():
         'beta_deg': 90.0, 'radius_m': 0.004, 'duration_s': 0.05, 'ramp_s': 0.0}],
         'period_s': 0.1})
     sim = SimulatedSkin(scene, rate_hz=RATE_HZ, noise_seed=3, loop=True, replay=True)
-    frames = frames_of(sim, 60)
+    frames = read_from(sim, 60).frames
     assert_equal_to_truth(sim, frames)
     assert_no_frame_lost(sim, frames)
     by_seq = {f.seq: f for f in frames}
@@ -217,7 +206,8 @@ def test_the_board_says_who_it_is_before_its_first_frame_then_once_a_second():
 
 
 def test_a_version_1_board_sends_no_identity_and_another_its_own():
-    frames = frames_of(SimulatedSkin(held_press_scene(), rate_hz=RATE_HZ, identity=None), 5)
+    board = SimulatedSkin(held_press_scene(), rate_hz=RATE_HZ, identity=None)
+    frames = read_from(board, 5).frames
     assert len(frames) >= 5
     qemu = BoardInfo('qemu', '0' * 24, '0.1.0', 16, 16, 0.005, 1000)
     sim = SimulatedSkin(held_press_scene(), rate_hz=RATE_HZ, identity=qemu)
@@ -230,12 +220,7 @@ def test_a_version_1_board_sends_no_identity_and_another_its_own():
         sim.stop()
     assert reader.decoder.board_info == qemu
     v1 = SimulatedSkin(held_press_scene(), rate_hz=RATE_HZ, identity=None)
-    reader = Reader(v1.start())
-    try:
-        reader.read_frames(5)
-    finally:
-        reader.close()
-        v1.stop()
+    reader = read_from(v1, 5)
     assert reader.decoder.board_info is None and v1.info_frames_sent == 0
     with pytest.raises(ValueError, match='identity'):
         SimulatedSkin('seed', identity='nucleo')
@@ -251,7 +236,7 @@ def drifting_scene(**drift):
 def test_a_scene_that_drifts_creeps_under_its_press_and_drifts_by_the_boards_clock():
     # 10 counts a second of offset drift, 20 % a decade of creep: plain within a second.
     scene = drifting_scene(creep_per_decade=0.2, offset_counts_per_hour=36000.0)
-    frames = frames_of(SimulatedSkin(scene, rate_hz=RATE_HZ), 200)
+    frames = read_from(SimulatedSkin(scene, rate_hz=RATE_HZ), 200).frames
     press = scene.presses[0].press()
     for f in frames:
         t = f.device_time_us / 1e6
@@ -272,7 +257,7 @@ def test_a_scene_that_drifts_creeps_under_its_press_and_drifts_by_the_boards_clo
 def test_a_scene_without_drift_renders_as_before_and_one_with_it_cannot_be_replayed():
     scene = drifting_scene(offset_counts_per_hour=36000.0)
     still = replace(scene, drifts=False)
-    frames = frames_of(SimulatedSkin(still, rate_hz=RATE_HZ), 20)
+    frames = read_from(SimulatedSkin(still, rate_hz=RATE_HZ), 20).frames
     assert all((f.top == 20).all() for f in frames)
     with pytest.raises(ValueError, match='cannot be replayed'):
         SimulatedSkin(replace(scene, period_s=2000.0), loop=True, replay=True)
@@ -282,12 +267,7 @@ def test_a_scene_without_drift_renders_as_before_and_one_with_it_cannot_be_repla
 def test_the_board_sends_version_2_by_default_and_version_1_on_request(protocol):
     kwargs = {} if protocol == 2 else {'protocol': 1}
     sim = SimulatedSkin(held_press_scene(), rate_hz=RATE_HZ, noise_seed=3, **kwargs)
-    reader = Reader(sim.start())
-    try:
-        reader.read_frames(20)
-    finally:
-        reader.close()
-        sim.stop()
+    reader = read_from(sim, 20)
     assert {f.version for f in reader.frames} == {protocol}
     assert_equal_to_truth(sim, reader.frames)
 
@@ -297,12 +277,7 @@ def test_rows_the_board_failed_to_sample_are_marked_with_its_fault_bits():
     row_valid = np.ones((2, 16), bool)
     row_valid[0, 7] = False  # the pressed centre's row of the top layer
     sim.set_row_faults(row_valid, faults=0b11)
-    reader = Reader(sim.start())
-    try:
-        reader.read_frames(10)
-    finally:
-        reader.close()
-        sim.stop()
+    reader = read_from(sim, 10)
     for frame in reader.frames:
         assert frame.faults == 0b11 and np.array_equal(frame.row_valid, row_valid)
         truth = sim.truth(frame.seq)

@@ -11,7 +11,7 @@ import subprocess
 import sys
 
 import numpy as np
-from port_reader import Reader
+from port_reader import read_from
 import pytest
 
 from skin_driver.core.protocol.wire import (BoardInfo, encode_frame, encode_info, FrameDecoder,
@@ -105,12 +105,7 @@ def test_what_the_board_sends_is_the_firmwares_frame_of_its_truth():
     valid[1, 2] = False
     sim.set_row_faults(valid, faults=0x8)
     sim.skip_sequence(3)
-    reader = Reader(sim.start())
-    try:
-        reader.read_frames(3)
-    finally:
-        reader.close()
-        sim.stop()
+    reader = read_from(sim, 3)
     framer = Framer(16, 16, 2)
     for frame in reader.frames:
         truth = sim.truth(frame.seq)
