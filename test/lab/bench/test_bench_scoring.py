@@ -58,6 +58,18 @@ def test_issue_45s_publish_latency_is_judged_at_1_khz_beside_the_first_scan_of_e
     assert not any('contacts published' in t['name'] for t in scoring.e2e_targets(at_2khz))
 
 
+def test_where_the_time_goes_shows_the_stages_called_one_a_millisecond_beside_back_to_back(e2e):
+    assert 'one a millisecond' not in scoring.why_e2e(e2e)[0]
+    paced = 'one a millisecond (median thread CPU after a 1 ms sleep)'
+    stages = dict(e2e['stage_costs_us'], **{
+        'driver: decode, protocol version 2': 12.0,
+        f'driver: decode, protocol version 2, {paced}': 67.0,
+        f'EstimationHost.process, {paced}': 150.0})
+    first = scoring.why_e2e(dict(e2e, stage_costs_us=stages))[0]
+    assert ('decoding a version-2 frame 67 us of thread CPU against 12 us back to back, '
+            'EstimationHost.process 150 us') in first
+
+
 def test_each_lost_scan_is_placed_and_the_drivers_own_losses_are_judged_apart(e2e):
     targets = {t['name']: t for t in scoring.e2e_targets(e2e)}
     lost = targets['split at 1 kHz: scans a depth-5 subscriber lacks in 60 s']
