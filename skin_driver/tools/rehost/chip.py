@@ -112,7 +112,7 @@ class Chip:
         self._mux = None
         self._column_cache = {}
         self._fault_ns = int(self.faults.from_s * 1e9)
-        self.irq_level = {}         # interrupt number -> the line's level, from the models
+        self.irq_lines = 0          # bit n: interrupt line n high (the models drive them)
         self._irq_wanted = False    # a line is high, enabled, and no handler runs
         self._handler = None        # the interrupted context while a handler runs
         self.uc = Uc(UC_ARCH_ARM, UC_MODE_THUMB | UC_MODE_MCLASS)
@@ -149,7 +149,7 @@ class Chip:
         self.iwdg = devices.Iwdg(self)
         self.scb = devices.SystemControl(self)
         self.otg = otg.OtgFs(self)
-        self.irq_level = {}
+        self.irq_lines = 0
         self._irq_wanted = False
         # RM0390 2.2.2 (register boundary addresses) and the enable bits of 6.3.10..6.3.14
         ahb1, ahb2, apb1, apb2 = 0x30, 0x34, 0x40, 0x44
@@ -421,13 +421,12 @@ class Chip:
 
     def set_irq(self, n: int, level: bool) -> None:
         """Drive interrupt line n (level-sensitive: it stays pending while high)."""
-        self.irq_level[n] = level
+        self.irq_lines = self.irq_lines | 1 << n if level else self.irq_lines & ~(1 << n)
         self.irq_changed()
 
     def irq_changed(self) -> None:
         """Recompute whether an interrupt waits to be taken (a line or an enable changed)."""
-        self._irq_wanted = self._handler is None and any(
-            level and n in self.scb.enabled for n, level in self.irq_level.items())
+        self._irq_wanted = self._handler is None and bool(self.irq_lines & self.scb.enabled)
 
     def _irq_unmasked(self) -> bool:
         return not self.uc.reg_read(arm.UC_ARM_REG_PRIMASK) & 1
@@ -505,7 +504,8 @@ class Chip:
     FRAME = ('R0', 'R1', 'R2', 'R3', 'R12', 'LR', 'PC', 'XPSR')
 
     def _enter_irq(self) -> None:
-        n = min(k for k, level in self.irq_level.items() if level and k in self.scb.enabled)
+        pending = self.irq_lines & self.scb.enabled
+        n = (pending & -pending).bit_length() - 1       # the lowest number first
         uc = self.uc
         regs = [uc.reg_read(getattr(arm, f'UC_ARM_REG_{r}')) for r in self.FRAME]
         regs[6] = self.pc

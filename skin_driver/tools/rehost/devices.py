@@ -664,21 +664,20 @@ class SystemControl:
     polled = frozenset({0x010})
     counters = frozenset()
     CPUID = 0x410F_C241
-    DELIVERED = frozenset({67})     # OTG_FS (otg.py)
+    DELIVERED = 1 << 67     # OTG_FS (otg.py)
 
     def __init__(self, chip):
         """Reset state: every interrupt disabled."""
         self.chip = chip
         self.regs = {}
-        self.enabled = set()
+        self.enabled = 0    # bit n: interrupt n enabled
 
     def read(self, off: int) -> int:
         """Read a register (CPUID fixed; ISER and ICER read the enabled set)."""
         if off == 0xD00:
             return self.CPUID
         if 0x100 <= off < 0x120 or 0x180 <= off < 0x1A0:
-            base = 32 * ((off & 0x1F) // 4)
-            return sum(1 << (n - base) for n in self.enabled if base <= n < base + 32)
+            return self.enabled >> (8 * (off & 0x1F)) & 0xFFFF_FFFF
         return self.regs.get(off, 0)
 
     def next_change(self, off: int):
@@ -691,14 +690,18 @@ class SystemControl:
             self.chip.request_reset(0x1000_0000)     # RCC_CSR SFTRSTF
             return
         if 0x100 <= off < 0x120 or 0x180 <= off < 0x1A0:
-            base = 32 * ((off & 0x1F) // 4)
-            irqs = {base + k for k in range(32) if value >> k & 1}
+            irqs = value << (8 * (off & 0x1F))
             if off < 0x180:
-                for n in sorted(irqs - self.DELIVERED):
-                    self.chip.error(f'interrupt {n} enabled: no model raises it')
+                for n in range(irqs.bit_length()):
+                    if irqs >> n & 1 and not self.DELIVERED >> n & 1:
+                        self.chip.error(f'interrupt {n} enabled: no model raises it')
                 self.enabled |= irqs
             else:
-                self.enabled -= irqs
+                self.enabled &= ~irqs
+            # An enable is no register a poll reads (TinyUSB masks its interrupt around each
+            # look at its queue, in the loop that waits for the scan tick): it does not end a
+            # poll. Whether an interrupt is now taken is the chip's (irq_changed).
+            self.chip.writes -= 1
             self.chip.irq_changed()
             return
         if off == 0x010 and value & 2:

@@ -67,7 +67,7 @@ class ScriptedHost:
                         for n in range(ENDPOINTS) if o.inep[n].ctl or o.outep[n].ctl)
         return (f'GINTSTS {o.gintsts_now():#x} GINTMSK {o.regs[0x018]:#x} GAHBCFG '
                 f'{o.gahbcfg:#x} DCFG {o.dcfg:#x} DCTL {o.dctl:#x} NVIC enabled '
-                f'{sorted(self.chip.scb.enabled)}; {eps}; model errors {self.chip.errors}')
+                f'{self.chip.scb.enabled:#x}; {eps}; model errors {self.chip.errors}')
 
     def until(self, poll, what: str):
         """Run the chip until poll() returns something other than None; return it."""
