@@ -52,7 +52,7 @@ STRINGS = {DESC[f'USB_STR_{name}']: text for name, text in
 
 
 def _skin():
-    """Return scans of an unloaded skin (100 counts), taxel (k, 2k) of the top pressed in scan k."""
+    """Return scans of an unloaded skin (100 counts), top taxel (k, 2k) pressed in scan k."""
     top = np.full((SCANS,) + GRID, 100, np.uint16)
     for k in range(SCANS):
         top[k, k, 2 * k] = 3000
@@ -118,9 +118,9 @@ def session(usb_image):
 
     host.bulk_in(DESC['USB_EP_IN'] & 0xF, sink, lambda: len(frames) >= FRAMES)
     got['sizes'] = sizes
+    tables = {name: _table(chip, usb_image, name) for name in ('device', 'configuration')}
     got.update(chip=chip, host=host, frames=frames, decoder=decoder, raw=bytes(raw),
-               tables={name: _table(chip, usb_image, name) for name in ('device',
-                                                                         'configuration')})
+               tables=tables)
     return got
 
 

@@ -23,9 +23,9 @@ import struct
 import time
 
 import numpy as np
-from unicorn import Uc, UC_ARCH_ARM, UC_MODE_MCLASS, UC_MODE_THUMB, UC_PROT_READ, UcError
-from unicorn import UC_PROT_EXEC
 from unicorn import arm_const as arm
+from unicorn import Uc, UC_ARCH_ARM, UC_MODE_MCLASS, UC_MODE_THUMB, UC_PROT_EXEC, UC_PROT_READ
+from unicorn import UcError
 from unicorn.arm_const import UC_ARM_REG_MSP, UC_ARM_REG_PC, UC_ARM_REG_SP, UC_CPU_ARM_CORTEX_M4
 from unicorn.unicorn_py3 import unicorn as binding
 
@@ -165,7 +165,7 @@ class Chip:
             self._blocks[base >> 10] = (dev, base, gate)
         for k in range(4):
             self._blocks[(0xE000_E000 >> 10) + k] = (self.scb, 0xE000_E000, None)
-        # OTG_FS (26.15): core and device registers, power and clock gating, the endpoint
+        # OTG_FS (31.15): core and device registers, power and clock gating, the endpoint
         # FIFOs; the host registers (0x400..0x7FF) are left out: device mode only.
         for k in (0, 2, 3) + tuple(range(4, 4 * (otg.ENDPOINTS + 1))):
             self._blocks[(0x5000_0000 >> 10) + k] = (self.otg, 0x5000_0000, (ahb2, 7))

@@ -1,7 +1,7 @@
 """
 The STM32F446's OTG FS core in device mode, as far as TinyUSB's DWC2 driver uses it.
 
-RM0390 Rev 4, chapter 26, "USB on-the-go full-speed/high-speed (OTG_FS/OTG_HS)"; and the
+RM0390 Rev 4, chapter 31, "USB on-the-go full-speed/high-speed (OTG_FS/OTG_HS)"; and the
 cable's other end: the tokens a host sends (``host_*``), for the scripted host (usb_host.py).
 
 Modelled: core soft reset and AHB idle, the FIFO flushes, device mode with the internal FS PHY
@@ -27,17 +27,17 @@ from __future__ import annotations
 
 from collections import deque
 
-IRQ = 67                       # OTG_FS global interrupt (RM0390 Table 38)
+IRQ = 67                       # OTG_FS global interrupt (RM0390 10.2, the vector table)
 NS = 1_000_000_000
-ENDPOINTS = 6                  # IN and OUT endpoints of OTG_FS (26.3, device mode)
+ENDPOINTS = 6                  # IN and OUT endpoints of OTG_FS (31.3, OTG_FS in device mode)
 FIFO_WORDS = 320               # 1.25 kB of FIFO RAM
 
-# Identification: OTG_CID (26.15.x, reset value), then what RM0390 does not list (see above).
+# Identification: OTG_CID (31.15, reset value), then what RM0390 does not list (see above).
 CID = 0x0000_2000
 SNPSID = 0x4F54_320A
 HWCFG = {0x44: 0x0000_0000, 0x48: 0x229E_D520, 0x4C: 0x0200_D1E8, 0x50: 0x17F0_8030}
 
-# OTG_GINTSTS bits (26.15.x)
+# OTG_GINTSTS bits (31.15)
 CMOD, OTGINT, SOF, RXFLVL, NPTXFE = 1 << 0, 1 << 2, 1 << 3, 1 << 4, 1 << 5
 GINAKEFF, BOUTNAKEFF = 1 << 6, 1 << 7
 USBSUSP, USBRST, ENUMDNE = 1 << 11, 1 << 12, 1 << 13
@@ -103,7 +103,7 @@ class OtgFs:
     word_only = True            # a byte access to a FIFO would pop or push a whole word
 
     def __init__(self, chip):
-        """Reset state (26.15: the reset values of the registers the model has)."""
+        """Reset state (31.15: the reset values of the registers the model has)."""
         self.chip = chip
         self.regs = dict.fromkeys(PLAIN | IGNORED, 0)
         self.regs[0x03C] = CID
@@ -228,7 +228,7 @@ class OtgFs:
         elif off == 0x008:
             self.gahbcfg = value
             if value & 0x20:
-                chip.error('OTG_FS: DMAEN set, the FS core has no DMA (RM0390 26.4)')
+                chip.error('OTG_FS: DMAEN set, the FS core has no DMA (RM0390 31.15, OTG_GAHBCFG)')
         elif off == 0x00C:
             if value & (1 << 29):
                 chip.error('OTG_FS: host mode forced (FHMOD): only device mode is modelled')
@@ -254,8 +254,8 @@ class OtgFs:
 
     def _reset_control(self, value: int) -> None:
         if value & CSRST:
-            # 26.15: a core soft reset flushes the FIFOs, clears the interrupts and stops
-            # every transfer; the configuration registers keep their values.
+            # 31.15 (OTG_GRSTCTL CSRST): a core soft reset flushes the FIFOs, clears the
+            # interrupts and stops every transfer; the configuration registers keep their values.
             self.gintsts = 0
             self.rx.clear()
             self.rx_words.clear()
@@ -303,7 +303,7 @@ class OtgFs:
         if value & CNAK:
             ep.nak = False
         if value & EPDIS and was & EPENA:
-            # 26.17.x "Disabling an endpoint": the core stops it and says so with EPDISD.
+            # 31.16 ("Disabling an endpoint"): the core stops it and says so with EPDISD.
             ep.ctl &= ~EPENA
             ep.intr |= EPDISD
         elif value & EPENA:
@@ -326,7 +326,7 @@ class OtgFs:
         return reg >> 16
 
     def mps(self, n: int, ep: Endpoint) -> int:
-        """Return an endpoint's maximum packet size (endpoint 0: the MPSIZ code of 26.15)."""
+        """Return an endpoint's maximum packet size (endpoint 0: the MPSIZ code of 31.15)."""
         if n == 0:
             return (64, 32, 16, 8)[ep.ctl & 3]
         return ep.ctl & 0x7FF
@@ -336,7 +336,7 @@ class OtgFs:
         return 0 if n == 0 else (ep.ctl >> 18) & 3
 
     def _tx_empty(self, n: int) -> bool:
-        # TXFE: half empty, or completely empty with GAHBCFG TXFELVL (26.15).
+        # TXFE: half empty, or completely empty with GAHBCFG TXFELVL (31.15).
         used, depth = self.inep[n].words(), self.fifo_depth(n)
         return used == 0 if self.gahbcfg & 0x80 else used * 2 <= depth
 
@@ -456,7 +456,7 @@ class OtgFs:
         """Send a SETUP packet to endpoint 0 (always accepted: a device may not NAK it)."""
         ep = self.outep[0]
         for either in (ep, self.inep[0]):
-            either.ctl &= ~STALL            # a SETUP clears endpoint 0's STALL (26.17.x)
+            either.ctl &= ~STALL            # a SETUP clears EP0's STALL (31.15, OTG_DIEPCTL0)
         # USB 2.0 8.5.3: a SETUP is taken whatever the endpoint's state; STUPCNT counts the
         # back-to-back ones (TinyUSB rewrites OTG_DOEPTSIZ0 without it for the status stage).
         stupcnt = (ep.tsiz >> 29) & 3
@@ -501,7 +501,7 @@ class OtgFs:
         count = max(((ep.tsiz >> 19) & 0x3FF) - 1, 0)
         ep.tsiz = ep.tsiz & ~(size_mask | 0x3FF << 19) | left | count << 19
         if count == 0 or len(data) < self.mps(n, ep):
-            # 26.17.x: the transfer is done; the core NAKs the endpoint until it is enabled again.
+            # 31.16: the transfer is done; the core NAKs the endpoint until it is enabled again.
             self.rx.append((OUT_DONE << 17 | n, b''))
             ep.ctl &= ~EPENA
             ep.nak = True
