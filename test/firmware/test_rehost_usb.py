@@ -6,9 +6,11 @@ host is usb_host.py: what is shown is that TinyUSB and the board's glue enumerat
 stream on that model, not on silicon (docs/firmware.md, "The USB link"). The descriptors are
 checked against the firmware's own: the bytes of usb_desc.c's tables in the image, and what they
 must say from usb_desc.h and tusb_config.h. The frames read by bulk IN go through the driver's
-decoder, and each holds the scan the skin showed at its device time.
+decoder, and each holds the scan the skin showed at its device time. SKIN_REHOST_USB_FRAMES sets
+how many (30; from 600 on, over a second of device time, the information frame is checked too).
 """
 
+import os
 from pathlib import Path
 import re
 import struct
@@ -30,7 +32,7 @@ USB_DIR = firmware_board.FIRMWARE_DIR / 'boards' / 'nucleo_f446re' / 'usb'
 WIRING = load_wiring(PINS, usb=True)
 GRID = (16, 16)
 SCANS = 8
-FRAMES = 30
+FRAMES = int(os.environ.get('SKIN_REHOST_USB_FRAMES', '30'))
 ADDRESS = 5
 LINE_CODING = struct.pack('<IBBB', 921_600, 0, 0, 8)     # CDC PSTN 6.3.11: 8N1
 CDC_CLASS, CDC_DATA_CLASS, ACM_SUBCLASS = 0x02, 0x0A, 0x02
@@ -196,6 +198,11 @@ def test_bulk_in_carries_intact_frames_of_the_scans_the_skin_showed(session):
     chip = session['chip']
     assert chip.errors == []
     assert chip.stats['irq67'] > 0                          # the stack ran from its interrupt
+    if FRAMES >= 600:
+        # The information frame repeats every second (the one at boot went before DTR).
+        info = decoder.board_info
+        assert (info.board, info.uid, info.rows, info.cols, info.rate_hz) == (
+            'nucleo-f446re', DEFAULT_UID.hex(), 16, 16, WIRING.scan_rate_hz)
 
 
 def test_a_port_not_opened_gets_no_byte_and_the_first_after_dtr_is_a_frames_start(usb_image):
