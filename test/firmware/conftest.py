@@ -41,6 +41,14 @@ def nucleo_image():
 
 
 @pytest.fixture(scope='session')
+def nucleo_usb_image():
+    """Return the path of the Nucleo-F446RE's USB image, built as ``make firmware`` builds it."""
+    _need(qemu=False)
+    from skin_driver.tools.rehost.board import build_nucleo_image
+    return build_nucleo_image(usb=True)
+
+
+@pytest.fixture(scope='session')
 def qemu_image():
     """Return the path of the emulated board's firmware image."""
     _need(qemu=True)

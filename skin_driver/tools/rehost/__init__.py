@@ -10,7 +10,9 @@ the wiring table (skin_board_pins.h); the USART's bytes go to a pty the driver r
 - wiring: the expander's wiring as skin_board_pins.h gives it;
 - clock: RCC, PWR and FLASH, and the clock tree computed from the firmware's writes;
 - devices: GPIO, timers, ADCs, DMA, USART, CRC, IWDG, the system control space;
-- chip: the CPU, the bus, device time and the fault switches;
+- otg: the OTG FS core in device mode (the USB image's link);
+- usb_host: a scripted USB host on the OTG core's cable (enumeration, control, bulk IN);
+- chip: the CPU, the bus, device time, the OTG interrupt's delivery and the fault switches;
 - board: the chip on a pty, and the command line (``python -m skin_driver.tools.rehost``).
 
 docs/firmware.md, "The rehosted board", says what is modelled, what is not and how it is fast.

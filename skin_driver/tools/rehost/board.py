@@ -33,18 +33,20 @@ from .elf import ElfImage
 from .wiring import load_wiring
 
 IMAGE = firmware_board.ARM_BUILD / 'boards' / 'nucleo_f446re' / 'skin_fw_nucleo_f446re.elf'
+USB_IMAGE = IMAGE.with_name('skin_fw_nucleo_f446re_usb.elf')
 PINS = firmware_board.FIRMWARE_DIR / 'boards' / 'nucleo_f446re' / 'skin_board_pins.h'
 # How far device time may run ahead of wall time before a real-time board sleeps.
 AHEAD_S = 0.005
 
 
-def build_nucleo_image() -> Path:
+def build_nucleo_image(usb: bool = False) -> Path:
     """Cross-build the Nucleo-F446RE image (as ``make firmware`` does); return the ELF's path."""
+    image = USB_IMAGE if usb else IMAGE
     firmware_board._cmake(
         firmware_board.ARM_BUILD,
         f'-DCMAKE_TOOLCHAIN_FILE={firmware_board.FIRMWARE_DIR / "cmake" / "arm-none-eabi.cmake"}',
-        '-DCMAKE_BUILD_TYPE=MinSizeRel', target='skin_fw_nucleo_f446re')
-    return IMAGE
+        '-DCMAKE_BUILD_TYPE=MinSizeRel', target=image.stem)
+    return image
 
 
 class RehostBoard:

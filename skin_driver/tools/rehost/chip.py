@@ -23,11 +23,13 @@ import struct
 import time
 
 import numpy as np
-from unicorn import Uc, UC_ARCH_ARM, UC_MODE_MCLASS, UC_MODE_THUMB, UC_PROT_READ, UcError
+from unicorn import arm_const as arm
+from unicorn import Uc, UC_ARCH_ARM, UC_MODE_MCLASS, UC_MODE_THUMB, UC_PROT_EXEC, UC_PROT_READ
+from unicorn import UcError
 from unicorn.arm_const import UC_ARM_REG_MSP, UC_ARM_REG_PC, UC_ARM_REG_SP, UC_CPU_ARM_CORTEX_M4
 from unicorn.unicorn_py3 import unicorn as binding
 
-from . import clock, devices
+from . import clock, devices, otg
 from .elf import ElfImage
 from .wiring import Wiring
 
@@ -36,6 +38,9 @@ SRAM = (0x2000_0000, 128 * 1024)       # SRAM1 112 kB + SRAM2 16 kB, contiguous
 SYSTEM = (0x1FFF_0000, 0x8000)         # system memory and the OTP/signature area
 UID_ADDR = 0x1FFF_7A10                 # RM0390 34.1
 FLASH_SIZE_ADDR = 0x1FFF_7A22          # RM0390 34.2
+# Where an interrupt handler returns to: a page no firmware address reaches (F446 has nothing at
+# 0x1000_0000), fetch only; reaching it ends the handler (see _enter_irq).
+RETURN_PAGE = 0x1000_0000
 DEFAULT_UID = bytes.fromhex('3900_1e00_0b51_3834_3939_3134'.replace('_', ''))
 
 ACCESS_CYCLES = 12      # CPU cycles counted per peripheral access (the code around it)
@@ -107,11 +112,16 @@ class Chip:
         self._mux = None
         self._column_cache = {}
         self._fault_ns = int(self.faults.from_s * 1e9)
+        self.irq_lines = 0          # bit n: interrupt line n high (the models drive them)
+        self._irq_wanted = False    # a line is high, enabled, and no handler runs
+        self._handler = None        # the interrupted context while a handler runs
         self.uc = Uc(UC_ARCH_ARM, UC_MODE_THUMB | UC_MODE_MCLASS)
         self.uc.ctl_set_cpu_model(UC_CPU_ARM_CORTEX_M4)
         self.uc.mem_map(*FLASH)
         self.uc.mem_map(*SRAM)
         self.uc.mem_map(*SYSTEM, UC_PROT_READ)
+        self.uc.mem_map(RETURN_PAGE, 0x1000, UC_PROT_EXEC | UC_PROT_READ)
+        self.uc.mem_write(RETURN_PAGE, b'\xfe\xe7' * 0x800)     # b . (never run: the stop)
         for seg in image.segments:
             if not FLASH[0] <= seg.paddr < FLASH[0] + FLASH[1] - len(seg.data) + 1:
                 raise ValueError(f'segment at {seg.paddr:#x} is not in the flash: not an image '
@@ -138,8 +148,11 @@ class Chip:
         self.crc = devices.Crc(self)
         self.iwdg = devices.Iwdg(self)
         self.scb = devices.SystemControl(self)
+        self.otg = otg.OtgFs(self)
+        self.irq_lines = 0
+        self._irq_wanted = False
         # RM0390 2.2.2 (register boundary addresses) and the enable bits of 6.3.10..6.3.14
-        ahb1, apb1, apb2 = 0x30, 0x40, 0x44
+        ahb1, ahb2, apb1, apb2 = 0x30, 0x34, 0x40, 0x44
         table = [(0x4000_0000, self.tim2, (apb1, 0)), (0x4000_0C00, self.tim5, (apb1, 3)),
                  (0x4000_3000, self.iwdg, None), (0x4000_7000, self.pwr, (apb1, 28)),
                  (0x4001_1000, self.usart1, (apb2, 4)), (0x4001_2000, self.adc, (apb2, 8)),
@@ -152,6 +165,10 @@ class Chip:
             self._blocks[base >> 10] = (dev, base, gate)
         for k in range(4):
             self._blocks[(0xE000_E000 >> 10) + k] = (self.scb, 0xE000_E000, None)
+        # OTG_FS (31.15): core and device registers, power and clock gating, the endpoint
+        # FIFOs; the host registers (0x400..0x7FF) are left out: device mode only.
+        for k in (0, 2, 3) + tuple(range(4, 4 * (otg.ENDPOINTS + 1))):
+            self._blocks[(0x5000_0000 >> 10) + k] = (self.otg, 0x5000_0000, (ahb2, 7))
 
     def _map_peripherals(self) -> None:
         """Map the peripheral pages to the models, straight through ctypes where possible."""
@@ -243,7 +260,8 @@ class Chip:
                 value = (value >> (8 * (off & 3))) & ((1 << (8 * size)) - 1)
             value &= 0xFFFF_FFFF
         self._accesses += 1
-        if self._halting or self.now >= self.stop_at or not self._accesses & CHECK_MASK:
+        if self._halting or self._irq_wanted or self.now >= self.stop_at or \
+                not self._accesses & CHECK_MASK:
             self._end(uc, addr, value)
         return value
 
@@ -263,18 +281,22 @@ class Chip:
             dev = entry[0]
             off = addr - entry[1]
             if size < 4:
+                if getattr(dev, 'word_only', False):
+                    self.error(f'{size}-byte write to {addr:#010x}: this block takes words only')
+                    return
                 shift = 8 * (off & 3)
                 mask = ((1 << (8 * size)) - 1) << shift
                 off &= ~3
                 value = (dev.read(off) & ~mask) | ((value << shift) & mask)
             dev.write(off, value & 0xFFFF_FFFF)
         self._accesses += 1
-        if self._halting or self.now >= self.stop_at or not self._accesses & CHECK_MASK:
+        if self._halting or self._irq_wanted or self.now >= self.stop_at or \
+                not self._accesses & CHECK_MASK:
             self._end(uc, addr, None)
 
     def _end(self, uc, addr: int, value) -> None:
         """Stop the CPU after this access if asked, remembering the access for its replay."""
-        if self.now >= self.stop_at:
+        if self.now >= self.stop_at or (self._irq_wanted and self._irq_unmasked()):
             self._halting = True
         if not self._accesses & CHECK_MASK and (
                 (self._stop is not None and self._stop()) or
@@ -397,6 +419,22 @@ class Chip:
         else:
             self.tx += data
 
+    def set_irq(self, n: int, level: bool) -> None:
+        """Drive interrupt line n (level-sensitive: it stays pending while high)."""
+        self.irq_lines = self.irq_lines | 1 << n if level else self.irq_lines & ~(1 << n)
+        self.irq_changed()
+
+    def irq_changed(self) -> None:
+        """Recompute whether an interrupt waits to be taken (a line or an enable changed)."""
+        self._irq_wanted = self._handler is None and bool(self.irq_lines & self.scb.enabled)
+
+    def _irq_unmasked(self) -> bool:
+        return not self.uc.reg_read(arm.UC_ARM_REG_PRIMASK) & 1
+
+    def request_stop(self) -> None:
+        """Stop the CPU after the access in progress (run() then asks its stop())."""
+        self._halting = True
+
     def watchdog_set(self, at: int) -> None:
         """Note that the IWDG resets the chip at device time at unless reloaded before."""
         self.watchdog_at = at
@@ -413,6 +451,7 @@ class Chip:
         self.reset_pending = 0
         self.watchdog_at = None
         self._replay = None
+        self._handler = None
         self._polls.clear()
         self._mux = None
         self._make_devices()
@@ -430,12 +469,16 @@ class Chip:
         self._stop = stop
         self.stop_at = float('inf') if until_s is None else int(until_s * 1e9)
         while True:
+            if self._irq_wanted and self._irq_unmasked():
+                self._enter_irq()
             try:
-                self.uc.emu_start(self.pc | 1, 0xFFFF_FFFF)
+                self.uc.emu_start(self.pc | 1, RETURN_PAGE)
             except UcError as err:
                 pc = self.uc.reg_read(UC_ARM_REG_PC)
                 raise ChipError(f'the CPU stopped at pc {pc:#x}: {err}') from err
             self.pc = self.uc.reg_read(UC_ARM_REG_PC)
+            if self.pc & ~1 == RETURN_PAGE and self._handler is not None:
+                self._return_from_irq()
             if self.failure is not None:
                 failure, self.failure = self.failure, None
                 raise failure
@@ -446,6 +489,60 @@ class Chip:
                 return
             if self._deadline is not None and time.monotonic() >= self._deadline:
                 return
+
+    # ---- interrupts -------------------------------------------------------------------------
+    # unicorn has no NVIC: the chip takes an interrupt itself between two runs of the CPU, as
+    # the v7-M exception entry does (ARM v7-M ARM B1.5.6): the eight-word frame pushed on the
+    # stack (aligned to 8 bytes), the handler from the vector table at VTOR, LR a return
+    # address. The handler's return branches there, where unicorn stops, and the frame is
+    # popped (B1.5.8). The CPU stops for an interrupt only at a peripheral access, like every
+    # stop, so an interrupt raised meanwhile waits for the next access: where the firmware
+    # spins on RAM alone (none of its waits do) it would wait. The floating-point context
+    # (S0..S15, FPSCR) is kept aside as lazy stacking would keep it; priorities and nesting
+    # are not modelled (one handler at a time), nor are IPSR and the handler mode.
+
+    FRAME = ('R0', 'R1', 'R2', 'R3', 'R12', 'LR', 'PC', 'XPSR')
+
+    def _enter_irq(self) -> None:
+        pending = self.irq_lines & self.scb.enabled
+        n = (pending & -pending).bit_length() - 1       # the lowest number first
+        uc = self.uc
+        regs = [uc.reg_read(getattr(arm, f'UC_ARM_REG_{r}')) for r in self.FRAME]
+        regs[6] = self.pc
+        sp = uc.reg_read(UC_ARM_REG_SP)
+        align = sp & 4
+        sp = (sp - 32) & ~7
+        regs[7] = regs[7] & ~(1 << 9) | (align << 7)       # xPSR bit 9: the alignment pad
+        uc.mem_write(sp, struct.pack('<8I', *regs))
+        uc.reg_write(UC_ARM_REG_SP, sp)
+        fp = [uc.reg_read(getattr(arm, f'UC_ARM_REG_S{k}')) for k in range(16)]
+        fp.append(uc.reg_read(arm.UC_ARM_REG_FPSCR))
+        self._handler = (n, self._replay, fp)
+        self._replay = None
+        self._irq_wanted = False
+        uc.reg_write(arm.UC_ARM_REG_LR, RETURN_PAGE | 1)
+        vtor = self.scb.regs.get(0xD08, 0)
+        if vtor < FLASH[1]:
+            vtor += FLASH[0]        # booted from flash: it is aliased at 0 (RM0390 2.4)
+        self.pc = struct.unpack('<I', uc.mem_read(vtor + 4 * (16 + n), 4))[0] & ~1
+        self.stats[f'irq{n}'] += 1
+
+    def _return_from_irq(self) -> None:
+        uc = self.uc
+        n, replay, fp = self._handler
+        sp = uc.reg_read(UC_ARM_REG_SP)
+        regs = struct.unpack('<8I', uc.mem_read(sp, 32))
+        for name, value in zip(self.FRAME, regs):
+            if name != 'PC':
+                uc.reg_write(getattr(arm, f'UC_ARM_REG_{name}'), value)
+        for k, value in enumerate(fp[:16]):
+            uc.reg_write(getattr(arm, f'UC_ARM_REG_S{k}'), value)
+        uc.reg_write(arm.UC_ARM_REG_FPSCR, fp[16])
+        uc.reg_write(UC_ARM_REG_SP, sp + 32 + (4 if regs[7] & (1 << 9) else 0))
+        self.pc = regs[6]
+        self._replay = replay
+        self._handler = None
+        self.irq_changed()
 
     def halt(self) -> None:
         """Stop the CPU for good from another thread (a replayed access is not guarded)."""

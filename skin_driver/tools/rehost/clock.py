@@ -34,6 +34,8 @@ APB_DIV = {4: 2, 5: 4, 6: 8, 7: 16}
 # RCC_CR bits (6.3.1)
 HSION, HSIRDY, HSEON, HSERDY, HSEBYP = 1 << 0, 1 << 1, 1 << 16, 1 << 17, 1 << 18
 PLLON, PLLRDY = 1 << 24, 1 << 25
+PLLSAION, PLLSAIRDY = 1 << 28, 1 << 29
+CK48MSEL = 1 << 27      # RCC_DCKCFGR2 (RM0390 6.3): the 48 MHz clock from PLLSAI_P, not PLL_Q
 # PWR bits (5.4.1, 5.4.2)
 ODEN, ODSWEN, ODRDY, ODSWRDY, VOSRDY = 1 << 16, 1 << 17, 1 << 16, 1 << 17, 1 << 14
 # RCC_CSR reset flags (6.3.21): power-on, pin, brown-out after power-up; IWDG
@@ -66,6 +68,24 @@ class ClockTree:
         return pclk if pclk == self.hclk_hz else 2 * pclk
 
 
+def _vco_limits(name: str, f_in: float, m: int, cfg: int) -> list:
+    """Return the limits a PLL's M, N (bits 14:6) and Q (27:24) break: input, VCO, Q range."""
+    n, q = (cfg >> 6) & 0x1FF, (cfg >> 24) & 0xF
+    vco = 'VCO' if name == 'PLL' else f'{name} VCO'
+    bad = []
+    if not 2 <= m <= 63:
+        bad.append(f'{name}M {m} outside 2..63')
+    elif not 1e6 <= f_in / m <= 2e6:
+        bad.append(f'{vco} input {f_in / m / 1e6:g} MHz outside 1..2 MHz')
+    if not 50 <= n <= 432:
+        bad.append(f'{name}N {n} outside 50..432')
+    elif m and not 100e6 <= f_in / max(m, 1) * n <= 432e6:
+        bad.append(f'{vco} {f_in / m * n / 1e6:g} MHz outside 100..432 MHz')
+    if not 2 <= q <= 15:
+        bad.append(f'{name}Q {q} outside 2..15')
+    return bad
+
+
 class Rcc:
     """Reset and clock control (RM0390 6.3), with PWR (5.4) and FLASH (3.8) as its partners."""
 
@@ -73,10 +93,10 @@ class Rcc:
     counters = frozenset()
 
     def __init__(self, chip):
-        """Reset state (RM0390 6.3: RCC_CR 0x0000_0083, RCC_PLLCFGR 0x2400_3010)."""
+        """Reset state (RM0390 6.3: RCC_CR 0x83, RCC_PLLCFGR and RCC_PLLSAICFGR 0x2400_3010)."""
         self.chip = chip
         self.regs = {0x00: HSION | HSIRDY | (16 << 3), 0x04: 0x2400_3010, 0x08: 0,
-                     0x30: 0x0010_0000, 0x40: 0, 0x44: 0, 0x74: 0}
+                     0x30: 0x0010_0000, 0x34: 0, 0x40: 0, 0x44: 0, 0x74: 0, 0x88: 0x2400_3010}
         self.ready_at = {}          # RCC_CR ready bit -> device time it sets
         self.tree = ClockTree()
 
@@ -121,7 +141,7 @@ class Rcc:
         chip = self.chip
         if off == 0x00:
             old = self.regs[0]
-            keep = old & (HSIRDY | HSERDY | PLLRDY)
+            keep = old & (HSIRDY | HSERDY | PLLRDY | PLLSAIRDY)
             self.regs[0] = (value & ~(HSIRDY | HSERDY | PLLRDY | 0x2A00_0000)) | keep
             if value & HSEON and not old & HSEON:
                 if chip.faults.hse_absent:
@@ -137,10 +157,20 @@ class Rcc:
             if not value & PLLON:
                 self.regs[0] &= ~PLLRDY
                 self.ready_at.pop(PLLRDY, None)
+            if value & PLLSAION and not old & PLLSAION:
+                if self._pllsai_ok():
+                    self.ready_at[PLLSAIRDY] = chip.now + PLL_LOCK_NS
+            if not value & PLLSAION:
+                self.regs[0] &= ~PLLSAIRDY
+                self.ready_at.pop(PLLSAIRDY, None)
         elif off == 0x04:
             if self.regs[0] & PLLON:
                 chip.error('RCC_PLLCFGR written while the PLL is on (RM0390 6.3.2 forbids it)')
             self.regs[4] = value
+        elif off == 0x88:
+            if self.regs[0] & PLLSAION:
+                chip.error('RCC_PLLSAICFGR written while PLLSAI is on (RM0390 6.3)')
+            self.regs[0x88] = value
         elif off == 0x08:
             self.regs[8] = (self.regs[8] & 0xC) | (value & ~0xC)
             self._switch()
@@ -165,23 +195,33 @@ class Rcc:
             self.chip.error('PLL started from the HSE before HSERDY')
             return False
         cfg = self.regs[4]
-        n, q, r = (cfg >> 6) & 0x1FF, (cfg >> 24) & 0xF, (cfg >> 28) & 7
-        bad = []
-        if not 2 <= m <= 63:
-            bad.append(f'PLLM {m} outside 2..63')
-        elif not 1e6 <= f_in / m <= 2e6:
-            bad.append(f'VCO input {f_in / m / 1e6:g} MHz outside 1..2 MHz')
-        if not 50 <= n <= 432:
-            bad.append(f'PLLN {n} outside 50..432')
-        elif m and not 100e6 <= f_in / max(m, 1) * n <= 432e6:
-            bad.append(f'VCO {f_in / m * n / 1e6:g} MHz outside 100..432 MHz')
-        if not 2 <= q <= 15:
-            bad.append(f'PLLQ {q} outside 2..15')
+        bad = _vco_limits('PLL', f_in, m, cfg)
+        r = (cfg >> 28) & 7
         if not 2 <= r <= 7:
             bad.append(f'PLLR {r} outside 2..7')
         for text in bad:
             self.chip.error(f'clock: {text} (RM0390 6.3.2)')
         return not bad
+
+    def _pllsai_ok(self) -> bool:
+        """Check PLLSAI's dividers (RM0390 6.3, RCC_PLLSAICFGR); its input is the main PLL's."""
+        _, f_in, _ = self._pll_in()
+        cfg = self.regs[0x88]
+        bad = _vco_limits('PLLSAI', f_in, cfg & 0x3F, cfg)
+        for text in bad:
+            self.chip.error(f'clock: {text} (RM0390 6.3, RCC_PLLSAICFGR)')
+        return not bad
+
+    def clk48_hz(self) -> float:
+        """Return the 48 MHz clock: PLLSAI_P or PLL_Q by CK48MSEL (RCC_DCKCFGR2), 0 if off."""
+        if self.regs.get(0x94, 0) & CK48MSEL:
+            if not self.read(0x00) & PLLSAIRDY:
+                return 0.0
+            _, f_in, _ = self._pll_in()
+            cfg = self.regs[0x88]
+            m, n, p = cfg & 0x3F, (cfg >> 6) & 0x1FF, 2 * (((cfg >> 16) & 3) + 1)
+            return f_in / m * n / p if m else 0.0
+        return self.tree.pll_q_hz if self.read(0x00) & PLLRDY else 0.0
 
     def update(self) -> None:
         """Recompute the clock tree from the registers and check it against the limits."""

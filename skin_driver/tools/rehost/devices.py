@@ -654,26 +654,30 @@ class Iwdg:
 
 class SystemControl:
     """
-    The Cortex-M4's system control space at 0xE000E000 (ARM v7-M ARM B3.2).
+    The Cortex-M4's system control space at 0xE000E000 (ARM v7-M ARM B3.2, B3.4).
 
-    CPACR, VTOR, AIRCR
-    (a SYSRESETREQ resets the chip), CPUID; SysTick and the NVIC are stored, and an interrupt
-    enable is reported: unicorn delivers no interrupts here.
+    CPACR, VTOR, AIRCR (a SYSRESETREQ resets the chip), CPUID, and the NVIC's set-enable and
+    clear-enable registers for the interrupts a model raises (``DELIVERED``: the chip takes
+    them, chip.py); enabling any other interrupt, or SysTick's, is reported: nothing raises it.
     """
 
     polled = frozenset({0x010})
     counters = frozenset()
     CPUID = 0x410F_C241
+    DELIVERED = 1 << 67     # OTG_FS (otg.py)
 
     def __init__(self, chip):
-        """Reset state."""
+        """Reset state: every interrupt disabled."""
         self.chip = chip
         self.regs = {}
+        self.enabled = 0    # bit n: interrupt n enabled
 
     def read(self, off: int) -> int:
-        """Read a register (CPUID fixed)."""
+        """Read a register (CPUID fixed; ISER and ICER read the enabled set)."""
         if off == 0xD00:
             return self.CPUID
+        if 0x100 <= off < 0x120 or 0x180 <= off < 0x1A0:
+            return self.enabled >> (8 * (off & 0x1F)) & 0xFFFF_FFFF
         return self.regs.get(off, 0)
 
     def next_change(self, off: int):
@@ -685,7 +689,22 @@ class SystemControl:
         if off == 0xD0C and value >> 16 == 0x05FA and value & 4:
             self.chip.request_reset(0x1000_0000)     # RCC_CSR SFTRSTF
             return
-        if (0x100 <= off < 0x140 or (off == 0x010 and value & 2)) and value:
-            self.chip.error(f'{0xE000E000 + off:#x} <- {value:#x}: interrupts are not '
-                            'delivered by this emulation')
+        if 0x100 <= off < 0x120 or 0x180 <= off < 0x1A0:
+            irqs = value << (8 * (off & 0x1F))
+            if off < 0x180:
+                for n in range(irqs.bit_length()):
+                    if irqs >> n & 1 and not self.DELIVERED >> n & 1:
+                        self.chip.error(f'interrupt {n} enabled: no model raises it')
+                self.enabled |= irqs
+            else:
+                self.enabled &= ~irqs
+            # An enable is no register a poll reads (TinyUSB masks its interrupt around each
+            # look at its queue, in the loop that waits for the scan tick): it does not end a
+            # poll. Whether an interrupt is now taken is the chip's (irq_changed).
+            self.chip.writes -= 1
+            self.chip.irq_changed()
+            return
+        if off == 0x010 and value & 2:
+            self.chip.error(f'{0xE000E000 + off:#x} <- {value:#x}: SysTick is not counted, '
+                            'its interrupt never comes')
         self.regs[off] = value

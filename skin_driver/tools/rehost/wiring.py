@@ -51,13 +51,15 @@ def _scan_rate(text: str, protocol: int) -> int:
     return int(match.group(1) if protocol == 1 else match.group(2))
 
 
-def load_wiring(path, protocol: int = 2) -> Wiring:
+def load_wiring(path, protocol: int = 2, usb: bool = False) -> Wiring:
     """
     Parse the pin table at path (firmware/boards/nucleo_f446re/skin_board_pins.h).
 
-    ``protocol``: the wire protocol version the image was built for (its scan rate depends on it).
+    ``protocol``: the wire protocol version the image was built for (its scan rate depends on it);
+    ``usb``: the table as the USB image reads it (SKIN_BOARD_USB_SCAN_RATE_HZ its scan rate).
     """
     text = Path(path).read_text()
+    rate = int(_define(text, 'SKIN_BOARD_USB_SCAN_RATE_HZ')) if usb else _scan_rate(text, protocol)
     rows = int(_define(text, 'SKIN_BOARD_ROWS'))
     cols = int(_define(text, 'SKIN_BOARD_COLS'))
     columns = _pairs(_define(text, r'SKIN_BOARD_COLUMNS\(X\)'))
@@ -71,4 +73,4 @@ def load_wiring(path, protocol: int = 2) -> Wiring:
         enable_pins=(_pin(text, 'SKIN_BOARD_ROW_EN_TOP'), _pin(text, 'SKIN_BOARD_ROW_EN_BOTTOM')),
         enable_active_low=_define(text, 'SKIN_BOARD_ROW_EN_ACTIVE_LOW') == '1',
         baud=int(_define(text, 'SKIN_BOARD_BAUD')),
-        scan_rate_hz=_scan_rate(text, protocol))
+        scan_rate_hz=rate)
