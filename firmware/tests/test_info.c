@@ -218,6 +218,18 @@ static void the_schedule_runs_on_64_bit_device_time(void **state) {
   assert_int_equal(sends(&s, times, 5), 0x1u | 0x8u);
 }
 
+static void due_now_goes_at_the_next_scan_and_the_period_restarts_from_it(void **state) {
+  (void)state;
+  skin_info_schedule_t s;
+  skin_info_schedule_init(&s, 1000000u);
+  const uint64_t before[] = {0u, 300000u};
+  assert_int_equal(sends(&s, before, 2), 0x1u);
+  /* A reader came at 0.35 s: one at 0.4 s (not at 1.0 s), the next at 1.4 s, not 1.0 s. */
+  skin_info_due_now(&s);
+  const uint64_t after[] = {400000u, 500000u, 1000000u, 1300000u, 1400000u, 1500000u};
+  assert_int_equal(sends(&s, after, 6), 0x1u | 0x10u);
+}
+
 int main(void) {
   const struct CMUnitTest tests[] = {
       cmocka_unit_test(text_and_layout),
@@ -232,6 +244,7 @@ int main(void) {
       cmocka_unit_test(the_schedule_keeps_to_whole_periods_of_device_time),
       cmocka_unit_test(after_a_stall_one_frame_then_a_period_later),
       cmocka_unit_test(the_schedule_runs_on_64_bit_device_time),
+      cmocka_unit_test(due_now_goes_at_the_next_scan_and_the_period_restarts_from_it),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);
 }

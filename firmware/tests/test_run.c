@@ -124,6 +124,34 @@ static void after_a_stall_one_information_frame_not_a_burst(void **state) {
   assert_int_equal(infos, 2); /* boot, then one after the stall; the next is due 1 s later */
 }
 
+/* A new reader between scans (the USB port opened): the information frame goes ahead of the
+ * next frame, not at the next whole second, and the one after a second later. */
+static void a_new_reader_gets_the_information_ahead_of_the_next_frame(void **state) {
+  (void)state;
+  fake.time_step_us = 100000u;
+  skin_fw_start();
+  for (int i = 0; i < 3; i++) { /* scans at 0.1 .. 0.3 s */
+    skin_fw_step();
+  }
+  skin_fw_info_now();
+  for (int i = 0; i < 12; i++) { /* 0.4 .. 1.5 s */
+    skin_fw_step();
+  }
+  fake_drain();
+  /* Boot's, then ahead of seq 3 (0.4 s) and seq 13 (1.4 s): none at 1.0 s. */
+  uint32_t infos = 0;
+  for (uint32_t i = 0; i < fake.n_sent; i++) {
+    if (is_info(i)) {
+      if (infos) {
+        assert_true(i + 1 < fake.n_sent && is_frame(i + 1));
+        assert_int_equal(fake.sent[i + 1][4], infos == 1 ? 3 : 13);
+      }
+      infos++;
+    }
+  }
+  assert_int_equal(infos, 3);
+}
+
 static uint32_t le32(const uint8_t *p) {
   return (uint32_t)p[0] | (uint32_t)p[1] << 8 | (uint32_t)p[2] << 16 | (uint32_t)p[3] << 24;
 }
@@ -271,6 +299,7 @@ int main(void) {
       cmocka_unit_test_setup(a_row_failing_on_every_scan_is_marked_in_every_frame_and_counted,
                              setup),
       cmocka_unit_test_setup(the_fault_bits_restate_the_boards_clock_and_reset, setup),
+      cmocka_unit_test_setup(a_new_reader_gets_the_information_ahead_of_the_next_frame, setup),
       cmocka_unit_test_setup(the_information_frame_carries_the_board_status, setup),
   };
   return cmocka_run_group_tests(tests, NULL, NULL);

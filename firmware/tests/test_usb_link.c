@@ -1,7 +1,8 @@
 /*
  * The link over USB (boards/nucleo_f446re/usb/usb_link.c) against a fake of the TinyUSB calls
- * it makes: a CDC transmit FIFO with a settable room, a host that has the port open or not, and
- * a count of tud_task() calls (the stack getting the CPU).
+ * it makes: a CDC transmit FIFO with a settable room, a host that has the port open or not, a
+ * count of tud_task() calls (the stack getting the CPU), a line state the host sets that the
+ * stack delivers in its next tud_task(), and the core's skin_fw_info_now() counted.
  */
 #include <setjmp.h>
 #include <stdarg.h>
@@ -12,6 +13,7 @@
 #include <cmocka.h>
 
 #include "skin_fw/board.h"
+#include "skin_fw/fw.h"
 #include "tusb.h"
 #include "usb_link.h"
 
@@ -21,13 +23,21 @@ static struct {
   uint32_t room;      /* bytes the FIFO takes before it is full */
   bool connected;
   uint32_t tasks, flushes, clears;
+  int line_dtr; /* a SET_CONTROL_LINE_STATE the stack has not handled yet: 0 or 1, -1 none */
+  uint32_t info_nows;
 } cdc;
 
 void tud_task_ext(uint32_t timeout_ms, bool in_isr) {
   (void)timeout_ms;
   (void)in_isr;
   cdc.tasks++;
+  if (cdc.line_dtr >= 0) {
+    const bool dtr = cdc.line_dtr == 1;
+    cdc.line_dtr = -1;
+    tud_cdc_line_state_cb(0, dtr, false);
+  }
 }
+void skin_fw_info_now(void) { cdc.info_nows++; }
 bool tud_cdc_n_connected(uint8_t itf) {
   assert_int_equal(itf, 0);
   return cdc.connected;
@@ -64,7 +74,13 @@ static int setup(void **state) {
   memset(&cdc, 0, sizeof cdc);
   cdc.connected = true;
   cdc.room = 2048;
+  cdc.line_dtr = -1;
   usb_link_reset();
+  /* Configured, then the host opens the port and the core waits for a scan tick. */
+  tud_mount_cb();
+  tud_cdc_line_state_cb(0, true, false);
+  usb_link_poll();
+  cdc.tasks = cdc.clears = cdc.info_nows = 0;
   usb_link_discarded = 0;
   now_us = 0xFFFF0000u; /* the clock wraps during the tests */
   for (uint32_t i = 0; i < sizeof frame; i++) {
@@ -138,11 +154,50 @@ static void reopen_starts_on_a_frame(void **state) {
   assert_int_equal(usb_link_discarded, 1);
 
   tud_cdc_line_state_cb(0, true, false);
+  usb_link_poll(); /* the scan tick */
   cdc.room = 2048;
   board_link_send(frame2, sizeof frame2);
   assert_true(board_link_idle());
   assert_int_equal(cdc.fifo_len, sizeof frame2);
   assert_memory_equal(cdc.fifo, frame2, sizeof frame2);
+}
+
+/* The host opens the port while the core waits for the link (the stack handles the request in
+ * that wait): the frame the core sends next, decided before, is discarded; at the next scan
+ * tick the port opens, once, with the information frame made due, so the host's first byte
+ * is the first of the frame that names the board. Expected: nothing before the tick, one
+ * skin_fw_info_now, then the next frame whole at the FIFO's start. */
+static void dtr_opens_the_port_at_the_scan_tick_with_the_information_due(void **state) {
+  (void)state;
+  tud_mount_cb(); /* a new configuration: closed */
+  cdc.room = 100;
+  board_link_send(frame, sizeof frame); /* closed: discarded at once */
+  cdc.line_dtr = 1;
+  assert_true(board_link_idle()); /* the stack delivers DTR here */
+  assert_int_equal(cdc.line_dtr, -1);
+  board_link_send(frame, sizeof frame); /* the frame decided before the port opened */
+  assert_true(board_link_idle());
+  assert_int_equal(cdc.fifo_len, 0);
+  assert_int_equal(cdc.info_nows, 0);
+  assert_int_equal(usb_link_discarded, 2);
+
+  usb_link_poll(); /* the core waits for the scan tick: the port opens */
+  assert_int_equal(cdc.info_nows, 1);
+  board_link_send(frame2, sizeof frame2);
+  cdc.room = 2048;
+  while (!board_link_idle()) {
+  }
+  assert_int_equal(cdc.fifo_len, sizeof frame2);
+  assert_memory_equal(cdc.fifo, frame2, sizeof frame2);
+  usb_link_poll(); /* open already: not a new reader */
+  assert_int_equal(cdc.info_nows, 1);
+
+  cdc.line_dtr = 0; /* closed and opened again: a new reader */
+  usb_link_poll();
+  assert_int_equal(cdc.info_nows, 1);
+  cdc.line_dtr = 1; /* delivered in the wait for the tick: opened in it, between two frames */
+  usb_link_poll();
+  assert_int_equal(cdc.info_nows, 2);
 }
 
 /* RTS changing with DTR held (a host setting the lines one request at a time) is the same
@@ -228,6 +283,7 @@ int main(void) {
       cmocka_unit_test_setup(poll_runs_the_stack, setup),
       cmocka_unit_test_setup(no_host_discards, setup),
       cmocka_unit_test_setup(reopen_starts_on_a_frame, setup),
+      cmocka_unit_test_setup(dtr_opens_the_port_at_the_scan_tick_with_the_information_due, setup),
       cmocka_unit_test_setup(rts_alone_keeps_the_session, setup),
       cmocka_unit_test_setup(mount_closes_the_session, setup),
       cmocka_unit_test_setup(host_stopped_reading, setup),

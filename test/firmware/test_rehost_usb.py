@@ -7,7 +7,8 @@ stream on that model, not on silicon (docs/firmware.md, "The USB link"). The des
 checked against the firmware's own: the bytes of usb_desc.c's tables in the image, and what they
 must say from usb_desc.h and tusb_config.h. The frames read by bulk IN go through the driver's
 decoder, and each holds the scan the skin showed at its device time. SKIN_REHOST_USB_FRAMES sets
-how many (30; from 600 on, over a second of device time, the information frame is checked too).
+how many (30; from 600 on, over a second of device time, the information frame's repeat is
+checked too).
 """
 
 import os
@@ -182,8 +183,8 @@ def test_bulk_in_carries_intact_frames_of_the_scans_the_skin_showed(session):
     stats = decoder.stats
     assert (stats.crc_errors, stats.size_errors, stats.version_errors) == (0, 0, 0)
     assert (stats.seq_gaps, stats.frames_missed, stats.bytes_discarded) == (0, 0, 0)
-    # The port opened on a frame boundary: the first byte read is a sync marker.
-    assert session['raw'][:2] == bytes([0xA5, 0x5A])
+    # The port opened on a frame boundary, the information frame's (checked below).
+    assert session['raw'][:2] == bytes([0xA5, 0x69])
     assert {f.version for f in frames} == {2}
     first = frames[0].seq
     assert [f.seq for f in frames] == list(range(first, first + len(frames)))
@@ -198,14 +199,15 @@ def test_bulk_in_carries_intact_frames_of_the_scans_the_skin_showed(session):
     chip = session['chip']
     assert chip.errors == []
     assert chip.stats['irq67'] > 0                          # the stack ran from its interrupt
-    if FRAMES >= 600:
-        # The information frame repeats every second (the one at boot went before DTR).
-        info = decoder.board_info
-        assert (info.board, info.uid, info.rows, info.cols, info.rate_hz) == (
-            'nucleo-f446re', DEFAULT_UID.hex(), 16, 16, WIRING.scan_rate_hz)
+    # The board named itself when the port opened, and again every second of device time.
+    info = decoder.board_info
+    assert (info.board, info.uid, info.rows, info.cols, info.rate_hz) == (
+        'nucleo-f446re', DEFAULT_UID.hex(), 16, 16, WIRING.scan_rate_hz)
+    seconds = (frames[-1].device_time_us - frames[0].device_time_us) // 1_000_000
+    assert stats.info_frames == 1 + seconds
 
 
-def test_a_port_not_opened_gets_no_byte_and_the_first_after_dtr_is_a_frames_start(usb_image):
+def test_a_port_not_opened_gets_no_byte_and_the_first_after_dtr_names_the_board(usb_image):
     # Configured but DTR never raised (no program has the port open): the board discards its
     # frames and the bulk endpoint NAKs; expected: a timeout, frames counted as discarded.
     chip, host = _configured(usb_image, dtr=False)
@@ -214,11 +216,20 @@ def test_a_port_not_opened_gets_no_byte_and_the_first_after_dtr_is_a_frames_star
                      lambda: False)
     assert chip.symbol_u32('usb_link_discarded') > 0
     assert chip.errors == []
-    # Then the port opens: the first packet starts a frame (sync marker, protocol version 2).
+    # Then the port opens: the first packet starts the information frame (marker, info version
+    # 1), whole, and a data frame follows it, not one of the next second.
     host.control(setup_packet(0x21, 0x22, 1, 0, 0), what='SET_CONTROL_LINE_STATE(DTR)')
-    packets = []
-    host.bulk_in(2, packets.append, lambda: packets)
-    assert packets[0][:3] == bytes([0xA5, 0x5A, 2])
+    packets, decoder = [], FrameDecoder(expected_shape=GRID)
+    frames = []
+
+    def sink(packet):
+        packets.append(packet)
+        frames.extend(decoder.feed(packet))
+
+    host.bulk_in(2, sink, lambda: frames)
+    assert packets[0][:3] == bytes([0xA5, 0x69, 1])
+    assert decoder.board_info.board == 'nucleo-f446re'
+    assert (decoder.stats.info_frames, decoder.stats.bytes_discarded) == (1, 0)
 
 
 def test_a_string_the_firmware_has_not_is_stalled_and_the_next_request_answered(usb_image):

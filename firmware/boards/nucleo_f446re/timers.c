@@ -39,10 +39,11 @@ void board_delay_us(uint32_t us) {
 
 void board_wait_scan_tick(void) {
   /* The flag stays set when a scan overran its period: the next scan starts at once and the
-   * missed ticks are not made up. Bounded by two periods in case the timer was stopped. */
+   * missed ticks are not made up. Bounded by two periods in case the timer was stopped. The link
+   * is polled once even then: the USB link opens a port between scans only here. */
   const uint32_t start = TIM2->CNT;
-  while (!(TIM5->SR & TIM_SR_UIF) && (uint32_t)(TIM2->CNT - start) <= 2u * SCAN_PERIOD_US) {
+  do {
     nucleo_link_poll();
-  }
+  } while (!(TIM5->SR & TIM_SR_UIF) && (uint32_t)(TIM2->CNT - start) <= 2u * SCAN_PERIOD_US);
   TIM5->SR = ~TIM_SR_UIF; /* rc_w0: zero clears the flag, ones leave the others */
 }

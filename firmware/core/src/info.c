@@ -139,3 +139,5 @@ void skin_info_sent(skin_info_schedule_t *s, uint64_t now_us) {
     s->due_us = now_us + s->period_us;
   }
 }
+
+void skin_info_due_now(skin_info_schedule_t *s) { s->started = 0u; }

@@ -90,6 +90,8 @@ void skin_fw_step(void) {
   }
 }
 
+void skin_fw_info_now(void) { skin_info_due_now(&info_schedule); }
+
 void skin_fw_run(void) {
   skin_fw_start();
   for (;;) {

@@ -7,20 +7,25 @@
  * scan tick (nucleo_link_poll). A frame is released to the core once all of it is in the FIFO.
  *
  * With no host holding the port open (DTR low, or not enumerated) frames are discarded, not
- * queued: the scans keep their rate and the host starts on a frame's first byte when it opens
- * the port (the FIFO is cleared then). A host that holds the port open but has stopped reading
+ * queued: the scans keep their rate. The port the host opens (DTR rising, in whichever wait
+ * tud_task ran) opens for frames at the next wait for the scan tick, between two frames, with
+ * the information frame due ahead of the next one (skin_fw_info_now): the host's first byte
+ * starts the frame that names the board. A host that holds the port open but has stopped reading
  * does not stop the board either: after USB_LINK_STALL_US without a byte taken, the rest of the
  * frame is discarded (the driver sees a torn frame and resynchronises on the next).
  */
 #include "usb_link.h"
 
 #include "skin_fw/board.h"
+#include "skin_fw/fw.h"
 #include "tusb.h"
 
 volatile uint32_t usb_link_discarded;
 static const uint8_t *pending;
 static uint32_t left;
 static uint32_t progress_us; /* when the FIFO last took a byte of the pending frame */
+static bool host_open;       /* DTR as the host last set it */
+static bool port_open;       /* frames go to the host: DTR high since the last scan tick */
 
 void usb_link_reset(void) {
   pending = 0;
@@ -31,7 +36,7 @@ static void pump(void) {
   if (left == 0u) {
     return;
   }
-  if (!tud_cdc_connected()) {
+  if (!port_open || !tud_cdc_connected()) {
     usb_link_discarded++;
     usb_link_reset();
     return;
@@ -49,9 +54,18 @@ static void pump(void) {
   }
 }
 
-void usb_link_poll(void) {
+static void service(void) {
   tud_task();
   pump();
+}
+
+void usb_link_poll(void) {
+  service();
+  if (host_open && !port_open) {
+    /* Between two frames (the core waits for the scan tick): nothing of a frame is pending. */
+    port_open = true;
+    skin_fw_info_now();
+  }
 }
 
 void board_link_send(const uint8_t *buf, uint32_t len) {
@@ -62,7 +76,7 @@ void board_link_send(const uint8_t *buf, uint32_t len) {
 }
 
 bool board_link_idle(void) {
-  usb_link_poll();
+  service();
   return left == 0u;
 }
 
@@ -77,8 +91,6 @@ bool board_link_abort(void) {
   usb_link_reset();
   return false;
 }
-
-static bool host_open; /* DTR as the host last set it */
 
 static void new_session(void) {
   /* What is left in the FIFO belongs to a session that has ended: the next one starts clean, on
@@ -97,6 +109,7 @@ void tud_cdc_line_state_cb(uint8_t itf, bool dtr, bool rts) {
   (void)rts;
   if (dtr != host_open) {
     host_open = dtr;
+    port_open = false; /* closed now; opened at the next scan tick if DTR is high */
     new_session();
   }
 }
@@ -104,5 +117,6 @@ void tud_cdc_line_state_cb(uint8_t itf, bool dtr, bool rts) {
 /* Configured (after a bus reset, the line state is cleared): the port is closed until DTR. */
 void tud_mount_cb(void) {
   host_open = false;
+  port_open = false;
   new_session();
 }

@@ -13,7 +13,12 @@
  */
 #define USB_LINK_STALL_US 100000u
 
-/* Give the USB stack the CPU (tud_task) and move what waits into the CDC FIFO. */
+/*
+ * While the core waits for the scan tick: give the USB stack the CPU (tud_task), move what waits
+ * into the CDC FIFO, and open a port the host has opened since (DTR) for the next frame, the
+ * information frame (skin_fw_info_now). The waits for the link run the stack but open nothing:
+ * a frame the core has already decided on is not the one that names the board.
+ */
 void usb_link_poll(void);
 
 /* Forget any frame in progress (after init, or when the host closes the port). */

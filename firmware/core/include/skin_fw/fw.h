@@ -27,6 +27,12 @@ void skin_fw_run(void) __attribute__((noreturn));
 void skin_fw_start(void);
 void skin_fw_step(void);
 
+/*
+ * The board's link has a new reader (the host opened the USB port): the information frame goes
+ * ahead of the next scan's frame (skin_info_due_now). Called from the main loop, between scans.
+ */
+void skin_fw_info_now(void);
+
 #ifdef __cplusplus
 }
 #endif

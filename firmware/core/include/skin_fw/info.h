@@ -45,6 +45,12 @@ void skin_info_schedule_init(skin_info_schedule_t *s, uint64_t period_us);
 bool skin_info_due(const skin_info_schedule_t *s, uint64_t now_us);
 /* Note that one went ahead of the scan of device time now_us. */
 void skin_info_sent(skin_info_schedule_t *s, uint64_t now_us);
+/*
+ * Make one due ahead of the next scan whatever the schedule, as at boot: a reader that has just
+ * come (a host opening the USB port) learns the board at once, not up to a period later. The
+ * period then counts from that one.
+ */
+void skin_info_due_now(skin_info_schedule_t *s);
 
 #ifdef __cplusplus
 }
