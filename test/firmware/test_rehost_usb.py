@@ -21,11 +21,12 @@ import pytest
 
 from skin_driver.core.protocol.wire import FrameDecoder
 from skin_driver.tools import firmware_board
+from skin_driver.tools.rehost import cost
 from skin_driver.tools.rehost.board import PINS
 from skin_driver.tools.rehost.chip import Chip, DEFAULT_UID
 from skin_driver.tools.rehost.elf import ElfImage
 from skin_driver.tools.rehost.otg import Stalled
-from skin_driver.tools.rehost.usb_host import parse_descriptors, ScriptedHost, setup_packet
+from skin_driver.tools.rehost.usb_host import parse_descriptors, ScriptedHost
 from skin_driver.tools.rehost.usb_host import UsbTimeout
 from skin_driver.tools.rehost.wiring import load_wiring
 
@@ -35,7 +36,6 @@ GRID = (16, 16)
 SCANS = 8
 FRAMES = int(os.environ.get('SKIN_REHOST_USB_FRAMES', '30'))
 ADDRESS = 5
-LINE_CODING = struct.pack('<IBBB', 921_600, 0, 0, 8)     # CDC PSTN 6.3.11: 8N1
 CDC_CLASS, CDC_DATA_CLASS, ACM_SUBCLASS = 0x02, 0x0A, 0x02
 
 
@@ -76,10 +76,9 @@ def _configured(image, dtr=True):
     host.reset()
     host.set_address(ADDRESS)
     host.set_configuration(1)
-    host.control(setup_packet(0x21, 0x20, 0, 0, len(LINE_CODING)), LINE_CODING,
-                 'SET_LINE_CODING')
+    host.set_line_coding()
     if dtr:
-        host.control(setup_packet(0x21, 0x22, 3, 0, 0), what='SET_CONTROL_LINE_STATE(DTR)')
+        host.set_lines(True)
     return chip, host
 
 
@@ -108,9 +107,8 @@ def session(usb_image):
     got['langids'] = host.get_descriptor('string', 0, langid=0)
     got['strings'] = {i: host.get_string(i) for i in range(1, DESC['USB_STR_COUNT'])}
     host.set_configuration(1)
-    host.control(setup_packet(0x21, 0x20, 0, 0, len(LINE_CODING)), LINE_CODING,
-                 'SET_LINE_CODING')
-    host.control(setup_packet(0x21, 0x22, 3, 0, 0), what='SET_CONTROL_LINE_STATE(DTR)')
+    host.set_line_coding()
+    host.set_lines(True)
     decoder = FrameDecoder(expected_shape=GRID)
     frames, raw, sizes = [], bytearray(), []
 
@@ -218,7 +216,7 @@ def test_a_port_not_opened_gets_no_byte_and_the_first_after_dtr_names_the_board(
     assert chip.errors == []
     # Then the port opens: the first packet starts the information frame (marker, info version
     # 1), whole, and a data frame follows it, not one of the next second.
-    host.control(setup_packet(0x21, 0x22, 1, 0, 0), what='SET_CONTROL_LINE_STATE(DTR)')
+    host.set_lines(True, rts=False)
     packets, decoder = [], FrameDecoder(expected_shape=GRID)
     frames = []
 
@@ -247,3 +245,22 @@ def test_an_interrupt_no_model_raises_is_reported_when_enabled(usb_image):
     chip = Chip(usb_image, WIRING, *_skin(), WIRING.scan_rate_hz)
     chip.debug_write(0xE000_E104, 1 << (37 - 32))       # NVIC_ISER1: USART1 (IRQ 37)
     assert chip.errors == ['interrupt 37 enabled: no model raises it']
+
+
+def test_what_usb_costs_the_cpu_is_counted_by_part(usb_image):
+    # Instructions per scan on the rehost (skin_driver/tools/rehost/cost.py), not a time: every
+    # part counted, each function where its caller puts it (the write path under the link, the
+    # handler under the interrupt, the frame under the scan), and one scan counted a period.
+    count, rate = cost.measure(usb=True, scans=10, warmup=3, image=usb_image)
+    assert rate == WIRING.scan_rate_hz
+    assert 9 <= count.scans <= 11
+    assert all(count.counts[part] > 0 for part in cost.PARTS), count.counts
+    parts = {}
+    for part, name in count.by_function:
+        parts.setdefault(name, set()).add(part)
+    assert parts['OTG_FS_IRQHandler'] == {'interrupt'}
+    assert parts['tud_task_ext'] == parts['tud_cdc_n_write_flush'] == {'link'}
+    assert parts['skin_frame_finish'] == parts['skin_scan_fill'] == {'scan'}
+    assert parts['board_delay_us'] == {'wait'}
+    unattributed = sum(n for (_, name), n in count.by_function.items() if name is None)
+    assert unattributed < 0.01 * sum(count.counts.values())

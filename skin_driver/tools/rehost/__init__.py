@@ -14,6 +14,7 @@ the wiring table (skin_board_pins.h); the USART's bytes go to a pty the driver r
 - usb_host: a scripted USB host on the OTG core's cable (enumeration, control, bulk IN);
 - chip: the CPU, the bus, device time, the OTG interrupt's delivery and the fault switches;
 - board: the chip on a pty, and the command line (``python -m skin_driver.tools.rehost``).
+- cost: the instructions the image runs per scan, by part (``python -m ...rehost.cost --usb``).
 
 docs/firmware.md, "The rehosted board", says what is modelled, what is not and how it is fast.
 """

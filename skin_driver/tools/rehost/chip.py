@@ -544,6 +544,11 @@ class Chip:
         self._handler = None
         self.irq_changed()
 
+    @property
+    def in_handler(self) -> bool:
+        """Whether the CPU runs an interrupt handler (between its entry and its return)."""
+        return self._handler is not None
+
     def halt(self) -> None:
         """Stop the CPU for good from another thread (a replayed access is not guarded)."""
         self.uc.emu_stop()

@@ -7,6 +7,7 @@ import struct
 
 PT_LOAD = 1
 SHT_SYMTAB = 2
+STT_FUNC = 2
 
 
 @dataclass(frozen=True)
@@ -19,8 +20,22 @@ class Segment:
     memsz: int
 
 
+@dataclass(frozen=True, order=True)
+class Function:
+    """A function's code: [start, end) without the Thumb bit, and its name."""
+
+    start: int
+    end: int
+    name: str
+
+
 class ElfImage:
-    """An ARM ELF executable: the bytes ``make flash`` writes, and its symbol table."""
+    """
+    An ARM ELF executable: the bytes ``make flash`` writes, and its symbol table.
+
+    ``symbols`` maps a name to (value, size); ``functions`` lists the functions of a size
+    (Function, by address), for telling which one an address is in.
+    """
 
     def __init__(self, data: bytes):
         """Parse data; raise ValueError when it is not a 32-bit little-endian ARM ELF."""
@@ -38,7 +53,7 @@ class ElfImage:
             if ptype == PT_LOAD and filesz:
                 self.segments.append(Segment(paddr, vaddr, bytes(data[offset:offset + filesz]),
                                              memsz))
-        self.symbols = self._symbols(data, shoff, shentsize, shnum)
+        self.symbols, self.functions = self._symbols(data, shoff, shentsize, shnum)
 
     @classmethod
     def load(cls, path) -> ElfImage:
@@ -50,18 +65,21 @@ class ElfImage:
     def _symbols(data: bytes, shoff: int, shentsize: int, shnum: int) -> dict:
         sections = [struct.unpack_from('<IIIIIIIIII', data, shoff + i * shentsize)
                     for i in range(shnum)]
-        symbols = {}
+        symbols, functions = {}, []
         for _, stype, _, _, offset, size, link, _, _, entsize in sections:
             if stype != SHT_SYMTAB:
                 continue
             strtab = sections[link]
             names = data[strtab[4]:strtab[4] + strtab[5]]
             for at in range(offset, offset + size, entsize):
-                name, value, sym_size, _, _, _ = struct.unpack_from('<IIIBBH', data, at)
+                name, value, sym_size, info, _, _ = struct.unpack_from('<IIIBBH', data, at)
                 text = names[name:names.index(b'\0', name)].decode('ascii', 'replace')
                 if text:
                     symbols[text] = (value, sym_size)
-        return symbols
+                    if info & 0xF == STT_FUNC and sym_size:
+                        start = value & ~1
+                        functions.append(Function(start, start + sym_size, text))
+        return symbols, sorted(functions)
 
     def address(self, name: str) -> int:
         """Return the address of the symbol name (KeyError names it when absent)."""

@@ -18,6 +18,7 @@ import time
 from .otg import ENDPOINTS
 
 EP0_SIZE = 64
+LINE_CODING = struct.pack('<IBBB', 921_600, 0, 0, 8)     # CDC PSTN 6.3.11: 8N1
 RESET_RECOVERY_S = 0.010        # USB 2.0 7.1.7.3, TRSTRCY: the device may ignore the bus
 DESCRIPTOR = {'device': 1, 'configuration': 2, 'string': 3, 'interface': 4, 'endpoint': 5}
 
@@ -142,6 +143,24 @@ class ScriptedHost:
     def set_configuration(self, value: int) -> None:
         """SET_CONFIGURATION (9.4.7)."""
         self.control(setup_packet(0x00, 9, value, 0, 0), what=f'SET_CONFIGURATION({value})')
+
+    def set_line_coding(self, coding: bytes = LINE_CODING) -> None:
+        """CDC SET_LINE_CODING on interface 0 (PSTN 6.3.10), as a terminal program sends it."""
+        self.control(setup_packet(0x21, 0x20, 0, 0, len(coding)), coding, 'SET_LINE_CODING')
+
+    def set_lines(self, dtr: bool, rts: bool = True) -> None:
+        """CDC SET_CONTROL_LINE_STATE (PSTN 6.3.12): DTR high is a program opening the port."""
+        self.control(setup_packet(0x21, 0x22, int(dtr) | int(rts) << 1, 0, 0),
+                     what=f'SET_CONTROL_LINE_STATE(DTR {int(dtr)})')
+
+    def open_port(self, address: int) -> None:
+        """Enumerate as a PC does, configure, and open the CDC port (line coding, DTR)."""
+        self.attach()
+        self.reset()
+        self.set_address(address)
+        self.set_configuration(1)
+        self.set_line_coding()
+        self.set_lines(True)
 
     def bulk_in(self, ep: int, sink, stop) -> int:
         """Read packets from IN endpoint ep into sink(bytes) until stop(); return the count."""
