@@ -185,8 +185,7 @@ static void dtr_opens_the_port_at_the_scan_tick_with_the_information_due(void **
   assert_int_equal(cdc.info_nows, 1);
   board_link_send(frame2, sizeof frame2);
   cdc.room = 2048;
-  while (!board_link_idle()) {
-  }
+  assert_true(board_link_idle());
   assert_int_equal(cdc.fifo_len, sizeof frame2);
   assert_memory_equal(cdc.fifo, frame2, sizeof frame2);
   usb_link_poll(); /* open already: not a new reader */
