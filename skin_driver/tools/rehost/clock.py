@@ -136,6 +136,14 @@ class Rcc:
             return sw
         return (self.regs[8] >> 2) & 3
 
+    def _switch_pll(self, value: int, old: int, on: int, ready: int, settings_ok) -> None:
+        """Start a PLL's lock when RCC_CR turns it on (if its settings hold), or drop its lock."""
+        if value & on and not old & on and settings_ok():
+            self.ready_at[ready] = self.chip.now + PLL_LOCK_NS
+        if not value & on:
+            self.regs[0] &= ~ready
+            self.ready_at.pop(ready, None)
+
     def write(self, off: int, value: int) -> None:
         """Write a register: start oscillators and the PLL, switch the system clock."""
         chip = self.chip
@@ -151,18 +159,8 @@ class Rcc:
             if not value & HSEON:
                 self.regs[0] &= ~HSERDY
                 self.ready_at.pop(HSERDY, None)
-            if value & PLLON and not old & PLLON:
-                if self._pll_ok():
-                    self.ready_at[PLLRDY] = chip.now + PLL_LOCK_NS
-            if not value & PLLON:
-                self.regs[0] &= ~PLLRDY
-                self.ready_at.pop(PLLRDY, None)
-            if value & PLLSAION and not old & PLLSAION:
-                if self._pllsai_ok():
-                    self.ready_at[PLLSAIRDY] = chip.now + PLL_LOCK_NS
-            if not value & PLLSAION:
-                self.regs[0] &= ~PLLSAIRDY
-                self.ready_at.pop(PLLSAIRDY, None)
+            self._switch_pll(value, old, PLLON, PLLRDY, self._pll_ok)
+            self._switch_pll(value, old, PLLSAION, PLLSAIRDY, self._pllsai_ok)
         elif off == 0x04:
             if self.regs[0] & PLLON:
                 chip.error('RCC_PLLCFGR written while the PLL is on (RM0390 6.3.2 forbids it)')
